@@ -1,0 +1,23 @@
+"""startrack: an open star-tracker system.
+
+From photons on a detector to a spacecraft's attitude and rate, and from a photo of the night sky
+to where the camera pointed. See ``docs/conventions.md`` for the pixel, frame and rotation
+conventions every function keeps.
+"""
+
+from __future__ import annotations
+
+from .camera import Camera, get_preset
+from .results import AttitudeSolution, Detections, Status, StarMatches
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "AttitudeSolution",
+    "Camera",
+    "Detections",
+    "StarMatches",
+    "Status",
+    "__version__",
+    "get_preset",
+]

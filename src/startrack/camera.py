@@ -1,0 +1,267 @@
+"""The camera model: intrinsics, Brown-Conrady distortion, pixel <-> unit vector.
+
+Pixels follow :mod:`startrack.conventions` (0-based, pixel centres, (x, y) = (column, row)).
+The distortion is the Brown-Conrady model in the form OpenCV and Bouguet's toolbox use (seed 003
+§4.2, notes ``seed-003.md``): with normalised pinhole coordinates (a, b) = (v_x / v_z, v_y / v_z)
+and r^2 = a^2 + b^2::
+
+    radial = 1 + k1 r^2 + k2 r^4 + k3 r^6
+    a_d = a * radial + 2 p1 a b + p2 (r^2 + 2 a^2)
+    b_d = b * radial + p1 (r^2 + 2 b^2) + 2 p2 a b
+    x = cx + fx * a_d,    y = cy + fy * b_d
+
+The inverse (pixel -> vector) is solved by Newton's method to 1e-6 px.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import InvalidInputError
+
+UNDISTORT_TOL_PX = 1e-6
+UNDISTORT_MAX_ITER = 50
+
+
+def focal_px_from_fov(size_px: float, fov_rad: float) -> float:
+    """Pinhole focal length in pixels that spans ``size_px`` pixels with ``fov_rad``.
+
+    ``f = size / (2 tan(fov / 2))`` (seed 000 §2.3 eq. 2.1). The size is the full width in pixels
+    (edge to edge), so ``fov`` is the angle between the outer edges of the outer pixels.
+    """
+    if not 0.0 < fov_rad < math.pi:
+        raise InvalidInputError(f"field of view must be between 0 and 180 deg, got {math.degrees(fov_rad):g} deg")
+    return size_px / (2.0 * math.tan(fov_rad / 2.0))
+
+
+def fov_from_focal_px(size_px: float, focal_px: float) -> float:
+    """Field of view in radians spanned by ``size_px`` pixels at focal length ``focal_px``."""
+    if focal_px <= 0:
+        raise InvalidInputError(f"focal length must be positive, got {focal_px:g} px")
+    return 2.0 * math.atan(size_px / (2.0 * focal_px))
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A star camera: image size, focal lengths, principal point and lens distortion.
+
+    Parameters
+    ----------
+    width, height : int
+        Image size in pixels.
+    fx, fy : float
+        Focal lengths in pixels (``fy`` defaults to ``fx``).
+    cx, cy : float
+        Principal point in our pixel convention; defaults to the image centre
+        ((width - 1) / 2, (height - 1) / 2).
+    k1, k2, k3, p1, p2 : float
+        Brown-Conrady radial and tangential coefficients (OpenCV's order is k1, k2, p1, p2, k3).
+    name, source : str
+        A label and where the numbers come from (a seed section, a calibration).
+    pixel_pitch_um : float or None
+        Pixel pitch, for radiometry and reporting.
+    """
+
+    width: int
+    height: int
+    fx: float
+    fy: float | None = None
+    cx: float | None = None
+    cy: float | None = None
+    k1: float = 0.0
+    k2: float = 0.0
+    k3: float = 0.0
+    p1: float = 0.0
+    p2: float = 0.0
+    name: str = ""
+    source: str = ""
+    pixel_pitch_um: float | None = None
+
+    def __post_init__(self) -> None:
+        for key in ("width", "height"):
+            value = getattr(self, key)
+            if not (isinstance(value, int | np.integer) and value >= 2):
+                raise InvalidInputError(f"camera {key} must be an integer of at least 2 px, got {value!r}")
+        if self.fy is None:
+            object.__setattr__(self, "fy", self.fx)
+        if self.cx is None:
+            object.__setattr__(self, "cx", (self.width - 1) / 2.0)
+        if self.cy is None:
+            object.__setattr__(self, "cy", (self.height - 1) / 2.0)
+        for key in ("fx", "fy"):
+            value = float(getattr(self, key))
+            if not (math.isfinite(value) and value > 0):
+                raise InvalidInputError(f"camera focal length {key} must be positive and finite, got {value!r} px")
+        for key in ("cx", "cy", "k1", "k2", "k3", "p1", "p2"):
+            if not math.isfinite(float(getattr(self, key))):
+                raise InvalidInputError(f"camera parameter {key} must be finite, got {getattr(self, key)!r}")
+
+    # --- construction -----------------------------------------------------------------------
+    @classmethod
+    def from_fov(cls, width: int, height: int, fov_deg: float, **kwargs) -> Camera:
+        """A pinhole camera whose horizontal field of view (edge to edge) is ``fov_deg``."""
+        if not (isinstance(fov_deg, int | float) and 0.0 < fov_deg < 180.0):
+            raise InvalidInputError(f"fov_deg must be between 0 and 180 deg, got {fov_deg!r}")
+        return cls(width=width, height=height, fx=focal_px_from_fov(width, math.radians(fov_deg)), **kwargs)
+
+    def with_focal(self, fx: float, fy: float | None = None) -> Camera:
+        """The same camera with other focal lengths (fy keeps the fx / fy ratio if not given)."""
+        if fy is None:
+            fy = fx * self.fy / self.fx
+        return replace(self, fx=float(fx), fy=float(fy))
+
+    # --- derived quantities -----------------------------------------------------------------
+    @property
+    def fov_deg(self) -> float:
+        """Horizontal pinhole field of view, edge to edge, in degrees."""
+        return math.degrees(fov_from_focal_px(self.width, self.fx))
+
+    @property
+    def fov_height_deg(self) -> float:
+        """Vertical pinhole field of view in degrees."""
+        return math.degrees(fov_from_focal_px(self.height, self.fy))
+
+    @property
+    def fov_diagonal_deg(self) -> float:
+        """Diagonal pinhole field of view in degrees (through the principal point, no distortion)."""
+        half_w = (self.width / 2.0) / self.fx
+        half_h = (self.height / 2.0) / self.fy
+        return math.degrees(2.0 * math.atan(math.hypot(half_w, half_h)))
+
+    @property
+    def pixel_scale_arcsec(self) -> float:
+        """Angular size of one pixel at the principal point, in arcseconds."""
+        return math.degrees(1.0 / math.sqrt(self.fx * self.fy)) * 3600.0
+
+    @property
+    def has_distortion(self) -> bool:
+        return any(getattr(self, k) != 0.0 for k in ("k1", "k2", "k3", "p1", "p2"))
+
+    # --- projection --------------------------------------------------------------------------
+    def _distort(self, a: NDArray, b: NDArray) -> tuple[NDArray, NDArray]:
+        r2 = a * a + b * b
+        radial = 1.0 + r2 * (self.k1 + r2 * (self.k2 + r2 * self.k3))
+        ad = a * radial + 2.0 * self.p1 * a * b + self.p2 * (r2 + 2.0 * a * a)
+        bd = b * radial + self.p1 * (r2 + 2.0 * b * b) + 2.0 * self.p2 * a * b
+        return ad, bd
+
+    def _distort_jacobian(self, a: NDArray, b: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        r2 = a * a + b * b
+        radial = 1.0 + r2 * (self.k1 + r2 * (self.k2 + r2 * self.k3))
+        dradial = self.k1 + r2 * (2.0 * self.k2 + 3.0 * self.k3 * r2)  # d radial / d r2
+        daa = radial + a * dradial * 2 * a + 2 * self.p1 * b + self.p2 * 6.0 * a
+        dab = a * dradial * 2 * b + 2 * self.p1 * a + self.p2 * 2.0 * b
+        dba = b * dradial * 2 * a + self.p1 * 2.0 * a + 2 * self.p2 * b
+        dbb = radial + b * dradial * 2 * b + self.p1 * 6.0 * b + 2 * self.p2 * a
+        return daa, dab, dba, dbb
+
+    def vector_to_pixel(self, vectors: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Pixel coordinates (x, y) of camera-frame directions.
+
+        Parameters
+        ----------
+        vectors : array_like, shape (..., 3)
+            Directions in the camera frame (need not be unit length).
+
+        Returns
+        -------
+        x, y : ndarray, shape (...)
+            Pixel coordinates; NaN for directions at or behind the image plane (v_z <= 0).
+            Points outside the image are returned as they are; see :meth:`in_image`.
+        """
+        v = np.asarray(vectors, dtype=float)
+        if v.shape[-1:] != (3,):
+            raise InvalidInputError(f"vectors must have shape (..., 3), got {v.shape}")
+        vz = v[..., 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            front = vz > 0
+            a = np.where(front, v[..., 0] / np.where(front, vz, 1.0), np.nan)
+            b = np.where(front, v[..., 1] / np.where(front, vz, 1.0), np.nan)
+        if self.has_distortion:
+            a, b = self._distort(a, b)
+        return self.cx + self.fx * a, self.cy + self.fy * b
+
+    def pixel_to_vector(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
+        """Unit camera-frame vectors (..., 3) of pixel coordinates (distortion removed).
+
+        Raises
+        ------
+        InvalidInputError
+            If the coordinates are not finite.
+        """
+        x = np.asarray(x, dtype=float)
+        y = np.asarray(y, dtype=float)
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+            raise InvalidInputError("pixel coordinates must be finite numbers (got NaN or inf)")
+        ad = (x - self.cx) / self.fx
+        bd = (y - self.cy) / self.fy
+        a, b = self._undistort(ad, bd) if self.has_distortion else (ad, bd)
+        v = np.stack([a, b, np.ones_like(a)], axis=-1)
+        return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+    def _undistort(self, ad: NDArray, bd: NDArray) -> tuple[NDArray, NDArray]:
+        """Invert the distortion by Newton's method (vectorised), to 1e-6 px."""
+        a, b = ad.copy(), bd.copy()
+        tol = UNDISTORT_TOL_PX / max(self.fx, self.fy)
+        for _ in range(UNDISTORT_MAX_ITER):
+            fa, fb = self._distort(a, b)
+            ra, rb = fa - ad, fb - bd
+            if np.all(np.hypot(ra, rb) < tol):
+                break
+            daa, dab, dba, dbb = self._distort_jacobian(a, b)
+            det = daa * dbb - dab * dba
+            a = a - (dbb * ra - dab * rb) / det
+            b = b - (-dba * ra + daa * rb) / det
+        return a, b
+
+    def in_image(self, x: ArrayLike, y: ArrayLike, margin_px: float = 0.0) -> NDArray[np.bool_]:
+        """True where (x, y) lies inside the image, at least ``margin_px`` from its outer edge."""
+        x = np.asarray(x, dtype=float)
+        y = np.asarray(y, dtype=float)
+        lo = -0.5 + margin_px
+        with np.errstate(invalid="ignore"):
+            return (x >= lo) & (y >= lo) & (x <= self.width - 0.5 - margin_px) & (y <= self.height - 0.5 - margin_px)
+
+
+# --- presets from the seeds ------------------------------------------------------------------
+def _from_pitch(name: str, width: int, height: int, focal_mm: float, pitch_um: float,
+                source: str, pitch_v_um: float | None = None) -> Camera:
+    pitch_v = pitch_um if pitch_v_um is None else pitch_v_um
+    return Camera(width=width, height=height, fx=focal_mm * 1000.0 / pitch_um,
+                  fy=focal_mm * 1000.0 / pitch_v, name=name, source=source, pixel_pitch_um=pitch_um)
+
+
+PRESETS: dict[str, Camera] = {
+    "far-mst": _from_pitch(
+        "far-mst", 1280, 1024, 15.97, 6.7,
+        "seed 000 Table 7.1 (p.127): FAR-MST simulation camera, IBIS5-A-1300, 30 x 24.25 deg"),
+    "sunsat": _from_pitch(
+        "sunsat", 752, 582, 25.0, 6.5, pitch_v_um=6.25,
+        source="seed 002 §2.1-2.2: Sunsat star camera CCD, 752 x 582 effective pixels, "
+               "6.5 x 6.25 um pitch, 25 mm f/1.4"),
+    "aptina-mt9p031": Camera(
+        width=2592, height=1944, fx=2745.88, fy=2747.75, cx=1351.9, cy=975.691,
+        k1=-0.1755, k2=0.1983, p1=0.0002264, p2=0.0, k3=0.0, pixel_pitch_um=2.2,
+        name="aptina-mt9p031",
+        source="seed 003 Table 1.3 and Table 4.4 (12.5 mm grid calibration, the one used)"),
+    "droid-x2": Camera(
+        width=3264, height=2448, fx=3520.75, fy=3521.15, cx=1620.66, cy=1214.52,
+        k1=0.1043, k2=-0.4592, pixel_pitch_um=1.4, name="droid-x2",
+        source="seed 003 Table 1.2 and Table 4.3 (6 mm grid calibration, the one used)"),
+    "starnav-i": _from_pitch(
+        "starnav-i", 512, 512, 58.0, 15.84,
+        "seed 004 Table 1 / §simulation: StarNav I, 512 x 512, f = 58 mm; pitch 15.84 um gives the "
+        "8 deg FOV that Table 1 implies (the text's 7 deg is an erratum, notes seed-001-004.md)"),
+}
+
+
+def get_preset(name: str) -> Camera:
+    """A named camera from the seeds (see :data:`PRESETS` for the names and their sources)."""
+    key = name.strip().lower().replace("_", "-")
+    if key not in PRESETS:
+        raise InvalidInputError(f"unknown camera preset {name!r}; valid presets: {', '.join(sorted(PRESETS))}")
+    return PRESETS[key]

@@ -1,0 +1,114 @@
+"""Rotations, sky directions and the RA / Dec / roll output format.
+
+All angles in radians. Vectors are unit vectors in arrays of shape (..., 3). The attitude type is
+``scipy.spatial.transform.Rotation`` named ``rot_cam_from_icrs`` (it maps ICRS vectors into the
+camera frame, see :mod:`startrack.conventions`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
+
+from .errors import InvalidInputError
+
+TWO_PI = 2.0 * np.pi
+
+
+def radec_to_vector(ra_rad: ArrayLike, dec_rad: ArrayLike) -> NDArray[np.float64]:
+    """ICRS unit vectors, shape (..., 3), from right ascension and declination in radians."""
+    ra = np.asarray(ra_rad, dtype=float)
+    dec = np.asarray(dec_rad, dtype=float)
+    cd = np.cos(dec)
+    return np.stack([cd * np.cos(ra), cd * np.sin(ra), np.sin(dec)], axis=-1)
+
+
+def vector_to_radec(v: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Right ascension in [0, 2 pi) and declination in [-pi/2, pi/2] of vectors (..., 3).
+
+    The vectors need not be normalised. RA of a pole is 0.
+    """
+    v = np.asarray(v, dtype=float)
+    x, y, z = v[..., 0], v[..., 1], v[..., 2]
+    ra = np.mod(np.arctan2(y, x), TWO_PI)
+    dec = np.arctan2(z, np.hypot(x, y))
+    return ra, dec
+
+
+def normalize(v: ArrayLike) -> NDArray[np.float64]:
+    """Vectors (..., 3) scaled to unit length."""
+    v = np.asarray(v, dtype=float)
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def angle_between(u: ArrayLike, v: ArrayLike) -> NDArray[np.float64]:
+    """Angle in radians between vectors (..., 3), by the stable atan2 form.
+
+    ``atan2(|u x v|, u . v)`` keeps full precision at small and near-pi angles, where
+    ``arccos(u . v)`` loses it.
+    """
+    u = np.asarray(u, dtype=float)
+    v = np.asarray(v, dtype=float)
+    cross = np.linalg.norm(np.cross(u, v), axis=-1)
+    return np.arctan2(cross, np.sum(u * v, axis=-1))
+
+
+def _north_east(ra: NDArray, dec: NDArray) -> tuple[NDArray, NDArray]:
+    """Local north and east unit tangent vectors (..., 3) at (ra, dec)."""
+    sr, cr, sd, cd = np.sin(ra), np.cos(ra), np.sin(dec), np.cos(dec)
+    north = np.stack([-sd * cr, -sd * sr, cd], axis=-1)
+    east = np.stack([-sr, cr, np.zeros_like(ra)], axis=-1)
+    return north, east
+
+
+def rotation_from_radec_roll(ra_rad: ArrayLike, dec_rad: ArrayLike, roll_rad: ArrayLike) -> Rotation:
+    """Attitude ``rot_cam_from_icrs`` from boresight RA, Dec and roll (radians).
+
+    The camera's +z axis points at (ra, dec); image "up" (camera -y) lies at position angle
+    ``-roll`` east of north, so roll = 0 puts north up and, for an ordinary un-mirrored image,
+    east to the left. Works at the poles, where RA fixes the meaning of "north".
+    Scalars give a single Rotation, arrays of shape (N,) a stacked one.
+    """
+    ra, dec, roll = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (ra_rad, dec_rad, roll_rad)))
+    z = radec_to_vector(ra, dec)
+    north, east = _north_east(ra, dec)
+    up = np.cos(roll)[..., None] * north - np.sin(roll)[..., None] * east
+    y = -up
+    x = np.cross(y, z)
+    matrix = np.stack([x, y, z], axis=-2)  # rows: camera axes in ICRS
+    return Rotation.from_matrix(matrix)
+
+
+def radec_roll_from_rotation(
+    rot_cam_from_icrs: Rotation,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Boresight RA in [0, 2 pi), Dec, and roll in [0, 2 pi) (radians) of an attitude.
+
+    The inverse of :func:`rotation_from_radec_roll`.
+    """
+    matrix = rot_cam_from_icrs.as_matrix()
+    y, z = matrix[..., 1, :], matrix[..., 2, :]
+    ra, dec = vector_to_radec(z)
+    north, east = _north_east(ra, dec)
+    up = -y
+    position_angle = np.arctan2(np.sum(up * east, axis=-1), np.sum(up * north, axis=-1))
+    roll = np.mod(-position_angle, TWO_PI)
+    return ra, dec, roll
+
+
+def boresight(rot_cam_from_icrs: Rotation) -> NDArray[np.float64]:
+    """ICRS unit vector (..., 3) of the camera's +z axis."""
+    return rot_cam_from_icrs.inv().apply(np.array([0.0, 0.0, 1.0]))
+
+
+def attitude_error(truth: Rotation, estimate: Rotation) -> NDArray[np.float64]:
+    """Total rotation angle (radians) between two attitudes: ``(truth * estimate.inv()).magnitude()``."""
+    return (truth * estimate.inv()).magnitude()
+
+
+def random_rotations(n: int | None = None, rng: np.random.Generator | int | None = None) -> Rotation:
+    """Attitudes uniformly distributed over SO(3), from a seeded generator."""
+    if n is not None and n < 1:
+        raise InvalidInputError(f"n must be a positive number of rotations, got {n}")
+    return Rotation.random(n, random_state=np.random.default_rng(rng))

@@ -1,0 +1,70 @@
+#!/usr/bin/env python3
+"""Set up the project and run its main jobs, with nothing but Python 3.11+ and pip.
+
+Usage::
+
+    python3 tasks.py demo     # create .venv, install startrack, simulate and solve a star image
+    python3 tasks.py test     # create .venv, install startrack with test tools, run the suite
+    python3 tasks.py bench    # run the benchmarks in benchmarks/ (installs their peers)
+
+The virtual environment lives in ``.venv`` next to this file; it is created on first use and
+reused afterwards (re-installed when ``pyproject.toml`` changes).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import subprocess
+import sys
+import venv
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent
+VENV = ROOT / ".venv"
+BIN = VENV / ("Scripts" if os.name == "nt" else "bin")
+PY = BIN / "python"
+STAMP = VENV / ".startrack-installed"
+
+
+def _run(*cmd: str | Path) -> None:
+    print("+", " ".join(str(c) for c in cmd), flush=True)
+    subprocess.run([str(c) for c in cmd], check=True, cwd=ROOT)
+
+
+def ensure_env(extra: str = "test") -> None:
+    """Create ``.venv`` and install the package (editable) unless it is already current."""
+    if sys.version_info < (3, 11):
+        sys.exit(f"startrack needs Python 3.11 or newer; this is {sys.version.split()[0]}")
+    if not PY.exists():
+        print(f"creating virtual environment in {VENV}", flush=True)
+        venv.EnvBuilder(with_pip=True).create(VENV)
+    digest = hashlib.sha256((ROOT / "pyproject.toml").read_bytes() + extra.encode()).hexdigest()
+    if STAMP.exists() and STAMP.read_text() == digest:
+        return
+    _run(PY, "-m", "pip", "install", "--quiet", "--upgrade", "pip")
+    _run(PY, "-m", "pip", "install", "--quiet", "-e", f".[{extra}]")
+    STAMP.write_text(digest)
+
+
+def main(argv: list[str]) -> int:
+    if not argv or argv[0] not in {"demo", "test", "bench"}:
+        print(__doc__)
+        return 2
+    task, rest = argv[0], argv[1:]
+    ensure_env()
+    try:
+        if task == "demo":
+            _run(BIN / "startrack", "demo", *rest)
+        elif task == "test":
+            _run(PY, "-m", "ruff", "check", "src", "tests", "benchmarks")
+            _run(PY, "-m", "pytest", *rest)
+        else:
+            _run(PY, "benchmarks/run_all.py", *rest)
+    except subprocess.CalledProcessError as exc:
+        return exc.returncode or 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
