@@ -8,7 +8,7 @@ conventions every function keeps.
 from __future__ import annotations
 
 from .camera import Camera, get_preset
-from .results import AttitudeSolution, Detections, Status, StarMatches
+from .results import AttitudeSolution, Detections, StarMatches, Status
 
 __version__ = "0.1.0"
 

@@ -1,0 +1,303 @@
+"""The pattern database: four-star patterns at several field-of-view scales, with a k-vector.
+
+Built on demand from the Hipparcos catalog into the user cache (DESIGN.md, Data) and loaded from
+there afterwards.
+
+How it is built (the uniform reduced catalog of seed 000 §5.5.4 and seed 002's sub-catalogue,
+applied per scale; notes ``seed-000.md`` §1.14-1.15):
+
+1. Stars to ``max_mag`` (estimated V), at ``epoch_jyear``; stars with a neighbour closer than
+   ``blend_fraction`` of a level's FOV are left out of that level's patterns (their centroids
+   blend in an image).
+2. Levels: fields of view from ``fov_max_deg`` down to ``fov_min_deg`` in steps of
+   ``level_ratio``. At each level, sample directions cover the sky (a Fibonacci lattice) at a
+   spacing of half the region radius ``region_fraction * FOV``; around each, the
+   ``stars_per_region`` brightest stars form every four-star pattern (C(6, 4) = 15 for 6 stars).
+   Duplicates are removed.
+3. Each pattern is keyed by its five sorted edge ratios (:mod:`.patterns`); each level's patterns
+   are sorted by a two-level key of the two smallest ratios (:func:`pattern_key`), which a
+   :class:`~.kvector.KVector` indexes.
+4. Each level also keeps a verification set: the ``verify_per_region`` brightest stars around each
+   sample direction within half the FOV, to confirm a match and measure its false-match
+   probability (:mod:`.verify`).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from functools import lru_cache
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+from .. import cache
+from ..catalog import flag_doubles, load_catalog
+from ..errors import InvalidInputError
+from .kvector import KVector
+from .patterns import edge_ratios, pair_angles
+
+DB_KIND = "patterns"
+DB_VERSION = 1
+
+
+@dataclass(frozen=True)
+class DatabaseSettings:
+    """What a pattern database is built from; its hash names the cache file."""
+
+    fov_min_deg: float = 5.0
+    fov_max_deg: float = 35.0
+    level_ratio: float = 1.4
+    stars_per_region: int = 6
+    region_fraction: float = 0.35
+    verify_per_region: int = 30
+    max_mag: float = 9.5
+    blend_fraction: float = 1.0 / 250.0
+    min_edge_fraction: float = 1.0 / 150.0
+    epoch_jyear: float = 2000.0
+
+    def __post_init__(self) -> None:
+        if not (0.5 <= self.fov_min_deg <= self.fov_max_deg <= 100.0):
+            raise InvalidInputError(
+                "database FOV range must satisfy 0.5 <= fov_min_deg <= fov_max_deg <= 100 deg, "
+                f"got {self.fov_min_deg} to {self.fov_max_deg}")
+        if self.level_ratio <= 1.05 or self.stars_per_region < 4:
+            raise InvalidInputError("level_ratio must exceed 1.05 and stars_per_region be at least 4")
+
+    def level_fovs_rad(self) -> NDArray[np.float64]:
+        """Fields of view of the levels, narrowest first (radians), from fov_min to >= fov_max."""
+        count = 1 + math.ceil(math.log(self.fov_max_deg / self.fov_min_deg) / math.log(self.level_ratio) - 1e-9)
+        return np.radians(self.fov_min_deg * self.level_ratio ** np.arange(count))
+
+
+@dataclass(frozen=True)
+class PatternDatabase:
+    """A loaded pattern database (see the module docstring for how it is built).
+
+    Attributes
+    ----------
+    settings : DatabaseSettings
+    cat_index : ndarray of int, shape (S,)
+        Row of each database star in :func:`startrack.catalog.load_catalog`.
+    hip : ndarray of int, shape (S,)
+    vectors : ndarray, shape (S, 3)
+        ICRS unit vectors at ``settings.epoch_jyear``.
+    mag : ndarray, shape (S,)
+    level_fov_rad : ndarray, shape (L,)
+    pattern_stars : ndarray of int32, shape (P, 4)
+        Database-star indices of each pattern (patterns sorted by level, then smallest ratio).
+    pattern_ratios : ndarray of uint16, shape (P, 5)
+        Sorted edge ratios times :data:`RATIO_SCALE`.
+    pattern_largest : ndarray of float32, shape (P,)
+        Largest edge angle of each pattern (radians).
+    level_offsets : ndarray of int, shape (L + 1,)
+        Patterns of level k are rows ``level_offsets[k]:level_offsets[k + 1]``.
+    verify_levels : ndarray of uint16, shape (S,)
+        Bit k set when the star belongs to level k's verification set.
+    """
+
+    settings: DatabaseSettings
+    cat_index: NDArray[np.int64]
+    hip: NDArray[np.int64]
+    vectors: NDArray[np.float64]
+    mag: NDArray[np.float32]
+    level_fov_rad: NDArray[np.float64]
+    pattern_stars: NDArray[np.int32]
+    pattern_ratios: NDArray[np.uint16]
+    pattern_largest: NDArray[np.float32]
+    level_offsets: NDArray[np.int64]
+    verify_levels: NDArray[np.uint16]
+    kvectors: tuple[KVector, ...] = field(repr=False, default=())
+    tree: cKDTree | None = field(repr=False, default=None)
+
+    @property
+    def n_patterns(self) -> int:
+        return int(self.pattern_stars.shape[0])
+
+    @property
+    def nbytes(self) -> int:
+        """Memory held by the arrays (bytes)."""
+        arrays = (self.cat_index, self.hip, self.vectors, self.mag, self.pattern_stars,
+                  self.pattern_ratios, self.pattern_largest, self.verify_levels)
+        return int(sum(a.nbytes for a in arrays) + sum(k.k.nbytes for k in self.kvectors))
+
+    def level_patterns(self, level: int) -> slice:
+        return slice(int(self.level_offsets[level]), int(self.level_offsets[level + 1]))
+
+
+# --- building ---------------------------------------------------------------------------------
+def fibonacci_sphere(n: int) -> NDArray[np.float64]:
+    """``n`` nearly evenly spaced unit vectors (golden-angle spiral), shape (n, 3)."""
+    i = np.arange(n) + 0.5
+    z = 1.0 - 2.0 * i / n
+    phi = math.pi * (3.0 - math.sqrt(5.0)) * i
+    r = np.sqrt(1.0 - z * z)
+    return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
+
+
+def _chord(angle_rad: float) -> float:
+    return 2.0 * math.sin(angle_rad / 2.0)
+
+
+def _brightest_near(tree: cKDTree, usable: NDArray[np.bool_], spacing_rad: float,
+                    radius_rad: float, count: int) -> list[NDArray[np.int64]]:
+    """For sample directions at ``spacing_rad``, the ``count`` brightest usable stars within radius.
+
+    Stars are indexed brightest first, so the brightest are the smallest indices.
+    """
+    n_points = max(12, int(4.0 * math.pi / spacing_rad**2))
+    neighbours = tree.query_ball_point(fibonacci_sphere(n_points), _chord(radius_rad))
+    regions = []
+    for found in neighbours:
+        idx = np.sort(np.asarray(found, dtype=np.int64))
+        regions.append(idx[usable[idx]][:count])
+    return regions
+
+
+def _region_patterns(regions: list[NDArray[np.int64]]) -> NDArray[np.int64]:
+    """All four-star combinations within each region, deduplicated, shape (P, 4), rows sorted."""
+    import itertools
+
+    chunks = []
+    by_size: dict[int, list[NDArray]] = {}
+    for idx in regions:
+        if idx.size >= 4:
+            by_size.setdefault(idx.size, []).append(idx)
+    for size, groups in by_size.items():
+        combos = np.array(list(itertools.combinations(range(size), 4)))
+        members = np.stack(groups)  # (G, size), each row ascending
+        chunks.append(members[:, combos].reshape(-1, 4))
+    if not chunks:
+        return np.zeros((0, 4), dtype=np.int64)
+    return np.unique(np.concatenate(chunks), axis=0)
+
+
+def _build_level(vectors: NDArray, tree: cKDTree, doubles: NDArray[np.bool_], fov: float,
+                 settings: DatabaseSettings) -> tuple[NDArray, NDArray]:
+    """Patterns (P, 4) and verification star indices of one level."""
+    radius = settings.region_fraction * fov
+    regions = _brightest_near(tree, ~doubles, radius / 2.0, radius, settings.stars_per_region)
+    patterns = _region_patterns(regions)
+    angles = pair_angles(vectors[patterns])
+    patterns = patterns[angles.min(axis=1) >= settings.min_edge_fraction * fov]
+    everyone = np.ones(len(vectors), dtype=bool)
+    verify = _brightest_near(tree, everyone, fov / 4.0, fov / 2.0, settings.verify_per_region)
+    return patterns, np.unique(np.concatenate(verify))
+
+
+def build_database_arrays(settings: DatabaseSettings) -> dict[str, NDArray]:
+    """Build the database arrays (what is cached); see the module docstring."""
+    catalog = load_catalog()
+    mag = catalog.v_mag
+    keep = np.flatnonzero(np.isfinite(mag) & (mag <= settings.max_mag))
+    keep = keep[np.argsort(mag[keep], kind="stable")]  # brightest first
+    sub = catalog.take(keep)
+    vectors = sub.vectors(settings.epoch_jyear)
+    tree = cKDTree(vectors)
+    levels = settings.level_fovs_rad()
+    stars_used = np.zeros(len(keep), dtype=bool)
+    verify_bits = np.zeros(len(keep), dtype=np.uint16)
+    level_patterns = []
+    for k, fov in enumerate(levels):
+        doubles = flag_doubles(sub, settings.blend_fraction * fov)
+        patterns, verify = _build_level(vectors, tree, doubles, fov, settings)
+        level_patterns.append(patterns)
+        stars_used[patterns.ravel()] = True
+        stars_used[verify] = True
+        verify_bits[verify] |= np.uint16(1 << k)
+    return _compact(keep, sub, vectors, stars_used, verify_bits, level_patterns, levels)
+
+
+RATIO_SCALE = 65535.0
+"""Edge ratios are stored as uint16: ratio = stored / RATIO_SCALE (resolution 1.5e-5)."""
+
+KEY_BINS = 64
+"""Bins of the smallest ratio in the two-level key (see :func:`pattern_key`)."""
+
+
+def pattern_key(ratios: NDArray) -> NDArray[np.float64]:
+    """The sort and k-vector key of patterns: ``2 * floor(64 * r0) + r1``.
+
+    Sorting by it orders patterns by a coarse bin of the smallest ratio r0 and, inside a bin, by
+    the second ratio r1 (in [0, 1]), so one k-vector range query per r0 bin returns only the
+    patterns whose first two ratios are both near the image's.
+    """
+    r0, r1 = ratios[..., 0], ratios[..., 1]
+    return 2.0 * np.floor(np.clip(r0, 0.0, 1.0) * KEY_BINS) + r1
+
+
+def _compact(keep, sub, vectors, stars_used, verify_bits, level_patterns, levels) -> dict[str, NDArray]:
+    """Keep only the stars some level uses, renumber, sort each level by :func:`pattern_key`."""
+    used = np.flatnonzero(stars_used)
+    renumber = np.full(len(keep), -1, dtype=np.int64)
+    renumber[used] = np.arange(used.size)
+    vec = vectors[used]
+    stars, ratios, largest, offsets = [], [], [], [0]
+    for patterns in level_patterns:
+        local = renumber[patterns]
+        r, big = edge_ratios(pair_angles(vec[local]))
+        quantised = np.round(r * RATIO_SCALE).astype(np.uint16)
+        order = np.argsort(pattern_key(quantised / RATIO_SCALE), kind="stable")
+        stars.append(local[order].astype(np.int32))
+        ratios.append(quantised[order])
+        largest.append(big[order].astype(np.float32))
+        offsets.append(offsets[-1] + len(order))
+    return {
+        "cat_index": keep[used], "hip": sub.hip[used].astype(np.int64), "vectors": vec,
+        "mag": sub.v_mag[used].astype(np.float32), "level_fov_rad": levels,
+        "pattern_stars": np.concatenate(stars), "pattern_ratios": np.concatenate(ratios),
+        "pattern_largest": np.concatenate(largest), "level_offsets": np.array(offsets, dtype=np.int64),
+        "verify_levels": verify_bits[used],
+    }
+
+
+# --- loading ----------------------------------------------------------------------------------
+def _from_arrays(settings: DatabaseSettings, arrays: dict[str, NDArray]) -> PatternDatabase:
+    offsets = arrays["level_offsets"]
+    keys = pattern_key(arrays["pattern_ratios"] / RATIO_SCALE)
+    kvectors = tuple(KVector.build(keys[offsets[k]:offsets[k + 1]]) for k in range(len(offsets) - 1))
+    fields = {k: arrays[k] for k in ("cat_index", "hip", "vectors", "mag", "level_fov_rad", "pattern_stars",
+                                     "pattern_ratios", "pattern_largest", "level_offsets", "verify_levels")}
+    return PatternDatabase(settings=settings, **fields, kvectors=kvectors, tree=cKDTree(arrays["vectors"]))
+
+
+def load_database(settings: DatabaseSettings | None = None) -> PatternDatabase:
+    """The pattern database for these settings, built into the cache on first use.
+
+    The first call for new settings builds the database (tens of seconds to a few minutes,
+    reported by :func:`database_report`); later calls load it from the cache in well under a
+    second, and calls in the same process reuse it.
+    """
+    return _load_database(settings or DatabaseSettings())
+
+
+@lru_cache(maxsize=4)
+def _load_database(settings: DatabaseSettings) -> PatternDatabase:
+    arrays = cache.load_or_build(DB_KIND, DB_VERSION, asdict(settings), lambda: build_database_arrays(settings))
+    return _from_arrays(settings, arrays)
+
+
+def database_path(settings: DatabaseSettings | None = None):
+    """Where the cache file of these settings lives (it may not exist yet)."""
+    settings = settings or DatabaseSettings()
+    return cache.cache_dir() / f"{DB_KIND}-{cache.input_key(DB_KIND, DB_VERSION, asdict(settings))}.npz"
+
+
+def database_report(settings: DatabaseSettings | None = None) -> dict[str, float]:
+    """Build (if needed) and load a database, and say what it costs: seconds, bytes, counts."""
+    settings = settings or DatabaseSettings()
+    path = database_path(settings)
+    t0 = time.perf_counter()
+    built = not path.exists()
+    if built:
+        arrays = build_database_arrays(settings)
+        cache.save(DB_KIND, DB_VERSION, asdict(settings), arrays)
+    build_s = time.perf_counter() - t0 if built else float("nan")
+    t0 = time.perf_counter()
+    db = _from_arrays(settings, cache.load(DB_KIND, DB_VERSION, asdict(settings)))
+    load_s = time.perf_counter() - t0
+    return {"build_s": build_s, "load_s": load_s, "file_bytes": path.stat().st_size,
+            "memory_bytes": db.nbytes, "n_patterns": db.n_patterns, "n_stars": len(db.hip),
+            "n_levels": len(db.level_fov_rad)}

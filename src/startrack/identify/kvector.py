@@ -1,0 +1,87 @@
+"""The k-vector range search (Mortari 1997; seed 000 §5.5.4, notes ``seed-000.md`` §1.15).
+
+Given n sorted keys S, a straight line z(j) = m j + q through the first and last key (widened by a
+small margin) and the counts k[j] = #{S <= z(j)} turn the question "which keys lie in [a, b]?"
+into two multiplications and two table look-ups, with no search. The answer is a contiguous
+slice of the sorted keys, trimmed exactly at both ends.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import InvalidInputError
+
+
+@dataclass(frozen=True)
+class KVector:
+    """A k-vector over sorted keys.
+
+    Attributes
+    ----------
+    keys : ndarray, shape (n,)
+        The keys, sorted ascending.
+    k : ndarray of int, shape (n + 1,)
+        ``k[j]`` = number of keys ``<= z(j)``, with ``z(j) = slope * j + intercept``.
+    slope, intercept : float
+        The line through (0, S[0] - margin) and (n, S[-1] + margin).
+    """
+
+    keys: NDArray
+    k: NDArray[np.int64]
+    slope: float
+    intercept: float
+
+    @classmethod
+    def build(cls, sorted_keys: ArrayLike) -> KVector:
+        """Build the index; ``sorted_keys`` must be sorted ascending (checked)."""
+        keys = np.asarray(sorted_keys)
+        if keys.ndim != 1:
+            raise InvalidInputError(f"k-vector keys must be 1-D, got shape {keys.shape}")
+        if keys.size and np.any(np.diff(keys) < 0):
+            raise InvalidInputError("k-vector keys must be sorted ascending")
+        n = keys.size
+        if n == 0:
+            return cls(keys=keys, k=np.zeros(1, dtype=np.int64), slope=1.0, intercept=0.0)
+        lo, hi = float(keys[0]), float(keys[-1])
+        margin = max(abs(lo), abs(hi), 1.0) * 1e-9
+        slope = (hi - lo + 2 * margin) / n
+        intercept = lo - margin
+        grid = slope * np.arange(n + 1) + intercept
+        k = np.searchsorted(keys, grid, side="right").astype(np.int32 if n < 2**31 - 1 else np.int64)
+        return cls(keys=keys, k=k, slope=slope, intercept=intercept)
+
+    def query(self, low: float, high: float) -> tuple[int, int]:
+        """Half-open index range [start, stop) of the sorted keys in [low, high]."""
+        start, stop = self.query_many(np.array([low]), np.array([high]))
+        return int(start[0]), int(stop[0])
+
+    def query_many(self, low: ArrayLike, high: ArrayLike) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """Vectorised :meth:`query` over arrays of bounds; returns (start, stop) arrays."""
+        low = np.asarray(low, dtype=float)
+        high = np.asarray(high, dtype=float)
+        n = self.keys.size
+        if n == 0:
+            zero = np.zeros(low.shape, dtype=np.int64)
+            return zero, zero
+        j_low = np.clip(np.floor((low - self.intercept) / self.slope).astype(np.int64), 0, n)
+        j_high = np.clip(np.ceil((high - self.intercept) / self.slope).astype(np.int64), 0, n)
+        start = self.k[j_low].astype(np.int64)
+        stop = self.k[j_high].astype(np.int64)
+        # Trim: k[j_low] may include a few keys below `low`; k[j_high] may include keys above `high`.
+        start = _advance(self.keys, start, stop, low, below=True)
+        stop = _advance(self.keys, start, stop, high, below=False)
+        return start, np.maximum(start, stop)
+
+
+def _advance(keys: NDArray, start: NDArray, stop: NDArray, bound: NDArray, *, below: bool) -> NDArray:
+    """Move ``start`` past keys < bound (below=True) or ``stop`` back over keys > bound."""
+    out = (start if below else stop).copy()
+    for i in range(out.size):
+        lo, hi = int(start.flat[i]), int(stop.flat[i])
+        side = "left" if below else "right"
+        out.flat[i] = lo + np.searchsorted(keys[lo:hi], keys.dtype.type(bound.flat[i]), side=side)
+    return out

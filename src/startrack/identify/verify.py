@@ -1,0 +1,110 @@
+"""Verification of a candidate attitude and the probability that it is a false match.
+
+A candidate (attitude and focal length) predicts where the database's verification stars fall.
+Each of the n brightest image stars either has a predicted star within ``radius_px`` or not.
+If the candidate were wrong, a star would find a neighbour by chance with probability
+p = m * pi * r^2 / (W * H) for m predicted stars in a W x H image, independently, so k or more
+chance matches among n stars have the binomial tail probability P(X >= k; n, p). Over the T
+candidates tried, the probability that any wrong one did this well is at most T times that
+(Bonferroni). A match is accepted when that bound is below the caller's threshold.
+This is the reasoning tetra3 uses for its mismatch probability; the test here counts only the
+stars that were not used to form the candidate.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+from scipy.special import bdtrc
+
+from ..camera import Camera
+from .database import PatternDatabase
+
+
+@dataclass(frozen=True)
+class Projection:
+    """Database stars predicted inside the image: indices and pixel positions."""
+
+    star: NDArray[np.int64]
+    x: NDArray[np.float64]
+    y: NDArray[np.float64]
+
+
+def project_catalog(db: PatternDatabase, rot_cam_from_icrs: Rotation, camera: Camera,
+                    level_bit: int | None = None) -> Projection:
+    """Database stars that land in the image for this attitude and camera.
+
+    Parameters
+    ----------
+    level_bit : int or None
+        Only stars of that level's verification set (None: every database star).
+    """
+    half_diag = math.radians(camera.fov_diagonal_deg) / 2.0 * 1.05
+    boresight = rot_cam_from_icrs.inv().apply([0.0, 0.0, 1.0])
+    idx = np.asarray(db.tree.query_ball_point(boresight, 2.0 * math.sin(min(half_diag, 1.5) / 2.0)),
+                     dtype=np.int64)
+    if level_bit is not None and idx.size:
+        idx = idx[(db.verify_levels[idx] >> np.uint16(level_bit)) & np.uint16(1) == 1]
+    if idx.size == 0:
+        return Projection(idx, np.zeros(0), np.zeros(0))
+    x, y = camera.vector_to_pixel(rot_cam_from_icrs.apply(db.vectors[idx]))
+    inside = camera.in_image(x, y)
+    return Projection(idx[inside], x[inside], y[inside])
+
+
+def match_nearest(img_x: NDArray, img_y: NDArray, cat_x: NDArray, cat_y: NDArray,
+                  radius_px: float) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Pairs (image index, catalog index), each used once, nearest first, within the radius."""
+    if img_x.size == 0 or cat_x.size == 0:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty
+    d2 = (img_x[:, None] - cat_x[None, :]) ** 2 + (img_y[:, None] - cat_y[None, :]) ** 2
+    i_idx, c_idx = np.nonzero(d2 <= radius_px * radius_px)
+    order = np.argsort(d2[i_idx, c_idx], kind="stable")
+    taken_i = np.zeros(img_x.size, dtype=bool)
+    taken_c = np.zeros(cat_x.size, dtype=bool)
+    pairs = []
+    for i, c in zip(i_idx[order], c_idx[order], strict=True):
+        if not (taken_i[i] or taken_c[c]):
+            taken_i[i] = taken_c[c] = True
+            pairs.append((i, c))
+    if not pairs:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty
+    arr = np.array(pairs, dtype=np.int64)
+    return arr[:, 0], arr[:, 1]
+
+
+def false_match_probability(n_matched: int, n_tested: int, n_predicted: int, radius_px: float,
+                            width: int, height: int, n_trials: int) -> float:
+    """Bound on the probability that a wrong candidate matched this many stars by chance.
+
+    Parameters
+    ----------
+    n_matched : int
+        Image stars (beyond those that formed the candidate) with a predicted star nearby.
+    n_tested : int
+        Image stars tested (beyond those that formed the candidate).
+    n_predicted : int
+        Catalog stars predicted inside the image.
+    radius_px : float
+        Match radius in pixels.
+    width, height : int
+        Image size in pixels.
+    n_trials : int
+        Candidates tried so far (the Bonferroni factor).
+
+    Returns
+    -------
+    float
+        ``min(1, n_trials * P(X >= n_matched))`` with X ~ Binomial(n_tested, p).
+    """
+    if n_tested <= 0 or n_matched <= 0:
+        return 1.0
+    p = min(1.0, n_predicted * math.pi * radius_px**2 / (width * height))
+    tail = float(bdtrc(n_matched - 1, n_tested, p))
+    return min(1.0, max(1, n_trials) * tail)

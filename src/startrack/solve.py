@@ -1,0 +1,218 @@
+"""Lost-in-space solving: a star list or an image in, an :class:`AttitudeSolution` out.
+
+This module only orchestrates: it validates the input, picks the pattern database for the field
+of view, calls the matcher (:mod:`startrack.identify`), refines the match on all stars, and
+computes the QUEST attitude with its covariance (:mod:`startrack.attitude`).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from astropy.time import Time
+from numpy.typing import ArrayLike, NDArray
+
+from .attitude import attitude_covariance, solve_wahba
+from .camera import Camera, focal_px_from_fov
+from .catalog import load_catalog
+from .errors import InvalidInputError
+from .frames import angle_between, radec_roll_from_rotation
+from .identify import DatabaseSettings, MatcherOptions, load_database, match_lost_in_space
+from .identify.quad_matcher import Candidate
+from .identify.refine import refine_pointing
+from .identify.verify import match_nearest, project_catalog
+from .results import AttitudeSolution, StarMatches, Status
+from .units import ARCSEC
+
+DEFAULT_FOV_RANGE_DEG: tuple[float, float] = (5.0, 35.0)
+"""Searched when no field of view is given: ordinary star trackers and camera lenses."""
+
+FOV_DEG_TOLERANCE = 0.03
+"""A given ``fov_deg`` is trusted to this fraction; the solve refines it."""
+
+DEFAULT_EPOCH_JYEAR = 2000.0
+
+
+@dataclass(frozen=True)
+class _Problem:
+    """A validated solve request."""
+
+    x: NDArray[np.float64]
+    y: NDArray[np.float64]
+    camera: Camera
+    focal_range: tuple[float, float] | None
+    fov_range_deg: tuple[float, float]
+    epoch_jyear: float
+
+
+def _epoch_jyear(epoch) -> float:
+    if epoch is None:
+        return DEFAULT_EPOCH_JYEAR
+    if isinstance(epoch, Time):
+        return float(epoch.tdb.jyear)
+    value = float(epoch)
+    if not (1000.0 < value < 3000.0):
+        raise InvalidInputError(f"epoch must be an astropy Time or a Julian year such as 2025.5, got {epoch!r}")
+    return value
+
+
+def _check_fov_deg(fov: float, name: str) -> float:
+    fov = float(fov)
+    if not (math.isfinite(fov) and 0.5 <= fov <= 100.0):
+        raise InvalidInputError(f"{name} must be a field of view between 0.5 and 100 deg, got {fov:g}")
+    return fov
+
+
+def _focal_setup(width, height, fov_deg, fov_range_deg, camera):
+    """Nominal camera, focal range (None: fixed) and the FOV range for the database."""
+    if camera is not None:
+        return camera, None, (camera.fov_deg, camera.fov_deg)
+    if fov_deg is not None:
+        fov = _check_fov_deg(fov_deg, "fov_deg")
+        lo, hi = fov * (1 - FOV_DEG_TOLERANCE), fov * (1 + FOV_DEG_TOLERANCE)
+    else:
+        lo, hi = fov_range_deg if fov_range_deg is not None else DEFAULT_FOV_RANGE_DEG
+        lo, hi = _check_fov_deg(lo, "fov_range_deg low"), _check_fov_deg(hi, "fov_range_deg high")
+        if lo > hi:
+            raise InvalidInputError(f"fov_range_deg must be (low, high) with low <= high, got ({lo:g}, {hi:g})")
+    f_lo, f_hi = focal_px_from_fov(width, math.radians(hi)), focal_px_from_fov(width, math.radians(lo))
+    nominal = Camera(width=int(width), height=int(height), fx=math.sqrt(f_lo * f_hi))
+    return nominal, (f_lo, f_hi), (lo, hi)
+
+
+def _star_arrays(x, y, flux, width, height) -> tuple[NDArray, NDArray]:
+    x = np.asarray(x, dtype=float).ravel()
+    y = np.asarray(y, dtype=float).ravel()
+    if x.shape != y.shape:
+        raise InvalidInputError(f"x and y must have the same length, got {x.size} and {y.size}")
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+        raise InvalidInputError("star coordinates must be finite numbers (got NaN or inf)")
+    outside = (x < -0.5) | (y < -0.5) | (x > width - 0.5) | (y > height - 0.5)
+    if np.any(outside):
+        i = int(np.flatnonzero(outside)[0])
+        raise InvalidInputError(f"star {i} at ({x[i]:g}, {y[i]:g}) lies outside the {width} x {height} image "
+                                f"(valid: -0.5 <= x <= {width - 0.5}, -0.5 <= y <= {height - 0.5})")
+    if flux is not None:
+        flux = np.asarray(flux, dtype=float).ravel()
+        if flux.shape != x.shape or not np.all(np.isfinite(flux)):
+            raise InvalidInputError("flux must be finite and as long as x and y")
+        order = np.argsort(-flux, kind="stable")
+        x, y = x[order], y[order]
+    return x, y
+
+
+def _problem(x, y, width, height, fov_deg, fov_range_deg, camera, flux, epoch) -> _Problem:
+    if camera is not None:
+        width, height = camera.width, camera.height
+    for name, value in (("width", width), ("height", height)):
+        if not (isinstance(value, int | np.integer) and value >= 2):
+            raise InvalidInputError(f"{name} must be an integer number of pixels >= 2, got {value!r}")
+    if fov_deg is not None and fov_range_deg is not None:
+        raise InvalidInputError("give fov_deg or fov_range_deg, not both")
+    xs, ys = _star_arrays(x, y, flux, width, height)
+    nominal, focal_range, fov_range = _focal_setup(width, height, fov_deg, fov_range_deg, camera)
+    return _Problem(xs, ys, nominal, focal_range, fov_range, _epoch_jyear(epoch))
+
+
+def _database_for(fov_range_deg: tuple[float, float]):
+    lo, hi = fov_range_deg
+    default = DatabaseSettings()
+    if default.fov_min_deg <= lo and hi <= default.fov_max_deg:
+        return load_database(default)
+    return load_database(DatabaseSettings(fov_min_deg=min(lo, default.fov_min_deg) * 0.97,
+                                          fov_max_deg=max(hi, default.fov_max_deg) * 1.03))
+
+
+def _rematch(problem: _Problem, db, rot, camera, radius_px: float):
+    """Match every image star to every predicted database star within the radius."""
+    proj = project_catalog(db, rot, camera)
+    img_i, cat_i = match_nearest(problem.x, problem.y, proj.x, proj.y, radius_px)
+    return img_i, proj.star[cat_i]
+
+
+def _refined(problem: _Problem, db, cand: Candidate):
+    """Refine the candidate on its matches, re-match all stars at 3x the residual, twice."""
+    catalog = load_catalog()
+    fit_focal = problem.focal_range is not None
+    img, star = cand.image_index, cand.db_index
+    rot, camera = cand.rot_cam_from_icrs, cand.camera
+    for _ in range(2):
+        ref = catalog.take(db.cat_index[star]).vectors(problem.epoch_jyear)
+        rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=fit_focal)
+        radius = max(1.0, 3.0 * float(np.sqrt(np.mean(res**2))))
+        new_img, new_star = _rematch(problem, db, rot, camera, radius)
+        if new_img.size >= 4:
+            img, star = new_img, new_star
+    ref = catalog.take(db.cat_index[star]).vectors(problem.epoch_jyear)
+    rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=fit_focal)
+    return rot, camera, img, star, ref, res
+
+
+def _solution(problem: _Problem, db, cand: Candidate, t0: float) -> AttitudeSolution:
+    rot, camera, img, star, ref, res_px = _refined(problem, db, cand)
+    observed = camera.pixel_to_vector(problem.x[img], problem.y[img])
+    sigma_rad = max(float(np.sqrt(np.mean(res_px**2))), 0.05) / camera.fx
+    quest = solve_wahba(observed, ref, method="quest")
+    rot = quest.rotation
+    residuals = angle_between(rot.apply(ref), observed) / ARCSEC
+    ra, dec, roll = radec_roll_from_rotation(rot)
+    matches = StarMatches(status=Status.OK, det_index=img.astype(np.int64),
+                          hip=db.hip[star].astype(np.int64), cat_vectors=ref,
+                          false_match_prob=cand.false_match_prob)
+    return AttitudeSolution(
+        status=Status.OK, rot_cam_from_icrs=rot,
+        covariance_rad2=attitude_covariance(observed, np.full(len(img), sigma_rad)),
+        ra_deg=float(np.degrees(ra)), dec_deg=float(np.degrees(dec)), roll_deg=float(np.degrees(roll)),
+        fov_deg=camera.fov_deg, camera=camera, matches=matches, residuals_arcsec=residuals,
+        false_match_prob=cand.false_match_prob, solve_time_s=time.perf_counter() - t0)
+
+
+def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height: int | None = None,
+                fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
+                camera: Camera | None = None, flux: ArrayLike | None = None, epoch=None,
+                options: MatcherOptions | None = None) -> AttitudeSolution:
+    """Lost-in-space attitude from a list of star centroids.
+
+    Parameters
+    ----------
+    x, y : array_like, shape (N,)
+        Star centroids in our pixel convention (0-based pixel centres, x = column), brightest
+        first (or give ``flux`` and they are sorted by it).
+    width, height : int
+        Image size in pixels (taken from ``camera`` when one is given).
+    fov_deg : float, optional
+        Horizontal field of view, trusted to +-3 % and refined.
+    fov_range_deg : (float, float), optional
+        Range of horizontal fields of view to search; default (5, 35) when neither is given.
+    camera : Camera, optional
+        A calibrated camera (focal length, principal point, distortion): the focal length is
+        then fixed.
+    flux : array_like, shape (N,), optional
+        Brightness of each star, to order them.
+    epoch : astropy.time.Time or float, optional
+        Epoch of the catalog positions (Julian year, TDB); default J2000.0.
+    options : MatcherOptions, optional
+
+    Returns
+    -------
+    AttitudeSolution
+        ``status`` OK with the attitude, covariance, matches and residuals; otherwise
+        TOO_FEW_STARS, NO_MATCH or TIMEOUT with a reason. ``solve_time_s`` excludes loading the
+        pattern database (done once per process).
+
+    Raises
+    ------
+    InvalidInputError
+        For NaN or out-of-frame coordinates, a bad image size or field of view.
+    """
+    problem = _problem(x, y, width, height, fov_deg, fov_range_deg, camera, flux, epoch)
+    db = _database_for(problem.fov_range_deg)
+    t0 = time.perf_counter()
+    outcome = match_lost_in_space(problem.x, problem.y, problem.camera, db, problem.focal_range, options)
+    if outcome.candidate is None:
+        return AttitudeSolution(status=outcome.status, reason=outcome.reason,
+                                solve_time_s=time.perf_counter() - t0)
+    return _solution(problem, db, outcome.candidate, t0)
