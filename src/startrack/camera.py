@@ -104,9 +104,13 @@ class Camera:
     @classmethod
     def from_fov(cls, width: int, height: int, fov_deg: float, **kwargs) -> Camera:
         """A pinhole camera whose horizontal field of view (edge to edge) is ``fov_deg``."""
-        if not (isinstance(fov_deg, int | float) and 0.0 < fov_deg < 180.0):
+        try:
+            fov = float(fov_deg)
+        except (TypeError, ValueError):
+            raise InvalidInputError(f"fov_deg must be a number of degrees, got {fov_deg!r}") from None
+        if not 0.0 < fov < 180.0:
             raise InvalidInputError(f"fov_deg must be between 0 and 180 deg, got {fov_deg!r}")
-        return cls(width=width, height=height, fx=focal_px_from_fov(width, math.radians(fov_deg)), **kwargs)
+        return cls(width=width, height=height, fx=focal_px_from_fov(width, math.radians(fov)), **kwargs)
 
     def with_focal(self, fx: float, fy: float | None = None) -> Camera:
         """The same camera with other focal lengths (fy keeps the fx / fy ratio if not given)."""
@@ -204,19 +208,26 @@ class Camera:
         return v / np.linalg.norm(v, axis=-1, keepdims=True)
 
     def _undistort(self, ad: NDArray, bd: NDArray) -> tuple[NDArray, NDArray]:
-        """Invert the distortion by Newton's method (vectorised), to 1e-6 px."""
+        """Invert the distortion by Newton's method (vectorised), to 1e-6 px.
+
+        Points where it does not converge (far outside the image, where the polynomial folds
+        back) come out as NaN rather than as a wrong direction.
+        """
         a, b = ad.copy(), bd.copy()
         tol = UNDISTORT_TOL_PX / max(self.fx, self.fy)
-        for _ in range(UNDISTORT_MAX_ITER):
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            for _ in range(UNDISTORT_MAX_ITER):
+                fa, fb = self._distort(a, b)
+                ra, rb = fa - ad, fb - bd
+                if np.all(np.hypot(ra, rb) < tol):
+                    break
+                daa, dab, dba, dbb = self._distort_jacobian(a, b)
+                det = daa * dbb - dab * dba
+                a = a - (dbb * ra - dab * rb) / det
+                b = b - (-dba * ra + daa * rb) / det
             fa, fb = self._distort(a, b)
-            ra, rb = fa - ad, fb - bd
-            if np.all(np.hypot(ra, rb) < tol):
-                break
-            daa, dab, dba, dbb = self._distort_jacobian(a, b)
-            det = daa * dbb - dab * dba
-            a = a - (dbb * ra - dab * rb) / det
-            b = b - (-dba * ra + daa * rb) / det
-        return a, b
+            bad = ~(np.hypot(fa - ad, fb - bd) < tol)
+        return np.where(bad, np.nan, a), np.where(bad, np.nan, b)
 
     def in_image(self, x: ArrayLike, y: ArrayLike, margin_px: float = 0.0) -> NDArray[np.bool_]:
         """True where (x, y) lies inside the image, at least ``margin_px`` from its outer edge."""

@@ -24,6 +24,12 @@ def radec_to_vector(ra_rad: ArrayLike, dec_rad: ArrayLike) -> NDArray[np.float64
     return np.stack([cd * np.cos(ra), cd * np.sin(ra), np.sin(dec)], axis=-1)
 
 
+def _wrap_2pi(angle: NDArray) -> NDArray:
+    """Angles mapped into [0, 2 pi) (``np.mod`` alone can round a tiny negative up to 2 pi)."""
+    wrapped = np.mod(angle, TWO_PI)
+    return np.where(wrapped >= TWO_PI, 0.0, wrapped)
+
+
 def vector_to_radec(v: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Right ascension in [0, 2 pi) and declination in [-pi/2, pi/2] of vectors (..., 3).
 
@@ -31,7 +37,7 @@ def vector_to_radec(v: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float
     """
     v = np.asarray(v, dtype=float)
     x, y, z = v[..., 0], v[..., 1], v[..., 2]
-    ra = np.mod(np.arctan2(y, x), TWO_PI)
+    ra = _wrap_2pi(np.arctan2(y, x))
     dec = np.arctan2(z, np.hypot(x, y))
     return ra, dec
 
@@ -93,7 +99,7 @@ def radec_roll_from_rotation(
     north, east = _north_east(ra, dec)
     up = -y
     position_angle = np.arctan2(np.sum(up * east, axis=-1), np.sum(up * north, axis=-1))
-    roll = np.mod(-position_angle, TWO_PI)
+    roll = _wrap_2pi(-position_angle)
     return ra, dec, roll
 
 

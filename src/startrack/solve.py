@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from astropy.time import Time
@@ -24,7 +24,7 @@ from .identify import DatabaseSettings, MatcherOptions, load_database, match_los
 from .identify.quad_matcher import Candidate
 from .identify.refine import refine_pointing
 from .identify.verify import match_nearest, project_catalog
-from .results import AttitudeSolution, StarMatches, Status
+from .results import AttitudeSolution, Detections, StarMatches, Status
 from .units import ARCSEC
 
 DEFAULT_FOV_RANGE_DEG: tuple[float, float] = (5.0, 35.0)
@@ -216,3 +216,41 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
         return AttitudeSolution(status=outcome.status, reason=outcome.reason,
                                 solve_time_s=time.perf_counter() - t0)
     return _solution(problem, db, outcome.candidate, t0)
+
+
+def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
+                camera: Camera | None = None, epoch=None, channel: str | int | None = None,
+                detector=None, options: MatcherOptions | None = None) -> tuple[AttitudeSolution, Detections]:
+    """Lost-in-space attitude of an image: read, detect, solve.
+
+    Parameters
+    ----------
+    image : path, ndarray or startrack.io.Image
+        A FITS, PNG, JPEG or TIFF file, or a 2-D (or colour) array in counts.
+    fov_deg, fov_range_deg, camera, epoch, options
+        As in :func:`solve_stars`.
+    channel : str or int, optional
+        Colour channel to use (default: the mean of R, G, B; see :mod:`startrack.io`).
+    detector : startrack.detect.StarDetector, optional
+        Detection settings (default: :func:`startrack.detect.detect`'s).
+
+    Returns
+    -------
+    solution : AttitudeSolution
+        ``solve_time_s`` covers detection and identification (not reading the file).
+    detections : Detections
+        The stars found, brightest first; ``solution.matches.det_index`` indexes them.
+    """
+    from .detect import StarDetector
+    from .io import Image, read_image
+
+    img = image if isinstance(image, Image) else read_image(image, channel=channel)
+    t0 = time.perf_counter()
+    found = (detector or StarDetector()).detect(img.data)
+    height, width = img.data.shape[:2]
+    if camera is not None and (camera.width, camera.height) != (width, height):
+        raise InvalidInputError(f"the camera is {camera.width} x {camera.height} px but the image is "
+                                f"{width} x {height} px")
+    solution = solve_stars(found.x, found.y, width=width, height=height, fov_deg=fov_deg,
+                           fov_range_deg=fov_range_deg, camera=camera, epoch=epoch, options=options)
+    return replace(solution, solve_time_s=time.perf_counter() - t0), found

@@ -1,0 +1,154 @@
+"""Read an image file (FITS, PNG, JPEG, TIFF) or an array into a single-channel :class:`Image`.
+
+The format is recognised by the file's first bytes, not by its extension. Pixel values keep
+their native dtype and are never rescaled; colour is reduced to one channel by the rule of
+:mod:`startrack.io.channels`. Pixel ``data[y, x]`` is the pixel centred at (x, y) in the
+0-based convention of :mod:`startrack.conventions`.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import ImageReadError, InvalidInputError
+from .channels import COLOUR_CHANNEL_COUNTS, channel_index, to_single_channel
+from .fitsfile import read_fits
+from .raster import identify_format, read_raster
+
+SUPPORTED_FORMATS = ("FITS", "PNG", "JPEG", "TIFF")
+_SIGNATURES = {
+    b"SIMPLE  =": "FITS",
+    b"\x1f\x8b": "FITS",  # gzip-compressed FITS (astropy decompresses it)
+    b"\x89PNG\r\n\x1a\n": "PNG",
+    b"\xff\xd8\xff": "JPEG",
+    b"II*\x00": "TIFF",
+    b"MM\x00*": "TIFF",
+}
+
+
+@dataclass(frozen=True)
+class Image:
+    """A single-channel image and what its file said about it.
+
+    Attributes
+    ----------
+    data : ndarray, shape (H, W)
+        Pixel values in the file's dtype (uint8, uint16, int32, float32, float64), never
+        rescaled; float32 when colour was averaged (see :mod:`startrack.io.channels`).
+    path : Path or None
+        The file read, None for an array.
+    header : dict
+        FITS header cards, or EXIF fields by their standard names (e.g. ``DateTimeOriginal``,
+        ``ExposureTime``) and simple Pillow info items. Empty for an array.
+    bit_depth : int or None
+        Bits per sample in the source file (1, 8, 16, 32 or 64); for an array, its item size
+        in bits.
+    colour : bool
+        True if the source had colour channels that were reduced to one.
+    """
+
+    data: NDArray
+    path: Path | None = None
+    header: dict[str, Any] = field(default_factory=dict)
+    bit_depth: int | None = None
+    colour: bool = False
+
+    @property
+    def height(self) -> int:
+        """Number of rows (pixels along y)."""
+        return int(self.data.shape[0])
+
+    @property
+    def width(self) -> int:
+        """Number of columns (pixels along x)."""
+        return int(self.data.shape[1])
+
+
+def _from_array(array: np.ndarray, channel: str | int | None) -> Image:
+    if array.dtype.kind not in "uif":
+        raise InvalidInputError(f"image array must be integer or float, got dtype {array.dtype}")
+    if not (array.ndim == 2 or (array.ndim == 3 and array.shape[-1] in COLOUR_CHANNEL_COUNTS)):
+        raise InvalidInputError(
+            "image array must have shape (H, W) or (H, W, C) with C = 1, 3 or 4, got shape "
+            f"{array.shape}"
+        )
+    if array.size == 0:
+        raise InvalidInputError(f"image array must not be empty, got shape {array.shape}")
+    colour = array.ndim == 3 and array.shape[-1] > 1
+    return Image(to_single_channel(array, channel), None, {}, array.dtype.itemsize * 8, colour)
+
+
+def _sniff(path: Path) -> str:
+    """The format named by the file's first bytes; raises for missing, empty or non-image files."""
+    if not path.exists():
+        raise ImageReadError(f"{path}: file does not exist")
+    if not path.is_file():
+        raise ImageReadError(f"{path}: is not a regular file")
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(16)
+    except OSError as exc:
+        raise ImageReadError(f"{path}: cannot be read ({exc.strerror})") from exc
+    if not head:
+        raise ImageReadError(f"{path}: file is empty (0 bytes)")
+    for signature, name in _SIGNATURES.items():
+        if head.startswith(signature):
+            return name
+    other = identify_format(path.read_bytes())
+    if other is not None:
+        raise ImageReadError(
+            f"{path}: unsupported image format {other}; supported: {', '.join(SUPPORTED_FORMATS)}"
+        )
+    raise ImageReadError(
+        f"{path}: not an image file (no {', '.join(SUPPORTED_FORMATS)} signature; it starts "
+        f"with {head[:12]!r})"
+    )
+
+
+def read_image(
+    source: str | os.PathLike | np.ndarray, *, channel: str | int | None = None
+) -> Image:
+    """Read an image file or wrap an array, reduced to a single channel.
+
+    Parameters
+    ----------
+    source : str, Path or ndarray
+        A FITS, PNG, JPEG or TIFF file (8 or 16 bit, grey or colour; float FITS / TIFF), or an
+        array of shape (H, W) or (H, W, C) with C = 1, 3 (RGB) or 4 (RGBA).
+    channel : {None, "r", "g", "b", 0, 1, 2}
+        Colour rule: None averages R, G and B into float32; otherwise that plane is kept in its
+        native dtype. Alpha is always ignored; grey images ignore ``channel``.
+
+    Returns
+    -------
+    Image
+        ``data`` of shape (H, W); the first 2-D image HDU for FITS.
+
+    Raises
+    ------
+    ImageReadError
+        If the file is missing, empty, truncated, corrupt, not an image, or of an unsupported
+        format; the message names the file and the problem.
+    InvalidInputError
+        If ``channel`` is not valid, or an array is not 2-D or 3-D with 1, 3 or 4 channels.
+    """
+    channel_index(channel)
+    if isinstance(source, np.ndarray):
+        return _from_array(source, channel)
+    if not isinstance(source, str | os.PathLike):
+        raise InvalidInputError(
+            f"source must be a file path or a numpy array, got {type(source).__name__}"
+        )
+    path = Path(source)
+    if _sniff(path) == "FITS":
+        data, header, bit_depth = read_fits(path)
+    else:
+        data, header, bit_depth = read_raster(path, path.read_bytes())
+    colour = data.ndim == 3
+    return Image(to_single_channel(data, channel), path, header, bit_depth, colour)

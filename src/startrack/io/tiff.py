@@ -1,0 +1,170 @@
+"""A minimal baseline TIFF writer, and a reader for the 16-bit colour TIFFs Pillow truncates.
+
+Pillow reads 16-bit-per-sample RGB(A) TIFFs as 8-bit RGB(A), silently keeping only the high
+byte, and cannot write them. startrack keeps native bit depths, so:
+
+* :func:`tiff_bytes` encodes every TIFF startrack writes (uncompressed, one strip,
+  little-endian; uint8 / uint16 / float32 grey, uint8 / uint16 RGB), and
+* :func:`read_tiff16_colour` decodes 16-bit RGB(A) TIFFs stored in strips, contiguously
+  (PlanarConfiguration 1), uncompressed or Deflate-compressed, with or without the horizontal
+  differencing predictor. Other 16-bit colour layouts raise
+  :class:`~startrack.errors.ImageReadError`.
+
+Tag numbers and field types are those of the TIFF 6.0 specification.
+"""
+
+from __future__ import annotations
+
+import struct
+import zlib
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import ImageReadError, InvalidInputError
+
+_SHORT, _LONG = 3, 4
+_FORMATS = {_SHORT: "H", _LONG: "I"}
+_DEFLATE = (8, 32946)
+_SAMPLE_FORMATS = {("u", 1): 1, ("u", 2): 1, ("f", 4): 3}
+"""(dtype kind, item size) the writer accepts, with their SampleFormat (1 = unsigned, 3 = float)."""
+
+
+# --- writing ---------------------------------------------------------------------------------
+def _check_writable(array: NDArray) -> None:
+    colour = array.ndim == 3 and array.shape[-1] == 3
+    if not (array.ndim == 2 or colour):
+        raise InvalidInputError(
+            f"TIFF image must have shape (H, W) or (H, W, 3), got {array.shape}"
+        )
+    if _sample_format(array) is None or (colour and array.dtype.kind == "f"):
+        raise InvalidInputError(
+            f"TIFF image dtype must be uint8, uint16 or (grey only) float32, got {array.dtype}; "
+            "convert explicitly, e.g. np.clip(a, 0, 65535).round().astype(np.uint16)"
+        )
+    if array.size == 0:
+        raise InvalidInputError(f"TIFF image must not be empty, got shape {array.shape}")
+
+
+def _sample_format(array: NDArray) -> int | None:
+    return _SAMPLE_FORMATS.get((array.dtype.kind, array.dtype.itemsize))
+
+
+def _entry(tag: int, kind: int, values: tuple[int, ...], extra_offset: int) -> tuple[bytes, bytes]:
+    """One 12-byte IFD entry and the out-of-line bytes it points to (empty when inline)."""
+    payload = struct.pack("<" + _FORMATS[kind] * len(values), *values)
+    if len(payload) <= 4:
+        return struct.pack("<HHI", tag, kind, len(values)) + payload.ljust(4, b"\0"), b""
+    return struct.pack("<HHII", tag, kind, len(values), extra_offset), payload
+
+
+def tiff_bytes(array: NDArray) -> bytes:
+    """Encode an image as an uncompressed little-endian baseline TIFF (one strip).
+
+    Parameters
+    ----------
+    array : ndarray, shape (H, W) or (H, W, 3)
+        uint8 or uint16 (grey or RGB), or float32 (grey). Values are written as they are.
+
+    Raises
+    ------
+    InvalidInputError
+        For another shape or dtype, or an image too large for a classic (32-bit) TIFF.
+    """
+    array = np.asarray(array)
+    _check_writable(array)
+    height, width = array.shape[:2]
+    spp = 1 if array.ndim == 2 else 3
+    data = np.ascontiguousarray(array, dtype=array.dtype.newbyteorder("<")).tobytes()
+    if len(data) > 2**32 - 4096:
+        raise InvalidInputError(f"image of {len(data)} bytes is too large for a classic TIFF")
+    bits = (array.dtype.itemsize * 8,) * spp
+    fields = [
+        (256, _LONG, (width,)), (257, _LONG, (height,)), (258, _SHORT, bits), (259, _SHORT, (1,)),
+        (262, _SHORT, (1 if spp == 1 else 2,)), (273, _LONG, (8,)), (277, _SHORT, (spp,)),
+        (278, _LONG, (height,)), (279, _LONG, (len(data),)), (284, _SHORT, (1,)),
+        (339, _SHORT, (_sample_format(array),) * spp),
+    ]
+    ifd_offset = 8 + len(data) + (len(data) % 2)
+    extra_offset = ifd_offset + 2 + 12 * len(fields) + 4
+    entries, extra = b"", b""
+    for tag, kind, values in fields:
+        entry, payload = _entry(tag, kind, values, extra_offset + len(extra))
+        entries += entry
+        extra += payload
+    header = b"II" + struct.pack("<HI", 42, ifd_offset)
+    ifd = struct.pack("<H", len(fields)) + entries + struct.pack("<I", 0)
+    return header + data + b"\0" * (len(data) % 2) + ifd + extra
+
+
+# --- reading 16-bit colour -------------------------------------------------------------------
+def is_tiff16_colour(tags: Mapping[int, object]) -> bool:
+    """True if Pillow's TIFF tags describe 16-bit samples with more than one sample per pixel."""
+    bits = tags.get(258, (8,))
+    bits = bits if isinstance(bits, tuple) else (bits,)
+    return int(tags.get(277, 1)) > 1 and max(bits) == 16
+
+
+def _as_tuple(value: object) -> tuple[int, ...]:
+    return tuple(value) if isinstance(value, tuple | list) else (int(value),)
+
+
+def _strip_bytes(raw: bytes, tags: Mapping[int, object], path: Path) -> bytes:
+    """The concatenated, decompressed strips of a TIFF file's first image."""
+    compression = int(tags.get(259, 1))
+    if compression != 1 and compression not in _DEFLATE:
+        raise ImageReadError(
+            f"{path}: 16-bit colour TIFF with compression {compression} is not supported "
+            "(only uncompressed or Deflate keep all 16 bits here); save it uncompressed, as "
+            "16-bit greyscale, or as FITS"
+        )
+    chunks = []
+    for offset, count in zip(_as_tuple(tags[273]), _as_tuple(tags[279]), strict=True):
+        if offset + count > len(raw):
+            raise ImageReadError(f"{path}: TIFF file is truncated (a strip ends past the file end)")
+        chunk = raw[offset:offset + count]
+        try:
+            chunks.append(zlib.decompress(chunk) if compression in _DEFLATE else chunk)
+        except zlib.error as exc:
+            raise ImageReadError(f"{path}: TIFF strip is truncated or corrupt ({exc})") from exc
+    return b"".join(chunks)
+
+
+def read_tiff16_colour(path: Path, raw: bytes, tags: Mapping[int, object]) -> NDArray[np.uint16]:
+    """Decode a 16-bit RGB(A) TIFF that Pillow would truncate to 8 bits.
+
+    Parameters
+    ----------
+    path : Path
+        The file, for error messages.
+    raw : bytes
+        The whole file.
+    tags : mapping
+        Pillow's ``tag_v2`` of the first image.
+
+    Returns
+    -------
+    ndarray, shape (H, W, C), uint16 in native byte order
+
+    Raises
+    ------
+    ImageReadError
+        For tiled or planar-separate layouts, compressions other than Deflate, or a truncated file.
+    """
+    if 322 in tags or int(tags.get(284, 1)) != 1:
+        raise ImageReadError(
+            f"{path}: 16-bit colour TIFF stored in tiles or separate planes is not supported; "
+            "save it with contiguous strips, as 16-bit greyscale, or as FITS"
+        )
+    width, height, spp = int(tags[256]), int(tags[257]), int(tags[277])
+    data = _strip_bytes(raw, tags, path)
+    expected = width * height * spp * 2
+    if len(data) < expected:
+        raise ImageReadError(f"{path}: TIFF file is truncated ({len(data)} of {expected} bytes)")
+    dtype = np.dtype("<u2") if raw[:2] == b"II" else np.dtype(">u2")
+    array = np.frombuffer(data[:expected], dtype=dtype).reshape(height, width, spp)
+    if int(tags.get(317, 1)) == 2:  # horizontal differencing: undo by a wrapping running sum
+        array = np.cumsum(array.astype(np.uint16), axis=1, dtype=np.uint16)
+    return array.astype(np.uint16)
