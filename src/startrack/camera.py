@@ -189,6 +189,35 @@ class Camera:
             a, b = self._distort(a, b)
         return self.cx + self.fx * a, self.cy + self.fy * b
 
+    def project_with_jacobian(self, vectors: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        """Pixel coordinates of camera-frame vectors (v_z > 0) and their derivatives.
+
+        Parameters
+        ----------
+        vectors : ndarray, shape (N, 3)
+
+        Returns
+        -------
+        x, y : ndarray, shape (N,)
+        jacobian : ndarray, shape (N, 2, 3)
+            d(x, y) / d(vector), pixels per unit of vector component.
+        """
+        v = np.asarray(vectors, dtype=float)
+        inv_z = 1.0 / v[:, 2]
+        a, b = v[:, 0] * inv_z, v[:, 1] * inv_z
+        zero = np.zeros_like(a)
+        da = np.stack([inv_z, zero, -a * inv_z], axis=-1)  # d a / d v
+        db = np.stack([zero, inv_z, -b * inv_z], axis=-1)
+        if self.has_distortion:
+            daa, dab, dba, dbb = self._distort_jacobian(a, b)
+            ad, bd = self._distort(a, b)
+            dx = self.fx * (daa[:, None] * da + dab[:, None] * db)
+            dy = self.fy * (dba[:, None] * da + dbb[:, None] * db)
+        else:
+            ad, bd = a, b
+            dx, dy = self.fx * da, self.fy * db
+        return self.cx + self.fx * ad, self.cy + self.fy * bd, np.stack([dx, dy], axis=1)
+
     def pixel_to_vector(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
         """Unit camera-frame vectors (..., 3) of pixel coordinates (distortion removed).
 

@@ -117,13 +117,18 @@ def _problem(x, y, width, height, fov_deg, fov_range_deg, camera, flux, epoch) -
     return _Problem(xs, ys, nominal, focal_range, fov_range, _epoch_jyear(epoch))
 
 
-def _database_for(fov_range_deg: tuple[float, float]):
+def database_settings_for(fov_range_deg: tuple[float, float] = DEFAULT_FOV_RANGE_DEG) -> DatabaseSettings:
+    """Settings of the pattern database that serves this range of horizontal FOVs (degrees).
+
+    The default database covers 5 to 35 deg; a range outside it gets a database of its own
+    (built on first use).
+    """
     lo, hi = fov_range_deg
     default = DatabaseSettings()
     if default.fov_min_deg <= lo and hi <= default.fov_max_deg:
-        return load_database(default)
-    return load_database(DatabaseSettings(fov_min_deg=min(lo, default.fov_min_deg) * 0.97,
-                                          fov_max_deg=max(hi, default.fov_max_deg) * 1.03))
+        return default
+    return DatabaseSettings(fov_min_deg=min(lo, default.fov_min_deg) * 0.97,
+                            fov_max_deg=max(hi, default.fov_max_deg) * 1.03)
 
 
 def _rematch(problem: _Problem, db, rot, camera, radius_px: float):
@@ -209,7 +214,7 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
         For NaN or out-of-frame coordinates, a bad image size or field of view.
     """
     problem = _problem(x, y, width, height, fov_deg, fov_range_deg, camera, flux, epoch)
-    db = _database_for(problem.fov_range_deg)
+    db = load_database(database_settings_for(problem.fov_range_deg))
     t0 = time.perf_counter()
     outcome = match_lost_in_space(problem.x, problem.y, problem.camera, db, problem.focal_range, options)
     if outcome.candidate is None:

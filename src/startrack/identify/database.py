@@ -26,8 +26,8 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
-from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -187,8 +187,12 @@ def _build_level(vectors: NDArray, tree: cKDTree, doubles: NDArray[np.bool_], fo
     return patterns, np.unique(np.concatenate(verify))
 
 
-def build_database_arrays(settings: DatabaseSettings) -> dict[str, NDArray]:
-    """Build the database arrays (what is cached); see the module docstring."""
+def build_database_arrays(settings: DatabaseSettings,
+                          progress: Callable[[int, int], None] | None = None) -> dict[str, NDArray]:
+    """Build the database arrays (what is cached); see the module docstring.
+
+    ``progress(done, total)`` is called after each level, for a progress bar.
+    """
     catalog = load_catalog()
     mag = catalog.v_mag
     keep = np.flatnonzero(np.isfinite(mag) & (mag <= settings.max_mag))
@@ -207,6 +211,8 @@ def build_database_arrays(settings: DatabaseSettings) -> dict[str, NDArray]:
         stars_used[patterns.ravel()] = True
         stars_used[verify] = True
         verify_bits[verify] |= np.uint16(1 << k)
+        if progress is not None:
+            progress(k + 1, len(levels))
     return _compact(keep, sub, vectors, stars_used, verify_bits, level_patterns, levels)
 
 
@@ -263,20 +269,30 @@ def _from_arrays(settings: DatabaseSettings, arrays: dict[str, NDArray]) -> Patt
     return PatternDatabase(settings=settings, **fields, kvectors=kvectors, tree=cKDTree(arrays["vectors"]))
 
 
-def load_database(settings: DatabaseSettings | None = None) -> PatternDatabase:
+def load_database(settings: DatabaseSettings | None = None,
+                  progress: Callable[[int, int], None] | None = None) -> PatternDatabase:
     """The pattern database for these settings, built into the cache on first use.
 
     The first call for new settings builds the database (tens of seconds to a few minutes,
     reported by :func:`database_report`); later calls load it from the cache in well under a
     second, and calls in the same process reuse it.
     """
-    return _load_database(settings or DatabaseSettings())
+    settings = settings or DatabaseSettings()
+    if settings not in _LOADED:
+        arrays = cache.load_or_build(DB_KIND, DB_VERSION, asdict(settings),
+                                     lambda: build_database_arrays(settings, progress))
+        _LOADED[settings] = _from_arrays(settings, arrays)
+    return _LOADED[settings]
 
 
-@lru_cache(maxsize=4)
-def _load_database(settings: DatabaseSettings) -> PatternDatabase:
-    arrays = cache.load_or_build(DB_KIND, DB_VERSION, asdict(settings), lambda: build_database_arrays(settings))
-    return _from_arrays(settings, arrays)
+_LOADED: dict[DatabaseSettings, PatternDatabase] = {}
+"""Databases loaded in this process (a few tens of MB each)."""
+
+
+def is_cached(settings: DatabaseSettings | None = None) -> bool:
+    """True when the database for these settings is loaded or its cache file exists."""
+    settings = settings or DatabaseSettings()
+    return settings in _LOADED or database_path(settings).exists()
 
 
 def database_path(settings: DatabaseSettings | None = None):

@@ -35,7 +35,17 @@ from ..frames import angle_between
 from ..results import Status
 from .database import KEY_BINS, RATIO_SCALE, PatternDatabase
 from .patterns import best_correspondence, edge_ratios, pair_angles
+from .refine import refine_pointing
 from .verify import false_match_probability, match_nearest, project_catalog
+
+LOOSE_RADIUS_FACTOR = 2.5
+"""First verification pass: match radius as a multiple of the final one."""
+
+MIN_EXTRA_MATCHES = 2
+"""A candidate needs at least this many stars beyond its pattern at the loose radius."""
+
+MAX_RATIO_TOLERANCE = 0.1
+"""Patterns whose edge ratios are less certain than this (tiny patterns) are not looked up."""
 
 
 @dataclass(frozen=True)
@@ -51,7 +61,8 @@ class MatcherOptions:
     centroid_sigma_px : float
         Assumed 1-sigma centroid error; sets the pattern tolerances (3 sigma).
     match_radius_px : float or None
-        Verification radius; None: 1 % of the larger image side, at least 2 px.
+        Verification radius after the candidate is refined on its first matches (which are
+        sought at 4 times this radius); None: 0.3 % of the larger image side, at least 2 px.
     max_false_match_prob : float
         A match is accepted only when its false-match bound is below this.
     focal_step : float
@@ -60,11 +71,11 @@ class MatcherOptions:
         Give up (status TIMEOUT) after this much wall-clock time.
     """
 
-    pattern_stars: int = 10
+    pattern_stars: int = 20
     verify_stars: int = 40
     centroid_sigma_px: float = 0.5
     match_radius_px: float | None = None
-    max_false_match_prob: float = 1e-9
+    max_false_match_prob: float = 1e-6
     focal_step: float = 0.004
     timeout_s: float = 5.0
 
@@ -195,7 +206,8 @@ class _Search:
         vec = camera.pixel_to_vector(x, y)
         self.u, self.w = vec[:, 0] / vec[:, 2], vec[:, 1] / vec[:, 2]
         self.scale_range = (camera.fx / focal_range[1], camera.fx / focal_range[0])
-        self.radius = options.match_radius_px or max(2.0, 0.01 * max(camera.width, camera.height))
+        self.radius = options.match_radius_px or max(2.0, 0.003 * max(camera.width, camera.height))
+        self.fit_focal = focal_range[1] > focal_range[0]
         self.trials = 0
         self.short = min(camera.width, camera.height)
 
@@ -205,6 +217,8 @@ class _Search:
             focal = self.camera.fx / scale
             window = (self.camera.fx / s_hi, self.camera.fx / s_lo)
             angles = pair_angles(_vectors(self.u[q], self.w[q], scale))
+            if _tolerances(angles, focal, self.options).max() > MAX_RATIO_TOLERANCE:
+                continue
             fov_short = tuple(2.0 * math.atan(self.short / (2.0 * f)) for f in (window[1], window[0]))
             levels = _levels_for(self.db, fov_short, float(angles.max()) * s_lo / scale)
             rows = lookup(self.db, angles, levels, focal, window, self.options)
@@ -239,7 +253,14 @@ class _Search:
         return None
 
     def _confirm(self, rot, camera, pattern_img, level) -> Candidate | None:
+        """Verify in two steps: a loose radius to find matches, a fit, then the tight radius."""
         n = min(len(self.x), self.options.verify_stars)
+        proj = project_catalog(self.db, rot, camera, level_bit=level)
+        img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y, LOOSE_RADIUS_FACTOR * self.radius)
+        if np.count_nonzero(~np.isin(img_i, pattern_img)) < MIN_EXTRA_MATCHES:
+            return None
+        ref = self.db.vectors[proj.star[cat_i]]
+        rot, camera, _ = refine_pointing(rot, camera, ref, self.x[img_i], self.y[img_i], fit_focal=self.fit_focal)
         proj = project_catalog(self.db, rot, camera, level_bit=level)
         img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y, self.radius)
         extra = ~np.isin(img_i, pattern_img)

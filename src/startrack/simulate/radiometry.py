@@ -254,7 +254,16 @@ _FAR_MST = Sensor(
             "Physical V-band zero point."),
 )
 
+_GENERIC_CMOS = Sensor(
+    optics=Optics.from_diameter(0.025, transmission=0.8, psf_sigma_px=1.0),
+    detector=Detector(quantum_efficiency=0.6, gain_e_per_adu=1.0, read_noise_e=5.0,
+                      dark_current_e_s=20.0, bias_adu=100.0, full_well_e=30000.0, bit_depth=12),
+    exposure_s=0.2, name="generic-cmos",
+    source="ours: a present-day CMOS star tracker (25 mm aperture, QE 0.6, 5 e- read noise, "
+           "0.2 s), the default of the demo and the end-to-end tests; sees to about V 7.5")
+
 SENSOR_PRESETS: dict[str, Sensor] = {
+    "generic-cmos": _GENERIC_CMOS,
     "far-mst": _FAR_MST,
     "far-mst-seed-eq34": replace(
         _FAR_MST,

@@ -1,0 +1,61 @@
+"""Pictures of results: an image annotated with its detections and identified stars.
+
+Plotting only: no I/O beyond saving the figure, no maths beyond display scaling.
+"""
+
+from __future__ import annotations
+
+import os
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from ..results import AttitudeSolution, Detections  # noqa: E402
+
+
+def display_stretch(image: np.ndarray) -> np.ndarray:
+    """Image scaled for display: asinh of the counts above the median, clipped at the 99.9th percentile."""
+    data = np.asarray(image, dtype=float)
+    if data.ndim == 3:
+        data = data[..., :3].mean(axis=2)
+    lo = np.nanmedian(data)
+    hi = max(np.nanpercentile(data, 99.9), lo + 1e-9)
+    scaled = np.clip((data - lo) / (hi - lo), 0, 1)
+    return np.arcsinh(10 * scaled) / np.arcsinh(10)
+
+
+def plot_solution(image: np.ndarray, detections: Detections, solution: AttitudeSolution,
+                  path: str | os.PathLike, *, truth_xy: tuple[np.ndarray, np.ndarray] | None = None,
+                  title: str | None = None) -> None:
+    """Save a PNG of the image with detections (grey), identified stars (green, HIP numbers) and,
+    optionally, the true star positions (red crosses)."""
+    height, width = np.asarray(image).shape[:2]
+    fig, ax = plt.subplots(figsize=(8, 8 * height / width), dpi=110)
+    ax.imshow(display_stretch(image), cmap="gray", origin="upper", extent=(-0.5, width - 0.5, height - 0.5, -0.5))
+    ax.scatter(detections.x, detections.y, s=90, facecolors="none", edgecolors="0.6", linewidths=0.8)
+    if truth_xy is not None:
+        ax.scatter(*truth_xy, s=25, marker="x", color="tab:red", linewidths=0.8, label="truth")
+    if solution.solved:
+        idx = solution.matches.det_index
+        ax.scatter(detections.x[idx], detections.y[idx], s=160, facecolors="none", edgecolors="lime", linewidths=1.2)
+        for i, hip in zip(idx[:25], solution.matches.hip[:25], strict=False):
+            ax.annotate(f"HIP {hip}", (detections.x[i], detections.y[i]), xytext=(6, -6),
+                        textcoords="offset points", color="lime", fontsize=7)
+    ax.set_title(title or _title(solution), fontsize=9)
+    ax.set_xlim(-0.5, width - 0.5)
+    ax.set_ylim(height - 0.5, -0.5)
+    ax.set_xlabel("x (px)")
+    ax.set_ylabel("y (px)")
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def _title(solution: AttitudeSolution) -> str:
+    if not solution.solved:
+        return f"not solved: {solution.reason}"
+    return (f"RA {solution.ra_deg:.4f}  Dec {solution.dec_deg:+.4f}  roll {solution.roll_deg:.3f} deg  "
+            f"FOV {solution.fov_deg:.3f} deg  {len(solution.matches)} stars")

@@ -1,0 +1,121 @@
+"""Spot filters: reject clusters that are not star images.
+
+From seed 003 §II.B (notes ``seed-003.md``, "Noise-removal techniques" 5-7) and seed 000 §4.1
+(notes §1.6):
+
+* **area** -- fewer than ``min_area_px`` pixels (speckle noise) or more than ``max_area_px``
+  (banding, compression blobs, the Moon, lit trees);
+* **peak** -- peak pixel below ``min_peak_snr`` times the pixel noise;
+* **elongation** -- principal-axis ratio above ``max_elongation`` (lines, edges, streaks of
+  roofs); seed 003 gives no number, we use the ratio rather than the eccentricity
+  e = sqrt(1 - 1 / elongation^2);
+* **flatness** -- std / peak below ``min_flatness`` (plateaus of nearly equal pixels; seed 003
+  finds > 0.10 for focused stars);
+* **hot pixels** -- a single bright pixel: its value is more than ``max_peak_fraction`` of the
+  sum of the 3 x 3 pixels around it (a focused star with a 0.5 px sigma puts under half of
+  that sum in its peak; a hot pixel puts nearly all);
+* **clutter** -- the background's lower-half noise there is more than ``max_clutter`` times
+  that of the clean sky (lit leaves, roof texture: structure, not stars; stars do not raise
+  the lower half);
+* **edge** -- the cluster's core (its pixels above the detection threshold) touches the image
+  border, so part of the star may be cut off and the centroid pulled inwards.
+
+Each function returns a boolean "keep" array of shape (N,); the detector ANDs them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .label import Regions
+
+NEIGHBOURS_3X3 = np.stack(np.divmod(np.arange(9), 3), axis=1) - 1
+"""Offsets (dy, dx) of a pixel's 3 x 3 neighbourhood, shape (9, 2)."""
+
+
+def area_ok(area_px: NDArray, min_area_px: int, max_area_px: int | None) -> NDArray[np.bool_]:
+    """Area within [min_area_px, max_area_px] (no upper limit when None)."""
+    keep = area_px >= min_area_px
+    if max_area_px is not None:
+        keep &= area_px <= max_area_px
+    return keep
+
+
+def peak_ok(peak_snr: NDArray, min_peak_snr: float) -> NDArray[np.bool_]:
+    """Peak pixel at least ``min_peak_snr`` pixel-noise units above the background."""
+    return peak_snr >= min_peak_snr
+
+
+def elongation_ok(elongation: NDArray, max_elongation: float | None) -> NDArray[np.bool_]:
+    """Principal-axis ratio at most ``max_elongation`` (no limit when None)."""
+    if max_elongation is None:
+        return np.ones(elongation.shape, dtype=bool)
+    return elongation <= max_elongation
+
+
+def flatness_ok(flatness: NDArray, min_flatness: float) -> NDArray[np.bool_]:
+    """Flatness factor (std / peak) at least ``min_flatness``."""
+    return flatness >= min_flatness
+
+
+def peak_fraction(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y: NDArray
+                  ) -> NDArray[np.float64]:
+    """Peak value over the sum of the 3 x 3 neighbourhood, both background-subtracted.
+
+    Parameters
+    ----------
+    signal_image : ndarray, shape (H, W)
+        The full-resolution image.
+    level : ndarray, shape (N,)
+        Background level at each peak.
+    peak_x, peak_y : ndarray of int, shape (N,)
+        Peak pixels. Neighbours beyond the border are replaced by the nearest pixel inside.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        About 1 for an isolated hot pixel, 0.1-0.5 for a star image.
+    """
+    h, w = signal_image.shape
+    ys = np.clip(peak_y[:, None] + NEIGHBOURS_3X3[:, 0], 0, h - 1)
+    xs = np.clip(peak_x[:, None] + NEIGHBOURS_3X3[:, 1], 0, w - 1)
+    window = signal_image[ys, xs].astype(np.float64) - level[:, None]
+    peak = signal_image[peak_y, peak_x] - level
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return peak / window.sum(axis=1)
+
+
+def hot_pixel_ok(fraction: NDArray, max_peak_fraction: float | None) -> NDArray[np.bool_]:
+    """Not a single hot pixel: peak fraction of the 3 x 3 sum at most ``max_peak_fraction``
+    (a non-positive sum, i.e. a fraction < 0, counts as a hot pixel)."""
+    if max_peak_fraction is None:
+        return np.ones(fraction.shape, dtype=bool)
+    return (fraction >= 0) & (fraction <= max_peak_fraction)
+
+
+def clutter_ok(clutter: NDArray, max_clutter: float | None) -> NDArray[np.bool_]:
+    """Clutter ratio of the background (see :mod:`.background`) at most ``max_clutter``
+    (no limit when None)."""
+    if max_clutter is None:
+        return np.ones(clutter.shape, dtype=bool)
+    return clutter <= max_clutter
+
+
+def away_from_edge(regions: Regions, shape: tuple[int, int], core: NDArray[np.bool_] | None = None
+                   ) -> NDArray[np.bool_]:
+    """True for regions whose core does not touch the border of ``shape``.
+
+    Parameters
+    ----------
+    regions : Regions
+        Regions on the image of shape ``shape`` (rows, columns).
+    core : ndarray of bool, shape (M,), optional
+        Which region pixels count (e.g. those above the detection threshold, not the wings
+        grown to a lower one); all of them when None.
+    """
+    h, w = shape
+    on_border = (regions.y == 0) | (regions.y == h - 1) | (regions.x == 0) | (regions.x == w - 1)
+    if core is not None:
+        on_border &= core
+    return regions.max(on_border.astype(np.int8)) == 0

@@ -1,0 +1,89 @@
+"""Input checks and conversion of the image to the float32 plane the detector works on."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InvalidInputError
+from .channels import to_single_channel
+
+MIN_SIDE_PX = 2
+"""Smallest accepted image side, in pixels."""
+
+_FILL_SAMPLE = 4096
+
+
+@dataclass(frozen=True)
+class PreparedImage:
+    """The plane the detector works on.
+
+    Attributes
+    ----------
+    data : ndarray of float32, shape (H, W)
+        Pixel values in the input's units; non-finite pixels replaced by ``fill_value``.
+    invalid : ndarray of bool, shape (H, W), or None
+        True where the input was NaN or infinite; None when every pixel was finite.
+    fill_value : float
+        Median of the finite pixels, written into the invalid ones.
+    """
+
+    data: NDArray[np.float32]
+    invalid: NDArray[np.bool_] | None
+    fill_value: float
+
+
+def prepare_image(image: NDArray, channel: int | None = None) -> PreparedImage:
+    """Check ``image``, reduce it to one channel and convert it to float32.
+
+    Parameters
+    ----------
+    image : array_like, shape (H, W) or (H, W, C)
+        uint8, uint16, any integer, bool, float32 or float64. Colour images are reduced by
+        :func:`startrack.detect.channels.to_single_channel` (R + G + B by default).
+    channel : int or None
+        Plane of a colour image to use instead of R + G + B.
+
+    Returns
+    -------
+    PreparedImage
+
+    Raises
+    ------
+    InvalidInputError
+        Not 2-D / 3-D, a side shorter than 2 px, empty, not numeric, or no finite pixel.
+    """
+    array = np.asarray(image)
+    if array.dtype == np.bool_:
+        array = array.astype(np.uint8)
+    if not (np.issubdtype(array.dtype, np.integer) or np.issubdtype(array.dtype, np.floating)):
+        raise InvalidInputError(f"image must hold integers or floats, got dtype {array.dtype}")
+    plane = to_single_channel(array, channel)
+    if min(plane.shape) < MIN_SIDE_PX:
+        raise InvalidInputError(
+            f"image must be at least {MIN_SIDE_PX} x {MIN_SIDE_PX} px, got shape {array.shape}"
+        )
+    data = plane.astype(np.float32)
+    if np.issubdtype(plane.dtype, np.integer):
+        return PreparedImage(data, None, 0.0)
+    return _replace_non_finite(data)
+
+
+def _replace_non_finite(data: NDArray[np.float32]) -> PreparedImage:
+    """Replace NaN / inf pixels by the median of the finite ones (in place)."""
+    finite = np.isfinite(data)
+    if finite.all():
+        return PreparedImage(data, None, 0.0)
+    if not finite.any():
+        raise InvalidInputError("image has no finite pixel (all NaN or infinite)")
+    step = max(1, int(np.sqrt(data.size / _FILL_SAMPLE)))
+    sample = data[::step, ::step]
+    sample = sample[np.isfinite(sample)]
+    if sample.size == 0:
+        sample = data[finite]
+    fill = float(np.median(sample))
+    invalid = ~finite
+    data[invalid] = fill
+    return PreparedImage(data, invalid, fill)

@@ -1,0 +1,98 @@
+"""The detection image: the frame binned and box-smoothed, a cheap matched filter.
+
+Thresholding single pixels at k sigma either misses faint spread-out stars (high k) or accepts
+noise spikes (low k); seed 000 §4.1 (notes §1.6) fights the noise spikes with 5 x 5 "at least
+9 of 25 pixels above threshold" pre-filters. Averaging the image over a window about the size
+of the star image does the same job better: it keeps most of a star's flux while it divides
+the noise by the window's width (a box approximation of the matched filter), and a lone hot
+pixel is diluted instead of detected. The mask is found on this small image; centroids are
+measured on the original pixels.
+
+The default, 2 x 2 mean binning followed by the 3 x 3 binomial kernel [1, 2, 1] / 4 (per
+axis), weighs a 6 x 6 px window with a taper, close to a Gaussian of 1.6 px sd sampled every
+2 px: a good match to star images of about 1-2 px sd, and 4 times fewer pixels to threshold
+and label. On real JPEG photographs, whose noise is correlated over several pixels, it also
+beats the wider box: averaging does not divide correlated noise by the window width.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+
+def bin_mean(image: NDArray[np.float32], factor: int) -> NDArray[np.float32]:
+    """Mean over ``factor`` x ``factor`` blocks; trailing rows / columns that do not fill a block
+    are dropped. Returns shape (H // factor, W // factor)."""
+    if factor == 1:
+        return image
+    h, w = image.shape[0] // factor, image.shape[1] // factor
+    out = np.zeros((h, w), dtype=np.float32)
+    for dy in range(factor):
+        for dx in range(factor):
+            out += image[dy: h * factor: factor, dx: w * factor: factor]
+    out *= np.float32(1.0 / factor**2)
+    return out
+
+
+KERNELS = ("binomial", "box")
+
+
+def kernel_weights(kernel: str, size: int) -> NDArray[np.float32]:
+    """1-D weights, summing to 1, of a ``size``-tap ``"box"`` or ``"binomial"`` kernel
+    (binomial 3 = [1, 2, 1] / 4, a sampled Gaussian of sd 0.71 px; 5 = [1, 4, 6, 4, 1] / 16)."""
+    if kernel == "box":
+        weights = np.ones(size)
+    else:
+        weights = np.array([1.0])
+        for _ in range(size - 1):
+            weights = np.convolve(weights, [1.0, 1.0])
+    return (weights / weights.sum()).astype(np.float32)
+
+
+def smooth(image: NDArray[np.float32], kernel: str, size: int) -> NDArray[np.float32]:
+    """Separable ``size`` x ``size`` smoothing with :func:`kernel_weights`, edges repeated;
+    same shape as the input (the input itself when ``size`` is 1).
+
+    Implemented as weighted sums of shifted slices, several times faster than
+    ``scipy.ndimage`` filters for such small kernels on float32.
+    """
+    if size == 1:
+        return image
+    weights = kernel_weights(kernel, size)
+    padded = np.pad(image, size // 2, mode="edge")
+    rows = _weighted_window_sum(padded, weights, axis=0)
+    return _weighted_window_sum(rows, weights, axis=1)
+
+
+def _weighted_window_sum(a: NDArray[np.float32], weights: NDArray[np.float32], axis: int
+                         ) -> NDArray[np.float32]:
+    """sum_k weights[k] * a shifted by k along ``axis`` (the result is shorter by len - 1)."""
+    n = a.shape[axis] - weights.size + 1
+    index = [slice(None), slice(None)]
+    index[axis] = slice(0, n)
+    out = a[tuple(index)] * weights[0]
+    for k in range(1, weights.size):
+        index[axis] = slice(k, k + n)
+        out += weights[k] * a[tuple(index)]
+    return out
+
+
+def detection_image(image: NDArray[np.float32], binning: int, kernel: str, size: int
+                    ) -> NDArray[np.float32]:
+    """Bin by ``binning``, then smooth with a ``size``-tap ``kernel``; see the module docstring.
+
+    Parameters
+    ----------
+    image : ndarray of float32, shape (H, W)
+    binning : int >= 1
+    kernel : {"binomial", "box"}
+    size : odd int >= 1
+
+    Returns
+    -------
+    ndarray of float32, shape (H // binning, W // binning)
+        Pixel (i, j) is centred on full-resolution pixel (j * b + (b - 1) / 2,
+        i * b + (b - 1) / 2) in (x, y); values stay in the image's units (means, not sums).
+    """
+    return smooth(bin_mean(image, binning), kernel, size)
