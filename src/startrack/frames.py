@@ -48,6 +48,14 @@ def normalize(v: ArrayLike) -> NDArray[np.float64]:
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
+def cross(u: NDArray, v: NDArray) -> NDArray[np.float64]:
+    """Cross products of vectors (..., 3), broadcasting; written out, as ``np.cross`` spends most
+    of its time in set-up for 3-component vectors."""
+    u0, u1, u2 = u[..., 0], u[..., 1], u[..., 2]
+    v0, v1, v2 = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack([u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0], axis=-1)
+
+
 def angle_between(u: ArrayLike, v: ArrayLike) -> NDArray[np.float64]:
     """Angle in radians between vectors (..., 3), by the stable atan2 form.
 
@@ -56,8 +64,8 @@ def angle_between(u: ArrayLike, v: ArrayLike) -> NDArray[np.float64]:
     """
     u = np.asarray(u, dtype=float)
     v = np.asarray(v, dtype=float)
-    cross = np.linalg.norm(np.cross(u, v), axis=-1)
-    return np.arctan2(cross, np.sum(u * v, axis=-1))
+    c = cross(u, v)
+    return np.arctan2(np.sqrt(np.sum(c * c, axis=-1)), np.sum(u * v, axis=-1))
 
 
 def _north_east(ra: NDArray, dec: NDArray) -> tuple[NDArray, NDArray]:

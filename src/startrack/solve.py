@@ -14,8 +14,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 from astropy.time import Time
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
 
-from .attitude import attitude_covariance, solve_wahba
+from .attitude import attitude_covariance
+from .attitude.quest import quest_quaternions
 from .camera import Camera, focal_px_from_fov
 from .catalog import load_catalog
 from .errors import InvalidInputError
@@ -34,6 +36,16 @@ FOV_DEG_TOLERANCE = 0.03
 """A given ``fov_deg`` is trusted to this fraction; the solve refines it."""
 
 DEFAULT_EPOCH_JYEAR = 2000.0
+
+MAX_REFINE_ROUNDS = 4
+"""Fit / re-match rounds after verification (usually two: the second finds no new star)."""
+
+REMATCH_RADIUS_PX = 3.0
+"""After verification, every image star within this distance of a predicted star is matched."""
+
+MIN_STARS_FOR_K1 = 12
+"""When the focal length is free, the final fit also estimates the radial distortion k1 if at least
+this many stars are matched (lenses of photographs are rarely calibrated)."""
 
 
 @dataclass(frozen=True)
@@ -139,20 +151,25 @@ def _rematch(problem: _Problem, db, rot, camera, radius_px: float):
 
 
 def _refined(problem: _Problem, db, cand: Candidate):
-    """Refine the candidate on its matches, re-match all stars at 3x the residual, twice."""
+    """Fit attitude (and camera) to the matched stars, re-match every star, and repeat while the
+    set of matches grows (a candidate verified on a few nearby stars can have a focal length
+    that is off enough to miss the far ones)."""
     catalog = load_catalog()
     fit_focal = problem.focal_range is not None
     img, star = cand.image_index, cand.db_index
     rot, camera = cand.rot_cam_from_icrs, cand.camera
-    for _ in range(2):
+    for _ in range(MAX_REFINE_ROUNDS):
         ref = catalog.take(db.cat_index[star]).vectors(problem.epoch_jyear)
-        rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=fit_focal)
-        radius = max(1.0, 3.0 * float(np.sqrt(np.mean(res**2))))
-        new_img, new_star = _rematch(problem, db, rot, camera, radius)
-        if new_img.size >= 4:
-            img, star = new_img, new_star
-    ref = catalog.take(db.cat_index[star]).vectors(problem.epoch_jyear)
-    rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=fit_focal)
+        rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=fit_focal,
+                                           fit_k1=fit_focal and img.size >= MIN_STARS_FOR_K1)
+        new_img, new_star = _rematch(problem, db, rot, camera, REMATCH_RADIUS_PX)
+        if new_img.size <= img.size:
+            break
+        img, star = new_img, new_star
+    else:
+        ref = catalog.take(db.cat_index[star]).vectors(problem.epoch_jyear)
+        rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=fit_focal,
+                                           fit_k1=fit_focal and img.size >= MIN_STARS_FOR_K1)
     return rot, camera, img, star, ref, res
 
 
@@ -160,8 +177,8 @@ def _solution(problem: _Problem, db, cand: Candidate, t0: float) -> AttitudeSolu
     rot, camera, img, star, ref, res_px = _refined(problem, db, cand)
     observed = camera.pixel_to_vector(problem.x[img], problem.y[img])
     sigma_rad = max(float(np.sqrt(np.mean(res_px**2))), 0.05) / camera.fx
-    quest = solve_wahba(observed, ref, method="quest")
-    rot = quest.rotation
+    weights = np.full((1, len(img)), 1.0 / len(img))
+    rot = Rotation.from_quat(quest_quaternions(observed[None], ref[None], weights)[0])
     residuals = angle_between(rot.apply(ref), observed) / ARCSEC
     ra, dec, roll = radec_roll_from_rotation(rot)
     matches = StarMatches(status=Status.OK, det_index=img.astype(np.int64),

@@ -1,4 +1,5 @@
-"""Small batched 3-vector and quaternion helpers, written out for speed on tiny trailing axes.
+"""Small batched 3-vector and quaternion helpers, written out for speed on tiny trailing axes
+(the cross product lives in :mod:`startrack.frames`).
 
 ``numpy.cross`` and ``einsum`` spend most of their time in set-up for 3-component vectors; the
 solvers call these on every problem of a batch, several times per solve.
@@ -9,12 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-
-def cross(u: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Cross products of vectors (..., 3) (broadcasting)."""
-    u0, u1, u2 = u[..., 0], u[..., 1], u[..., 2]
-    v0, v1, v2 = v[..., 0], v[..., 1], v[..., 2]
-    return np.stack([u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0], axis=-1)
+from ..frames import cross
 
 
 def matvec(m: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -1,4 +1,9 @@
-"""Pieces every subcommand shares: FOV options, output, and turning errors into one line."""
+"""Pieces the solving subcommands share: FOV and epoch options, the output formats, exit codes.
+
+Exit status of every subcommand: 0 solved (or written), 1 an expected failure (not solved: the
+status and reason are printed), 2 misuse (a bad option, an unreadable file, an invalid image or
+star list), reported as one line ``startrack <cmd>: error: ...`` on standard error.
+"""
 
 from __future__ import annotations
 
@@ -13,38 +18,98 @@ from ..camera import Camera, get_preset
 from ..errors import InvalidInputError
 from ..io.solution_json import solution_to_dict
 from ..results import AttitudeSolution, Detections
+from ..solve import _check_fov_deg, _epoch_jyear
+
+SOLUTION_FORMATS = """\
+output (table, the default)
+  status       solved, or the status of a failure (too_few_stars, no_match, timeout)
+  RA, Dec      boresight in ICRS, deg
+  roll         deg, the startrack.frames definition (equal to tetra3 / cedar-solve roll)
+  FOV          horizontal field of view, deg, and the focal length, px
+  stars        stars matched (of those detected, for an image)
+  residual     rms angle between matched stars and the catalog after the fit, arcsec
+  1-sigma      attitude uncertainty across the boresight and about it (roll), arcsec
+  false match  upper bound on the probability that the identification is wrong
+  time         solve time (detection and identification), ms
+  qx qy qz qw  the quaternion of rot_cam_from_icrs, scalar last
+  When not solved: status, reason, (stars detected) and time.
+
+output (--json)
+  One object. Always: status ("ok", "too_few_stars", "no_match", "timeout"), reason (empty
+  when solved), solve_time_s, and for an image n_detections. When solved also: ra_deg,
+  dec_deg, roll_deg, fov_deg, qx, qy, qz, qw, focal_px, sigma_cross_boresight_arcsec,
+  sigma_roll_arcsec, residual_rms_arcsec, false_match_prob, and matches: a list of
+  {index, hip, residual_arcsec[, x, y]} (index into the detections or star list; x, y in
+  0-based pixels). Values that are undefined are null.
+
+exit status
+  0 solved; 1 not solved (the reason is printed); 2 misuse (bad option, unreadable file or
+  invalid input), with one line 'startrack <cmd>: error: ...' on standard error.
+"""
 
 
 def add_fov_options(parser: argparse.ArgumentParser) -> None:
     """--fov-deg, --fov-range-deg, --camera (mutually exclusive)."""
     group = parser.add_mutually_exclusive_group()
-    group.add_argument("--fov-deg", type=float, metavar="F", help="horizontal field of view, trusted to +-3 %%")
+    group.add_argument("--fov-deg", type=float, metavar="F",
+                       help="horizontal field of view in deg (0.5 to 100), trusted to +-3 %%")
     group.add_argument("--fov-range-deg", type=float, nargs=2, metavar=("LO", "HI"),
-                       help="range of horizontal fields of view to search (default 5 35)")
+                       help="range of horizontal fields of view to search, deg (default 5 35)")
     group.add_argument("--camera", metavar="PRESET", help="a calibrated camera preset (fixes the focal length)")
 
 
+def add_epoch_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--epoch", type=float, metavar="YEAR",
+                        help="catalog epoch as a Julian year, e.g. 2025.5 (default 2000.0)")
+
+
 def fov_kwargs(args: argparse.Namespace) -> dict[str, Any]:
-    """Keyword arguments for the solvers from the parsed FOV options."""
+    """Keyword arguments ``fov_deg, fov_range_deg, camera`` for the solvers, checked.
+
+    Raises
+    ------
+    InvalidInputError
+        Naming the option: a FOV outside 0.5..100 deg or not a number, LO > HI, an unknown preset.
+    """
     camera: Camera | None = get_preset(args.camera) if args.camera else None
-    fov_range = tuple(args.fov_range_deg) if args.fov_range_deg else None
+    if args.fov_deg is not None:
+        _check_fov_deg(args.fov_deg, "--fov-deg")
+    fov_range = None
+    if args.fov_range_deg:
+        lo, hi = (_check_fov_deg(v, "--fov-range-deg") for v in args.fov_range_deg)
+        if lo > hi:
+            raise InvalidInputError(f"--fov-range-deg LO HI needs LO <= HI, got {lo:g} {hi:g}")
+        fov_range = (lo, hi)
     return {"fov_deg": args.fov_deg, "fov_range_deg": fov_range, "camera": camera}
 
 
+def epoch_option(args: argparse.Namespace) -> float | None:
+    """The checked --epoch (Julian year) or None."""
+    if args.epoch is None:
+        return None
+    try:
+        return _epoch_jyear(args.epoch)
+    except InvalidInputError:
+        raise InvalidInputError(f"--epoch must be a Julian year such as 2025.5, got {args.epoch:g}") from None
+
+
 def print_json(data: dict[str, Any]) -> None:
-    json.dump(data, sys.stdout, indent=2)
+    """Standard JSON (no NaN: callers put None for undefined values) on standard output."""
+    json.dump(data, sys.stdout, indent=2, allow_nan=False)
     sys.stdout.write("\n")
 
 
 def solution_table(solution: AttitudeSolution, detections: Detections | None = None) -> str:
-    """A short human-readable table of a solve."""
-    if not solution.solved:
-        return f"status      {solution.status.value}\nreason      {solution.reason}\n" \
-               f"time        {solution.solve_time_s * 1e3:.1f} ms"
-    q = solution.quaternion_xyzw
-    rms = float(np.sqrt(np.mean(solution.residuals_arcsec**2)))
+    """A short human-readable table of a solve (the format is in :data:`SOLUTION_FORMATS`)."""
     n_det = f" of {len(detections)} detected" if detections is not None else ""
-    lines = [
+    if not solution.solved:
+        lines = [("status", solution.status.value), ("reason", solution.reason)]
+        if detections is not None:
+            lines.append(("stars", f"{len(detections)} detected"))
+        lines.append(("time", f"{solution.solve_time_s * 1e3:.1f} ms"))
+        return _table(lines)
+    rms = float(np.sqrt(np.mean(solution.residuals_arcsec**2)))
+    return _table([
         ("status", "solved"),
         ("RA, Dec", f"{solution.ra_deg:.5f} deg, {solution.dec_deg:+.5f} deg (boresight, ICRS)"),
         ("roll", f"{solution.roll_deg:.4f} deg"),
@@ -55,8 +120,11 @@ def solution_table(solution: AttitudeSolution, detections: Detections | None = N
                     f"{solution.sigma_roll_arcsec:.2f} arcsec roll"),
         ("false match", f"{solution.false_match_prob:.1e} (upper bound)"),
         ("time", f"{solution.solve_time_s * 1e3:.1f} ms"),
-        ("qx qy qz qw", " ".join(f"{v:+.9f}" for v in q)),
-    ]
+        ("qx qy qz qw", " ".join(f"{v:+.9f}" for v in solution.quaternion_xyzw)),
+    ])
+
+
+def _table(lines: list[tuple[str, str]]) -> str:
     return "\n".join(f"{k:<12}{v}" for k, v in lines)
 
 
@@ -70,7 +138,11 @@ def report(solution: AttitudeSolution, detections: Detections | None, as_json: b
 
 
 def positive_int(text: str) -> int:
-    value = int(text)
+    """argparse type: a whole number >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number of pixels, got {text!r}") from None
     if value < 1:
-        raise InvalidInputError(f"expected a positive whole number, got {text}")
+        raise argparse.ArgumentTypeError(f"expected a positive whole number of pixels, got {text}")
     return value

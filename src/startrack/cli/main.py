@@ -1,10 +1,18 @@
-"""The ``startrack`` command: one module per subcommand, each with ``main(argv) -> int``."""
+"""The ``startrack`` command: one module per subcommand, each with ``main(argv) -> int``.
+
+Exit status: 0 success, 1 an expected failure reported as a result (e.g. not solved: too few
+stars, no match), 2 misuse (bad option, unreadable or invalid input), reported as one line
+``startrack <cmd>: error: <message>`` on standard error with no traceback (argparse's own
+errors print the usage line first).
+"""
 
 from __future__ import annotations
 
 import importlib
+import os
 import sys
 
+from .. import __version__
 from ..errors import StartrackError
 
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
@@ -16,24 +24,42 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
 
 USAGE = "usage: startrack {" + ",".join(SUBCOMMANDS) + "} [options]\n\n" + "\n".join(
     f"  {name:<12} {text}" for name, (_, text) in SUBCOMMANDS.items()) + \
-    "\n\nRun 'startrack COMMAND --help' for the options of a command."
+    "\n\nRun 'startrack COMMAND --help' for the options of a command.\n" \
+    "Exit status: 0 success, 1 not solved (the reason is printed), 2 misuse."
+
+
+def one_line(exc: BaseException) -> str:
+    """The exception's message on one line (its class name when it has none)."""
+    return " ".join(str(exc).split()) or type(exc).__name__
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script; returns the exit status."""
     argv = list(sys.argv[1:] if argv is None else argv)
-    if not argv or argv[0] in {"-h", "--help"}:
+    if argv and argv[0] in {"-h", "--help"}:
         print(USAGE)
-        return 0 if argv else 2
-    name, rest = argv[0], argv[1:]
-    if name not in SUBCOMMANDS:
-        print(f"startrack: error: unknown command {name!r}\n{USAGE}", file=sys.stderr)
+        return 0
+    if argv and argv[0] == "--version":
+        print(f"startrack {__version__}")
+        return 0
+    if not argv or argv[0] not in SUBCOMMANDS:
+        problem = f"unknown command {argv[0]!r}" if argv else "a command is required"
+        print(f"{USAGE}\nstartrack: error: {problem}", file=sys.stderr)
         return 2
+    return _run(argv[0], argv[1:])
+
+
+def _run(name: str, argv: list[str]) -> int:
     module = importlib.import_module(SUBCOMMANDS[name][0])
     try:
-        return module.main(rest)
+        return module.main(argv)
+    except SystemExit as exc:  # argparse: --help (0) or a usage error (2, already printed)
+        return exc.code if isinstance(exc.code, int) else int(exc.code is not None)
+    except BrokenPipeError:  # e.g. `startrack solve x.fits --json | head`: stop quietly, as on SIGPIPE
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
     except (StartrackError, ValueError, OSError) as exc:
-        print(f"startrack {name}: error: {exc}", file=sys.stderr)
+        print(f"startrack {name}: error: {one_line(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"startrack {name}: interrupted", file=sys.stderr)

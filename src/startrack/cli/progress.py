@@ -1,8 +1,11 @@
-"""A minimal text progress bar on standard error (no dependency)."""
+"""A minimal text progress bar on standard error (no dependency), and loading the pattern
+database with it so the first run (which builds the database, tens of seconds) shows progress."""
 
 from __future__ import annotations
 
 import sys
+
+from ..camera import Camera
 
 
 class ProgressBar:
@@ -19,8 +22,8 @@ class ProgressBar:
         sys.stderr.flush()
 
 
-def ensure_database(fov_range_deg=None) -> None:
-    """Load (building on first use, with a progress bar) the pattern database for a FOV range."""
+def ensure_database(fov_range_deg: tuple[float, float] | None = None) -> None:
+    """Load (building on first use, with a progress bar) the pattern database for a FOV range (deg)."""
     from ..identify import load_database
     from ..identify.database import is_cached
     from ..solve import DEFAULT_FOV_RANGE_DEG, database_settings_for
@@ -31,3 +34,15 @@ def ensure_database(fov_range_deg=None) -> None:
         load_database(settings, progress=ProgressBar("  FOV levels"))
     else:
         load_database(settings)
+
+
+def ensure_database_for(fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
+                        camera: Camera | None = None) -> None:
+    """:func:`ensure_database` for the FOV range a solve with these (checked) options searches."""
+    from ..solve import FOV_DEG_TOLERANCE
+
+    if camera is not None:
+        fov_range_deg = (camera.fov_deg, camera.fov_deg)
+    elif fov_deg is not None:
+        fov_range_deg = (fov_deg * (1 - FOV_DEG_TOLERANCE), fov_deg * (1 + FOV_DEG_TOLERANCE))
+    ensure_database(fov_range_deg)

@@ -1,4 +1,4 @@
-"""Options that describe a simulated scene: camera, attitude, sensor (shared by simulate and demo)."""
+"""Options that describe a simulated scene: camera, attitude, sensor, epoch (shared by simulate and demo)."""
 
 from __future__ import annotations
 
@@ -11,17 +11,21 @@ from scipy.spatial.transform import Rotation
 from ..camera import Camera, get_preset
 from ..errors import InvalidInputError
 from ..frames import random_rotations, rotation_from_radec_roll
-from ..simulate import Sensor, get_sensor_preset
+from ..simulate import Sensor, get_sensor_preset, simulate_frame
+from ..solve import DEFAULT_EPOCH_JYEAR
+from .common import epoch_option
+
+DEFAULT_FOV_DEG = 15.0
+DEFAULT_SIZE_PX = (1024, 1024)
 
 
-def add_scene_options(parser: argparse.ArgumentParser, *, default_fov_deg: float = 15.0,
-                      default_size: tuple[int, int] = (1024, 1024)) -> None:
-    cam = parser.add_argument_group("camera")
+def add_scene_options(parser: argparse.ArgumentParser) -> None:
+    """Camera, attitude, sensor, --epoch and --seed options."""
+    cam = parser.add_argument_group("camera (a preset, or a pinhole camera from FOV and size)")
     cam.add_argument("--camera", metavar="PRESET", help="camera preset (see startrack.camera.PRESETS)")
-    cam.add_argument("--fov-deg", type=float, metavar="F",
-                     help=f"pinhole camera: horizontal FOV (default {default_fov_deg})")
-    cam.add_argument("--width", type=int, default=default_size[0], help="pinhole camera: width in px")
-    cam.add_argument("--height", type=int, default=default_size[1], help="pinhole camera: height in px")
+    cam.add_argument("--fov-deg", type=float, metavar="F", help=f"horizontal FOV (default {DEFAULT_FOV_DEG:g})")
+    cam.add_argument("--width", type=int, metavar="W", help=f"width in px (default {DEFAULT_SIZE_PX[0]})")
+    cam.add_argument("--height", type=int, metavar="H", help=f"height in px (default {DEFAULT_SIZE_PX[1]})")
     att = parser.add_argument_group("attitude (default: uniformly random from --seed)")
     att.add_argument("--ra-deg", type=float, help="boresight right ascension")
     att.add_argument("--dec-deg", type=float, help="boresight declination")
@@ -29,19 +33,30 @@ def add_scene_options(parser: argparse.ArgumentParser, *, default_fov_deg: float
     sen = parser.add_argument_group("sensor")
     sen.add_argument("--sensor", default="generic-cmos", help="sensor preset (default generic-cmos)")
     sen.add_argument("--exposure-s", type=float, help="exposure time (default: the sensor's)")
-    sen.add_argument("--max-mag", type=float, default=7.5, help="faintest catalog star rendered (V)")
+    sen.add_argument("--max-mag", type=float, default=7.5, help="faintest catalog star rendered (V, default 7.5)")
     sen.add_argument("--no-noise", action="store_true", help="render the expected image without noise")
-    parser.add_argument("--seed", type=int, help="random seed (attitude and noise); default: fresh")
-    parser.set_defaults(default_fov_deg=default_fov_deg)
+    parser.add_argument("--epoch", type=float, metavar="YEAR",
+                        help=f"epoch of the star positions, Julian year (default {DEFAULT_EPOCH_JYEAR:g}, "
+                             "the default of the solvers)")
+    parser.add_argument("--seed", type=int, help="random seed (attitude and noise), >= 0; default: fresh")
 
 
 def scene_camera(args: argparse.Namespace) -> Camera:
-    if args.camera and args.fov_deg is not None:
-        raise InvalidInputError("give --camera or --fov-deg, not both")
+    """The preset, or a pinhole camera from --fov-deg, --width, --height."""
     if args.camera:
+        given = [name for name, value in (("--fov-deg", args.fov_deg), ("--width", args.width),
+                                          ("--height", args.height)) if value is not None]
+        if given:
+            raise InvalidInputError(f"--camera fixes the FOV and size; leave out {', '.join(given)}")
         return get_preset(args.camera)
-    return Camera.from_fov(args.width, args.height, args.fov_deg if args.fov_deg is not None else args.default_fov_deg,
-                           name="pinhole")
+    width = args.width if args.width is not None else DEFAULT_SIZE_PX[0]
+    height = args.height if args.height is not None else DEFAULT_SIZE_PX[1]
+    fov_deg = args.fov_deg if args.fov_deg is not None else DEFAULT_FOV_DEG
+    try:
+        return Camera.from_fov(width, height, fov_deg, name="pinhole")
+    except InvalidInputError as exc:
+        options = f"--fov-deg {fov_deg:g} --width {width} --height {height}"
+        raise InvalidInputError(f"pinhole camera {options}: {exc}") from None
 
 
 def scene_attitude(args: argparse.Namespace, rng: np.random.Generator) -> Rotation:
@@ -52,7 +67,10 @@ def scene_attitude(args: argparse.Namespace, rng: np.random.Generator) -> Rotati
         return random_rotations(None, rng)
     if not -90.0 <= args.dec_deg <= 90.0:
         raise InvalidInputError(f"--dec-deg must be between -90 and 90, got {args.dec_deg:g}")
-    return rotation_from_radec_roll(*(math.radians(v) for v in (args.ra_deg, args.dec_deg, args.roll_deg)))
+    angles = (args.ra_deg, args.dec_deg, args.roll_deg)
+    if not all(math.isfinite(v) for v in angles):
+        raise InvalidInputError("--ra-deg, --dec-deg and --roll-deg must be finite numbers")
+    return rotation_from_radec_roll(*(math.radians(v) for v in angles))
 
 
 def scene_sensor(args: argparse.Namespace) -> Sensor:
@@ -64,6 +82,35 @@ def scene_sensor(args: argparse.Namespace) -> Sensor:
     return sensor
 
 
+def scene_epoch(args: argparse.Namespace) -> float:
+    """The checked --epoch, or the solvers' default, as a Julian year."""
+    epoch = epoch_option(args)
+    return DEFAULT_EPOCH_JYEAR if epoch is None else epoch
+
+
 def scene_seed(args: argparse.Namespace) -> int:
     """The seed to use: the given one, or a fresh one (printed so the run can be repeated)."""
-    return args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % 2**31)
+    if args.seed is None:
+        return int(np.random.SeedSequence().entropy % 2**31)
+    if args.seed < 0:
+        raise InvalidInputError(f"--seed must be a whole number >= 0, got {args.seed}")
+    return args.seed
+
+
+def simulate_scene(args: argparse.Namespace):
+    """Check the scene options and render the frame.
+
+    Returns
+    -------
+    seed : int
+        The seed used (given or fresh).
+    sim : startrack.simulate.SimulatedImage
+        ``sim.image`` in ADU and ``sim.truth``.
+    """
+    seed = scene_seed(args)
+    camera, sensor, epoch = scene_camera(args), scene_sensor(args), scene_epoch(args)
+    rng = np.random.default_rng(seed)
+    rot = scene_attitude(args, rng)
+    sim = simulate_frame(camera, rot, max_mag=args.max_mag, sensor=sensor, rng=rng, noise=not args.no_noise,
+                         epoch_jyear=epoch)
+    return seed, sim

@@ -1,20 +1,56 @@
-"""``startrack solve IMAGE``: lost-in-space attitude of an image."""
+"""startrack solve IMAGE: lost-in-space attitude of an image (FITS, PNG, JPEG or TIFF, 8 or
+16 bit, grey or colour). Stars are detected and identified against Hipparcos with no prior
+attitude; give the field of view if you know it (faster, more robust), else a range is searched."""
 
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 
+import numpy as np
+
+from ..errors import InvalidInputError
+from ..io import Image, read_image
+from ..results import AttitudeSolution, Detections, Status
 from ..solve import solve_image
-from .common import add_fov_options, fov_kwargs, report
+from .common import SOLUTION_FORMATS, add_epoch_option, add_fov_options, epoch_option, fov_kwargs, report
+from .progress import ensure_database_for
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="startrack solve", description=__doc__, epilog=SOLUTION_FORMATS,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("image", help="FITS, PNG, JPEG or TIFF file")
+    add_fov_options(parser)
+    parser.add_argument("--channel", choices=("r", "g", "b"),
+                        help="colour channel to use (default: the mean of R, G and B)")
+    add_epoch_option(parser)
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    return parser
 
 
 def main(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser(prog="startrack solve", description=__doc__)
-    parser.add_argument("image", help="FITS, PNG, JPEG or TIFF file")
-    add_fov_options(parser)
-    parser.add_argument("--channel", help="colour channel to use: r, g or b (default: mean of R, G, B)")
-    parser.add_argument("--epoch", type=float, help="catalog epoch as a Julian year (default 2000.0)")
-    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    args = parser.parse_args(argv)
-    solution, detections = solve_image(args.image, channel=args.channel, epoch=args.epoch, **fov_kwargs(args))
-    return report(solution, detections, args.json)
+    args = _parser().parse_args(argv)
+    solver_options = {**fov_kwargs(args), "epoch": epoch_option(args)}
+    image = read_image(args.image, channel=args.channel)
+    ensure_database_for(solver_options["fov_deg"], solver_options["fov_range_deg"], solver_options["camera"])
+    try:
+        solution, detections = solve_image(image, **solver_options)
+    except InvalidInputError as exc:  # a problem with this image's content (size, no finite pixel...)
+        raise InvalidInputError(f"{args.image}: {exc}") from exc
+    return report(_explain_blank(solution, detections, image), detections, args.json)
+
+
+def _explain_blank(solution: AttitudeSolution, detections: Detections, image: Image) -> AttitudeSolution:
+    """Name the problem when nothing was detected because every pixel has the same value."""
+    if solution.status is not Status.TOO_FEW_STARS or len(detections) or not _uniform(image.data):
+        return solution
+    value = np.nanmax(image.data)
+    saturated = image.data.dtype.kind == "u" and value == np.iinfo(image.data.dtype).max
+    what = "saturated" if saturated else "blank"
+    return replace(solution, reason=f"no stars: the image is {what}, every pixel is {value:g}")
+
+
+def _uniform(data: np.ndarray) -> bool:
+    finite = data[np.isfinite(data)] if data.dtype.kind == "f" else data
+    return finite.size > 0 and np.min(finite) == np.max(finite)

@@ -36,7 +36,7 @@ CLEAN_SKY_QUANTILE = 0.25
 """The global noise of a tiled model is this quantile of the tile noises: the clean sky even
 when trees or a roof fill more than half of the frame."""
 
-MIN_NOISE_RATIO = 0.5
+MIN_NOISE_RATIO = 0.7
 """No tile's noise is taken below this fraction of the global noise (guards flat or quantized
 tiles against a zero noise)."""
 
@@ -74,48 +74,61 @@ class BackgroundModel:
         (len(ys), len(xs)), or the two floats for a constant model."""
         if not self.is_tiled:
             return self.level, self.noise
-        y0, y1, wy = _axis_weights(self.centres_y, np.asarray(ys, dtype=float))
-        x0, x1, wx = _axis_weights(self.centres_x, np.asarray(xs, dtype=float))
-        wx, wy = wx.astype(np.float32), wy.astype(np.float32)[:, None]
-        maps = []
-        for grid in (self.level_grid, self.noise_grid):
-            grid = grid.astype(np.float32)
-            rows = grid[:, x0] + wx * (grid[:, x1] - grid[:, x0])  # along x: (ny, len(xs))
-            low = rows[y0]
-            maps.append(low + wy * (rows[y1] - low))
-        return maps[0], maps[1]
+        return (_grid_map(self.level_grid, self.centres_y, self.centres_x, ys, xs, True),
+                _grid_map(self.noise_grid, self.centres_y, self.centres_x, ys, xs, False))
 
     def at(self, x: NDArray, y: NDArray) -> tuple[NDArray, NDArray]:
         """Level and noise at points (x, y) (arrays of one shape), bilinearly interpolated."""
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
         if not self.is_tiled:
             return np.full(x.shape, self.level), np.full(x.shape, self.noise)
-        return self._interpolate(self.level_grid, x, y), self._interpolate(self.noise_grid, x, y)
+        return (self._interpolate(self.level_grid, x, y, True),
+                self._interpolate(self.noise_grid, x, y, False))
 
     def clutter_at(self, x: NDArray, y: NDArray) -> NDArray:
         """Clutter ratio at points (x, y): 1 on clean sky, larger on structure."""
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
         if not self.is_tiled:
             return np.ones(x.shape)
-        return self._interpolate(self.clutter_grid, x, y)
+        return self._interpolate(self.clutter_grid, x, y, False)
 
-    def _interpolate(self, grid: NDArray, x: NDArray, y: NDArray) -> NDArray:
-        y0, y1, wy = _axis_weights(self.centres_y, y)
-        x0, x1, wx = _axis_weights(self.centres_x, x)
+    def _interpolate(self, grid: NDArray, x: NDArray, y: NDArray, extrapolate: bool) -> NDArray:
+        y0, y1, wy = _axis_weights(self.centres_y, y, extrapolate)
+        x0, x1, wx = _axis_weights(self.centres_x, x, extrapolate)
         top = grid[y0, x0] * (1 - wx) + grid[y0, x1] * wx
         bottom = grid[y1, x0] * (1 - wx) + grid[y1, x1] * wx
         return top * (1 - wy) + bottom * wy
 
 
-def _axis_weights(centres: NDArray, coords: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-    """Lower index, upper index and upper weight of linear interpolation along one axis."""
+def _axis_weights(centres: NDArray, coords: NDArray, extrapolate: bool
+                  ) -> tuple[NDArray, NDArray, NDArray]:
+    """Lower index, upper index and upper weight of linear interpolation along one axis.
+
+    ``centres`` are equally spaced. Beyond the outer centres (the outer half tile) the value
+    is held constant, or, with ``extrapolate``, the line through the two outer centres is
+    extended (the weight clipped to [-0.75, 1.75]) so that a gradient is followed to the edge.
+    """
     n = centres.size
     if n == 1:
         zero = np.zeros(coords.shape, dtype=np.int64)
         return zero, zero, np.zeros(coords.shape)
-    pos = np.interp(coords, centres, np.arange(n, dtype=float))
-    i0 = np.minimum(np.floor(pos).astype(np.int64), n - 2)
-    return i0, i0 + 1, pos - i0
+    pos = (coords - centres[0]) / (centres[1] - centres[0])
+    i0 = np.clip(np.floor(pos).astype(np.int64), 0, n - 2)
+    low, high = (-0.75, 1.75) if extrapolate else (0.0, 1.0)
+    return i0, i0 + 1, np.clip(pos - i0, low, high)
+
+
+def _grid_map(grid: NDArray, centres_y: NDArray, centres_x: NDArray, ys: NDArray, xs: NDArray,
+              extrapolate: bool) -> NDArray[np.float32]:
+    """Bilinear interpolation of ``grid`` (values at centres_y x centres_x) on the grid of rows
+    ``ys`` x columns ``xs`` (beyond the outer centres: see :func:`_axis_weights`); float32
+    array of shape (len(ys), len(xs))."""
+    y0, y1, wy = _axis_weights(centres_y, np.asarray(ys, dtype=float), extrapolate)
+    x0, x1, wx = _axis_weights(centres_x, np.asarray(xs, dtype=float), extrapolate)
+    grid = grid.astype(np.float32)
+    rows = grid[:, x0] + wx.astype(np.float32) * (grid[:, x1] - grid[:, x0])  # (ny, len(xs))
+    low = rows[y0]
+    return low + wy.astype(np.float32)[:, None] * (rows[y1] - low)
 
 
 def global_background(image: NDArray) -> BackgroundModel:
@@ -124,12 +137,21 @@ def global_background(image: NDArray) -> BackgroundModel:
     Parameters
     ----------
     image : ndarray, shape (H, W)
-        Finite values (the detector replaces NaN / inf beforehand).
+        NaN pixels are left out.
     """
-    sample, _ = strided_sample(image)
-    sample = sample.ravel()
+    sample = _finite(strided_sample(image)[0])
+    if sample.size == 0:  # the finite pixels are sparse: take them all
+        sample = _finite(image)
+    if sample.size == 0:
+        return BackgroundModel(level=0.0, noise=0.0)
     level, noise = clipped_level_noise(sample, quantization_step(sample))
     return BackgroundModel(level=level, noise=noise)
+
+
+def _finite(values: NDArray) -> NDArray:
+    """The finite values, flattened."""
+    values = values.ravel()
+    return values if np.issubdtype(values.dtype, np.integer) else values[np.isfinite(values)]
 
 
 def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: float = 0.0
@@ -139,7 +161,8 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
     Parameters
     ----------
     image : ndarray, shape (H, W)
-        Finite values.
+        NaN pixels are left out; a tile without any other takes its nearest neighbour's
+        values.
     tile : int
         Tile side in pixels of ``image``; the grid has max(1, H // tile) x max(1, W // tile)
         tiles of equal size, the last H % tile rows (W % tile columns) are left out.
@@ -153,48 +176,104 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
         ``level`` is the median of the tile levels, ``noise`` the lower quartile of the tile
         noises (:data:`CLEAN_SKY_QUANTILE`).
     """
-    tiles, (tile_h, tile_w) = _tile_stack(image, tile)
-    q_lo, median, q_hi = _last_axis_quantiles(tiles, (GAUSS_LO, 0.5, GAUSS_HI))
-    level, noise, lower = (ndimage.median_filter(grid, size=3, mode="nearest")
-                           for grid in (median, 0.5 * (q_hi - q_lo), median - q_lo))
+    sample, rows, cols = _tile_samples(image, tile)
+    ny, nx = max(1, image.shape[0] // tile), max(1, image.shape[1] // tile)
+    centres_y = rows.reshape(ny, -1).mean(axis=1)  # the mean sampled row of each tile
+    centres_x = cols.reshape(nx, -1).mean(axis=1)
+    q_lo, median, q_hi = _tile_quantiles(sample, (ny, nx), (GAUSS_LO, 0.5, GAUSS_HI))
+    if not np.isfinite(median).any():
+        return global_background(image)
+    level, lower = _median3(median, linear=True), _median3(median - q_lo)
+    # noise from the residual, so that a gradient across a tile does not count as noise
+    residual = sample - _grid_map(level, centres_y, centres_x, rows, cols, True)
+    q_lo, q_hi = _tile_quantiles(residual, (ny, nx), (GAUSS_LO, GAUSS_HI))
+    noise = _median3(0.5 * (q_hi - q_lo))
     noise_global = float(np.quantile(noise, CLEAN_SKY_QUANTILE))
     if noise_global <= 0:  # quantized, nearly flat tiles: fall back on the global estimate
         noise_global = global_background(image).noise
     lower_global = float(np.quantile(lower, CLEAN_SKY_QUANTILE))
     clutter = lower / lower_global if lower_global > 0 else np.ones_like(lower)
-    ny, nx = level.shape
     return BackgroundModel(
         level=float(np.median(level)), noise=noise_global, level_grid=level,
         noise_grid=np.maximum(noise, MIN_NOISE_RATIO * noise_global), clutter_grid=clutter,
-        centres_y=offset + scale * (np.arange(ny) * tile_h + (tile_h - 1) / 2),
-        centres_x=offset + scale * (np.arange(nx) * tile_w + (tile_w - 1) / 2),
+        centres_y=offset + scale * centres_y, centres_x=offset + scale * centres_x,
     )
 
 
-def _last_axis_quantiles(stack: NDArray, q: tuple[float, ...]) -> list[NDArray]:
-    """Quantiles along the last axis (linear interpolation, as ``np.quantile``); sorting the
-    short rows is about 20 times faster than ``np.quantile``'s partitions here."""
-    ordered = np.sort(stack, axis=-1)
-    out = []
-    for quantile in q:
-        pos = quantile * (stack.shape[-1] - 1)
-        lo = int(np.floor(pos))
-        hi = min(lo + 1, stack.shape[-1] - 1)
-        out.append(ordered[..., lo] + (pos - lo) * (ordered[..., hi] - ordered[..., lo]))
-    return out
+def _median3(grid: NDArray, linear: bool = False) -> NDArray:
+    """3 x 3 median filter of a tile grid (a single odd tile is replaced by its neighbours').
+
+    Borders repeat the edge value, or with ``linear`` are padded by linear extrapolation, so
+    that a plane (a uniform gradient of the level) passes unchanged up to the border.
+    """
+    if not linear:
+        return ndimage.median_filter(grid, size=3, mode="nearest")
+    padded = np.pad(grid, 1, mode="reflect", reflect_type="odd")
+    return ndimage.median_filter(padded, size=3)[1:-1, 1:-1]
 
 
-def _tile_stack(image: NDArray, tile: int) -> tuple[NDArray, tuple[int, int]]:
-    """Subsampled tiles as an array (ny, nx, n), and the tile height and width."""
+def _tile_samples(image: NDArray, tile: int) -> tuple[NDArray, NDArray, NDArray]:
+    """A regular subsample of every tile, about :data:`TILE_SAMPLES` pixels each.
+
+    Returns the sample (ny * n_rows, nx * n_cols) and its row and column indices in ``image``.
+    The grid has max(1, H // tile) x max(1, W // tile) equal tiles; the last H % tile rows and
+    W % tile columns are left out.
+    """
     h, w = image.shape
     ny, nx = max(1, h // tile), max(1, w // tile)
     tile_h, tile_w = h // ny, w // nx
     step = max(1, int(np.sqrt(tile_h * tile_w / TILE_SAMPLES)))
-    sub_h, sub_w = -(-tile_h // step), -(-tile_w // step)
-    cropped = image[: ny * tile_h, : nx * tile_w]
-    blocks = cropped.reshape(ny, tile_h, nx, tile_w)[:, ::step, :, ::step]
-    stack = blocks.transpose(0, 2, 1, 3).reshape(ny, nx, sub_h * sub_w)
-    return stack, (tile_h, tile_w)
+    rows = (np.arange(ny)[:, None] * tile_h + np.arange(0, tile_h, step)).ravel()
+    cols = (np.arange(nx)[:, None] * tile_w + np.arange(0, tile_w, step)).ravel()
+    if step == 1:  # every pixel of the tiles: a view, no copy
+        return image[: ny * tile_h, : nx * tile_w], rows, cols
+    return image[np.ix_(rows, cols)], rows, cols
+
+
+def _tile_quantiles(sample: NDArray, grid: tuple[int, int], q: tuple[float, ...]
+                    ) -> list[NDArray]:
+    """Quantiles ``q`` of each tile of a :func:`_tile_samples` sample, ignoring NaN, each of
+    shape ``grid``; a tile with no finite value takes its nearest neighbour's (all NaN when
+    no tile has one)."""
+    ny, nx = grid
+    stack = sample.reshape(ny, sample.shape[0] // ny, nx, sample.shape[1] // nx)
+    values = _last_axis_quantiles(stack.transpose(0, 2, 1, 3).reshape(ny, nx, -1), q)
+    return [_fill_from_nearest(v) for v in values]
+
+
+def _last_axis_quantiles(stack: NDArray, q: tuple[float, ...]) -> list[NDArray]:
+    """Quantiles along the last axis, NaN left out (linear interpolation, as ``np.quantile``);
+    sorting the short rows is about 20 times faster than ``np.nanquantile`` here."""
+    ordered = np.sort(stack, axis=-1)  # NaN go last
+    if not np.isnan(ordered[..., -1]).any():
+        last = stack.shape[-1] - 1
+        return [_row_quantile(ordered, quantile * last, last) for quantile in q]
+    last = np.sum(~np.isnan(stack), axis=-1, keepdims=True) - 1
+    out = []
+    for quantile in q:
+        pos = quantile * np.maximum(last, 0)
+        lo = np.floor(pos).astype(np.int64)
+        low = np.take_along_axis(ordered, lo, axis=-1)
+        high = np.take_along_axis(ordered, np.minimum(lo + 1, np.maximum(last, 0)), axis=-1)
+        value = low + (pos - lo) * (high - low)
+        out.append(np.where(last >= 0, value, np.nan)[..., 0])
+    return out
+
+
+def _row_quantile(ordered: NDArray, pos: float, last: int) -> NDArray:
+    """Linear interpolation at position ``pos`` of sorted rows without NaN."""
+    lo = int(np.floor(pos))
+    hi = min(lo + 1, last)
+    return ordered[..., lo] + (pos - lo) * (ordered[..., hi] - ordered[..., lo])
+
+
+def _fill_from_nearest(grid: NDArray) -> NDArray:
+    """NaN cells of ``grid`` replaced by the nearest finite cell (unchanged if none is)."""
+    missing = np.isnan(grid)
+    if not missing.any() or missing.all():
+        return grid
+    index = ndimage.distance_transform_edt(missing, return_distances=False, return_indices=True)
+    return grid[tuple(index)]
 
 
 def pixel_noise(image: NDArray, model: BackgroundModel) -> float:
@@ -210,11 +289,11 @@ def pixel_noise(image: NDArray, model: BackgroundModel) -> float:
     else:
         level = model.level
     sample = sample.astype(np.float64)
-    q = quantization_step(sample.ravel())
+    q = quantization_step(_finite(sample))
     if q > 0:
         level = q * np.round(np.asarray(level, dtype=np.float64) / q)
-    residual = (sample - level).ravel()
-    return clipped_level_noise(residual, q, upper_half=True)[1]
+    residual = _finite(sample - level)
+    return clipped_level_noise(residual, q, upper_half=True)[1] if residual.size else 0.0
 
 
 def with_noise_floor(model: BackgroundModel, floor: float) -> BackgroundModel:

@@ -11,7 +11,8 @@ when its significance image has several local maxima separated by a real valley:
    height (a noise ripple on a bright star or a slightly lumpy streak does not dip);
 3. every pixel of a split cluster goes to the nearest kept peak.
 
-The loop in step 2 runs over the few clusters that have more than one candidate peak only.
+The loop in step 2 runs over the few clusters that have more than one candidate peak only,
+and over at most :data:`MAX_PEAKS` peaks of each.
 """
 
 from __future__ import annotations
@@ -24,6 +25,9 @@ from .label import Regions, regions_from_index
 NEIGHBOUR_OFFSETS = np.array([(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx])
 DEFAULT_VALLEY = 0.7
 """A second peak counts as a star when the saddle towards a brighter one is below 70 % of it."""
+
+MAX_PEAKS = 32
+"""Only a region's highest candidate peaks are examined (bounds the cost on large blobs)."""
 
 
 def local_peaks(regions: Regions, snr: NDArray, min_sigma: float) -> NDArray[np.bool_]:
@@ -94,7 +98,7 @@ def _split_one(regions: Regions, snr: NDArray, is_peak: NDArray, r: int, valley:
     lo, hi = regions.starts[r], regions.starts[r] + regions.counts[r]
     ys, xs = regions.y[lo:hi], regions.x[lo:hi]
     peaks = np.flatnonzero(is_peak[lo:hi])
-    peaks = peaks[np.argsort(-snr[ys[peaks], xs[peaks]], kind="stable")]
+    peaks = peaks[np.argsort(-snr[ys[peaks], xs[peaks]], kind="stable")][:MAX_PEAKS]
     peaks_yx = np.stack([ys[peaks], xs[peaks]], axis=1)
     kept = peaks_yx[_kept_peaks(snr, peaks_yx, valley)]
     if len(kept) < 2:

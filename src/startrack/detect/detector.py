@@ -21,7 +21,13 @@ from .background import (
     tiled_background,
     with_noise_floor,
 )
-from .centroid import UNCERTAINTY_MODELS, SpotMeasurements, centroid_sigma, measure_spots, take_spots
+from .centroid import (
+    UNCERTAINTY_MODELS,
+    SpotMeasurements,
+    centroid_sigma,
+    measure_spots,
+    take_spots,
+)
 from .deblend import split_regions
 from .label import Regions, hysteresis_regions
 from .prepare import PreparedImage, prepare_image
@@ -109,19 +115,23 @@ class StarDetector:
                         optional=True)
         _check_non_negative(self, ("min_peak_snr", "min_flatness"))
         if self.kernel_px % 2 == 0:
-            raise InvalidInputError(f"kernel_px must be an odd integer (1, 3, 5...), got {self.kernel_px}")
+            raise InvalidInputError(
+                f"kernel_px must be an odd integer (1, 3, 5...), got {self.kernel_px}")
         if self.kernel not in KERNELS:
             raise InvalidInputError(f"kernel must be one of {KERNELS}, got {self.kernel!r}")
         if self.background not in BACKGROUND_MODES:
-            raise InvalidInputError(f"background must be one of {BACKGROUND_MODES}, got {self.background!r}")
+            raise InvalidInputError(
+                f"background must be one of {BACKGROUND_MODES}, got {self.background!r}")
         if self.uncertainty not in UNCERTAINTY_MODELS:
             raise InvalidInputError(
                 f"uncertainty must be one of {UNCERTAINTY_MODELS}, got {self.uncertainty!r}")
         if self.channel is not None and not (isinstance(self.channel, int) and self.channel >= 0):
-            raise InvalidInputError(f"channel must be None or a non-negative int, got {self.channel!r}")
+            raise InvalidInputError(
+                f"channel must be None or a non-negative int, got {self.channel!r}")
         for name in ("reject_edge", "deblend"):
             if not isinstance(getattr(self, name), bool | np.bool_):
-                raise InvalidInputError(f"{name} must be True or False, got {getattr(self, name)!r}")
+                raise InvalidInputError(
+                    f"{name} must be True or False, got {getattr(self, name)!r}")
 
     def settings(self) -> dict:
         """The settings as a plain dict (for logs and result files)."""
@@ -147,7 +157,8 @@ class StarDetector:
         """
         prepared = prepare_image(image, self.channel)
         binning = min(self.binning, *prepared.data.shape)
-        det = detection_image(prepared.data, binning, self.kernel, self.kernel_px)
+        det = detection_image(prepared.data, binning, self.kernel, self.kernel_px,
+                              prepared.invalid)
         model = self._background_model(det, binning)
         noise_px = pixel_noise(prepared.data, model) or _floor(prepared.data, model.level)
         empty = Detections(background=model.level, noise=noise_px, width=prepared.data.shape[1],
@@ -232,7 +243,8 @@ def detect(image: NDArray, **settings) -> Detections:
 def _floor(values: NDArray, level: float) -> float:
     """Noise floor for a noise-free (simulated) image: a millionth of the largest deviation
     from the background (0 when the image is constant)."""
-    return NOISE_FLOOR_FRACTION * float(np.max(np.abs(values - np.float32(level))))
+    largest = float(np.fmax.reduce(np.abs(values - np.float32(level)), axis=None))  # NaN-free
+    return NOISE_FLOOR_FRACTION * largest if np.isfinite(largest) else 0.0
 
 
 def _check_positive(obj, names: tuple[str, ...], optional: bool = False) -> None:
@@ -241,7 +253,8 @@ def _check_positive(obj, names: tuple[str, ...], optional: bool = False) -> None
         if optional and value is None:
             continue
         if not (isinstance(value, int | float | np.number) and math.isfinite(value) and value > 0):
-            raise InvalidInputError(f"{name} must be a positive number{_or_none(optional)}, got {value!r}")
+            raise InvalidInputError(
+                f"{name} must be a positive number{_or_none(optional)}, got {value!r}")
 
 
 def _check_non_negative(obj, names: tuple[str, ...]) -> None:
@@ -256,7 +269,8 @@ def _check_int(obj, names: tuple[str, ...], minimum: int, optional: bool = False
         value = getattr(obj, name)
         if optional and value is None:
             continue
-        if not (isinstance(value, int | np.integer) and not isinstance(value, bool) and value >= minimum):
+        is_int = isinstance(value, int | np.integer) and not isinstance(value, bool)
+        if not (is_int and value >= minimum):
             raise InvalidInputError(
                 f"{name} must be an integer >= {minimum}{_or_none(optional)}, got {value!r}")
 

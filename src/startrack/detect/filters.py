@@ -83,7 +83,7 @@ def peak_fraction(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y
     window = signal_image[ys, xs].astype(np.float64) - level[:, None]
     peak = signal_image[peak_y, peak_x] - level
     with np.errstate(invalid="ignore", divide="ignore"):
-        return peak / window.sum(axis=1)
+        return peak / np.nansum(window, axis=1)  # NaN (missing) neighbours count as 0
 
 
 def hot_pixel_ok(fraction: NDArray, max_peak_fraction: float | None) -> NDArray[np.bool_]:

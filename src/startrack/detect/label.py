@@ -14,6 +14,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
+from .threshold import threshold_mask
+
 EIGHT_CONNECTED = np.ones((3, 3), dtype=bool)
 
 
@@ -114,7 +116,7 @@ def hysteresis_regions(snr: NDArray, detect_sigma: float, grow_sigma: float) -> 
     seed 000 §4.2.1: seed on the bright core, grow until the neighbours fall below threshold)
     keeps more of each star's wings for the centroid without admitting more noise spikes.
     """
-    regions = label_regions(snr > min(grow_sigma, detect_sigma))
+    regions = label_regions(threshold_mask(snr, min(grow_sigma, detect_sigma)))
     if len(regions) == 0:
         return regions
     peak = regions.max(snr[regions.y, regions.x])

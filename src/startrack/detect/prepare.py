@@ -13,8 +13,6 @@ from .channels import to_single_channel
 MIN_SIDE_PX = 2
 """Smallest accepted image side, in pixels."""
 
-_FILL_SAMPLE = 4096
-
 
 @dataclass(frozen=True)
 class PreparedImage:
@@ -22,21 +20,22 @@ class PreparedImage:
 
     Attributes
     ----------
-    data : ndarray of float32, shape (H, W)
-        Pixel values in the input's units; non-finite pixels replaced by ``fill_value``.
+    data : ndarray, shape (H, W)
+        Pixel values in the input's units: the integer plane itself (not copied; stages
+        convert what they read), or a float32 copy in which every non-finite pixel is NaN.
     invalid : ndarray of bool, shape (H, W), or None
-        True where the input was NaN or infinite; None when every pixel was finite.
-    fill_value : float
-        Median of the finite pixels, written into the invalid ones.
+        True where the input was NaN or infinite; None when every pixel was finite. The
+        stages leave these pixels out of the background statistics and give them no weight
+        in a spot.
     """
 
-    data: NDArray[np.float32]
+    data: NDArray
     invalid: NDArray[np.bool_] | None
-    fill_value: float
 
 
 def prepare_image(image: NDArray, channel: int | None = None) -> PreparedImage:
-    """Check ``image``, reduce it to one channel and convert it to float32.
+    """Check ``image``, reduce it to one channel, make float planes float32 with NaN for
+    every non-finite pixel.
 
     Parameters
     ----------
@@ -65,25 +64,13 @@ def prepare_image(image: NDArray, channel: int | None = None) -> PreparedImage:
         raise InvalidInputError(
             f"image must be at least {MIN_SIDE_PX} x {MIN_SIDE_PX} px, got shape {array.shape}"
         )
-    data = plane.astype(np.float32)
     if np.issubdtype(plane.dtype, np.integer):
-        return PreparedImage(data, None, 0.0)
-    return _replace_non_finite(data)
-
-
-def _replace_non_finite(data: NDArray[np.float32]) -> PreparedImage:
-    """Replace NaN / inf pixels by the median of the finite ones (in place)."""
+        return PreparedImage(plane, None)
+    data = plane.astype(np.float32)
     finite = np.isfinite(data)
     if finite.all():
-        return PreparedImage(data, None, 0.0)
+        return PreparedImage(data, None)
     if not finite.any():
         raise InvalidInputError("image has no finite pixel (all NaN or infinite)")
-    step = max(1, int(np.sqrt(data.size / _FILL_SAMPLE)))
-    sample = data[::step, ::step]
-    sample = sample[np.isfinite(sample)]
-    if sample.size == 0:
-        sample = data[finite]
-    fill = float(np.median(sample))
-    invalid = ~finite
-    data[invalid] = fill
-    return PreparedImage(data, invalid, fill)
+    data[~finite] = np.nan
+    return PreparedImage(data, ~finite)

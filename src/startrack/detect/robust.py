@@ -7,7 +7,9 @@
   (84.13 % quantile - median) is used instead;
 * integer-valued data are treated as quantized: each value stands for a bin of the
   quantization step, and quantiles are interpolated within the bins (a 1-DN noise is measured
-  correctly instead of jumping between 0 and 1).
+  correctly instead of jumping between 0 and 1). Spreading the values over their bins adds
+  step^2 / 12 to the variance, which is taken off again, so the result is the standard
+  deviation of the quantized values themselves (Sheppard: sigma^2 + step^2 / 12).
 """
 
 from __future__ import annotations
@@ -87,6 +89,7 @@ def clipped_level_noise(values: NDArray, step: float = 0.0, upper_half: bool = F
     for _ in range(CLIP_ITERATIONS):
         q_lo, level, q_hi = quantiles(values, np.array([GAUSS_LO, 0.5, GAUSS_HI]), step)
         noise = (q_hi - level) if upper_half else 0.5 * (q_hi - q_lo)
+        noise = np.sqrt(max(noise**2 - step**2 / 12.0, 0.0))  # the in-bin spread (see below)
         if noise <= 0:
             break
         kept = values[np.abs(values - level) <= CLIP_SIGMA * noise]

@@ -1,4 +1,4 @@
-"""The detection image: the frame binned and box-smoothed, a cheap matched filter.
+"""The detection image: the frame binned and smoothed, a cheap matched filter.
 
 Thresholding single pixels at k sigma either misses faint spread-out stars (high k) or accepts
 noise spikes (low k); seed 000 §4.1 (notes §1.6) fights the noise spikes with 5 x 5 "at least
@@ -9,7 +9,7 @@ pixel is diluted instead of detected. The mask is found on this small image; cen
 measured on the original pixels.
 
 The default, 2 x 2 mean binning followed by the 3 x 3 binomial kernel [1, 2, 1] / 4 (per
-axis), weighs a 6 x 6 px window with a taper, close to a Gaussian of 1.6 px sd sampled every
+axis), weighs a 6 x 6 px window with a taper, close to a Gaussian of 1.5 px sd sampled every
 2 px: a good match to star images of about 1-2 px sd, and 4 times fewer pixels to threshold
 and label. On real JPEG photographs, whose noise is correlated over several pixels, it also
 beats the wider box: averaging does not divide correlated noise by the window width.
@@ -21,11 +21,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 
-def bin_mean(image: NDArray[np.float32], factor: int) -> NDArray[np.float32]:
-    """Mean over ``factor`` x ``factor`` blocks; trailing rows / columns that do not fill a block
-    are dropped. Returns shape (H // factor, W // factor)."""
+def bin_mean(image: NDArray, factor: int) -> NDArray[np.float32]:
+    """Mean over ``factor`` x ``factor`` blocks, as float32 (any numeric input); trailing rows /
+    columns that do not fill a block are dropped. Returns shape (H // factor, W // factor)."""
     if factor == 1:
-        return image
+        return image.astype(np.float32, copy=False)
     h, w = image.shape[0] // factor, image.shape[1] // factor
     out = np.zeros((h, w), dtype=np.float32)
     for dy in range(factor):
@@ -78,16 +78,25 @@ def _weighted_window_sum(a: NDArray[np.float32], weights: NDArray[np.float32], a
     return out
 
 
-def detection_image(image: NDArray[np.float32], binning: int, kernel: str, size: int
-                    ) -> NDArray[np.float32]:
+MIN_VALID_WEIGHT = 0.5
+"""A detection pixel needs at least this fraction of its kernel weight on valid pixels."""
+
+
+def detection_image(image: NDArray, binning: int, kernel: str, size: int,
+                    invalid: NDArray[np.bool_] | None = None) -> NDArray[np.float32]:
     """Bin by ``binning``, then smooth with a ``size``-tap ``kernel``; see the module docstring.
 
     Parameters
     ----------
-    image : ndarray of float32, shape (H, W)
+    image : ndarray, shape (H, W)
+        Any numeric dtype.
     binning : int >= 1
     kernel : {"binomial", "box"}
     size : odd int >= 1
+    invalid : ndarray of bool, shape (H, W), optional
+        Missing pixels. They are left out by normalised convolution (the smoothed valid
+        values divided by the smoothed valid weight); detection pixels with less than
+        :data:`MIN_VALID_WEIGHT` of their weight on valid pixels are NaN.
 
     Returns
     -------
@@ -95,4 +104,12 @@ def detection_image(image: NDArray[np.float32], binning: int, kernel: str, size:
         Pixel (i, j) is centred on full-resolution pixel (j * b + (b - 1) / 2,
         i * b + (b - 1) / 2) in (x, y); values stay in the image's units (means, not sums).
     """
-    return smooth(bin_mean(image, binning), kernel, size)
+    if invalid is None:
+        return smooth(bin_mean(image, binning), kernel, size)
+    valid = ~invalid
+    values = smooth(bin_mean(np.where(valid, image, 0), binning), kernel, size)
+    weight = smooth(bin_mean(valid, binning), kernel, size)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        values /= weight
+    values[weight < MIN_VALID_WEIGHT] = np.nan
+    return values

@@ -15,7 +15,7 @@ applied per scale; notes ``seed-000.md`` §1.14-1.15):
    ``stars_per_region`` brightest stars form every four-star pattern (C(6, 4) = 15 for 6 stars).
    Duplicates are removed.
 3. Each pattern is keyed by its five sorted edge ratios (:mod:`.patterns`); each level's patterns
-   are sorted by a two-level key of the two smallest ratios (:func:`pattern_key`), which a
+   are sorted by a key of its three smallest ratios (:func:`pattern_key`), which a
    :class:`~.kvector.KVector` indexes.
 4. Each level also keeps a verification set: the ``verify_per_region`` brightest stars around each
    sample direction within half the FOV, to confirm a match and measure its false-match
@@ -40,7 +40,7 @@ from .kvector import KVector
 from .patterns import edge_ratios, pair_angles
 
 DB_KIND = "patterns"
-DB_VERSION = 1
+DB_VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -52,7 +52,7 @@ class DatabaseSettings:
     level_ratio: float = 1.4
     stars_per_region: int = 6
     region_fraction: float = 0.35
-    verify_per_region: int = 30
+    verify_per_region: int = 24
     max_mag: float = 9.5
     blend_fraction: float = 1.0 / 250.0
     min_edge_fraction: float = 1.0 / 150.0
@@ -86,12 +86,12 @@ class PatternDatabase:
         ICRS unit vectors at ``settings.epoch_jyear``.
     mag : ndarray, shape (S,)
     level_fov_rad : ndarray, shape (L,)
-    pattern_stars : ndarray of int32, shape (P, 4)
-        Database-star indices of each pattern (patterns sorted by level, then smallest ratio).
+    pattern_stars : ndarray of uint16 (uint32 beyond 65,536 stars), shape (P, 4)
+        Database-star indices of each pattern (patterns sorted by level, then :func:`pattern_key`).
     pattern_ratios : ndarray of uint16, shape (P, 5)
         Sorted edge ratios times :data:`RATIO_SCALE`.
-    pattern_largest : ndarray of float32, shape (P,)
-        Largest edge angle of each pattern (radians).
+    pattern_largest : ndarray of uint16, shape (P,)
+        Largest edge angle of each pattern, in units of :data:`LARGEST_SCALE_RAD`.
     level_offsets : ndarray of int, shape (L + 1,)
         Patterns of level k are rows ``level_offsets[k]:level_offsets[k + 1]``.
     verify_levels : ndarray of uint16, shape (S,)
@@ -104,9 +104,9 @@ class PatternDatabase:
     vectors: NDArray[np.float64]
     mag: NDArray[np.float32]
     level_fov_rad: NDArray[np.float64]
-    pattern_stars: NDArray[np.int32]
+    pattern_stars: NDArray[np.unsignedinteger]
     pattern_ratios: NDArray[np.uint16]
-    pattern_largest: NDArray[np.float32]
+    pattern_largest: NDArray[np.uint16]
     level_offsets: NDArray[np.int64]
     verify_levels: NDArray[np.uint16]
     kvectors: tuple[KVector, ...] = field(repr=False, default=())
@@ -121,7 +121,11 @@ class PatternDatabase:
         """Memory held by the arrays (bytes)."""
         arrays = (self.cat_index, self.hip, self.vectors, self.mag, self.pattern_stars,
                   self.pattern_ratios, self.pattern_largest, self.verify_levels)
-        return int(sum(a.nbytes for a in arrays) + sum(k.k.nbytes for k in self.kvectors))
+        return int(sum(a.nbytes for a in arrays) + sum(k.k.nbytes + k.keys.nbytes for k in self.kvectors))
+
+    def largest_rad(self, rows: NDArray) -> NDArray[np.float64]:
+        """Largest edge angle (radians) of the patterns in ``rows``."""
+        return self.pattern_largest[rows] * LARGEST_SCALE_RAD
 
     def level_patterns(self, level: int) -> slice:
         return slice(int(self.level_offsets[level]), int(self.level_offsets[level + 1]))
@@ -219,19 +223,28 @@ def build_database_arrays(settings: DatabaseSettings,
 RATIO_SCALE = 65535.0
 """Edge ratios are stored as uint16: ratio = stored / RATIO_SCALE (resolution 1.5e-5)."""
 
+LARGEST_SCALE_RAD = 0.5 / 65535.0
+"""Largest edges are stored as uint16: angle = stored * LARGEST_SCALE_RAD (resolution 1.6 arcsec)."""
+
 KEY_BINS = 64
-"""Bins of the smallest ratio in the two-level key (see :func:`pattern_key`)."""
+"""Bins of each of the two smallest ratios in the key (see :func:`pattern_key`)."""
 
 
-def pattern_key(ratios: NDArray) -> NDArray[np.float64]:
-    """The sort and k-vector key of patterns: ``2 * floor(64 * r0) + r1``.
+def ratio_bin(quantised: NDArray) -> NDArray[np.int64]:
+    """Key bin (0 .. KEY_BINS - 1) of quantised ratios."""
+    return (np.asarray(quantised, dtype=np.int64) * KEY_BINS) >> 16
 
-    Sorting by it orders patterns by a coarse bin of the smallest ratio r0 and, inside a bin, by
-    the second ratio r1 (in [0, 1]), so one k-vector range query per r0 bin returns only the
-    patterns whose first two ratios are both near the image's.
+
+def pattern_key(quantised_ratios: NDArray) -> NDArray[np.int64]:
+    """The sort and k-vector key of patterns from their quantised ratios (..., 5).
+
+    ``key = (bin(r0) * KEY_BINS + bin(r1)) * 65536 + r2`` (r2 quantised): sorting by it orders
+    patterns by coarse bins of the two smallest ratios and, inside a pair of bins, by the third,
+    so one k-vector range query per pair of bins returns only patterns whose three smallest
+    ratios are all near the image's.
     """
-    r0, r1 = ratios[..., 0], ratios[..., 1]
-    return 2.0 * np.floor(np.clip(r0, 0.0, 1.0) * KEY_BINS) + r1
+    q = np.asarray(quantised_ratios, dtype=np.int64)
+    return (ratio_bin(q[..., 0]) * KEY_BINS + ratio_bin(q[..., 1])) * 65536 + q[..., 2]
 
 
 def _compact(keep, sub, vectors, stars_used, verify_bits, level_patterns, levels) -> dict[str, NDArray]:
@@ -245,10 +258,10 @@ def _compact(keep, sub, vectors, stars_used, verify_bits, level_patterns, levels
         local = renumber[patterns]
         r, big = edge_ratios(pair_angles(vec[local]))
         quantised = np.round(r * RATIO_SCALE).astype(np.uint16)
-        order = np.argsort(pattern_key(quantised / RATIO_SCALE), kind="stable")
-        stars.append(local[order].astype(np.int32))
+        order = np.argsort(pattern_key(quantised), kind="stable")
+        stars.append(local[order].astype(np.uint16 if used.size <= 65536 else np.uint32))
         ratios.append(quantised[order])
-        largest.append(big[order].astype(np.float32))
+        largest.append(np.round(big[order] / LARGEST_SCALE_RAD).astype(np.uint16))
         offsets.append(offsets[-1] + len(order))
     return {
         "cat_index": keep[used], "hip": sub.hip[used].astype(np.int64), "vectors": vec,
@@ -262,7 +275,7 @@ def _compact(keep, sub, vectors, stars_used, verify_bits, level_patterns, levels
 # --- loading ----------------------------------------------------------------------------------
 def _from_arrays(settings: DatabaseSettings, arrays: dict[str, NDArray]) -> PatternDatabase:
     offsets = arrays["level_offsets"]
-    keys = pattern_key(arrays["pattern_ratios"] / RATIO_SCALE)
+    keys = pattern_key(arrays["pattern_ratios"]).astype(np.uint32)
     kvectors = tuple(KVector.build(keys[offsets[k]:offsets[k + 1]]) for k in range(len(offsets) - 1))
     fields = {k: arrays[k] for k in ("cat_index", "hip", "vectors", "mag", "level_fov_rad", "pattern_stars",
                                      "pattern_ratios", "pattern_largest", "level_offsets", "verify_levels")}
@@ -302,18 +315,20 @@ def database_path(settings: DatabaseSettings | None = None):
 
 
 def database_report(settings: DatabaseSettings | None = None) -> dict[str, float]:
-    """Build (if needed) and load a database, and say what it costs: seconds, bytes, counts."""
+    """Build (if needed) and load a database, and say what it costs: seconds, bytes, counts.
+
+    ``build_s`` is NaN when a valid cache file was already there.
+    """
     settings = settings or DatabaseSettings()
-    path = database_path(settings)
+    params = asdict(settings)
+    build_s = float("nan")
+    if cache.load(DB_KIND, DB_VERSION, params) is None:
+        t0 = time.perf_counter()
+        cache.save(DB_KIND, DB_VERSION, params, build_database_arrays(settings))
+        build_s = time.perf_counter() - t0
     t0 = time.perf_counter()
-    built = not path.exists()
-    if built:
-        arrays = build_database_arrays(settings)
-        cache.save(DB_KIND, DB_VERSION, asdict(settings), arrays)
-    build_s = time.perf_counter() - t0 if built else float("nan")
-    t0 = time.perf_counter()
-    db = _from_arrays(settings, cache.load(DB_KIND, DB_VERSION, asdict(settings)))
+    db = _from_arrays(settings, cache.load(DB_KIND, DB_VERSION, params))
     load_s = time.perf_counter() - t0
-    return {"build_s": build_s, "load_s": load_s, "file_bytes": path.stat().st_size,
+    return {"build_s": build_s, "load_s": load_s, "file_bytes": database_path(settings).stat().st_size,
             "memory_bytes": db.nbytes, "n_patterns": db.n_patterns, "n_stars": len(db.hip),
             "n_levels": len(db.level_fov_rad)}

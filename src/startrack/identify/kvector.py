@@ -28,12 +28,15 @@ class KVector:
         ``k[j]`` = number of keys ``<= z(j)``, with ``z(j) = slope * j + intercept``.
     slope, intercept : float
         The line through (0, S[0] - margin) and (n, S[-1] + margin).
+    max_bucket : int
+        Most keys between two consecutive grid lines (bounds the exact trimming).
     """
 
     keys: NDArray
     k: NDArray[np.int64]
     slope: float
     intercept: float
+    max_bucket: int = 0
 
     @classmethod
     def build(cls, sorted_keys: ArrayLike) -> KVector:
@@ -45,14 +48,15 @@ class KVector:
             raise InvalidInputError("k-vector keys must be sorted ascending")
         n = keys.size
         if n == 0:
-            return cls(keys=keys, k=np.zeros(1, dtype=np.int64), slope=1.0, intercept=0.0)
+            return cls(keys=keys, k=np.zeros(1, dtype=np.int64), slope=1.0, intercept=0.0, max_bucket=0)
         lo, hi = float(keys[0]), float(keys[-1])
         margin = max(abs(lo), abs(hi), 1.0) * 1e-9
         slope = (hi - lo + 2 * margin) / n
         intercept = lo - margin
         grid = slope * np.arange(n + 1) + intercept
         k = np.searchsorted(keys, grid, side="right").astype(np.int32 if n < 2**31 - 1 else np.int64)
-        return cls(keys=keys, k=k, slope=slope, intercept=intercept)
+        max_bucket = int(np.max(np.diff(k))) if n > 1 else 1
+        return cls(keys=keys, k=k, slope=slope, intercept=intercept, max_bucket=max_bucket)
 
     def query(self, low: float, high: float) -> tuple[int, int]:
         """Half-open index range [start, stop) of the sorted keys in [low, high]."""
@@ -60,28 +64,32 @@ class KVector:
         return int(start[0]), int(stop[0])
 
     def query_many(self, low: ArrayLike, high: ArrayLike) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-        """Vectorised :meth:`query` over arrays of bounds; returns (start, stop) arrays."""
-        low = np.asarray(low, dtype=float)
-        high = np.asarray(high, dtype=float)
+        """Vectorised :meth:`query` over arrays of bounds; returns (start, stop) arrays.
+
+        The bucket table gives, for each bound, the slice of keys between the two grid lines
+        around it; the ends are then trimmed exactly by counting, in one gather of
+        ``max_bucket`` keys per bound, the keys of that slice that fall outside the bound.
+        """
+        low = np.atleast_1d(np.asarray(low, dtype=float))
+        high = np.atleast_1d(np.asarray(high, dtype=float))
         n = self.keys.size
         if n == 0:
             zero = np.zeros(low.shape, dtype=np.int64)
             return zero, zero
-        j_low = np.clip(np.floor((low - self.intercept) / self.slope).astype(np.int64), 0, n)
-        j_high = np.clip(np.ceil((high - self.intercept) / self.slope).astype(np.int64), 0, n)
-        start = self.k[j_low].astype(np.int64)
-        stop = self.k[j_high].astype(np.int64)
-        # Trim: k[j_low] may include a few keys below `low`; k[j_high] may include keys above `high`.
-        start = _advance(self.keys, start, stop, low, below=True)
-        stop = _advance(self.keys, start, stop, high, below=False)
+        start = self._bucket_start(low)
+        stop = self._bucket_start(high, upper=True)
         return start, np.maximum(start, stop)
 
+    def _bucket_start(self, bound: NDArray, upper: bool = False) -> NDArray[np.int64]:
+        """Index of the first key >= bound (or > bound when ``upper``)."""
+        n = self.keys.size
+        j = np.clip(np.floor((bound - self.intercept) / self.slope).astype(np.int64), 0, n)
+        first = self.k[j].astype(np.int64)  # keys[:first] <= z(j) <= bound
+        window = first[:, None] + np.arange(self.max_bucket + 1)
+        inside = window < n
+        values = self.keys[np.minimum(window, n - 1)]
+        typed = bound.astype(self.keys.dtype)[:, None]
+        below = (values <= typed) if upper else (values < typed)
+        return first + np.count_nonzero(below & inside, axis=1)
 
-def _advance(keys: NDArray, start: NDArray, stop: NDArray, bound: NDArray, *, below: bool) -> NDArray:
-    """Move ``start`` past keys < bound (below=True) or ``stop`` back over keys > bound."""
-    out = (start if below else stop).copy()
-    for i in range(out.size):
-        lo, hi = int(start.flat[i]), int(stop.flat[i])
-        side = "left" if below else "right"
-        out.flat[i] = lo + np.searchsorted(keys[lo:hi], keys.dtype.type(bound.flat[i]), side=side)
-    return out
+

@@ -14,6 +14,8 @@ import itertools
 import numpy as np
 from numpy.typing import NDArray
 
+from ..frames import angle_between
+
 EDGE_PAIRS = np.array(list(itertools.combinations(range(4), 2)))
 """The six (i, j) star pairs of a pattern, in a fixed order."""
 
@@ -31,10 +33,7 @@ def pair_angles(vectors: NDArray) -> NDArray[np.float64]:
     ndarray, shape (..., 6)
         Angles for the pairs in :data:`EDGE_PAIRS` order (stable atan2 form).
     """
-    a = vectors[..., EDGE_PAIRS[:, 0], :]
-    b = vectors[..., EDGE_PAIRS[:, 1], :]
-    cross = np.linalg.norm(np.cross(a, b), axis=-1)
-    return np.arctan2(cross, np.sum(a * b, axis=-1))
+    return angle_between(vectors[..., EDGE_PAIRS[:, 0], :], vectors[..., EDGE_PAIRS[:, 1], :])
 
 
 def edge_ratios(angles: NDArray) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

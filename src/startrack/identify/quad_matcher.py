@@ -2,12 +2,14 @@
 
 The default matcher. Steps (after tetra3's pattern hashing, with a k-vector index per scale):
 
-1. Form four-star patterns from the brightest image stars, brightest combinations first.
+1. Form four-star patterns from the brightest image stars, brightest combinations first, in
+   batches (:func:`pattern_batches`); steps 2-4 run on a whole batch at once
+   (:mod:`.quad_search`).
 2. For each, the image vectors depend on the focal length; when it is only known as a range,
    choose the few trial focal lengths that change the pattern's edge ratios by more than the
-   tolerance (:func:`focal_trials`). Wide fields need several, narrow fields one.
-3. Look the ratios up in the levels of the database whose scale fits the trial field of view
-   (:func:`lookup`): k-vector range on the smallest ratio, then all five ratios, then the scale.
+   tolerance. Wide fields need several, narrow fields one.
+3. Look the ratios up in the levels of the database whose scale fits the trial field of view:
+   k-vector range on a key of the two smallest ratios, then all five ratios, then the scale.
 4. For each candidate, take the star correspondence whose edges agree best, correct the focal
    length from the edge sums, fit the rotation (q-method) and check the residuals.
 5. Verify against the level's verification stars and bound the false-match probability
@@ -20,7 +22,6 @@ A mirror image has the same edge ratios but no rotation fits it, so step 4 rejec
 from __future__ import annotations
 
 import itertools
-import math
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -29,12 +30,10 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ..attitude import solve_wahba
 from ..camera import Camera
-from ..frames import angle_between
 from ..results import Status
-from .database import KEY_BINS, RATIO_SCALE, PatternDatabase
-from .patterns import best_correspondence, edge_ratios, pair_angles
+from .database import PatternDatabase
+from .quad_search import candidate_rows, fit_candidates, focal_trials, trial_geometry
 from .refine import refine_pointing
 from .verify import false_match_probability, match_nearest, project_catalog
 
@@ -101,166 +100,73 @@ class MatchOutcome:
     n_trials: int
 
 
-def pattern_order(n: int) -> Iterator[tuple[int, int, int, int]]:
-    """Four-star combinations of ``n`` stars, those of brighter stars first."""
-    for last in range(3, n):
-        for first in itertools.combinations(range(last), 3):
-            yield (*first, last)
+FIRST_BATCH_STARS = 6
+"""The first batch holds every pattern of the 6 brightest stars (15 patterns)."""
 
 
-def _vectors(u: NDArray, w: NDArray, scale: NDArray | float) -> NDArray:
-    """Unit vectors of normalised coordinates (u, w) scaled by ``scale`` (= f_nominal / f)."""
-    u = u * np.asarray(scale)[..., None]
-    w = w * np.asarray(scale)[..., None]
-    v = np.stack([u, w, np.ones_like(u)], axis=-1)
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
-
-
-def focal_trials(u: NDArray, w: NDArray, scale_range: tuple[float, float],
-                 step: float) -> list[tuple[float, float, float]]:
-    """Trial scales (f_nominal / f) for one pattern, spaced so its edge ratios move by < step.
-
-    Parameters
-    ----------
-    u, w : ndarray, shape (4,)
-        Normalised pinhole coordinates of the pattern's stars at the nominal focal length.
-    scale_range : (float, float)
-        Smallest and largest f_nominal / f; equal when the focal length is known.
-
-    Returns
-    -------
-    list of (scale, low, high)
-        Each trial scale and the interval of scales it stands for (its ratios are within
-        ``step`` of every scale in the interval).
-    """
-    lo, hi = scale_range
-    if hi <= lo * (1 + 1e-9):
-        return [(lo, lo, hi)]
-    grid = np.geomspace(lo, hi, 48)
-    ratios, _ = edge_ratios(pair_angles(_vectors(u, w, grid)))
-    starts = [0]
-    for i in range(1, grid.size):
-        if np.max(np.abs(ratios[i] - ratios[starts[-1]])) > step:
-            starts.append(i)
-    ends = [*starts[1:], grid.size - 1]
-    return [(grid[a], grid[a], grid[b]) for a, b in zip(starts, ends, strict=True)]
-
-
-def _tolerances(angles: NDArray, focal_px: float, options: MatcherOptions) -> NDArray:
-    """Ratio tolerances (5,) from the centroid error and the focal-length step."""
-    edges_px = np.sort(angles) * focal_px
-    ratios = edges_px[:5] / edges_px[5]
-    noise = 3.0 * options.centroid_sigma_px * math.sqrt(2.0)
-    return options.focal_step + noise * (1.0 / edges_px[:5] + ratios / edges_px[5])
-
-
-def lookup(db: PatternDatabase, angles: NDArray, levels: NDArray[np.int64],
-           focal_px: float, focal_window: tuple[float, float], options: MatcherOptions) -> NDArray[np.int64]:
-    """Database pattern rows whose ratios and scale fit an image pattern.
-
-    Parameters
-    ----------
-    angles : ndarray, shape (6,)
-        The image pattern's edge angles at the trial focal length ``focal_px``.
-    levels : ndarray of int
-        Database levels to search.
-    focal_window : (float, float)
-        Focal lengths (px) this trial stands for; a pattern must imply one of them.
-    """
-    ratios, largest = edge_ratios(angles)
-    tol = _tolerances(angles, focal_px, options)
-    bins = np.arange(math.floor(max(ratios[0] - tol[0], 0.0) * KEY_BINS),
-                     math.floor(min(ratios[0] + tol[0], 1.0) * KEY_BINS) + 1)
-    low, high = 2.0 * bins + ratios[1] - tol[1], 2.0 * bins + ratios[1] + tol[1]
-    q_lo = np.round((ratios - tol) * RATIO_SCALE)
-    q_hi = np.round((ratios + tol) * RATIO_SCALE)
-    rows = []
-    for level in levels:
-        offset = db.level_offsets[level]
-        starts, stops = db.kvectors[level].query_many(low, high)
-        idx = np.concatenate([np.arange(a, b) for a, b in zip(starts, stops, strict=True)]) + offset
-        if idx.size == 0:
-            continue
-        stored = db.pattern_ratios[idx]
-        idx = idx[np.all((stored >= q_lo) & (stored <= q_hi), axis=1)]
-        focal = focal_px * largest / db.pattern_largest[idx]
-        rows.append(idx[(focal >= focal_window[0] * 0.98) & (focal <= focal_window[1] * 1.02)])
-    return np.concatenate(rows) if rows else np.zeros(0, dtype=np.int64)
-
-
-def _levels_for(db: PatternDatabase, fov_short: tuple[float, float], largest: float) -> NDArray[np.int64]:
-    """Levels whose scale suits an image whose short side spans ``fov_short`` (low, high)
-    radians, and which can hold a pattern whose largest edge is at least ``largest``."""
-    ratio = db.settings.level_ratio
-    fit = (db.level_fov_rad >= fov_short[0] / ratio) & (db.level_fov_rad <= fov_short[1] * ratio)
-    fit &= 2.0 * db.settings.region_fraction * db.level_fov_rad >= 0.95 * largest
-    return np.flatnonzero(fit)
+def pattern_batches(n: int) -> Iterator[NDArray[np.int64]]:
+    """Four-star combinations of ``n`` stars (brightest first), in batches: the first holds every
+    pattern of the brightest :data:`FIRST_BATCH_STARS`, each later one every pattern whose
+    faintest star is the next star; inside a batch, patterns of brighter stars come first."""
+    first = min(n, FIRST_BATCH_STARS)
+    if first >= 4:
+        yield np.array(list(itertools.combinations(range(first), 4)), dtype=np.int64)
+    for last in range(first, n):
+        head = np.array(list(itertools.combinations(range(last), 3)), dtype=np.int64)
+        yield np.column_stack([head, np.full(len(head), last)])
 
 
 class _Search:
-    """State of one lost-in-space search (a small object so the steps stay short functions)."""
+    """State of one lost-in-space search."""
 
     def __init__(self, x, y, camera: Camera, focal_range, db: PatternDatabase, options: MatcherOptions):
         self.x, self.y, self.camera, self.db, self.options = x, y, camera, db, options
-        self.focal_range = focal_range
         vec = camera.pixel_to_vector(x, y)
         self.u, self.w = vec[:, 0] / vec[:, 2], vec[:, 1] / vec[:, 2]
         self.scale_range = (camera.fx / focal_range[1], camera.fx / focal_range[0])
         self.radius = options.match_radius_px or max(2.0, 0.003 * max(camera.width, camera.height))
         self.fit_focal = focal_range[1] > focal_range[0]
         self.trials = 0
-        self.short = min(camera.width, camera.height)
 
-    def try_pattern(self, quad: tuple[int, ...]) -> Candidate | None:
-        q = np.array(quad)
-        for scale, s_lo, s_hi in focal_trials(self.u[q], self.w[q], self.scale_range, self.options.focal_step):
-            focal = self.camera.fx / scale
-            window = (self.camera.fx / s_hi, self.camera.fx / s_lo)
-            angles = pair_angles(_vectors(self.u[q], self.w[q], scale))
-            if _tolerances(angles, focal, self.options).max() > MAX_RATIO_TOLERANCE:
-                continue
-            fov_short = tuple(2.0 * math.atan(self.short / (2.0 * f)) for f in (window[1], window[0]))
-            levels = _levels_for(self.db, fov_short, float(angles.max()) * s_lo / scale)
-            rows = lookup(self.db, angles, levels, focal, window, self.options)
-            if rows.size:
-                found = self._check(q, angles, scale, rows)
-                if found is not None:
-                    return found
-        return None
-
-    def _check(self, q, angles, scale, rows) -> Candidate | None:
-        """Fit every candidate at once; confirm those whose four stars fit a rotation."""
-        cat_vec = self.db.vectors[self.db.pattern_stars[rows]]  # (C, 4, 3)
-        cat_angles = pair_angles(cat_vec)
-        perm, misfit = best_correspondence(angles, cat_angles)
-        keep = misfit <= 3.0 * _tolerances(angles, self.camera.fx / scale, self.options).max()
-        if not np.any(keep):
+    def try_batch(self, quads: NDArray) -> Candidate | None:
+        """Look up and verify a batch of patterns; the first verified candidate wins."""
+        opt = self.options
+        u, w = self.u[quads], self.w[quads]
+        trials = focal_trials(u, w, self.scale_range, opt.focal_step)
+        geom = trial_geometry(u, w, trials, self.camera.fx, opt.centroid_sigma_px, opt.focal_step)
+        short = min(self.camera.width, self.camera.height)
+        cand_trial, row = candidate_rows(self.db, trials, geom, self.camera.fx, short, MAX_RATIO_TOLERANCE)
+        if row.size == 0:
             return None
-        rows, img, cat_vec = rows[keep], q[perm[keep]], cat_vec[keep]
-        self.trials += int(rows.size)
-        scales = scale * cat_angles[keep].sum(axis=1) / angles.sum()  # focal from the edge sums
-        obs = _vectors(self.u[img], self.w[img], scales)
-        rot = solve_wahba(obs, cat_vec, method="qmethod").rotation
-        predicted = np.einsum("cij,ckj->cki", rot.as_matrix(), cat_vec)
-        focal = self.camera.fx / scales
-        tol = 6.0 * self.options.centroid_sigma_px / focal + self.options.focal_step * angles.max()
-        fits = np.flatnonzero(np.max(angle_between(predicted, obs), axis=1) <= tol)
-        for i in fits:
-            level = int(np.searchsorted(self.db.level_offsets, rows[i], side="right") - 1)
-            found = self._confirm(rot[int(i)], self.camera.with_focal(focal[i]), img[i], level)
+        fits = fit_candidates(self.db, self.u, self.w, quads, trials, geom, cand_trial, row,
+                              focal_nominal=self.camera.fx, fit_focal=self.fit_focal,
+                              sigma_px=opt.centroid_sigma_px, focal_step=opt.focal_step)
+        self.trials += fits.n_tried
+        for i in range(fits.row.size):
+            level = int(np.searchsorted(self.db.level_offsets, fits.row[i], side="right") - 1)
+            found = self._confirm(fits.rotation[i], self.camera.with_focal(fits.focal[i]), fits.image_stars[i], level)
             if found is not None:
                 return found
         return None
 
     def _confirm(self, rot, camera, pattern_img, level) -> Candidate | None:
-        """Verify in two steps: a loose radius to find matches, a fit, then the tight radius."""
-        n = min(len(self.x), self.options.verify_stars)
+        """Verify at the tight radius; if that falls short, find matches at a loose radius, fit
+        the attitude (and focal length) to them, and verify again at the tight radius."""
+        found = self._verify(rot, camera, pattern_img, level)
+        if found is not None or self.options.verify_stars < 5:
+            return found
         proj = project_catalog(self.db, rot, camera, level_bit=level)
+        n = min(len(self.x), self.options.verify_stars)
         img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y, LOOSE_RADIUS_FACTOR * self.radius)
         if np.count_nonzero(~np.isin(img_i, pattern_img)) < MIN_EXTRA_MATCHES:
             return None
         ref = self.db.vectors[proj.star[cat_i]]
         rot, camera, _ = refine_pointing(rot, camera, ref, self.x[img_i], self.y[img_i], fit_focal=self.fit_focal)
+        return self._verify(rot, camera, pattern_img, level)
+
+    def _verify(self, rot, camera, pattern_img, level) -> Candidate | None:
+        """The candidate if its tight-radius matches make a false match unlikely enough."""
+        n = min(len(self.x), self.options.verify_stars)
         proj = project_catalog(self.db, rot, camera, level_bit=level)
         img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y, self.radius)
         extra = ~np.isin(img_i, pattern_img)
@@ -300,8 +206,8 @@ def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatab
     focal_range = focal_range_px or (camera.fx, camera.fx)
     search = _Search(np.asarray(x, float), np.asarray(y, float), camera, focal_range, db, options)
     deadline = time.perf_counter() + options.timeout_s
-    for quad in pattern_order(min(len(x), options.pattern_stars)):
-        found = search.try_pattern(quad)
+    for quads in pattern_batches(min(len(x), options.pattern_stars)):
+        found = search.try_batch(quads)
         if found is not None:
             return MatchOutcome(Status.OK, "", found, search.trials)
         if time.perf_counter() > deadline:

@@ -1,17 +1,19 @@
 """The one rule that turns a colour image into the single channel startrack works on.
 
 DESIGN.md §3 (Images): colour images are reduced to one channel by an explicit, documented
-rule. The rule, used by every reader in :mod:`startrack.io`:
+rule. The rule, used by every reader in :mod:`startrack.io` and by the detector:
 
 * a 2-D array is already single-channel and is returned unchanged;
-* an array of shape (H, W, 1) is squeezed to (H, W), dtype unchanged;
+* an array of shape (H, W, 1) is squeezed to (H, W); (H, W, 2) (grey + alpha) gives the grey
+  plane;
 * an array of shape (H, W, 3) (RGB) or (H, W, 4) (RGBA) is reduced
 
-  - by default (``channel=None``) to the mean of R, G and B, as float32 (computed in float64
-    and then rounded, so it is exact to float32 precision for 8- and 16-bit data); alpha is
-    ignored;
-  - with ``channel`` = ``"r"``, ``"g"``, ``"b"`` (any case) or ``0``, ``1``, ``2`` to that
-    one channel, keeping the native dtype (uint8 stays uint8, uint16 stays uint16).
+  - by default (``channel=None``) to the **sum** R + G + B, in a wider integer type for
+    integer images (8-bit RGB becomes 0..765) and in its own precision for floats; alpha is
+    ignored. The sum, not the mean, keeps the counts whole and the photon statistics of the
+    three channels, and a star of any colour contributes in all three;
+  - with ``channel`` = ``"r"``, ``"g"``, ``"b"`` (any case) or a plane index to that one plane,
+    keeping the native dtype (uint8 stays uint8, uint16 stays uint16).
 
 The values are never rescaled (no division by 255 or 65535).
 """
@@ -26,28 +28,45 @@ from ..errors import InvalidInputError
 CHANNEL_NAMES: dict[str, int] = {"r": 0, "g": 1, "b": 2}
 """Names accepted for ``channel`` and the index of the colour plane they select."""
 
-COLOUR_CHANNEL_COUNTS = (1, 3, 4)
-"""Numbers of channels (last axis) that a colour array may have: grey, RGB, RGBA."""
+COLOUR_CHANNEL_COUNTS = (1, 2, 3, 4)
+"""Numbers of channels (last axis) a colour array may have: grey, grey + alpha, RGB, RGBA."""
+
+_SUM_DTYPE = {1: np.uint16, 2: np.uint32, 4: np.int64, 8: np.int64}
 
 
-def channel_index(channel: str | int | None) -> int | None:
-    """The plane index (0, 1, 2) that ``channel`` selects, or None for the RGB mean.
+def channel_index(channel: str | int | None, n_channels: int = 3) -> int | None:
+    """The plane index that ``channel`` selects, or None for the default rule.
 
     Raises
     ------
     InvalidInputError
-        If ``channel`` is not None, "r", "g", "b" (any case) or 0, 1, 2.
+        If ``channel`` is not None, "r", "g", "b" (any case) or an index below ``n_channels``.
     """
     if channel is None:
         return None
     if isinstance(channel, str) and channel.strip().lower() in CHANNEL_NAMES:
-        return CHANNEL_NAMES[channel.strip().lower()]
-    is_int = isinstance(channel, int | np.integer) and not isinstance(channel, bool)
-    if is_int and 0 <= channel <= 2:
-        return int(channel)
-    raise InvalidInputError(
-        f"channel must be None (mean of R, G, B), 'r', 'g', 'b' or 0, 1, 2; got {channel!r}"
-    )
+        index = CHANNEL_NAMES[channel.strip().lower()]
+    elif isinstance(channel, int | np.integer) and not isinstance(channel, bool):
+        index = int(channel)
+    else:
+        index = -1
+    if not 0 <= index < max(n_channels, 1):
+        raise InvalidInputError(f"channel must be None (R + G + B), 'r', 'g', 'b' or a plane index 0 to "
+                                f"{max(n_channels, 1) - 1}; got {channel!r}")
+    return index
+
+
+def _sum_dtype(dtype: np.dtype) -> np.dtype:
+    """Dtype that holds the sum of three values of ``dtype`` without overflow."""
+    if dtype == np.bool_:
+        return np.dtype(np.uint8)
+    if np.issubdtype(dtype, np.unsignedinteger):
+        return np.dtype(_SUM_DTYPE[dtype.itemsize])
+    if np.issubdtype(dtype, np.integer):
+        return np.dtype(np.int64 if dtype.itemsize >= 4 else np.int32)
+    if np.issubdtype(dtype, np.floating):
+        return np.dtype(np.float64) if dtype.itemsize > 4 else np.dtype(np.float32)
+    raise InvalidInputError(f"image dtype must be numeric (integer or float), got {dtype}")
 
 
 def to_single_channel(array: NDArray, channel: str | int | None = None) -> NDArray:
@@ -55,33 +74,33 @@ def to_single_channel(array: NDArray, channel: str | int | None = None) -> NDArr
 
     Parameters
     ----------
-    array : ndarray, shape (H, W) or (H, W, C) with C in {1, 3, 4}
+    array : ndarray, shape (H, W) or (H, W, C) with C in 1..4
         Image, channels last (RGB or RGBA order).
-    channel : {None, "r", "g", "b", 0, 1, 2}
-        None for the float32 mean of R, G and B; otherwise the plane to keep. Ignored for
-        single-channel input (after checking it is a valid value).
+    channel : {None, "r", "g", "b"} or int
+        None for R + G + B; otherwise the plane to keep (checked, then ignored, for a grey
+        image).
 
     Returns
     -------
     ndarray, shape (H, W)
-        float32 for the RGB mean, the input dtype otherwise.
+        The input itself for a 2-D image, a view for a chosen plane, a new array for the sum.
 
     Raises
     ------
     InvalidInputError
-        If the array is not 2-D or 3-D with 1, 3 or 4 channels, or ``channel`` is not valid.
+        If the array is not 2-D or 3-D with 1 to 4 channels, or ``channel`` is not valid.
     """
-    index = channel_index(channel)
     array = np.asarray(array)
     if array.ndim == 2:
+        channel_index(channel, 4)  # a valid choice is ignored for a grey image
         return array
-    if array.ndim != 3 or array.shape[-1] not in COLOUR_CHANNEL_COUNTS:
-        raise InvalidInputError(
-            "image array must have shape (H, W) or (H, W, C) with C = 1 (grey), 3 (RGB) or "
-            f"4 (RGBA), got shape {array.shape}"
-        )
-    if array.shape[-1] == 1:
-        return array[..., 0]
+    if array.ndim != 3 or not 1 <= array.shape[-1] <= 4:
+        raise InvalidInputError("image array must have shape (H, W) or (H, W, C) with C = 1 (grey), 2 (grey + "
+                                f"alpha), 3 (RGB) or 4 (RGBA), got shape {array.shape}")
+    index = channel_index(channel, array.shape[-1])
     if index is not None:
         return array[..., index]
-    return np.mean(array[..., :3], axis=-1, dtype=np.float64).astype(np.float32)
+    if array.shape[-1] <= 2:
+        return array[..., 0]
+    rgb = array[..., :3]
+    return np.add(np.add(rgb[..., 0], rgb[..., 1], dtype=_sum_dtype(array.dtype)), rgb[..., 2])

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ImageReadError, InvalidInputError
-from .channels import COLOUR_CHANNEL_COUNTS, channel_index, to_single_channel
+from .channels import channel_index, to_single_channel
 from .fitsfile import read_fits
 from .raster import identify_format, read_raster
 
@@ -73,11 +73,6 @@ class Image:
 def _from_array(array: np.ndarray, channel: str | int | None) -> Image:
     if array.dtype.kind not in "uif":
         raise InvalidInputError(f"image array must be integer or float, got dtype {array.dtype}")
-    if not (array.ndim == 2 or (array.ndim == 3 and array.shape[-1] in COLOUR_CHANNEL_COUNTS)):
-        raise InvalidInputError(
-            "image array must have shape (H, W) or (H, W, C) with C = 1, 3 or 4, got shape "
-            f"{array.shape}"
-        )
     if array.size == 0:
         raise InvalidInputError(f"image array must not be empty, got shape {array.shape}")
     colour = array.ndim == 3 and array.shape[-1] > 1
@@ -138,7 +133,7 @@ def read_image(
     InvalidInputError
         If ``channel`` is not valid, or an array is not 2-D or 3-D with 1, 3 or 4 channels.
     """
-    channel_index(channel)
+    channel_index(channel, 4)
     if isinstance(source, np.ndarray):
         return _from_array(source, channel)
     if not isinstance(source, str | os.PathLike):

@@ -1,0 +1,174 @@
+"""The whole image path, end to end: read a 1024 x 1024 16-bit PNG, detect the stars, solve.
+
+Seeded frames are simulated at uniformly random attitudes (``startrack.simulate.simulate_frame``
+with its noise model) and written as 16-bit PNG files to a temporary folder; each file is solved
+with ``startrack.solve_image(path, fov_deg=..., epoch=...)``, timed by ``time.perf_counter``
+around that one call (reading, detection and solving; simulation and writing are not timed).
+One untimed warm-up call runs first (it loads the pattern database; its time is printed apart).
+A solve succeeds when its attitude is within 5 pixel angles of the truth (see :mod:`scoring`).
+Target on the 2-core reference machine: median under 50 ms.
+
+The sensor is the seed 000 FAR-MST one (``get_sensor_preset("far-mst")``) with a 1.0 s exposure
+and a 1.5 px PSF, and stars to V 7.0 are rendered at epoch 2025.0 (also given to the solver):
+that gives 25-70 detections per frame at a 15 deg FOV. (With the preset's 0.1 s and 2.5 px,
+only one or two stars clear the detection threshold of a 1024 px, 15 deg frame.)
+
+The same files are then run through the stages one by one (``startrack.io.read_image``,
+``startrack.detect.detect``, ``solve_stars``), each timed, to show where the time goes.
+
+Usage::
+
+    python benchmarks/image_path_benchmark.py [--frames 50] [--seed 1] [--fov-deg 15]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from methods import startrack_function  # noqa: E402
+from scoring import TOLERANCE_PIXELS, attitude_errors_rad, summarize, tolerance_rad  # noqa: E402
+
+from startrack.camera import Camera  # noqa: E402
+from startrack.frames import random_rotations  # noqa: E402
+
+TARGET_MEDIAN_MS = 50.0
+EPOCH_JYEAR = 2025.0
+"""Epoch of the simulated star positions, given to the solver too."""
+
+
+def benchmark_sensor(exposure_s: float, psf_sigma_px: float):
+    """The FAR-MST sensor of seed 000 with another exposure time and PSF width."""
+    from startrack.simulate import get_sensor_preset
+
+    base = get_sensor_preset("far-mst").with_exposure(exposure_s)
+    return replace(base, optics=replace(base.optics, psf_sigma_px=psf_sigma_px))
+
+
+def write_frames(camera: Camera, args: argparse.Namespace, folder: Path) -> list:
+    """Simulate ``args.frames`` frames, write them as 16-bit PNG; return (path, truth) pairs."""
+    from startrack.io import write_png
+    from startrack.simulate import simulate_frame
+
+    rng = np.random.default_rng(args.seed)
+    sensor = benchmark_sensor(args.exposure_s, args.psf_sigma_px)
+    frames = []
+    for i, rot in enumerate(random_rotations(args.frames, rng=rng)):
+        sim = simulate_frame(camera, rot, rng=rng, sensor=sensor, max_mag=args.max_mag,
+                             epoch_jyear=EPOCH_JYEAR)
+        image = np.clip(np.round(sim.image), 0, 65535).astype(np.uint16)
+        frames.append((write_png(folder / f"frame{i:04d}.png", image), rot))
+    return frames
+
+
+def time_solves(frames: list, fov_deg: float) -> tuple[list, np.ndarray, float]:
+    """Solve each file; return the attitudes (None when unsolved), times (s), warm-up time (s)."""
+    solve_image = startrack_function("solve_image")
+    t0 = time.perf_counter()
+    solve_image(frames[0][0], fov_deg=fov_deg, epoch=EPOCH_JYEAR)
+    warmup_s = time.perf_counter() - t0
+    estimates, times = [], np.zeros(len(frames))
+    for i, (path, _) in enumerate(frames):
+        t0 = time.perf_counter()
+        result = solve_image(path, fov_deg=fov_deg, epoch=EPOCH_JYEAR)
+        times[i] = time.perf_counter() - t0
+        sol = result[0] if isinstance(result, tuple) else result  # (solution, detections)
+        estimates.append(sol.rot_cam_from_icrs if sol.status else None)
+    return estimates, times, warmup_s
+
+
+def time_stages(frames: list, fov_deg: float) -> tuple[dict[str, np.ndarray], list, np.ndarray]:
+    """Per-file times (s) of reading, detecting and solving called one by one; the attitudes
+    (None when unsolved) and the number of detections per file."""
+    from startrack.detect import detect
+    from startrack.io import read_image
+
+    solve_stars = startrack_function("solve_stars")
+    times = {k: np.zeros(len(frames)) for k in ("read", "detect", "solve")}
+    estimates, n_det = [], np.zeros(len(frames), dtype=int)
+    for i, (path, _) in enumerate(frames):
+        t0 = time.perf_counter()
+        data = read_image(path).data
+        t1 = time.perf_counter()
+        det = detect(data)
+        t2 = time.perf_counter()
+        sol = solve_stars(det.x, det.y, flux=det.flux, width=data.shape[1],
+                          height=data.shape[0], fov_deg=fov_deg, epoch=EPOCH_JYEAR)
+        t3 = time.perf_counter()
+        times["read"][i], times["detect"][i], times["solve"][i] = t1 - t0, t2 - t1, t3 - t2
+        estimates.append(sol.rot_cam_from_icrs if sol.status else None)
+        n_det[i] = len(det)
+    return times, estimates, n_det
+
+
+def print_end_to_end(frames: list, camera: Camera, args: argparse.Namespace) -> None:
+    estimates, times, warmup_s = time_solves(frames, args.fov_deg)
+    solved = np.array([e is not None for e in estimates])
+    err = attitude_errors_rad([rot for _, rot in frames], estimates)
+    s = summarize(solved, err, times, tolerance_rad(camera))
+    verdict = "meets" if s["median_ms"] < TARGET_MEDIAN_MS else "misses"
+    print(f"\nimage path (read PNG, detect, solve), {args.size} x {args.size} px, "
+          f"FOV {args.fov_deg:g} deg, {s['n']} frames ({int(solved.sum())} solved)")
+    print(f"  median {s['median_ms']:.1f} ms, p95 {s['p95_ms']:.1f} ms "
+          f"({verdict} the {TARGET_MEDIAN_MS:g} ms median target); first call {warmup_s:.2f} s")
+    print(f"  success {s['success_rate']:.1%}, false solves {s['false_rate']:.1%} "
+          f"(within {TOLERANCE_PIXELS:g} pixel angles; "
+          f"median error {s['median_err_arcsec']:.1f} arcsec)")
+
+
+def print_stages(frames: list, camera: Camera, args: argparse.Namespace) -> None:
+    stages, estimates, n_det = time_stages(frames, args.fov_deg)
+    total = sum(stages.values())
+    err = attitude_errors_rad([rot for _, rot in frames], estimates)
+    solved = np.array([e is not None for e in estimates])
+    s = summarize(solved, err, total, tolerance_rad(camera))
+    parts = ", ".join(f"{k} {np.median(v) * 1e3:.1f}" for k, v in stages.items())
+    print(f"  stage by stage, median ms: {parts}; sum: median {s['median_ms']:.1f}, "
+          f"p95 {s['p95_ms']:.1f}")
+    print(f"  stage by stage: success {s['success_rate']:.1%}, false {s['false_rate']:.1%}, "
+          f"detections per frame median {np.median(n_det):.0f} (5-95 %: "
+          f"{np.percentile(n_det, 5):.0f}-{np.percentile(n_det, 95):.0f})")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--frames", type=int, default=50)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--fov-deg", type=float, default=15.0)
+    parser.add_argument("--size", type=int, default=1024, help="image width and height (px)")
+    parser.add_argument("--max-mag", type=float, default=7.0, help="faintest star rendered (V)")
+    parser.add_argument("--exposure-s", type=float, default=1.0)
+    parser.add_argument("--psf-sigma-px", type=float, default=1.5)
+    args = parser.parse_args(argv)
+    camera = Camera.from_fov(args.size, args.size, args.fov_deg)
+    with tempfile.TemporaryDirectory(prefix="startrack-imgbench-") as tmp:
+        print(f"simulating {args.frames} frames of {args.size} x {args.size} px, "
+              f"FOV {args.fov_deg:g} deg", file=sys.stderr, flush=True)
+        frames = write_frames(camera, args, Path(tmp))
+        missing = _missing_entry_point()
+        if missing:
+            print(f"\nend-to-end timing skipped: {missing}")
+        else:
+            print_end_to_end(frames, camera, args)
+        print_stages(frames, camera, args)
+    return 0
+
+
+def _missing_entry_point() -> str | None:
+    try:
+        startrack_function("solve_image")
+    except (ImportError, AttributeError) as exc:
+        return f"startrack.solve_image is not importable ({exc})"
+    return None
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,199 @@
+"""Lost-in-space benchmark on seeded random star lists: startrack side by side with cedar-solve.
+
+For each field of view, ``--trials`` star lists are generated (:mod:`starlists`: random
+attitudes, centroid noise 0.1-0.5 px, 0-20 % missing stars, 0-6 false stars, magnitude noise) and
+solved by both methods in the same run, first with the FOV known, then with only a FOV range
+(``--fov-range``). Printed per method and condition: success rate, false-solve rate, median and
+95th-percentile solve time, and for startrack the ratio of its times to cedar-solve's.
+Results (the table and per-trial arrays) are saved as JSON under ``benchmarks/results/``.
+
+Usage::
+
+    python benchmarks/lis_benchmark.py [--trials 300] [--seed 1] [--fov-deg 10 15 20]
+                                       [--fov-range 5 35] [--no-range] [--no-peer]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import sys
+import time
+from datetime import datetime
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from methods import FovKnowledge, MethodRun, ours_available, solve_cedar, solve_ours  # noqa: E402
+from scoring import (  # noqa: E402
+    TOLERANCE_PIXELS,
+    attitude_errors_rad,
+    boresight_and_roll_errors,
+    summarize,
+    tolerance_rad,
+)
+from starlists import Conditions, generate_star_lists, load_sky  # noqa: E402
+
+from startrack.units import ARCSEC  # noqa: E402
+
+RESULTS_DIR = Path(__file__).resolve().parent / "results"
+HEADER = (f"{'method':<12} {'condition':<20} {'trials':>6} {'success':>8} {'false':>7} "
+          f"{'median ms':>10} {'p95 ms':>8} {'x cedar med':>11} {'x cedar p95':>11}")
+
+
+def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--trials", type=int, default=300, help="star lists per FOV (default 300)")
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--fov-deg", type=float, nargs="+", default=[10.0, 15.0, 20.0])
+    parser.add_argument("--fov-range", type=float, nargs=2, default=[5.0, 35.0],
+                        metavar=("LO", "HI"),
+                        help="FOV range given to the solvers in the unknown-FOV runs (deg)")
+    parser.add_argument("--no-range", action="store_true", help="only run with the FOV known")
+    parser.add_argument("--no-peer", action="store_true", help="do not run cedar-solve")
+    parser.add_argument("--no-ours", action="store_true", help="do not run startrack")
+    parser.add_argument("--cedar-timeout-ms", type=float, default=5000.0)
+    parser.add_argument("--progress", type=int, default=100, help="progress line every N trials")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="JSON file (default: results/lis-*.json)")
+    return parser.parse_args(argv)
+
+
+def knowledge_list(fov_deg: float, args: argparse.Namespace) -> list[FovKnowledge]:
+    out = [FovKnowledge(fov_deg=fov_deg)]
+    if not args.no_range:
+        out.append(FovKnowledge(fov_range_deg=(args.fov_range[0], args.fov_range[1])))
+    return out
+
+
+def run_methods(lists, conditions, knowledge, args, skip_ours: str | None) -> list[MethodRun]:
+    runs = []
+    if not skip_ours:
+        print(f"startrack on {conditions.name}, {knowledge.label}", file=sys.stderr, flush=True)
+        runs.append(solve_ours(lists, conditions, knowledge, progress=args.progress))
+    if not args.no_peer:
+        print(f"cedar-solve on {conditions.name}, {knowledge.label}", file=sys.stderr, flush=True)
+        runs.append(solve_cedar(lists, conditions, knowledge, timeout_ms=args.cedar_timeout_ms,
+                                progress=args.progress))
+    return runs
+
+
+def score_runs(runs: list[MethodRun], lists, conditions: Conditions, label: str) -> list[dict]:
+    """One row per method: the summary plus per-trial arrays, and the ratio to cedar-solve."""
+    truths = [s.rot_cam_from_icrs for s in lists]
+    tol = tolerance_rad(conditions.camera)
+    rows = []
+    for run in runs:
+        err = attitude_errors_rad(truths, run.estimates)
+        row = {"method": run.method, "condition": f"{conditions.name} {label}", **summarize(
+            run.solved, err, run.time_s, tol)}
+        err_arcsec = [None if math.isnan(e) else e / ARCSEC for e in err]
+        row["trials"] = {"solved": run.solved.tolist(), "time_ms": (run.time_s * 1e3).tolist(),
+                         "err_arcsec": err_arcsec}
+        if "roll_deg" in run.extra:
+            row.update(roll_check(truths, run, err <= tol))
+        rows.append(row)
+    add_ratios(rows)
+    return rows
+
+
+def roll_check(truths, run: MethodRun, good) -> dict:
+    """Median boresight error and |roll difference| (arcsec) of a peer's correct solves.
+
+    Checks that the peer's RA / Dec / roll mean what ours do: a roll convention that differed
+    would show as degrees here (and as false solves).
+    """
+    e = run.extra
+    checks = boresight_and_roll_errors(truths, e["ra_deg"], e["dec_deg"], e["roll_deg"])
+    if not np.any(good):
+        return {}
+    bore = np.median(checks["boresight_err_rad"][good]) / ARCSEC
+    roll = np.median(np.abs(checks["roll_diff_rad"][good])) / ARCSEC
+    return {"median_boresight_err_arcsec": float(bore), "median_abs_roll_diff_arcsec": float(roll)}
+
+
+def add_ratios(rows: list[dict]) -> None:
+    """Ours / cedar-solve for the median and 95th-percentile times, on startrack's row."""
+    peer = next((r for r in rows if r["method"] == "cedar-solve"), None)
+    for row in rows:
+        if peer is not None and row["method"] != "cedar-solve":
+            row["ratio_median"] = row["median_ms"] / peer["median_ms"]
+            row["ratio_p95"] = row["p95_ms"] / peer["p95_ms"]
+
+
+def format_row(row: dict) -> str:
+    ratio = (f"{row['ratio_median']:>11.2f} {row['ratio_p95']:>11.2f}" if "ratio_median" in row
+             else f"{'':>11} {'':>11}")
+    return (f"{row['method']:<12} {row['condition']:<20} {row['n']:>6} {row['success_rate']:>8.1%} "
+            f"{row['false_rate']:>7.1%} {row['median_ms']:>10.2f} {row['p95_ms']:>8.2f} {ratio}")
+
+
+def print_table(rows: list[dict], notes: list[str]) -> None:
+    print()
+    print(HEADER)
+    print("-" * len(HEADER))
+    for row in rows:
+        print(format_row(row))
+    for note in notes:
+        print(note)
+
+
+def save_json(path: Path | None, payload: dict) -> Path:
+    if path is None:
+        RESULTS_DIR.mkdir(parents=True, exist_ok=True)
+        path = RESULTS_DIR / f"lis-{datetime.now():%Y%m%d-%H%M%S}.json"
+    path.write_text(json.dumps(payload, indent=1, default=str))
+    return path
+
+
+def table_notes(rows: list[dict], skip_ours: str | None, peer_db: dict | None,
+                loads: tuple[float, float]) -> list[str]:
+    """The lines printed under the table: definitions, machine load, roll check, peer database."""
+    notes = [f"success: attitude error < {TOLERANCE_PIXELS:g} pixel angles; false: solved outside"
+             " it; times over all trials, after one warm-up solve",
+             "x cedar: startrack's time / cedar-solve's on the same lists",
+             f"load average before / after: {loads[0]:.2f} / {loads[1]:.2f} on {os.cpu_count()} "
+             "cores (other work on the machine slows both methods)"]
+    if skip_ours:
+        notes.append(f"startrack not run: {skip_ours}")
+    notes.extend(f"  {r['method']} {r['condition']}: median boresight error "
+                 f"{r['median_boresight_err_arcsec']:.1f} arcsec, median |roll - true roll| "
+                 f"{r['median_abs_roll_diff_arcsec']:.1f} arcsec"
+                 for r in rows if "median_abs_roll_diff_arcsec" in r)
+    if peer_db:
+        notes.append(f"cedar-solve database: FOV {peer_db['min_fov']:g}-{peer_db['max_fov']:g} "
+                     f"deg, stars to mag {peer_db['star_max_magnitude']:.2f}, "
+                     f"{peer_db['num_patterns']} patterns")
+    return notes
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    skip_ours = "--no-ours given" if args.no_ours else ours_available()
+    load_before = os.getloadavg()[0]
+    rows: list[dict] = []
+    peer_db: dict | None = None
+    t0 = time.perf_counter()
+    for fov_deg in args.fov_deg:
+        conditions = Conditions(fov_deg=fov_deg)
+        lists = generate_star_lists(conditions, args.trials, args.seed, sky=load_sky(conditions))
+        for knowledge in knowledge_list(fov_deg, args):
+            runs = run_methods(lists, conditions, knowledge, args, skip_ours)
+            peer_db = next((r.extra["database"] for r in runs if "database" in r.extra), peer_db)
+            rows.extend(score_runs(runs, lists, conditions, knowledge.label))
+    loads = (load_before, os.getloadavg()[0])
+    print_table(rows, table_notes(rows, skip_ours, peer_db, loads))
+    payload = {"args": vars(args), "python": platform.python_version(),
+               "machine": platform.machine(), "wall_s": time.perf_counter() - t0,
+               "load_average_before_after": list(loads), "cedar_database": peer_db, "rows": rows}
+    print(f"results saved to {save_json(args.out, payload)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,53 @@
+"""Run every benchmark in sequence with its defaults (``python3 tasks.py bench`` calls this).
+
+1. ``lis_benchmark.py``: lost-in-space on seeded star lists, startrack beside cedar-solve;
+2. ``image_path_benchmark.py``: read + detect + solve of 1024 x 1024 PNG frames;
+3. ``database_report.py``: the pattern database's build time, size and memory (5-35 deg),
+   beside cedar-solve's shipped one.
+
+The cedar-solve environment (``benchmarks/.venv-cedar``) is created first if needed. A benchmark
+that fails is reported and the others still run; the exit status is 1 if any failed.
+Arguments after ``--`` go to ``lis_benchmark.py`` (e.g. ``-- --trials 1000``).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+import traceback
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import database_report  # noqa: E402
+import image_path_benchmark  # noqa: E402
+import lis_benchmark  # noqa: E402
+from peers.cedar_env import ensure_cedar_env  # noqa: E402
+
+
+def _run(name: str, func, argv: list[str]) -> bool:
+    print(f"\n=== {name} {' '.join(argv)}", flush=True)
+    t0 = time.perf_counter()
+    try:
+        code = func(argv)
+    except Exception:  # report and go on with the next benchmark
+        traceback.print_exc()
+        code = 1
+    print(f"=== {name} finished in {time.perf_counter() - t0:.0f} s (exit {code})", flush=True)
+    return code == 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    lis_args = argv[argv.index("--") + 1:] if "--" in argv else argv
+    ensure_cedar_env()
+    ok = [
+        _run("lis_benchmark", lis_benchmark.main, lis_args),
+        _run("image_path_benchmark", image_path_benchmark.main, []),
+        _run("database_report", database_report.main, []),
+    ]
+    return 0 if all(ok) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

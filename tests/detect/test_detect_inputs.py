@@ -1,0 +1,161 @@
+"""Input handling of the detector: dtypes, colour rule, NaN / inf, bad input, blank frames."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from star_render import random_positions, render_stars
+
+from startrack.detect import StarDetector, detect, to_single_channel
+from startrack.errors import InvalidInputError
+from startrack.results import Detections
+from startrack.units import PIXEL
+
+SHAPE = (128, 160)
+
+
+@pytest.fixture(scope="module")
+def field():
+    """A 128 x 160 float image with 8 bright stars, and their true positions."""
+    rng = np.random.default_rng(11)
+    x, y = random_positions(8, SHAPE, margin=12, min_sep=14, rng=rng)
+    flux = np.linspace(2000.0, 6000.0, 8)
+    image = render_stars(SHAPE, x, y, flux, sigma_px=1.3, background=20.0, read_noise=2.0, rng=rng)
+    return image, x, y
+
+
+def _matched(det: Detections, x, y, tol: float = 0.2 * PIXEL) -> int:
+    dist = np.hypot(x[:, None] - det.x[None], y[:, None] - det.y[None])
+    return int(np.sum(dist.min(axis=1) < tol)) if len(det) else 0
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.int16, np.int32, np.int64,
+                                   np.float32, np.float64])
+def test_every_dtype_finds_the_stars(field, dtype):
+    image, x, y = field
+    scaled = image * (250.0 / image.max()) if dtype == np.uint8 else image
+    integer = np.issubdtype(dtype, np.integer)
+    array = np.rint(scaled).astype(dtype) if integer else scaled.astype(dtype)
+    det = detect(array)
+    assert _matched(det, x, y) == len(x)
+    assert len(det) == len(x)
+    assert (det.width, det.height) == (SHAPE[1], SHAPE[0])
+
+
+def test_result_arrays_have_documented_types(field):
+    det = detect(field[0])
+    assert det.area_px.dtype == np.int64
+    for name in ("x", "y", "flux", "sigma_px", "peak", "elongation"):
+        assert getattr(det, name).dtype == np.float64, name
+        assert getattr(det, name).shape == (len(det),)
+    assert np.all(det.sigma_px > 0) and np.all(det.elongation >= 1.0)
+    assert det.noise == pytest.approx(2.0, rel=0.15)
+    assert det.background == pytest.approx(20.0, abs=0.5)
+
+
+def test_nan_and_inf_pixels_are_ignored(field):
+    image, x, y = field
+    spoiled = image.copy()
+    rng = np.random.default_rng(3)
+    spoiled[rng.integers(0, SHAPE[0], 300), rng.integers(0, SHAPE[1], 300)] = np.nan
+    spoiled[5, 5], spoiled[6, 9] = np.inf, -np.inf
+    # a NaN in the wing of the first star: the star is still found, a little less precisely
+    spoiled[int(round(y[0])), int(round(x[0])) + 2] = np.nan
+    det = detect(spoiled)
+    assert np.all(np.isfinite(det.x)) and np.all(np.isfinite(det.flux))
+    assert _matched(det, x, y, tol=0.5 * PIXEL) == len(x)
+
+
+def test_an_all_nan_star_region_does_not_crash(field):
+    image, x, y = field
+    spoiled = image.copy()
+    yc, xc = int(round(y[0])), int(round(x[0]))
+    spoiled[yc - 6: yc + 7, xc - 6: xc + 7] = np.nan
+    det = detect(spoiled)
+    assert _matched(det, x[1:], y[1:]) == len(x) - 1
+
+
+@pytest.mark.parametrize("value", [0, 7])
+@pytest.mark.parametrize("dtype", [np.uint8, np.float32])
+def test_constant_image_has_no_detections(value, dtype):
+    det = detect(np.full((64, 64), value, dtype=dtype))
+    assert len(det) == 0
+    assert det.background == pytest.approx(value)
+
+
+@pytest.mark.parametrize("bad", [
+    np.zeros(10), np.zeros((1, 1)), np.zeros((0, 0)), np.zeros((1, 50)), np.zeros((4, 4, 5)),
+    np.zeros((2, 3, 4, 5)), np.full((8, 8), np.nan), np.zeros((8, 8), dtype=complex),
+    np.array([["a", "b"], ["c", "d"]]),
+])
+def test_bad_input_raises_invalid_input_error(bad):
+    with pytest.raises(InvalidInputError):
+        detect(bad)
+
+
+@pytest.mark.parametrize("settings", [
+    {"sigma": 0}, {"sigma": -1}, {"sigma": float("nan")}, {"binning": 0}, {"binning": 1.5},
+    {"kernel_px": 2}, {"kernel": "gauss"}, {"background": "local"}, {"tile_px": 0},
+    {"min_area_px": 0}, {"max_area_px": 0}, {"max_elongation": 0}, {"uncertainty": "x"},
+    {"reject_edge": "yes"}, {"channel": -1}, {"max_stars": 0}, {"min_peak_snr": -1},
+])
+def test_bad_settings_raise_once_at_construction(settings):
+    with pytest.raises(InvalidInputError, match=next(iter(settings))):
+        StarDetector(**settings)
+
+
+def test_detect_with_settings_equals_configured_detector(field):
+    a = detect(field[0], sigma=8, max_stars=3)
+    b = StarDetector(sigma=8, max_stars=3).detect(field[0])
+    assert len(a) == 3
+    np.testing.assert_array_equal(a.x, b.x)
+
+
+# --- colour rule ---------------------------------------------------------------------------
+
+def test_colour_rule_sums_rgb_and_ignores_alpha():
+    rng = np.random.default_rng(0)
+    rgba = rng.integers(0, 256, (6, 7, 4), dtype=np.uint8)
+    expected = rgba[..., :3].astype(np.int64).sum(axis=-1)
+    for image in (rgba, rgba[..., :3]):
+        grey = to_single_channel(image)
+        assert grey.shape == (6, 7)
+        np.testing.assert_array_equal(grey, expected)  # no uint8 overflow
+    np.testing.assert_array_equal(to_single_channel(rgba, channel=1), rgba[..., 1])
+
+
+def test_colour_rule_grey_alpha_and_single_plane():
+    rng = np.random.default_rng(1)
+    la = rng.random((5, 4, 2))
+    np.testing.assert_array_equal(to_single_channel(la), la[..., 0])
+    np.testing.assert_array_equal(to_single_channel(la[..., :1]), la[..., 0])
+    grey = la[..., 0]
+    assert to_single_channel(grey) is grey
+
+
+@pytest.mark.parametrize("channel", [3, -1, 1.0, "g"])
+def test_colour_rule_rejects_bad_channel(channel):
+    with pytest.raises(InvalidInputError, match="channel"):
+        to_single_channel(np.zeros((4, 4, 3)), channel=channel)
+
+
+def test_colour_image_detects_like_its_sum(field):
+    image, x, y = field
+    rgb = np.stack([0.5 * image, 0.3 * image, 0.2 * image], axis=-1)
+    det_rgb = detect(rgb)
+    det_grey = detect(image)
+    np.testing.assert_allclose(det_rgb.x, det_grey.x, atol=1e-6)
+    det_green = detect(rgb, channel=1)
+    assert _matched(det_green, x, y) == len(x)
+
+
+def test_missing_half_frame_gives_no_false_stars_at_its_border():
+    rng = np.random.default_rng(12)
+    counts = []
+    for _ in range(3):
+        image = rng.normal(10.0, 2.0, (300, 300))
+        image[:, :150] = np.nan
+        det = detect(image)
+        counts.append(len(det))
+        assert det.noise == pytest.approx(2.0, rel=0.1)
+    assert sum(counts) == 0
