@@ -16,7 +16,16 @@ from startrack.solve import solve_image
 from startrack.units import ARCSEC, DEG
 
 ROWS = Path(__file__).resolve().parents[1].parent / "shared" / "realdata" / "truth.csv"
-NAMES = [r["file"] for r in csv.DictReader(open(ROWS))] if ROWS.exists() else []
+
+
+def _names() -> list[str]:
+    if not ROWS.exists():
+        return []
+    with open(ROWS, newline="") as fh:
+        return [row["file"] for row in csv.DictReader(fh)]
+
+
+NAMES = _names()
 
 
 @pytest.mark.parametrize("name", NAMES)

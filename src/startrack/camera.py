@@ -15,8 +15,9 @@ The inverse (pixel -> vector) is solved by Newton's method to 1e-6 px.
 
 from __future__ import annotations
 
+import copy
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -116,7 +117,26 @@ class Camera:
         """The same camera with other focal lengths (fy keeps the fx / fy ratio if not given)."""
         if fy is None:
             fy = fx * self.fy / self.fx
-        return replace(self, fx=float(fx), fy=float(fy))
+        if not (fx > 0 and fy > 0 and math.isfinite(fx) and math.isfinite(fy)):
+            raise InvalidInputError(f"focal lengths must be positive and finite, got {fx!r}, {fy!r} px")
+        return self._updated(fx=float(fx), fy=float(fy))
+
+    def with_distortion(self, **coefficients: float) -> Camera:
+        """The same camera with other distortion coefficients (k1, k2, k3, p1, p2)."""
+        unknown = set(coefficients) - {"k1", "k2", "k3", "p1", "p2"}
+        if unknown:
+            raise InvalidInputError(f"unknown distortion coefficients {sorted(unknown)}; valid: k1, k2, k3, p1, p2")
+        if not all(math.isfinite(float(v)) for v in coefficients.values()):
+            raise InvalidInputError(f"distortion coefficients must be finite, got {coefficients}")
+        return self._updated(**{k: float(v) for k, v in coefficients.items()})
+
+    def _updated(self, **fields: float) -> Camera:
+        """A copy with some already-checked fields changed (cheaper than ``dataclasses.replace``,
+        which re-runs every check; refinement loops call this many times)."""
+        new = copy.copy(self)
+        for key, value in fields.items():
+            object.__setattr__(new, key, value)
+        return new
 
     # --- derived quantities -----------------------------------------------------------------
     @property

@@ -54,6 +54,7 @@ class _Problem:
 
     x: NDArray[np.float64]
     y: NDArray[np.float64]
+    rows: NDArray[np.int64]
     camera: Camera
     focal_range: tuple[float, float] | None
     fov_range_deg: tuple[float, float]
@@ -95,7 +96,8 @@ def _focal_setup(width, height, fov_deg, fov_range_deg, camera):
     return nominal, (f_lo, f_hi), (lo, hi)
 
 
-def _star_arrays(x, y, flux, width, height) -> tuple[NDArray, NDArray]:
+def _star_arrays(x, y, flux, width, height) -> tuple[NDArray, NDArray, NDArray]:
+    """Validated coordinates, brightest first, and the input row of each."""
     x = np.asarray(x, dtype=float).ravel()
     y = np.asarray(y, dtype=float).ravel()
     if x.shape != y.shape:
@@ -112,8 +114,8 @@ def _star_arrays(x, y, flux, width, height) -> tuple[NDArray, NDArray]:
         if flux.shape != x.shape or not np.all(np.isfinite(flux)):
             raise InvalidInputError("flux must be finite and as long as x and y")
         order = np.argsort(-flux, kind="stable")
-        x, y = x[order], y[order]
-    return x, y
+        return x[order], y[order], order
+    return x, y, np.arange(x.size)
 
 
 def _problem(x, y, width, height, fov_deg, fov_range_deg, camera, flux, epoch) -> _Problem:
@@ -124,9 +126,9 @@ def _problem(x, y, width, height, fov_deg, fov_range_deg, camera, flux, epoch) -
             raise InvalidInputError(f"{name} must be an integer number of pixels >= 2, got {value!r}")
     if fov_deg is not None and fov_range_deg is not None:
         raise InvalidInputError("give fov_deg or fov_range_deg, not both")
-    xs, ys = _star_arrays(x, y, flux, width, height)
+    xs, ys, rows = _star_arrays(x, y, flux, width, height)
     nominal, focal_range, fov_range = _focal_setup(width, height, fov_deg, fov_range_deg, camera)
-    return _Problem(xs, ys, nominal, focal_range, fov_range, _epoch_jyear(epoch))
+    return _Problem(xs, ys, rows, nominal, focal_range, fov_range, _epoch_jyear(epoch))
 
 
 def database_settings_for(fov_range_deg: tuple[float, float] = DEFAULT_FOV_RANGE_DEG) -> DatabaseSettings:
@@ -181,7 +183,7 @@ def _solution(problem: _Problem, db, cand: Candidate, t0: float) -> AttitudeSolu
     rot = Rotation.from_quat(quest_quaternions(observed[None], ref[None], weights)[0])
     residuals = angle_between(rot.apply(ref), observed) / ARCSEC
     ra, dec, roll = radec_roll_from_rotation(rot)
-    matches = StarMatches(status=Status.OK, det_index=img.astype(np.int64),
+    matches = StarMatches(status=Status.OK, det_index=problem.rows[img].astype(np.int64),
                           hip=db.hip[star].astype(np.int64), cat_vectors=ref,
                           false_match_prob=cand.false_match_prob)
     return AttitudeSolution(
@@ -252,7 +254,7 @@ def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[flo
     fov_deg, fov_range_deg, camera, epoch, options
         As in :func:`solve_stars`.
     channel : str or int, optional
-        Colour channel to use (default: the mean of R, G, B; see :mod:`startrack.io`).
+        Colour channel to use: 'r', 'g' or 'b' (default: R + G + B; see :mod:`startrack.io.channels`).
     detector : startrack.detect.StarDetector, optional
         Detection settings (default: :func:`startrack.detect.detect`'s).
 

@@ -117,26 +117,38 @@ def test_colour_rule_sums_rgb_and_ignores_alpha():
     rng = np.random.default_rng(0)
     rgba = rng.integers(0, 256, (6, 7, 4), dtype=np.uint8)
     expected = rgba[..., :3].astype(np.int64).sum(axis=-1)
+    assert expected.max() > 255
     for image in (rgba, rgba[..., :3]):
         grey = to_single_channel(image)
-        assert grey.shape == (6, 7)
+        assert grey.shape == (6, 7) and grey.dtype == np.uint16
         np.testing.assert_array_equal(grey, expected)  # no uint8 overflow
-    np.testing.assert_array_equal(to_single_channel(rgba, channel=1), rgba[..., 1])
+
+
+@pytest.mark.parametrize(("channel", "index"), [(0, 0), (1, 1), (2, 2), ("r", 0), ("G", 1),
+                                                ("b", 2)])
+def test_colour_rule_picks_one_plane_in_native_dtype(channel, index):
+    rgba = np.random.default_rng(2).integers(0, 65536, (6, 7, 4)).astype(np.uint16)
+    plane = to_single_channel(rgba, channel=channel)
+    assert plane.dtype == np.uint16
+    np.testing.assert_array_equal(plane, rgba[..., index])
 
 
 def test_colour_rule_grey_alpha_and_single_plane():
     rng = np.random.default_rng(1)
     la = rng.random((5, 4, 2))
-    np.testing.assert_array_equal(to_single_channel(la), la[..., 0])
+    for channel in (None, "g", 1):
+        np.testing.assert_array_equal(to_single_channel(la, channel=channel), la[..., 0])
     np.testing.assert_array_equal(to_single_channel(la[..., :1]), la[..., 0])
     grey = la[..., 0]
     assert to_single_channel(grey) is grey
+    assert to_single_channel(grey, channel="b") is grey
 
 
-@pytest.mark.parametrize("channel", [3, -1, 1.0, "g"])
+@pytest.mark.parametrize("channel", [3, -1, 1.0, "alpha", "", True])
 def test_colour_rule_rejects_bad_channel(channel):
-    with pytest.raises(InvalidInputError, match="channel"):
-        to_single_channel(np.zeros((4, 4, 3)), channel=channel)
+    for shape in ((4, 4, 4), (4, 4, 3), (4, 4)):
+        with pytest.raises(InvalidInputError, match="channel"):
+            to_single_channel(np.zeros(shape), channel=channel)
 
 
 def test_colour_image_detects_like_its_sum(field):

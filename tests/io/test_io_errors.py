@@ -141,7 +141,7 @@ def test_real_truncated_png(realdata_dir):
 
 
 # --- misuse ----------------------------------------------------------------------------------
-@pytest.mark.parametrize("shape", [(10,), (4, 4, 2), (4, 4, 5), (2, 4, 4, 3), (0, 5)])
+@pytest.mark.parametrize("shape", [(10,), (4, 4, 0), (4, 4, 5), (2, 4, 4, 3), (0, 5)])
 def test_bad_array_shapes(shape):
     with pytest.raises(InvalidInputError, match="shape"):
         read_image(np.zeros(shape))
@@ -159,9 +159,18 @@ def test_bad_source_type():
         read_image([[1, 2], [3, 4]])
 
 
-def test_bad_channel_even_for_grey(tmp_path):
+@pytest.mark.parametrize("channel", ["alpha", "a", 3, -1, 1.5, True])
+@pytest.mark.parametrize("shape", [(3, 3), (3, 3, 1), (3, 3, 2), (3, 3, 3), (3, 3, 4)])
+def test_bad_channel_even_for_grey(shape, channel):
     with pytest.raises(InvalidInputError, match="channel"):
-        read_image(np.zeros((3, 3)), channel="alpha")
+        read_image(np.zeros(shape), channel=channel)
+
+
+@pytest.mark.parametrize("channel", ["alpha", 3])
+def test_bad_channel_is_refused_before_the_file_is_read(tmp_path, channel):
+    for path in (_save(tmp_path, "image.png", "PNG"), tmp_path / "absent.png"):
+        with pytest.raises(InvalidInputError, match="channel"):
+            read_image(path, channel=channel)
 
 
 def test_decompression_bomb_limit(tmp_path, monkeypatch):

@@ -47,13 +47,19 @@ def test_pillow_32bit_grey_png_from_mode_i_becomes_uint16(tmp_path):
     np.testing.assert_array_equal(data, GREY16)
 
 
+def _rgb_sum(rgb: np.ndarray) -> np.ndarray:
+    """R + G + B of an (H, W, 3 or 4) array in int64 (exact for 8 and 16 bits)."""
+    return rgb[..., :3].astype(np.int64).sum(axis=-1)
+
+
 @pytest.mark.parametrize("fmt", ["PNG", "TIFF"])
-def test_pillow_rgb8_mean_and_channels(tmp_path, fmt):
+def test_pillow_rgb8_sum_and_channels(tmp_path, fmt):
     path = tmp_path / f"rgb.{fmt.lower()}"
     PILImage.fromarray(RGB8).save(path, format=fmt)
-    mean = read_image(path)
-    assert mean.colour and mean.bit_depth == 8 and mean.data.dtype == np.float32
-    np.testing.assert_allclose(mean.data, RGB8.astype(float).mean(axis=-1), rtol=1e-7)
+    total = read_image(path)
+    assert total.colour and total.bit_depth == 8 and total.data.dtype == np.uint16
+    np.testing.assert_array_equal(total.data, _rgb_sum(RGB8))
+    assert total.data.max() > 255  # summed, not averaged or clipped to 8 bits
     for channel, index in (("r", 0), ("g", 1), ("b", 2)):
         picked = read_image(path, channel=channel)
         assert picked.data.dtype == np.uint8
@@ -61,10 +67,22 @@ def test_pillow_rgb8_mean_and_channels(tmp_path, fmt):
 
 
 def test_rgba_png_ignores_alpha(tmp_path):
-    rgba = np.dstack([RGB8, np.zeros(RGB8.shape[:2], np.uint8)])
+    alpha = RNG.integers(1, 256, size=RGB8.shape[:2]).astype(np.uint8)
     path = tmp_path / "rgba.png"
-    PILImage.fromarray(rgba).save(path)
-    np.testing.assert_allclose(read_image(path).data, RGB8.astype(float).mean(axis=-1), rtol=1e-7)
+    PILImage.fromarray(np.dstack([RGB8, alpha])).save(path)
+    image = read_image(path)
+    assert image.colour and image.data.dtype == np.uint16
+    np.testing.assert_array_equal(image.data, _rgb_sum(RGB8))
+    np.testing.assert_array_equal(read_image(path, channel="b").data, RGB8[..., 2])
+
+
+def test_grey_alpha_png_gives_grey(tmp_path):
+    path = tmp_path / "la.png"
+    PILImage.fromarray(np.dstack([GREY8, np.full_like(GREY8, 128)])).save(path)
+    for channel in (None, "g"):
+        image = read_image(path, channel=channel)
+        assert not image.colour and image.data.dtype == np.uint8
+        np.testing.assert_array_equal(image.data, GREY8)
 
 
 def test_palette_png_is_colour(tmp_path):
@@ -188,7 +206,10 @@ def test_tiff_rgb16_keeps_16_bits(tmp_path, big_endian, deflate, predictor):
         image = read_image(path, channel=channel)
         assert image.data.dtype == np.uint16 and image.bit_depth == 16 and image.colour
         np.testing.assert_array_equal(image.data, RGB16[..., channel])
-    np.testing.assert_allclose(read_image(path).data, RGB16.astype(float).mean(axis=-1), rtol=1e-7)
+    total = read_image(path)
+    assert total.data.dtype == np.uint32 and total.bit_depth == 16 and total.colour
+    np.testing.assert_array_equal(total.data, _rgb_sum(RGB16))
+    assert total.data.max() > 65535  # no uint16 overflow
 
 
 # --- arrays ---------------------------------------------------------------------------------
@@ -200,16 +221,32 @@ def test_array_input():
     colour = read_image(RGB16, channel="r")
     assert colour.colour and colour.data.dtype == np.uint16
     np.testing.assert_array_equal(colour.data, RGB16[..., 0])
-    assert read_image(RGB8).data.dtype == np.float32
-    assert not read_image(GREY8[..., None]).colour
+    total = read_image(RGB8)
+    assert total.colour and total.bit_depth == 8 and total.data.dtype == np.uint16
+    np.testing.assert_array_equal(total.data, _rgb_sum(RGB8))
+    rgba = read_image(np.dstack([RGB16, GREY16]))
+    assert rgba.colour and rgba.data.dtype == np.uint32
+    np.testing.assert_array_equal(rgba.data, _rgb_sum(RGB16))
+    single = read_image(GREY8[..., None])
+    assert not single.colour and single.data.dtype == np.uint8
+    np.testing.assert_array_equal(single.data, GREY8)
+    grey_alpha = read_image(np.dstack([GREY16, RGB16[..., 0]]), channel="r")
+    assert not grey_alpha.colour and grey_alpha.data.dtype == np.uint16
+    np.testing.assert_array_equal(grey_alpha.data, GREY16)
 
 
 # --- real files ------------------------------------------------------------------------------
 def test_real_images_match_truth_sizes(realdata_dir, truth_table):
+    """The 8-bit colour PNGs (RGBA) and JPEGs (RGB) become uint16 R + G + B, as Pillow decodes."""
     for row in truth_table:
-        image = read_image(realdata_dir / row["set"] / row["file"])
+        path = realdata_dir / row["set"] / row["file"]
+        image = read_image(path)
         assert image.data.shape == (int(row["height"]), int(row["width"])), row["file"]
         assert image.bit_depth == 8 and image.colour
-        assert image.data.dtype == np.float32
-        assert 0.0 <= image.data.min() and image.data.max() <= 255.0
-        assert np.isfinite(image.data).all()
+        assert image.data.dtype == np.uint16
+        with PILImage.open(path) as pil:
+            pixels = np.asarray(pil)
+        np.testing.assert_array_equal(image.data, _rgb_sum(pixels), err_msg=row["file"])
+        green = read_image(path, channel="g")
+        assert green.data.dtype == np.uint8
+        np.testing.assert_array_equal(green.data, pixels[..., 1], err_msg=row["file"])

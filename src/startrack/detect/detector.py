@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InvalidInputError
+from ..io.channels import channel_index
 from ..results import Detections
 from . import filters
 from .background import (
@@ -79,8 +80,8 @@ class StarDetector:
         Split clusters that hold several separate peaks (see :mod:`.deblend`).
     reject_edge : bool
         Drop spots that touch the image border.
-    channel : int or None
-        Plane of a colour image to use; None sums R + G + B (see :mod:`.channels`).
+    channel : {None, "r", "g", "b", 0, 1, 2}
+        Plane of a colour image to use; None sums R + G + B (see :mod:`startrack.io.channels`).
     max_stars : int or None
         Keep only this many spots, the brightest.
     uncertainty : {"propagated", "eq4.2"}
@@ -103,7 +104,7 @@ class StarDetector:
     max_clutter: float | None = 2.5
     deblend: bool = True
     reject_edge: bool = True
-    channel: int | None = None
+    channel: str | int | None = None
     max_stars: int | None = None
     uncertainty: str = "propagated"
 
@@ -125,9 +126,7 @@ class StarDetector:
         if self.uncertainty not in UNCERTAINTY_MODELS:
             raise InvalidInputError(
                 f"uncertainty must be one of {UNCERTAINTY_MODELS}, got {self.uncertainty!r}")
-        if self.channel is not None and not (isinstance(self.channel, int) and self.channel >= 0):
-            raise InvalidInputError(
-                f"channel must be None or a non-negative int, got {self.channel!r}")
+        channel_index(self.channel)
         for name in ("reject_edge", "deblend"):
             if not isinstance(getattr(self, name), bool | np.bool_):
                 raise InvalidInputError(

@@ -116,6 +116,17 @@ def pattern_batches(n: int) -> Iterator[NDArray[np.int64]]:
         yield np.column_stack([head, np.full(len(head), last)])
 
 
+MIN_SEPARATION_PX = 1.0
+"""A star closer than this to a brighter one takes no part in patterns (coincident entries)."""
+
+
+def distinct_stars(x: NDArray, y: NDArray) -> NDArray[np.int64]:
+    """Indices of the stars (in order) that are not within MIN_SEPARATION_PX of a brighter one."""
+    d2 = (x[:, None] - x[None, :]) ** 2 + (y[:, None] - y[None, :]) ** 2
+    close = np.tril(d2 < MIN_SEPARATION_PX**2, k=-1)  # pairs (i, j) with j brighter than i
+    return np.flatnonzero(~close.any(axis=1))
+
+
 class _Search:
     """State of one lost-in-space search."""
 
@@ -127,10 +138,13 @@ class _Search:
         self.radius = options.match_radius_px or max(2.0, 0.003 * max(camera.width, camera.height))
         self.fit_focal = focal_range[1] > focal_range[0]
         self.trials = 0
+        self.pattern_index = distinct_stars(x, y)[: options.pattern_stars]
 
     def try_batch(self, quads: NDArray) -> Candidate | None:
-        """Look up and verify a batch of patterns; the first verified candidate wins."""
+        """Look up and verify a batch of patterns (indices into :attr:`pattern_index`); the first
+        verified candidate wins."""
         opt = self.options
+        quads = self.pattern_index[quads]
         u, w = self.u[quads], self.w[quads]
         trials = focal_trials(u, w, self.scale_range, opt.focal_step)
         geom = trial_geometry(u, w, trials, self.camera.fx, opt.centroid_sigma_px, opt.focal_step)
@@ -206,7 +220,7 @@ def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatab
     focal_range = focal_range_px or (camera.fx, camera.fx)
     search = _Search(np.asarray(x, float), np.asarray(y, float), camera, focal_range, db, options)
     deadline = time.perf_counter() + options.timeout_s
-    for quads in pattern_batches(min(len(x), options.pattern_stars)):
+    for quads in pattern_batches(search.pattern_index.size):
         found = search.try_batch(quads)
         if found is not None:
             return MatchOutcome(Status.OK, "", found, search.trials)

@@ -8,8 +8,6 @@ focal length (fx and fy scale together). Gauss-Newton with the analytic Jacobian
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
@@ -95,7 +93,7 @@ def refine_pointing(rot_cam_from_icrs: Rotation, camera: Camera, ref_icrs: NDArr
         if fit_focal:
             camera = camera.with_focal(camera.fx * np.exp(delta[3]))
         if fit_k1:
-            camera = replace(camera, k1=camera.k1 + delta[4])
+            camera = camera.with_distortion(k1=camera.k1 + delta[4])
         if np.max(np.abs(delta)) < _CONVERGED:
             break
     px, py = camera.vector_to_pixel(ref_icrs @ matrix.T)

@@ -40,7 +40,8 @@ class Image:
     ----------
     data : ndarray, shape (H, W)
         Pixel values in the file's dtype (uint8, uint16, int32, float32, float64), never
-        rescaled; float32 when colour was averaged (see :mod:`startrack.io.channels`).
+        rescaled; for colour summed as R + G + B a wider type that cannot overflow (8-bit RGB
+        gives uint16 0..765, 16-bit RGB gives uint32; see :mod:`startrack.io.channels`).
     path : Path or None
         The file read, None for an array.
     header : dict
@@ -50,7 +51,7 @@ class Image:
         Bits per sample in the source file (1, 8, 16, 32 or 64); for an array, its item size
         in bits.
     colour : bool
-        True if the source had colour channels that were reduced to one.
+        True if the source had colour channels (RGB or RGBA) that were reduced to one.
     """
 
     data: NDArray
@@ -75,7 +76,7 @@ def _from_array(array: np.ndarray, channel: str | int | None) -> Image:
         raise InvalidInputError(f"image array must be integer or float, got dtype {array.dtype}")
     if array.size == 0:
         raise InvalidInputError(f"image array must not be empty, got shape {array.shape}")
-    colour = array.ndim == 3 and array.shape[-1] > 1
+    colour = array.ndim == 3 and array.shape[-1] >= 3
     return Image(to_single_channel(array, channel), None, {}, array.dtype.itemsize * 8, colour)
 
 
@@ -115,10 +116,12 @@ def read_image(
     ----------
     source : str, Path or ndarray
         A FITS, PNG, JPEG or TIFF file (8 or 16 bit, grey or colour; float FITS / TIFF), or an
-        array of shape (H, W) or (H, W, C) with C = 1, 3 (RGB) or 4 (RGBA).
+        array of shape (H, W) or (H, W, C) with C = 1 (grey), 2 (grey + alpha), 3 (RGB) or
+        4 (RGBA).
     channel : {None, "r", "g", "b", 0, 1, 2}
-        Colour rule: None averages R, G and B into float32; otherwise that plane is kept in its
-        native dtype. Alpha is always ignored; grey images ignore ``channel``.
+        Colour rule: None sums R + G + B in a wider type (uint8 -> uint16, uint16 -> uint32,
+        floats in their own precision); otherwise that plane is kept in its native dtype.
+        Alpha is always ignored; grey images check ``channel`` and then ignore it.
 
     Returns
     -------
@@ -131,9 +134,10 @@ def read_image(
         If the file is missing, empty, truncated, corrupt, not an image, or of an unsupported
         format; the message names the file and the problem.
     InvalidInputError
-        If ``channel`` is not valid, or an array is not 2-D or 3-D with 1, 3 or 4 channels.
+        If ``channel`` is not valid, or an array is empty, not integer / float, or not 2-D or
+        3-D with 1 to 4 channels.
     """
-    channel_index(channel, 4)
+    channel_index(channel)  # checked before any file is read
     if isinstance(source, np.ndarray):
         return _from_array(source, channel)
     if not isinstance(source, str | os.PathLike):
