@@ -87,13 +87,31 @@ def _focal_setup(width, height, fov_deg, fov_range_deg, camera):
         fov = _check_fov_deg(fov_deg, "fov_deg")
         lo, hi = fov * (1 - FOV_DEG_TOLERANCE), fov * (1 + FOV_DEG_TOLERANCE)
     else:
-        lo, hi = fov_range_deg if fov_range_deg is not None else DEFAULT_FOV_RANGE_DEG
+        lo, hi = _fov_pair(fov_range_deg if fov_range_deg is not None else DEFAULT_FOV_RANGE_DEG)
         lo, hi = _check_fov_deg(lo, "fov_range_deg low"), _check_fov_deg(hi, "fov_range_deg high")
         if lo > hi:
             raise InvalidInputError(f"fov_range_deg must be (low, high) with low <= high, got ({lo:g}, {hi:g})")
     f_lo, f_hi = focal_px_from_fov(width, math.radians(hi)), focal_px_from_fov(width, math.radians(lo))
     nominal = Camera(width=int(width), height=int(height), fx=math.sqrt(f_lo * f_hi))
     return nominal, (f_lo, f_hi), (lo, hi)
+
+
+def _fov_pair(fov_range_deg) -> tuple[float, float]:
+    values = np.asarray(fov_range_deg, dtype=object).ravel()
+    if isinstance(fov_range_deg, str) or values.size != 2:
+        raise InvalidInputError(f"fov_range_deg must be a pair (low, high) in deg, got {fov_range_deg!r}")
+    return float(values[0]), float(values[1])
+
+
+def _check_distinct(x: NDArray, y: NDArray) -> None:
+    """Two stars at exactly the same position make degenerate patterns: refuse them."""
+    order = np.lexsort((y, x))
+    same = (np.diff(x[order]) == 0) & (np.diff(y[order]) == 0)
+    if np.any(same):
+        k = int(np.flatnonzero(same)[0])
+        i, j = sorted(int(v) for v in order[k:k + 2])
+        raise InvalidInputError(f"stars {i} and {j} are at the same position ({x[i]:g}, {y[i]:g}); "
+                                "give each star once")
 
 
 def _star_arrays(x, y, flux, width, height) -> tuple[NDArray, NDArray, NDArray]:
@@ -109,6 +127,7 @@ def _star_arrays(x, y, flux, width, height) -> tuple[NDArray, NDArray, NDArray]:
         i = int(np.flatnonzero(outside)[0])
         raise InvalidInputError(f"star {i} at ({x[i]:g}, {y[i]:g}) lies outside the {width} x {height} image "
                                 f"(valid: -0.5 <= x <= {width - 0.5}, -0.5 <= y <= {height - 0.5})")
+    _check_distinct(x, y)
     if flux is not None:
         flux = np.asarray(flux, dtype=float).ravel()
         if flux.shape != x.shape or not np.all(np.isfinite(flux)):
@@ -126,6 +145,8 @@ def _problem(x, y, width, height, fov_deg, fov_range_deg, camera, flux, epoch) -
             raise InvalidInputError(f"{name} must be an integer number of pixels >= 2, got {value!r}")
     if fov_deg is not None and fov_range_deg is not None:
         raise InvalidInputError("give fov_deg or fov_range_deg, not both")
+    if camera is not None and (fov_deg is not None or fov_range_deg is not None):
+        raise InvalidInputError("a camera fixes the field of view: give camera or fov_deg / fov_range_deg, not both")
     xs, ys, rows = _star_arrays(x, y, flux, width, height)
     nominal, focal_range, fov_range = _focal_setup(width, height, fov_deg, fov_range_deg, camera)
     return _Problem(xs, ys, rows, nominal, focal_range, fov_range, _epoch_jyear(epoch))

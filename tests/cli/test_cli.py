@@ -243,8 +243,6 @@ def test_solve_stars_match_index_is_the_row_of_the_star_list(sim, tmp_path):
     assert [stars[m["index"]]["hip"] for m in matches] == [m["hip"] for m in matches]
 
 
-@pytest.mark.xfail(strict=True, reason="coincident stars divide by zero (RuntimeWarning) in identify.quad_search; "
-                                      "fix proposed: refuse them in solve._star_arrays")
 def test_solve_stars_duplicate_rows_are_refused_cleanly(sim, tmp_path):
     rows = sim["csv"].read_text().splitlines()
     starlist = tmp_path / "duplicates.csv"
@@ -367,8 +365,7 @@ def test_solve_stars_two_stars_is_an_expected_failure(bad_lists):
     ("nan.csv", ("nan.csv", "line 7", "finite")),
     ("outside.csv", ("outside.csv", "(1500, 12.5)", "outside the 1024 x 1024 image")),
     ("binary.csv", ()),
-    pytest.param("binary.csv", ("binary.csv", "not a UTF-8 text"), marks=pytest.mark.xfail(
-        strict=True, reason="startrack.io.starlist: UnicodeDecodeError message names no file (fix proposed)")),
+    ("binary.csv", ("binary.csv", "not a UTF-8 text")),
     ("missing.csv", ("missing.csv", "does not exist")),
 ])
 def test_solve_stars_bad_list_is_misuse(bad_lists, name, words):

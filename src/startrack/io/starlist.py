@@ -28,9 +28,13 @@ def _rows(path: Path) -> tuple[list[str], list[tuple[int, list[str]]]]:
     """Header names (lower case) and the (line number, fields) of each data row."""
     if not path.is_file():
         raise InvalidInputError(f"star list {path} does not exist or is not a file")
-    with open(path, newline="", encoding="utf-8-sig") as fh:
-        lines = [(n, line) for n, line in enumerate(fh, start=1)
-                 if line.strip() and not line.lstrip().startswith("#")]
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as fh:
+            lines = [(n, line) for n, line in enumerate(fh, start=1)
+                     if line.strip() and not line.lstrip().startswith("#")]
+    except UnicodeDecodeError as exc:
+        raise InvalidInputError(f"star list {path} is not a UTF-8 text CSV file (undecodable byte at offset "
+                                f"{exc.start})") from None
     if not lines:
         raise InvalidInputError(f"star list {path} is empty: expected a header row with x, y")
     parsed = list(csv.reader(line for _, line in lines))
