@@ -34,9 +34,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from methods import startrack_function  # noqa: E402
 from scoring import TOLERANCE_PIXELS, attitude_errors_rad, summarize, tolerance_rad  # noqa: E402
 
+from startrack import solve_image, solve_stars  # noqa: E402
 from startrack.camera import Camera  # noqa: E402
 from startrack.frames import random_rotations  # noqa: E402
 
@@ -71,16 +71,14 @@ def write_frames(camera: Camera, args: argparse.Namespace, folder: Path) -> list
 
 def time_solves(frames: list, fov_deg: float) -> tuple[list, np.ndarray, float]:
     """Solve each file; return the attitudes (None when unsolved), times (s), warm-up time (s)."""
-    solve_image = startrack_function("solve_image")
     t0 = time.perf_counter()
     solve_image(frames[0][0], fov_deg=fov_deg, epoch=EPOCH_JYEAR)
     warmup_s = time.perf_counter() - t0
     estimates, times = [], np.zeros(len(frames))
     for i, (path, _) in enumerate(frames):
         t0 = time.perf_counter()
-        result = solve_image(path, fov_deg=fov_deg, epoch=EPOCH_JYEAR)
+        sol = solve_image(path, fov_deg=fov_deg, epoch=EPOCH_JYEAR)
         times[i] = time.perf_counter() - t0
-        sol = result[0] if isinstance(result, tuple) else result  # (solution, detections)
         estimates.append(sol.rot_cam_from_icrs if sol.status else None)
     return estimates, times, warmup_s
 
@@ -91,7 +89,6 @@ def time_stages(frames: list, fov_deg: float) -> tuple[dict[str, np.ndarray], li
     from startrack.detect import detect
     from startrack.io import read_image
 
-    solve_stars = startrack_function("solve_stars")
     times = {k: np.zeros(len(frames)) for k in ("read", "detect", "solve")}
     estimates, n_det = [], np.zeros(len(frames), dtype=int)
     for i, (path, _) in enumerate(frames):
@@ -153,21 +150,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"simulating {args.frames} frames of {args.size} x {args.size} px, "
               f"FOV {args.fov_deg:g} deg", file=sys.stderr, flush=True)
         frames = write_frames(camera, args, Path(tmp))
-        missing = _missing_entry_point()
-        if missing:
-            print(f"\nend-to-end timing skipped: {missing}")
-        else:
-            print_end_to_end(frames, camera, args)
+        print_end_to_end(frames, camera, args)
         print_stages(frames, camera, args)
     return 0
-
-
-def _missing_entry_point() -> str | None:
-    try:
-        startrack_function("solve_image")
-    except (ImportError, AttributeError) as exc:
-        return f"startrack.solve_image is not importable ({exc})"
-    return None
 
 
 if __name__ == "__main__":

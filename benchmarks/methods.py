@@ -28,6 +28,8 @@ from scipy.spatial.transform import Rotation
 from scoring import rotations_from_radec_roll_deg
 from starlists import Conditions, StarList, save_for_peer
 
+from startrack import solve_stars
+
 try:
     from startrack.solve import FOV_DEG_TOLERANCE as KNOWN_FOV_TOLERANCE
 except ImportError:  # the solver is not there yet: its documented tolerance
@@ -78,30 +80,9 @@ class MethodRun:
     extra: dict = field(default_factory=dict)
 
 
-def startrack_function(name: str):
-    """``startrack.<name>`` (the public entry point), else ``startrack.solve.<name>``."""
-    import startrack
-
-    if hasattr(startrack, name):
-        return getattr(startrack, name)
-    from startrack import solve
-
-    return getattr(solve, name)
-
-
-def ours_available() -> str | None:
-    """None if ``startrack.solve_stars`` can be imported, else the reason it cannot."""
-    try:
-        startrack_function("solve_stars")
-    except (ImportError, AttributeError) as exc:
-        return f"startrack.solve_stars is not importable ({exc})"
-    return None
-
-
 def solve_ours(lists: list[StarList], conditions: Conditions, knowledge: FovKnowledge,
                *, warmup: bool = True, progress: int = 0) -> MethodRun:
     """Solve every list with ``startrack.solve_stars`` (in this process)."""
-    solve_stars = startrack_function("solve_stars")
     kwargs = dict(width=conditions.width, height=conditions.height, epoch=conditions.epoch_jyear,
                   **knowledge.ours_kwargs())
     if warmup and lists:

@@ -31,7 +31,8 @@ NAMES = _names()
 @pytest.mark.parametrize("name", NAMES)
 def test_real_image_solves_within_two_pixels_and_a_fifth_of_a_degree(name, truth_table, realdata_dir):
     row = next(r for r in truth_table if r["file"] == name)
-    solution, detections = solve_image(realdata_dir / row["set"] / name, fov_range_deg=(5.0, 35.0))
+    solution = solve_image(realdata_dir / row["set"] / name, fov_range_deg=(5.0, 35.0))
+    detections = solution.detections
     assert solution.solved, f"{name}: {solution.reason}"
     width, height = int(row["width"]), int(row["height"])
     centre_cam = solution.camera.pixel_to_vector((width - 1) / 2, (height - 1) / 2)

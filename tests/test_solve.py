@@ -30,7 +30,8 @@ def _attitudes():
 def test_simulated_frames_solve_lost_in_space(index):
     truth = _attitudes()[index]
     sim = simulate_frame(CAMERA, truth, max_mag=7.5, sensor=SENSOR, rng=100 + index)
-    solution, detections = solve_image(sim.image)  # no FOV given: 5-35 deg searched
+    solution = solve_image(sim.image)  # no FOV given: 5-35 deg searched
+    detections = solution.detections
     assert solution.status is Status.OK, solution.reason
     assert attitude_error(truth, solution.rot_cam_from_icrs) < 2 * PIXEL_ANGLE
     assert solution.fov_deg == pytest.approx(15.0, rel=1e-3)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from .camera import Camera, get_preset
 from .results import AttitudeSolution, Detections, StarMatches, Status
+from .solve import solve_image, solve_stars
 
 __version__ = "0.1.0"
 
@@ -20,4 +21,6 @@ __all__ = [
     "Status",
     "__version__",
     "get_preset",
+    "solve_image",
+    "solve_stars",
 ]

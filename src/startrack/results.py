@@ -133,6 +133,9 @@ class AttitudeSolution:
     false_match_prob : float
     solve_time_s : float
         Wall-clock time of the solve.
+    detections : Detections or None
+        The stars detected in the image (for a solve from an image); ``matches.det_index``
+        indexes them. None for a solve from a star list.
     """
 
     status: Status
@@ -148,6 +151,7 @@ class AttitudeSolution:
     residuals_arcsec: NDArray[np.float64] = field(default_factory=_empty)
     false_match_prob: float = 1.0
     solve_time_s: float = 0.0
+    detections: Detections | None = None
 
     @property
     def solved(self) -> bool:

@@ -26,7 +26,7 @@ from .identify import DatabaseSettings, MatcherOptions, load_database, match_los
 from .identify.quad_matcher import Candidate
 from .identify.refine import refine_pointing
 from .identify.verify import match_nearest, project_catalog
-from .results import AttitudeSolution, Detections, StarMatches, Status
+from .results import AttitudeSolution, StarMatches, Status
 from .units import ARCSEC
 
 DEFAULT_FOV_RANGE_DEG: tuple[float, float] = (5.0, 35.0)
@@ -265,7 +265,7 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
 
 def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
                 camera: Camera | None = None, epoch=None, channel: str | int | None = None,
-                detector=None, options: MatcherOptions | None = None) -> tuple[AttitudeSolution, Detections]:
+                detector=None, options: MatcherOptions | None = None) -> AttitudeSolution:
     """Lost-in-space attitude of an image: read, detect, solve.
 
     Parameters
@@ -281,10 +281,9 @@ def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[flo
 
     Returns
     -------
-    solution : AttitudeSolution
-        ``solve_time_s`` covers detection and identification (not reading the file).
-    detections : Detections
-        The stars found, brightest first; ``solution.matches.det_index`` indexes them.
+    AttitudeSolution
+        With ``detections`` (the stars found, brightest first; ``matches.det_index`` indexes
+        them). ``solve_time_s`` covers detection and identification, not reading the file.
     """
     from .detect import StarDetector
     from .io import Image, read_image
@@ -298,4 +297,4 @@ def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[flo
                                 f"{width} x {height} px")
     solution = solve_stars(found.x, found.y, width=width, height=height, fov_deg=fov_deg,
                            fov_range_deg=fov_range_deg, camera=camera, epoch=epoch, options=options)
-    return replace(solution, solve_time_s=time.perf_counter() - t0), found
+    return replace(solution, solve_time_s=time.perf_counter() - t0, detections=found)

@@ -44,7 +44,8 @@ def main(argv: list[str]) -> int:
     out.mkdir(parents=True, exist_ok=True)
     written = write_frame(out / "demo.png", sim.image, sim.truth)
     ensure_database(DEFAULT_FOV_RANGE_DEG)
-    solution, detections = solve_image(sim.image, epoch=scene_epoch(args))
+    solution = solve_image(sim.image, epoch=scene_epoch(args))
+    detections = solution.detections
     inside = sim.truth.inside()
     plot_solution(sim.image, detections, solution, out / "demo_solved.png",
                   truth_xy=(sim.truth.x[inside], sim.truth.y[inside]))

@@ -35,7 +35,8 @@ def main(argv: list[str]) -> int:
     image = read_image(args.image, channel=args.channel)
     ensure_database_for(solver_options["fov_deg"], solver_options["fov_range_deg"], solver_options["camera"])
     try:
-        solution, detections = solve_image(image, **solver_options)
+        solution = solve_image(image, **solver_options)
+        detections = solution.detections
     except InvalidInputError as exc:  # a problem with this image's content (size, no finite pixel...)
         raise InvalidInputError(f"{args.image}: {exc}") from exc
     return report(_explain_blank(solution, detections, image), detections, args.json)
