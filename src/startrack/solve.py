@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from .attitude import attitude_covariance
-from .attitude.quest import quest_quaternions
+from .attitude.qmethod import q_method_quaternions
 from .camera import Camera, focal_px_from_fov
 from .catalog import load_catalog
 from .errors import InvalidInputError
@@ -44,8 +44,11 @@ REMATCH_RADIUS_PX = 3.0
 """After verification, every image star within this distance of a predicted star is matched."""
 
 MIN_STARS_FOR_K1 = 12
-"""When the focal length is free, the final fit also estimates the radial distortion k1 if at least
-this many stars are matched (lenses of photographs are rarely calibrated)."""
+K1_FOCAL_SPAN = 0.1
+"""When the focal length is searched over a range wider than 10 % (an uncalibrated camera), the
+final fit also estimates the radial distortion k1 if at least MIN_STARS_FOR_K1 stars are
+matched: the lenses of photographs are rarely calibrated. A ``fov_deg`` (+-3 %) fits the focal
+length only."""
 
 
 @dataclass(frozen=True)
@@ -179,29 +182,36 @@ def _refined(problem: _Problem, db, cand: Candidate):
     that is off enough to miss the far ones)."""
     catalog = load_catalog()
     fit_focal = problem.focal_range is not None
-    img, star = cand.image_index, cand.db_index
+    fit_k1 = fit_focal and problem.focal_range[1] > problem.focal_range[0] * (1 + K1_FOCAL_SPAN)
     rot, camera = cand.rot_cam_from_icrs, cand.camera
+    img, star = _rematch(problem, db, rot, camera, REMATCH_RADIUS_PX)
+    if img.size < cand.image_index.size:
+        img, star = cand.image_index, cand.db_index
     for _ in range(MAX_REFINE_ROUNDS):
         ref = catalog.take(db.cat_index[star]).vectors(problem.epoch_jyear)
         rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=fit_focal,
-                                           fit_k1=fit_focal and img.size >= MIN_STARS_FOR_K1)
+                                           fit_k1=fit_k1 and img.size >= MIN_STARS_FOR_K1)
         new_img, new_star = _rematch(problem, db, rot, camera, REMATCH_RADIUS_PX)
         if new_img.size <= img.size:
             break
         img, star = new_img, new_star
-    else:
+    else:  # still growing after the last round: fit the final set
         ref = catalog.take(db.cat_index[star]).vectors(problem.epoch_jyear)
         rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=fit_focal,
-                                           fit_k1=fit_focal and img.size >= MIN_STARS_FOR_K1)
+                                           fit_k1=fit_k1 and img.size >= MIN_STARS_FOR_K1)
     return rot, camera, img, star, ref, res
 
 
 def _solution(problem: _Problem, db, cand: Candidate, t0: float) -> AttitudeSolution:
+    """The solution from a verified candidate: refined fit, then the Wahba attitude of all matched
+    stars (Davenport's q-method: the same optimum as QUEST, and one 4 x 4 eigen-decomposition is
+    faster in numpy than QUEST's Newton iteration; both are in :mod:`startrack.attitude`) with the
+    QUEST measurement-model covariance (seed 000 §6.1.3)."""
     rot, camera, img, star, ref, res_px = _refined(problem, db, cand)
     observed = camera.pixel_to_vector(problem.x[img], problem.y[img])
     sigma_rad = max(float(np.sqrt(np.mean(res_px**2))), 0.05) / camera.fx
     weights = np.full((1, len(img)), 1.0 / len(img))
-    rot = Rotation.from_quat(quest_quaternions(observed[None], ref[None], weights)[0])
+    rot = Rotation.from_quat(q_method_quaternions(observed[None], ref[None], weights)[0])
     residuals = angle_between(rot.apply(ref), observed) / ARCSEC
     ra, dec, roll = radec_roll_from_rotation(rot)
     matches = StarMatches(status=Status.OK, det_index=problem.rows[img].astype(np.int64),
