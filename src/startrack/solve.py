@@ -23,9 +23,10 @@ from .catalog import load_catalog
 from .errors import InvalidInputError
 from .frames import angle_between, radec_roll_from_rotation
 from .identify import DatabaseSettings, MatcherOptions, load_database, match_lost_in_space
+from .identify.field_stars import FieldStars, field_stars
 from .identify.quad_matcher import Candidate
 from .identify.refine import refine_pointing
-from .identify.verify import match_nearest, project_catalog
+from .identify.verify import match_nearest, project_stars
 from .results import AttitudeSolution, StarMatches, Status
 from .units import ARCSEC
 
@@ -38,7 +39,7 @@ FOV_DEG_TOLERANCE = 0.03
 DEFAULT_EPOCH_JYEAR = 2000.0
 
 MAX_REFINE_ROUNDS = 4
-"""Fit / re-match rounds after verification (usually two: the second finds no new star)."""
+"""Fit / re-match rounds after verification (usually two: the second changes nothing)."""
 
 REMATCH_RADIUS_PX = 3.0
 """After verification, every image star within this distance of a predicted star is matched."""
@@ -169,37 +170,41 @@ def database_settings_for(fov_range_deg: tuple[float, float] = DEFAULT_FOV_RANGE
                             fov_max_deg=max(hi, default.fov_max_deg) * 1.03)
 
 
-def _rematch(problem: _Problem, db, rot, camera, radius_px: float):
-    """Match every image star to every predicted database star within the radius."""
-    proj = project_catalog(db, rot, camera)
+def _rematch(problem: _Problem, stars: FieldStars, rot, camera, radius_px: float):
+    """Match every image star to its nearest catalog star within the radius: (image index, catalog row)."""
+    proj = project_stars(stars.tree, stars.vectors, rot, camera)
     img_i, cat_i = match_nearest(problem.x, problem.y, proj.x, proj.y, radius_px)
-    return img_i, proj.star[cat_i]
+    return img_i, stars.rows[proj.star[cat_i]]
 
 
 def _refined(problem: _Problem, db, cand: Candidate):
-    """Fit attitude (and camera) to the matched stars, re-match every star, and repeat while the
-    set of matches grows (a candidate verified on a few nearby stars can have a focal length
-    that is off enough to miss the far ones)."""
+    """Fit attitude (and camera) to the matched stars, re-match every star, and repeat until the
+    matches stop changing (a candidate verified on a few nearby stars can have a focal length
+    that is off enough to miss the far stars, or to pair one with its faint neighbour).
+
+    Returns the attitude, camera, matched image indices, their catalog rows, the rows' ICRS
+    vectors at the solve epoch and the pixel residuals.
+    """
     catalog = load_catalog()
+    stars = field_stars(db.settings.max_mag, db.settings.epoch_jyear)
     fit_focal = problem.focal_range is not None
     fit_k1 = fit_focal and problem.focal_range[1] > problem.focal_range[0] * (1 + K1_FOCAL_SPAN)
     rot, camera = cand.rot_cam_from_icrs, cand.camera
-    img, star = _rematch(problem, db, rot, camera, REMATCH_RADIUS_PX)
+    img, rows = _rematch(problem, stars, rot, camera, REMATCH_RADIUS_PX)
     if img.size < cand.image_index.size:
-        img, star = cand.image_index, cand.db_index
-    for _ in range(MAX_REFINE_ROUNDS):
-        ref = catalog.take(db.cat_index[star]).vectors(problem.epoch_jyear)
+        img, rows = cand.image_index, db.cat_index[cand.db_index]
+    for round_ in range(MAX_REFINE_ROUNDS):
+        ref = catalog.take(rows).vectors(problem.epoch_jyear)
         rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=fit_focal,
                                            fit_k1=fit_k1 and img.size >= MIN_STARS_FOR_K1)
-        new_img, new_star = _rematch(problem, db, rot, camera, REMATCH_RADIUS_PX)
-        if new_img.size <= img.size:
+        if round_ == MAX_REFINE_ROUNDS - 1:
             break
-        img, star = new_img, new_star
-    else:  # still growing after the last round: fit the final set
-        ref = catalog.take(db.cat_index[star]).vectors(problem.epoch_jyear)
-        rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=fit_focal,
-                                           fit_k1=fit_k1 and img.size >= MIN_STARS_FOR_K1)
-    return rot, camera, img, star, ref, res
+        new_img, new_rows = _rematch(problem, stars, rot, camera, REMATCH_RADIUS_PX)
+        unchanged = np.array_equal(new_img, img) and np.array_equal(new_rows, rows)
+        if unchanged or new_img.size < img.size:
+            break
+        img, rows = new_img, new_rows
+    return rot, camera, img, rows, ref, res
 
 
 def _solution(problem: _Problem, db, cand: Candidate, t0: float) -> AttitudeSolution:
@@ -207,7 +212,7 @@ def _solution(problem: _Problem, db, cand: Candidate, t0: float) -> AttitudeSolu
     stars (Davenport's q-method: the same optimum as QUEST, and one 4 x 4 eigen-decomposition is
     faster in numpy than QUEST's Newton iteration; both are in :mod:`startrack.attitude`) with the
     QUEST measurement-model covariance (seed 000 §6.1.3)."""
-    rot, camera, img, star, ref, res_px = _refined(problem, db, cand)
+    rot, camera, img, rows, ref, res_px = _refined(problem, db, cand)
     observed = camera.pixel_to_vector(problem.x[img], problem.y[img])
     sigma_rad = max(float(np.sqrt(np.mean(res_px**2))), 0.05) / camera.fx
     weights = np.full((1, len(img)), 1.0 / len(img))
@@ -215,7 +220,7 @@ def _solution(problem: _Problem, db, cand: Candidate, t0: float) -> AttitudeSolu
     residuals = angle_between(rot.apply(ref), observed) / ARCSEC
     ra, dec, roll = radec_roll_from_rotation(rot)
     matches = StarMatches(status=Status.OK, det_index=problem.rows[img].astype(np.int64),
-                          hip=db.hip[star].astype(np.int64), cat_vectors=ref,
+                          hip=load_catalog().hip[rows].astype(np.int64), cat_vectors=ref,
                           false_match_prob=cand.false_match_prob)
     return AttitudeSolution(
         status=Status.OK, rot_cam_from_icrs=rot,

@@ -75,7 +75,7 @@ class MatcherOptions:
     centroid_sigma_px: float = 0.5
     match_radius_px: float | None = None
     max_false_match_prob: float = 1e-6
-    focal_step: float = 0.004
+    focal_step: float = 0.0015
     timeout_s: float = 5.0
 
 

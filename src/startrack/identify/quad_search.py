@@ -28,10 +28,15 @@ from ..frames import angle_between
 from .database import KEY_BINS, RATIO_SCALE, PatternDatabase, ratio_bin
 from .patterns import PERMUTATIONS, PERMUTED_EDGES, edge_ratios, pair_angles
 
+FITTED_FOCAL_STEP_SHARE = 0.25
+"""Share of the focal step kept in the rotation-fit tolerance once the focal length is corrected."""
+
 FOCAL_GRID = 48
 FOCAL_GRID_SPAN = 7.0
+FOCAL_GRID_STEP = 0.004
 """The trials are chosen on a logarithmic grid of focal lengths with FOCAL_GRID points per
-factor FOCAL_GRID_SPAN (48 points from 5 to 35 deg; 3 for a FOV known to a few percent)."""
+factor FOCAL_GRID_SPAN for a ratio step of FOCAL_GRID_STEP, proportionally more for a finer
+step (48 points from 5 to 35 deg at 0.004; 3 for a FOV known to a few percent)."""
 
 
 def pattern_vectors(u: NDArray, w: NDArray, scale: NDArray) -> NDArray:
@@ -76,7 +81,8 @@ def focal_trials(u: NDArray, w: NDArray, scale_range: tuple[float, float], step:
     if hi <= lo * (1 + 1e-9):
         ones = np.ones(n)
         return Trials(np.arange(n), lo * ones, lo * ones, hi * ones)
-    size = max(3, math.ceil(FOCAL_GRID * math.log(hi / lo) / math.log(FOCAL_GRID_SPAN)))
+    density = FOCAL_GRID * max(1.0, FOCAL_GRID_STEP / step)  # finer steps need a finer grid
+    size = max(3, math.ceil(density * math.log(hi / lo) / math.log(FOCAL_GRID_SPAN)))
     grid = np.geomspace(lo, hi, size)
     ratios, _ = edge_ratios(pair_angles(pattern_vectors(u, w, grid[:, None])))  # (G, P, 5)
     change = np.max(np.abs(np.diff(ratios, axis=0)), axis=-1)  # (G - 1, P)
@@ -239,6 +245,9 @@ def fit_candidates(db: PatternDatabase, u: NDArray, w: NDArray, quads: NDArray, 
     rotation = Rotation.from_quat(q_method_quaternions(obs, cat_vec, weights))
     predicted = np.einsum("cij,ckj->cki", rotation.as_matrix(), cat_vec)
     focal = focal_nominal / scales
-    tol = 6.0 * sigma_px / focal + focal_step * geom.largest[cand_trial]
+    # With the focal length corrected from the edge sums only the centroid noise (and a little of
+    # the projection's non-linearity) is left; with it fixed, the trial's focal step remains.
+    step_share = FITTED_FOCAL_STEP_SHARE if fit_focal else 1.0
+    tol = 6.0 * sigma_px / focal + step_share * focal_step * geom.largest[cand_trial]
     good = np.flatnonzero(np.max(angle_between(predicted, obs), axis=1) <= tol)
     return Fits(rotation[good] if good.size else None, focal[good], stars[good], row[good], int(row.size))

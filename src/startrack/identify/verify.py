@@ -14,10 +14,12 @@ stars that were not used to form the candidate.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 from scipy.special import bdtrc
 
@@ -34,6 +36,31 @@ class Projection:
     y: NDArray[np.float64]
 
 
+def project_stars(tree: cKDTree, vectors: NDArray, rot_cam_from_icrs: Rotation, camera: Camera,
+                  keep: Callable[[NDArray], NDArray] | None = None) -> Projection:
+    """Stars (of a KD-tree over their ICRS unit vectors) that land in the image.
+
+    Parameters
+    ----------
+    tree : scipy.spatial.cKDTree
+        Built on ``vectors``.
+    vectors : ndarray, shape (S, 3)
+        ICRS unit vectors.
+    keep : callable, optional
+        Given the indices of the stars in the field, returns a mask of those to keep.
+    """
+    half_diag = math.radians(camera.fov_diagonal_deg) / 2.0 * 1.05
+    boresight = rot_cam_from_icrs.inv().apply([0.0, 0.0, 1.0])
+    idx = np.asarray(tree.query_ball_point(boresight, 2.0 * math.sin(min(half_diag, 1.5) / 2.0)), dtype=np.int64)
+    if keep is not None and idx.size:
+        idx = idx[keep(idx)]
+    if idx.size == 0:
+        return Projection(idx, np.zeros(0), np.zeros(0))
+    x, y = camera.vector_to_pixel(rot_cam_from_icrs.apply(vectors[idx]))
+    inside = camera.in_image(x, y)
+    return Projection(idx[inside], x[inside], y[inside])
+
+
 def project_catalog(db: PatternDatabase, rot_cam_from_icrs: Rotation, camera: Camera,
                     level_bit: int | None = None) -> Projection:
     """Database stars that land in the image for this attitude and camera.
@@ -43,17 +70,11 @@ def project_catalog(db: PatternDatabase, rot_cam_from_icrs: Rotation, camera: Ca
     level_bit : int or None
         Only stars of that level's verification set (None: every database star).
     """
-    half_diag = math.radians(camera.fov_diagonal_deg) / 2.0 * 1.05
-    boresight = rot_cam_from_icrs.inv().apply([0.0, 0.0, 1.0])
-    idx = np.asarray(db.tree.query_ball_point(boresight, 2.0 * math.sin(min(half_diag, 1.5) / 2.0)),
-                     dtype=np.int64)
-    if level_bit is not None and idx.size:
-        idx = idx[(db.verify_levels[idx] >> np.uint16(level_bit)) & np.uint16(1) == 1]
-    if idx.size == 0:
-        return Projection(idx, np.zeros(0), np.zeros(0))
-    x, y = camera.vector_to_pixel(rot_cam_from_icrs.apply(db.vectors[idx]))
-    inside = camera.in_image(x, y)
-    return Projection(idx[inside], x[inside], y[inside])
+    keep = None
+    if level_bit is not None:
+        bit = np.uint16(level_bit)
+        keep = lambda idx: (db.verify_levels[idx] >> bit) & np.uint16(1) == 1  # noqa: E731
+    return project_stars(db.tree, db.vectors, rot_cam_from_icrs, camera, keep)
 
 
 def match_nearest(img_x: NDArray, img_y: NDArray, cat_x: NDArray, cat_y: NDArray,
