@@ -190,13 +190,10 @@ def _refined(problem: _Problem, db, cand: Candidate):
     fit_focal = problem.focal_range is not None
     fit_k1 = fit_focal and problem.focal_range[1] > problem.focal_range[0] * (1 + K1_FOCAL_SPAN)
     rot, camera = cand.rot_cam_from_icrs, cand.camera
-    img, rows = _rematch(problem, stars, rot, camera, REMATCH_RADIUS_PX)
-    if img.size < cand.image_index.size:
-        img, rows = cand.image_index, db.cat_index[cand.db_index]
+    img, rows = cand.image_index, db.cat_index[cand.db_index]
     for round_ in range(MAX_REFINE_ROUNDS):
         ref = catalog.take(rows).vectors(problem.epoch_jyear)
-        rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=fit_focal,
-                                           fit_k1=fit_k1 and img.size >= MIN_STARS_FOR_K1)
+        rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=fit_focal)
         if round_ == MAX_REFINE_ROUNDS - 1:
             break
         new_img, new_rows = _rematch(problem, stars, rot, camera, REMATCH_RADIUS_PX)
@@ -204,6 +201,9 @@ def _refined(problem: _Problem, db, cand: Candidate):
         if unchanged or new_img.size < img.size:
             break
         img, rows = new_img, new_rows
+    if fit_k1 and img.size >= MIN_STARS_FOR_K1:  # lens distortion last, on the settled matches
+        rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=True,
+                                           fit_k1=True)
     return rot, camera, img, rows, ref, res
 
 

@@ -9,12 +9,12 @@ The default matcher. Steps (after tetra3's pattern hashing, with a k-vector inde
    choose the few trial focal lengths that change the pattern's edge ratios by more than the
    tolerance. Wide fields need several, narrow fields one.
 3. Look the ratios up in the levels of the database whose scale fits the trial field of view:
-   k-vector range on a key of the two smallest ratios, then all five ratios, then the scale.
+   k-vector range on a key of the three smallest ratios, then all five ratios, then the scale.
 4. For each candidate, take the star correspondence whose edges agree best, correct the focal
    length from the edge sums, fit the rotation (q-method) and check the residuals.
 5. Verify against the level's verification stars and bound the false-match probability
    (:mod:`.verify`); the first candidate below the threshold wins.
-6. Refine attitude and focal length on all matched stars (:mod:`.refine`).
+6. (In :mod:`startrack.solve`) refine attitude and focal length on all matched stars (:mod:`.refine`).
 
 A mirror image has the same edge ratios but no rotation fits it, so step 4 rejects it.
 """
@@ -54,14 +54,16 @@ class MatcherOptions:
     Attributes
     ----------
     pattern_stars : int
-        Brightest image stars combined into patterns (C(10, 4) = 210 patterns at most).
+        Brightest image stars combined into patterns (C(20, 4) = 4845 patterns at most, tried
+        brightest first until one verifies or time runs out).
     verify_stars : int
         Brightest image stars tested against the predicted catalog stars.
     centroid_sigma_px : float
         Assumed 1-sigma centroid error; sets the pattern tolerances (3 sigma).
     match_radius_px : float or None
-        Verification radius after the candidate is refined on its first matches (which are
-        sought at 4 times this radius); None: 0.3 % of the larger image side, at least 2 px.
+        Verification radius; None: 0.3 % of the larger image side, at least 2 px. A candidate
+        that falls short at it is fitted to its matches at :data:`LOOSE_RADIUS_FACTOR` times the
+        radius and verified again.
     max_false_match_prob : float
         A match is accepted only when its false-match bound is below this.
     focal_step : float
@@ -120,11 +122,12 @@ MIN_SEPARATION_PX = 1.0
 """A star closer than this to a brighter one takes no part in patterns (coincident entries)."""
 
 
-def distinct_stars(x: NDArray, y: NDArray) -> NDArray[np.int64]:
-    """Indices of the stars (in order) that are not within MIN_SEPARATION_PX of a brighter one."""
-    d2 = (x[:, None] - x[None, :]) ** 2 + (y[:, None] - y[None, :]) ** 2
+def distinct_stars(x: NDArray, y: NDArray, count: int) -> NDArray[np.int64]:
+    """The first ``count`` stars (in order) that are not within MIN_SEPARATION_PX of a brighter one."""
+    n = min(len(x), 4 * count)  # enough candidates, and the (n, n) test stays small
+    d2 = (x[:n, None] - x[None, :n]) ** 2 + (y[:n, None] - y[None, :n]) ** 2
     close = np.tril(d2 < MIN_SEPARATION_PX**2, k=-1)  # pairs (i, j) with j brighter than i
-    return np.flatnonzero(~close.any(axis=1))
+    return np.flatnonzero(~close.any(axis=1))[:count]
 
 
 class _Search:
@@ -138,7 +141,7 @@ class _Search:
         self.radius = options.match_radius_px or max(2.0, 0.003 * max(camera.width, camera.height))
         self.fit_focal = focal_range[1] > focal_range[0]
         self.trials = 0
-        self.pattern_index = distinct_stars(x, y)[: options.pattern_stars]
+        self.pattern_index = distinct_stars(x, y, options.pattern_stars)
 
     def try_batch(self, quads: NDArray) -> Candidate | None:
         """Look up and verify a batch of patterns (indices into :attr:`pattern_index`); the first

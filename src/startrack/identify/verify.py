@@ -79,25 +79,41 @@ def project_catalog(db: PatternDatabase, rot_cam_from_icrs: Rotation, camera: Ca
 
 def match_nearest(img_x: NDArray, img_y: NDArray, cat_x: NDArray, cat_y: NDArray,
                   radius_px: float) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """Pairs (image index, catalog index), each used once, nearest first, within the radius."""
+    """Pairs (image index, catalog index), each star used once, closest pairs first, within the radius.
+
+    Only pairs within the radius are ever formed (KD-trees), so memory stays proportional to
+    the stars, however many there are.
+    """
+    empty = np.zeros(0, dtype=np.int64)
     if img_x.size == 0 or cat_x.size == 0:
-        empty = np.zeros(0, dtype=np.int64)
         return empty, empty
-    d2 = (img_x[:, None] - cat_x[None, :]) ** 2 + (img_y[:, None] - cat_y[None, :]) ** 2
-    i_idx, c_idx = np.nonzero(d2 <= radius_px * radius_px)
-    order = np.argsort(d2[i_idx, c_idx], kind="stable")
+    i, c, d2 = _pairs_within(img_x, img_y, cat_x, cat_y, radius_px)
+    order = np.argsort(d2, kind="stable")
     taken_i = np.zeros(img_x.size, dtype=bool)
     taken_c = np.zeros(cat_x.size, dtype=bool)
-    pairs = []
-    for i, c in zip(i_idx[order], c_idx[order], strict=True):
-        if not (taken_i[i] or taken_c[c]):
-            taken_i[i] = taken_c[c] = True
-            pairs.append((i, c))
-    if not pairs:
-        empty = np.zeros(0, dtype=np.int64)
-        return empty, empty
-    arr = np.array(pairs, dtype=np.int64)
-    return arr[:, 0], arr[:, 1]
+    keep = []
+    for k in order:
+        if not (taken_i[i[k]] or taken_c[c[k]]):
+            taken_i[i[k]] = taken_c[c[k]] = True
+            keep.append(k)
+    keep = np.array(keep, dtype=np.int64)
+    return i[keep].astype(np.int64), c[keep].astype(np.int64)
+
+
+DENSE_PAIRS_LIMIT = 200_000
+"""Above this many (image, catalog) pairs, candidate pairs come from KD-trees, not a full table."""
+
+
+def _pairs_within(img_x, img_y, cat_x, cat_y, radius_px: float):
+    """(image index, catalog index, squared distance) of every pair closer than the radius."""
+    if img_x.size * cat_x.size <= DENSE_PAIRS_LIMIT:
+        d2 = (img_x[:, None] - cat_x[None, :]) ** 2 + (img_y[:, None] - cat_y[None, :]) ** 2
+        i, c = np.nonzero(d2 <= radius_px * radius_px)
+        return i, c, d2[i, c]
+    img_tree = cKDTree(np.column_stack([img_x, img_y]))
+    cat_tree = cKDTree(np.column_stack([cat_x, cat_y]))
+    pairs = img_tree.sparse_distance_matrix(cat_tree, radius_px, output_type="ndarray")
+    return pairs["i"], pairs["j"], pairs["v"] ** 2
 
 
 def false_match_probability(n_matched: int, n_tested: int, n_predicted: int, radius_px: float,
