@@ -159,8 +159,9 @@ class AttitudeSolution:
 
     @property
     def quaternion_xyzw(self) -> NDArray[np.float64] | None:
-        """The attitude as a scalar-last quaternion (qx, qy, qz, qw), for files and CLI output."""
-        return None if self.rot_cam_from_icrs is None else self.rot_cam_from_icrs.as_quat()
+        """The attitude as a scalar-last quaternion (qx, qy, qz, qw) with qw >= 0 (of the two
+        signs that give the same rotation), for files and CLI output."""
+        return None if self.rot_cam_from_icrs is None else self.rot_cam_from_icrs.as_quat(canonical=True)
 
     @property
     def sigma_cross_boresight_arcsec(self) -> float:
