@@ -65,7 +65,8 @@ class _Problem:
     epoch_jyear: float
 
 
-def _epoch_jyear(epoch) -> float:
+def epoch_jyear(epoch) -> float:
+    """A catalog epoch as a Julian year (TDB): None gives J2000.0; accepts astropy Time or a year."""
     if epoch is None:
         return DEFAULT_EPOCH_JYEAR
     if isinstance(epoch, Time):
@@ -76,7 +77,9 @@ def _epoch_jyear(epoch) -> float:
     return value
 
 
-def _check_fov_deg(fov: float, name: str) -> float:
+def check_fov_deg(fov: float, name: str) -> float:
+    """``fov`` as a float if it is a field of view startrack can solve (0.5 to 100 deg); else an
+    InvalidInputError naming ``name``."""
     fov = float(fov)
     if not (math.isfinite(fov) and 0.5 <= fov <= 100.0):
         raise InvalidInputError(f"{name} must be a field of view between 0.5 and 100 deg, got {fov:g}")
@@ -88,11 +91,11 @@ def _focal_setup(width, height, fov_deg, fov_range_deg, camera):
     if camera is not None:
         return camera, None, (camera.fov_deg, camera.fov_deg)
     if fov_deg is not None:
-        fov = _check_fov_deg(fov_deg, "fov_deg")
+        fov = check_fov_deg(fov_deg, "fov_deg")
         lo, hi = fov * (1 - FOV_DEG_TOLERANCE), fov * (1 + FOV_DEG_TOLERANCE)
     else:
         lo, hi = _fov_pair(fov_range_deg if fov_range_deg is not None else DEFAULT_FOV_RANGE_DEG)
-        lo, hi = _check_fov_deg(lo, "fov_range_deg low"), _check_fov_deg(hi, "fov_range_deg high")
+        lo, hi = check_fov_deg(lo, "fov_range_deg low"), check_fov_deg(hi, "fov_range_deg high")
         if lo > hi:
             raise InvalidInputError(f"fov_range_deg must be (low, high) with low <= high, got ({lo:g}, {hi:g})")
     f_lo, f_hi = focal_px_from_fov(width, math.radians(hi)), focal_px_from_fov(width, math.radians(lo))
@@ -153,7 +156,7 @@ def _problem(x, y, width, height, fov_deg, fov_range_deg, camera, flux, epoch) -
         raise InvalidInputError("a camera fixes the field of view: give camera or fov_deg / fov_range_deg, not both")
     xs, ys, rows = _star_arrays(x, y, flux, width, height)
     nominal, focal_range, fov_range = _focal_setup(width, height, fov_deg, fov_range_deg, camera)
-    return _Problem(xs, ys, rows, nominal, focal_range, fov_range, _epoch_jyear(epoch))
+    return _Problem(xs, ys, rows, nominal, focal_range, fov_range, epoch_jyear(epoch))
 
 
 def database_settings_for(fov_range_deg: tuple[float, float] = DEFAULT_FOV_RANGE_DEG) -> DatabaseSettings:

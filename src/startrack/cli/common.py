@@ -18,7 +18,7 @@ from ..camera import Camera, get_preset
 from ..errors import InvalidInputError
 from ..io.solution_json import solution_to_dict
 from ..results import AttitudeSolution, Detections
-from ..solve import _check_fov_deg, _epoch_jyear
+from ..solve import check_fov_deg, epoch_jyear
 
 SOLUTION_FORMATS = """\
 output (table, the default)
@@ -73,10 +73,10 @@ def fov_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     """
     camera: Camera | None = get_preset(args.camera) if args.camera else None
     if args.fov_deg is not None:
-        _check_fov_deg(args.fov_deg, "--fov-deg")
+        check_fov_deg(args.fov_deg, "--fov-deg")
     fov_range = None
     if args.fov_range_deg:
-        lo, hi = (_check_fov_deg(v, "--fov-range-deg") for v in args.fov_range_deg)
+        lo, hi = (check_fov_deg(v, "--fov-range-deg") for v in args.fov_range_deg)
         if lo > hi:
             raise InvalidInputError(f"--fov-range-deg LO HI needs LO <= HI, got {lo:g} {hi:g}")
         fov_range = (lo, hi)
@@ -88,7 +88,7 @@ def epoch_option(args: argparse.Namespace) -> float | None:
     if args.epoch is None:
         return None
     try:
-        return _epoch_jyear(args.epoch)
+        return epoch_jyear(args.epoch)
     except InvalidInputError:
         raise InvalidInputError(f"--epoch must be a Julian year such as 2025.5, got {args.epoch:g}") from None
 

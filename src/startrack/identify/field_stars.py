@@ -19,7 +19,8 @@ from ..catalog import load_catalog
 
 @dataclass(frozen=True)
 class FieldStars:
-    """Catalog rows (S,), their ICRS unit vectors (S, 3) at ``epoch_jyear`` and a KD-tree on them."""
+    """Catalog rows (S,), brightest first, their ICRS unit vectors (S, 3) at ``epoch_jyear`` and a
+    KD-tree on them (so that sorted tree queries return the brightest stars first)."""
 
     rows: NDArray[np.int64]
     vectors: NDArray[np.float64]
@@ -29,8 +30,9 @@ class FieldStars:
 
 @lru_cache(maxsize=4)
 def field_stars(max_mag: float, epoch_jyear: float) -> FieldStars:
-    """Catalog stars with V <= ``max_mag`` (built once per process and limit)."""
+    """Catalog stars with V <= ``max_mag``, brightest first (built once per process and limit)."""
     catalog = load_catalog()
     rows = np.flatnonzero(np.isfinite(catalog.v_mag) & (catalog.v_mag <= max_mag))
+    rows = rows[np.argsort(catalog.v_mag[rows], kind="stable")]
     vectors = catalog.take(rows).vectors(epoch_jyear)
     return FieldStars(rows, vectors, cKDTree(vectors), epoch_jyear)

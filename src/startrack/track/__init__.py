@@ -1,0 +1,19 @@
+"""Tracking: identify stars near where the last attitude and rate predict them, and the Tracker
+state machine that chains frames (lost-in-space until it has an attitude, then tracking, back to
+lost-in-space when tracking fails). DESIGN.md §1; seed 004 §2.2, seed 002 §4, seed 000 §8.2."""
+
+from __future__ import annotations
+
+from .predict import propagate_attitude, rate_from_attitudes
+from .tracker import Tracker, TrackerOptions, TrackStep
+from .windows import WindowMatch, match_in_windows
+
+__all__ = [
+    "TrackStep",
+    "Tracker",
+    "TrackerOptions",
+    "WindowMatch",
+    "match_in_windows",
+    "propagate_attitude",
+    "rate_from_attitudes",
+]

@@ -1,0 +1,199 @@
+"""The Tracker: a state machine over a sequence of frames (DESIGN.md §1; seed 000 §1.33 mode
+logic, seed 004 §2.2 predictive loop, seed 002 §4 tracking).
+
+* No attitude yet (or tracking just failed): lost-in-space (:func:`startrack.solve_stars`).
+* An attitude from the previous frame: predict this frame's attitude with the rate (from a gyro
+  when given, otherwise from the last two attitudes, smoothed), identify stars in windows around
+  their predicted positions (:func:`.windows.match_in_windows`), confirm with the geometry of the
+  matched stars (enough stars, residuals at the noise level). If that fails, fall back to
+  lost-in-space in the same frame.
+
+A lost-in-space solve with an unknown FOV fixes the camera (its fitted focal length) for the
+frames after it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
+
+from ..camera import Camera
+from ..errors import InvalidInputError
+from ..frames import radec_roll_from_rotation
+from ..identify.field_stars import field_stars
+from ..results import Status
+from ..solve import epoch_jyear, solve_stars
+from .predict import propagate_attitude, rate_from_attitudes
+from .windows import match_in_windows
+
+LOST_IN_SPACE = "lost-in-space"
+TRACKING = "tracking"
+
+
+@dataclass(frozen=True)
+class TrackerOptions:
+    """Settings of the Tracker.
+
+    Attributes
+    ----------
+    min_stars : int
+        Fewest matched stars for a tracked attitude.
+    window_px : float
+        Search half-window around each predicted star when the rate is known.
+    max_rate_deg_s : float
+        Largest rate expected; sets the window when the rate is not known yet.
+    rate_error_fraction : float
+        Assumed relative error of the rate estimate; widens the window with the motion.
+    match_px : float
+        Match radius once the attitude is refitted to the window matches.
+    max_residual_px : float
+        A tracked attitude whose matched stars leave a larger rms residual is rejected.
+    rate_gain : float
+        Weight of the newest frame-to-frame rate in the smoothed rate (0 < gain <= 1).
+    catalog_max_mag : float
+        Faintest catalog star predicted (V).
+    """
+
+    min_stars: int = 5
+    window_px: float = 8.0
+    max_rate_deg_s: float = 6.0
+    rate_error_fraction: float = 0.2
+    match_px: float = 2.0
+    max_residual_px: float = 1.0
+    rate_gain: float = 0.5
+    catalog_max_mag: float = 9.5
+
+
+@dataclass(frozen=True)
+class TrackStep:
+    """What the Tracker made of one frame."""
+
+    t_s: float
+    mode: str
+    status: Status
+    reason: str = ""
+    rot_cam_from_icrs: Rotation | None = None
+    rate_rad_s: NDArray[np.float64] | None = None
+    n_matched: int = 0
+    residual_rms_px: float = float("nan")
+    time_s: float = 0.0
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def radec_roll_deg(self) -> tuple[float, float, float]:
+        """Boresight RA, Dec and roll in degrees (NaN when there is no attitude)."""
+        if self.rot_cam_from_icrs is None:
+            return (math.nan, math.nan, math.nan)
+        return tuple(float(np.degrees(a)) for a in radec_roll_from_rotation(self.rot_cam_from_icrs))
+
+
+class Tracker:
+    """Follows the attitude over a sequence of star lists (or images, see :meth:`update_image`).
+
+    Parameters
+    ----------
+    camera : Camera, optional
+        A calibrated camera. Otherwise give ``width``, ``height`` and ``fov_deg`` or
+        ``fov_range_deg`` (the first lost-in-space solve then fixes the focal length).
+    epoch : float or astropy Time, optional
+        Catalog epoch (Julian year); default J2000.0.
+    options : TrackerOptions, optional
+    """
+
+    def __init__(self, *, camera: Camera | None = None, width: int | None = None, height: int | None = None,
+                 fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None, epoch=None,
+                 options: TrackerOptions | None = None):
+        if camera is None and (width is None or height is None):
+            raise InvalidInputError("give a camera, or the image width and height (and a FOV or FOV range)")
+        self.options = options or TrackerOptions()
+        self._lis_kwargs = {"width": width, "height": height, "fov_deg": fov_deg, "fov_range_deg": fov_range_deg,
+                            "epoch": epoch}
+        self._camera = camera
+        self._rot: Rotation | None = None
+        self._t: float | None = None
+        self._rate: NDArray | None = None
+        self._epoch = epoch
+
+    # --- public ---------------------------------------------------------------------------------
+    def update(self, x: ArrayLike, y: ArrayLike, t_s: float, *, flux: ArrayLike | None = None,
+               gyro_rate_rad_s: ArrayLike | None = None) -> TrackStep:
+        """Process one frame's star list (our pixel convention) taken at time ``t_s`` (seconds)."""
+        t0 = time.perf_counter()
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        if flux is not None:
+            order = np.argsort(-np.asarray(flux, dtype=float), kind="stable")
+            x, y = x[order], y[order]
+        if gyro_rate_rad_s is not None:
+            self._rate = np.asarray(gyro_rate_rad_s, dtype=float)
+        step = self._track(x, y, t_s) if self._rot is not None and self._camera is not None else None
+        if step is None:
+            step = self._lost_in_space(x, y, t_s)
+        return _with_time(step, time.perf_counter() - t0)
+
+    def update_image(self, image, t_s: float, *, detector=None, gyro_rate_rad_s=None) -> TrackStep:
+        """Detect the stars of an image (array or path) and :meth:`update` with them."""
+        from ..detect import StarDetector
+        from ..io import read_image
+
+        data = read_image(image).data
+        found = (detector or StarDetector()).detect(data)
+        return self.update(found.x, found.y, t_s, gyro_rate_rad_s=gyro_rate_rad_s)
+
+    def reset(self) -> None:
+        """Forget the attitude and rate (the next frame is solved lost-in-space)."""
+        self._rot, self._t, self._rate = None, None, None
+
+    # --- modes ----------------------------------------------------------------------------------
+    def _window_px(self, dt: float) -> float:
+        opt = self.options
+        if self._rate is None:
+            motion = math.radians(opt.max_rate_deg_s) * abs(dt)
+        else:
+            motion = opt.rate_error_fraction * float(np.linalg.norm(self._rate)) * abs(dt)
+        return opt.window_px + motion * self._camera.fx
+
+    def _track(self, x: NDArray, y: NDArray, t_s: float) -> TrackStep | None:
+        opt = self.options
+        dt = t_s - self._t
+        predicted = propagate_attitude(self._rot, self._rate if self._rate is not None else np.zeros(3), dt)
+        stars = field_stars(opt.catalog_max_mag, epoch_jyear(self._epoch))
+        found = match_in_windows(x, y, self._camera, predicted, stars, window_px=self._window_px(dt),
+                                 match_px=opt.match_px, min_stars=opt.min_stars)
+        if found.rot_cam_from_icrs is None or not found.residual_rms_px <= opt.max_residual_px:
+            return None
+        self._advance(found.rot_cam_from_icrs, t_s)
+        return TrackStep(t_s, TRACKING, Status.OK, "", found.rot_cam_from_icrs, self._rate_copy(),
+                         int(found.image_index.size), found.residual_rms_px)
+
+    def _lost_in_space(self, x: NDArray, y: NDArray, t_s: float) -> TrackStep:
+        kwargs = {"camera": self._camera, "epoch": self._epoch} if self._camera is not None else self._lis_kwargs
+        solution = solve_stars(x, y, **kwargs)
+        if not solution.solved:
+            self.reset()
+            return TrackStep(t_s, LOST_IN_SPACE, solution.status, solution.reason)
+        self._camera = self._camera or solution.camera.with_distortion(k1=0.0)
+        self._advance(solution.rot_cam_from_icrs, t_s)
+        rms = float(np.sqrt(np.mean(solution.residuals_arcsec**2)) / solution.camera.pixel_scale_arcsec)
+        return TrackStep(t_s, LOST_IN_SPACE, Status.OK, "", solution.rot_cam_from_icrs, self._rate_copy(),
+                         len(solution.matches), rms)
+
+    # --- state ----------------------------------------------------------------------------------
+    def _advance(self, rot: Rotation, t_s: float) -> None:
+        """Take a new attitude; update the smoothed rate from the previous one (if any)."""
+        if self._rot is not None and self._t is not None and t_s > self._t:
+            measured = rate_from_attitudes(self._rot, rot, t_s - self._t)
+            gain = self.options.rate_gain
+            self._rate = measured if self._rate is None else (1 - gain) * self._rate + gain * measured
+        self._rot, self._t = rot, t_s
+
+    def _rate_copy(self) -> NDArray | None:
+        return None if self._rate is None else self._rate.copy()
+
+
+def _with_time(step: TrackStep, seconds: float) -> TrackStep:
+    return replace(step, time_s=seconds)
