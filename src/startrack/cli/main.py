@@ -19,6 +19,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "solve": ("startrack.cli.solve_cmd", "solve an image lost-in-space (FITS, PNG, JPEG, TIFF)"),
     "solve-stars": ("startrack.cli.solve_stars_cmd", "solve a CSV star list (x, y in 0-based pixels)"),
     "simulate": ("startrack.cli.simulate_cmd", "simulate a star image with its truth"),
+    "track": ("startrack.cli.track_cmd", "follow the attitude over a sequence of images, write a CSV"),
     "demo": ("startrack.cli.demo_cmd", "simulate a random sky image, solve it, compare with the truth"),
 }
 
