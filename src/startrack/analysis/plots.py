@@ -59,3 +59,18 @@ def _title(solution: AttitudeSolution) -> str:
         return f"not solved: {solution.reason}"
     return (f"RA {solution.ra_deg:.4f}  Dec {solution.dec_deg:+.4f}  roll {solution.roll_deg:.3f} deg  "
             f"FOV {solution.fov_deg:.3f} deg  {len(solution.matches)} stars")
+
+
+def plot_star_counts(availability, path: str | os.PathLike, *, title: str = "") -> None:
+    """Save a histogram of stars in the field over random pointings (seed 002 Fig. 5-1)."""
+    hist = availability.histogram
+    fig, ax = plt.subplots(figsize=(7, 4), dpi=110)
+    ax.bar(np.arange(hist.size), hist / hist.sum(), width=0.9, color="tab:blue")
+    ax.set_xlabel("stars in the image")
+    ax.set_ylabel("fraction of pointings")
+    ax.set_title(title or f"{availability.counts.size} random pointings, V <= {availability.max_mag:g} "
+                          f"({availability.n_catalog} stars); P(< 3) = {availability.probability_below(3):.4f}",
+                 fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)

@@ -20,6 +20,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "solve-stars": ("startrack.cli.solve_stars_cmd", "solve a CSV star list (x, y in 0-based pixels)"),
     "simulate": ("startrack.cli.simulate_cmd", "simulate a star image with its truth"),
     "track": ("startrack.cli.track_cmd", "follow the attitude over a sequence of images, write a CSV"),
+    "availability": ("startrack.cli.availability_cmd", "stars in the field over random pointings (histogram)"),
     "demo": ("startrack.cli.demo_cmd", "simulate a random sky image, solve it, compare with the truth"),
 }
 

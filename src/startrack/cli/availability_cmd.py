@@ -1,0 +1,72 @@
+"""startrack availability: how many catalog stars a camera sees over random pointings (seed 002
+Fig. 5-1 / Table 5-1; seed 000 Table 5.1), with a histogram plot; and the size of a uniform
+reduced onboard catalog (seed 000 §5.5.4: the N brightest stars at every pointing)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from ..camera import Camera, get_preset
+from ..catalog import load_catalog, thin_uniform
+from ..errors import InvalidInputError
+from .common import print_json
+from .progress import ProgressBar
+
+
+def _camera(args) -> Camera:
+    if args.camera:
+        return get_preset(args.camera)
+    if args.fov_deg is None:
+        raise InvalidInputError("give --camera PRESET or --fov-deg F (with --width and --height)")
+    return Camera.from_fov(args.width, args.height, args.fov_deg)
+
+
+def main(argv: list[str]) -> int:
+    parser = argparse.ArgumentParser(prog="startrack availability", description=__doc__)
+    parser.add_argument("--camera", help="camera preset")
+    parser.add_argument("--fov-deg", type=float, help="pinhole camera: horizontal FOV")
+    parser.add_argument("--width", type=int, default=1024)
+    parser.add_argument("--height", type=int, default=1024)
+    parser.add_argument("--max-mag", type=float, default=6.0, help="catalog limit, V (default 6.0)")
+    parser.add_argument("--pointings", type=int, default=100_000, help="random pointings (seed 002 used 10^6)")
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--plot", help="write the histogram to this PNG")
+    parser.add_argument("--reduced-per-fov", type=int, metavar="N",
+                        help="also build the uniform reduced catalog: N brightest stars per field")
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args(argv)
+    from ..analysis.availability import star_counts
+
+    camera = _camera(args)
+    result = star_counts(camera, args.max_mag, args.pointings, rng=args.seed, progress=ProgressBar("  pointings"))
+    report = {"camera": camera.name or "pinhole", "fov_deg": camera.fov_deg, "fov_height_deg": camera.fov_height_deg,
+              "max_mag": args.max_mag, "catalog_stars": result.n_catalog, "pointings": args.pointings,
+              "mean": float(result.counts.mean()), "min": int(result.counts.min()), "max": int(result.counts.max()),
+              "p_below_3": result.probability_below(3), "p_below_4": result.probability_below(4),
+              "probability": {str(n): result.probability(n) for n in range(len(result.histogram))}}
+    if args.reduced_per_fov:
+        reduced = thin_uniform(load_catalog().brighter_than(args.max_mag), args.reduced_per_fov,
+                               math.radians(camera.fov_diagonal_deg) / 2.0)
+        report["reduced_catalog_stars"] = len(reduced)
+    if args.plot:
+        from ..analysis.plots import plot_star_counts
+
+        plot_star_counts(result, Path(args.plot))
+    if args.json:
+        print_json(report)
+    else:
+        _print_table(report)
+    return 0
+
+
+def _print_table(report: dict) -> None:
+    print(f"{report['camera']}: {report['fov_deg']:.2f} x {report['fov_height_deg']:.2f} deg, "
+          f"V <= {report['max_mag']:g} ({report['catalog_stars']} stars), {report['pointings']} random pointings")
+    print(f"stars in the image: mean {report['mean']:.2f}, min {report['min']}, max {report['max']}")
+    print(f"P(< 3 stars) = {report['p_below_3']:.5f}, P(< 4 stars) = {report['p_below_4']:.5f}")
+    for n in range(6):
+        print(f"  P({n}) = {report['probability'].get(str(n), 0.0) * 1e3:.3f} x 1e-3")
+    if "reduced_catalog_stars" in report:
+        print(f"uniform reduced catalog: {report['reduced_catalog_stars']} stars")
