@@ -23,8 +23,8 @@ from .catalog import load_catalog
 from .errors import InvalidInputError
 from .frames import angle_between, radec_roll_from_rotation
 from .identify import DatabaseSettings, MatcherOptions, load_database, match_lost_in_space
+from .identify.candidate import Candidate
 from .identify.field_stars import FieldStars, field_stars
-from .identify.quad_matcher import Candidate
 from .identify.refine import refine_pointing
 from .identify.verify import match_nearest, project_stars
 from .results import AttitudeSolution, StarMatches, Status
@@ -193,7 +193,7 @@ def _refined(problem: _Problem, db, cand: Candidate):
     fit_focal = problem.focal_range is not None
     fit_k1 = fit_focal and problem.focal_range[1] > problem.focal_range[0] * (1 + K1_FOCAL_SPAN)
     rot, camera = cand.rot_cam_from_icrs, cand.camera
-    img, rows = cand.image_index, db.cat_index[cand.db_index]
+    img, rows = cand.image_index, cand.catalog_rows
     for round_ in range(MAX_REFINE_ROUNDS):
         ref = catalog.take(rows).vectors(problem.epoch_jyear)
         rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=fit_focal)

@@ -7,11 +7,13 @@ database of :mod:`.database`.
 
 from __future__ import annotations
 
+from .candidate import Candidate, MatchOutcome
 from .database import DatabaseSettings, PatternDatabase, database_report, load_database
 from .kvector import KVector
-from .quad_matcher import MatcherOptions, MatchOutcome, match_lost_in_space
+from .quad_matcher import MatcherOptions, match_lost_in_space
 
 __all__ = [
+    "Candidate",
     "DatabaseSettings",
     "KVector",
     "MatchOutcome",

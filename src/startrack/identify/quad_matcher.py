@@ -13,7 +13,7 @@ The default matcher. Steps (after tetra3's pattern hashing, with a k-vector inde
 4. For each candidate, take the star correspondence whose edges agree best, correct the focal
    length from the edge sums, fit the rotation (q-method) and check the residuals.
 5. Verify against the level's verification stars and bound the false-match probability
-   (:mod:`.verify`); the first candidate below the threshold wins.
+   (:mod:`.confirm`, :mod:`.verify`); the first candidate below the threshold wins.
 6. (In :mod:`startrack.solve`) refine attitude and focal length on all matched stars (:mod:`.refine`).
 
 A mirror image has the same edge ratios but no rotation fits it, so step 4 rejects it.
@@ -28,20 +28,13 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
 from ..results import Status
+from .candidate import Candidate, MatchOutcome
+from .confirm import Confirmer, StarSet, match_radius_px
 from .database import PatternDatabase
 from .quad_search import candidate_rows, fit_candidates, focal_trials, trial_geometry
-from .refine import refine_pointing
-from .verify import false_match_probability, match_nearest, project_catalog
-
-LOOSE_RADIUS_FACTOR = 2.5
-"""First verification pass: match radius as a multiple of the final one."""
-
-MIN_EXTRA_MATCHES = 2
-"""A candidate needs at least this many stars beyond its pattern at the loose radius."""
 
 MAX_RATIO_TOLERANCE = 0.1
 """Patterns whose edge ratios are less certain than this (tiny patterns) are not looked up."""
@@ -62,8 +55,8 @@ class MatcherOptions:
         Assumed 1-sigma centroid error; sets the pattern tolerances (3 sigma).
     match_radius_px : float or None
         Verification radius; None: 0.3 % of the larger image side, at least 2 px. A candidate
-        that falls short at it is fitted to its matches at :data:`LOOSE_RADIUS_FACTOR` times the
-        radius and verified again.
+        that falls short at it is fitted to its matches at a wider radius and verified again
+        (:mod:`.confirm`).
     max_false_match_prob : float
         A match is accepted only when its false-match bound is below this.
     focal_step : float
@@ -79,27 +72,6 @@ class MatcherOptions:
     max_false_match_prob: float = 1e-6
     focal_step: float = 0.0015
     timeout_s: float = 5.0
-
-
-@dataclass(frozen=True)
-class Candidate:
-    """A verified identification: attitude, camera and the matched (image, database) stars."""
-
-    rot_cam_from_icrs: Rotation
-    camera: Camera
-    image_index: NDArray[np.int64]
-    db_index: NDArray[np.int64]
-    false_match_prob: float
-
-
-@dataclass(frozen=True)
-class MatchOutcome:
-    """What the matcher found: a candidate, or a status and reason."""
-
-    status: Status
-    reason: str
-    candidate: Candidate | None
-    n_trials: int
 
 
 FIRST_BATCH_STARS = 6
@@ -138,8 +110,9 @@ class _Search:
         vec = camera.pixel_to_vector(x, y)
         self.u, self.w = vec[:, 0] / vec[:, 2], vec[:, 1] / vec[:, 2]
         self.scale_range = (camera.fx / focal_range[1], camera.fx / focal_range[0])
-        self.radius = options.match_radius_px or max(2.0, 0.003 * max(camera.width, camera.height))
         self.fit_focal = focal_range[1] > focal_range[0]
+        self.confirmer = Confirmer(x, y, match_radius_px(camera, options.match_radius_px), options.verify_stars,
+                                   options.max_false_match_prob, self.fit_focal)
         self.trials = 0
         self.pattern_index = distinct_stars(x, y, options.pattern_stars)
 
@@ -161,37 +134,16 @@ class _Search:
         self.trials += fits.n_tried
         for i in range(fits.row.size):
             level = int(np.searchsorted(self.db.level_offsets, fits.row[i], side="right") - 1)
-            found = self._confirm(fits.rotation[i], self.camera.with_focal(fits.focal[i]), fits.image_stars[i], level)
+            found = self.confirmer.confirm(self._level_stars(level), fits.rotation[i],
+                                           self.camera.with_focal(fits.focal[i]), fits.image_stars[i], self.trials)
             if found is not None:
                 return found
         return None
 
-    def _confirm(self, rot, camera, pattern_img, level) -> Candidate | None:
-        """Verify at the tight radius; if that falls short, find matches at a loose radius, fit
-        the attitude (and focal length) to them, and verify again at the tight radius."""
-        found = self._verify(rot, camera, pattern_img, level)
-        if found is not None or self.options.verify_stars < 5:
-            return found
-        proj = project_catalog(self.db, rot, camera, level_bit=level)
-        n = min(len(self.x), self.options.verify_stars)
-        img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y, LOOSE_RADIUS_FACTOR * self.radius)
-        if np.count_nonzero(~np.isin(img_i, pattern_img)) < MIN_EXTRA_MATCHES:
-            return None
-        ref = self.db.vectors[proj.star[cat_i]]
-        rot, camera, _ = refine_pointing(rot, camera, ref, self.x[img_i], self.y[img_i], fit_focal=self.fit_focal)
-        return self._verify(rot, camera, pattern_img, level)
-
-    def _verify(self, rot, camera, pattern_img, level) -> Candidate | None:
-        """The candidate if its tight-radius matches make a false match unlikely enough."""
-        n = min(len(self.x), self.options.verify_stars)
-        proj = project_catalog(self.db, rot, camera, level_bit=level)
-        img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y, self.radius)
-        extra = ~np.isin(img_i, pattern_img)
-        prob = false_match_probability(int(extra.sum()), n - 4, proj.star.size, self.radius,
-                                       camera.width, camera.height, self.trials)
-        if prob > self.options.max_false_match_prob:
-            return None
-        return Candidate(rot, camera, img_i, proj.star[cat_i], prob)
+    def _level_stars(self, level: int) -> StarSet:
+        bit = np.uint16(level)
+        return StarSet(self.db.tree, self.db.vectors, self.db.cat_index,
+                       keep=lambda idx: (self.db.verify_levels[idx] >> bit) & np.uint16(1) == 1)
 
 
 def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatabase,

@@ -24,7 +24,6 @@ from scipy.spatial.transform import Rotation
 from scipy.special import bdtrc
 
 from ..camera import Camera
-from .database import PatternDatabase
 
 
 @dataclass(frozen=True)
@@ -59,22 +58,6 @@ def project_stars(tree: cKDTree, vectors: NDArray, rot_cam_from_icrs: Rotation, 
     x, y = camera.vector_to_pixel(rot_cam_from_icrs.apply(vectors[idx]))
     inside = camera.in_image(x, y)
     return Projection(idx[inside], x[inside], y[inside])
-
-
-def project_catalog(db: PatternDatabase, rot_cam_from_icrs: Rotation, camera: Camera,
-                    level_bit: int | None = None) -> Projection:
-    """Database stars that land in the image for this attitude and camera.
-
-    Parameters
-    ----------
-    level_bit : int or None
-        Only stars of that level's verification set (None: every database star).
-    """
-    keep = None
-    if level_bit is not None:
-        bit = np.uint16(level_bit)
-        keep = lambda idx: (db.verify_levels[idx] >> bit) & np.uint16(1) == 1  # noqa: E731
-    return project_stars(db.tree, db.vectors, rot_cam_from_icrs, camera, keep)
 
 
 def match_nearest(img_x: NDArray, img_y: NDArray, cat_x: NDArray, cat_y: NDArray,

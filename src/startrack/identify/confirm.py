@@ -1,0 +1,96 @@
+"""Confirmation of a candidate attitude against predicted catalog stars, shared by every
+lost-in-space matcher (see :mod:`.verify` for the false-match probability).
+
+The candidate is tested at the tight match radius. If it falls short, its matches at a loose
+radius (``LOOSE_RADIUS_FACTOR`` times wider) are used to refit the attitude (and the focal length
+when it is free), and it is tested again at the tight radius: a pattern fitted on a few close
+stars can be off by more than the tight radius at the far side of the image.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+from scipy.spatial.transform import Rotation
+
+from ..camera import Camera
+from .candidate import Candidate
+from .refine import refine_pointing
+from .verify import false_match_probability, match_nearest, project_stars
+
+LOOSE_RADIUS_FACTOR = 2.5
+"""First verification pass: match radius as a multiple of the final one."""
+
+MIN_EXTRA_MATCHES = 2
+"""A candidate needs at least this many stars beyond its pattern at the loose radius."""
+
+
+@dataclass(frozen=True)
+class StarSet:
+    """Catalog stars to confirm against: KD-tree over their ICRS vectors (S, 3), their catalog
+    rows (S,), and optionally a filter of the indices to use."""
+
+    tree: cKDTree
+    vectors: NDArray[np.float64]
+    catalog_rows: NDArray[np.int64]
+    keep: Callable[[NDArray], NDArray] | None = None
+
+
+@dataclass(frozen=True)
+class Confirmer:
+    """The image side of confirmation: star positions (brightest first) and the test's settings.
+
+    Attributes
+    ----------
+    x, y : ndarray, shape (N,)
+    radius_px : float
+        Tight match radius.
+    verify_stars : int
+        Brightest image stars tested.
+    max_false_match_prob : float
+    fit_focal : bool
+        Refit the focal length with the attitude in the loose pass.
+    """
+
+    x: NDArray[np.float64]
+    y: NDArray[np.float64]
+    radius_px: float
+    verify_stars: int
+    max_false_match_prob: float
+    fit_focal: bool
+
+    def confirm(self, stars: StarSet, rot: Rotation, camera: Camera, pattern_img: NDArray,
+                n_trials: int) -> Candidate | None:
+        """A verified :class:`Candidate`, or None (see the module docstring)."""
+        found = self._verify(stars, rot, camera, pattern_img, n_trials)
+        if found is not None:
+            return found
+        n = min(len(self.x), self.verify_stars)
+        proj = project_stars(stars.tree, stars.vectors, rot, camera, stars.keep)
+        img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y, LOOSE_RADIUS_FACTOR * self.radius_px)
+        if np.count_nonzero(~np.isin(img_i, pattern_img)) < MIN_EXTRA_MATCHES:
+            return None
+        ref = stars.vectors[proj.star[cat_i]]
+        rot, camera, _ = refine_pointing(rot, camera, ref, self.x[img_i], self.y[img_i], fit_focal=self.fit_focal)
+        return self._verify(stars, rot, camera, pattern_img, n_trials)
+
+    def _verify(self, stars: StarSet, rot, camera, pattern_img, n_trials: int) -> Candidate | None:
+        """The candidate if its tight-radius matches make a false match unlikely enough."""
+        n = min(len(self.x), self.verify_stars)
+        proj = project_stars(stars.tree, stars.vectors, rot, camera, stars.keep)
+        img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y, self.radius_px)
+        extra = ~np.isin(img_i, pattern_img)
+        prob = false_match_probability(int(extra.sum()), n - len(pattern_img), proj.star.size, self.radius_px,
+                                       camera.width, camera.height, n_trials)
+        if prob > self.max_false_match_prob:
+            return None
+        return Candidate(rot, camera, img_i, stars.catalog_rows[proj.star[cat_i]], prob)
+
+
+def match_radius_px(camera: Camera, given: float | None) -> float:
+    """The tight match radius: the one given, else 0.3 % of the larger image side, at least 2 px."""
+    return given or max(2.0, 0.003 * max(camera.width, camera.height))
