@@ -25,6 +25,8 @@ from .frames import angle_between, radec_roll_from_rotation
 from .identify import DatabaseSettings, MatcherOptions, load_database, match_lost_in_space
 from .identify.candidate import Candidate
 from .identify.field_stars import FieldStars, field_stars
+from .identify.pair_database import PairSettings, load_pair_database
+from .identify.pyramid import PyramidOptions, match_pyramid
 from .identify.refine import refine_pointing
 from .identify.verify import match_nearest, project_stars
 from .results import AttitudeSolution, StarMatches, Status
@@ -180,7 +182,7 @@ def _rematch(problem: _Problem, stars: FieldStars, rot, camera, radius_px: float
     return img_i, stars.rows[proj.star[cat_i]]
 
 
-def _refined(problem: _Problem, db, cand: Candidate):
+def _refined(problem: _Problem, stars: FieldStars, cand: Candidate):
     """Fit attitude (and camera) to the matched stars, re-match every star, and repeat until the
     matches stop changing (a candidate verified on a few nearby stars can have a focal length
     that is off enough to miss the far stars, or to pair one with its faint neighbour).
@@ -189,7 +191,6 @@ def _refined(problem: _Problem, db, cand: Candidate):
     vectors at the solve epoch and the pixel residuals.
     """
     catalog = load_catalog()
-    stars = field_stars(db.settings.max_mag, db.settings.epoch_jyear)
     fit_focal = problem.focal_range is not None
     fit_k1 = fit_focal and problem.focal_range[1] > problem.focal_range[0] * (1 + K1_FOCAL_SPAN)
     rot, camera = cand.rot_cam_from_icrs, cand.camera
@@ -210,12 +211,12 @@ def _refined(problem: _Problem, db, cand: Candidate):
     return rot, camera, img, rows, ref, res
 
 
-def _solution(problem: _Problem, db, cand: Candidate, t0: float) -> AttitudeSolution:
+def _solution(problem: _Problem, stars: FieldStars, cand: Candidate, t0: float) -> AttitudeSolution:
     """The solution from a verified candidate: refined fit, then the Wahba attitude of all matched
     stars (Davenport's q-method: the same optimum as QUEST, and one 4 x 4 eigen-decomposition is
     faster in numpy than QUEST's Newton iteration; both are in :mod:`startrack.attitude`) with the
     QUEST measurement-model covariance (seed 000 §6.1.3)."""
-    rot, camera, img, rows, ref, res_px = _refined(problem, db, cand)
+    rot, camera, img, rows, ref, res_px = _refined(problem, stars, cand)
     observed = camera.pixel_to_vector(problem.x[img], problem.y[img])
     sigma_rad = max(float(np.sqrt(np.mean(res_px**2))), 0.05) / camera.fx
     weights = np.full((1, len(img)), 1.0 / len(img))
@@ -233,10 +234,42 @@ def _solution(problem: _Problem, db, cand: Candidate, t0: float) -> AttitudeSolu
         false_match_prob=cand.false_match_prob, solve_time_s=time.perf_counter() - t0)
 
 
+def _quads(problem: _Problem):
+    db = load_database(database_settings_for(problem.fov_range_deg))
+
+    def run(options):
+        return match_lost_in_space(problem.x, problem.y, problem.camera, db, problem.focal_range, options)
+
+    return run, field_stars(db.settings.max_mag, db.settings.epoch_jyear)
+
+
+def _pyramid(problem: _Problem):
+    lo, hi = problem.focal_range or (problem.camera.fx, problem.camera.fx)
+    tolerance = (hi / lo - 1.0) / 2.0
+    if tolerance > PYRAMID_MAX_FOCAL_TOLERANCE:
+        raise InvalidInputError("the pyramid matcher needs the field of view to within 5 %: give fov_deg or a camera "
+                                "(or use method='quads' with a FOV range)")
+    settings = PairSettings(fov_deg=float(math.ceil(problem.camera.fov_diagonal_deg * (1 + tolerance))))
+    pdb = load_pair_database(settings)
+
+    def run(options):
+        camera = problem.camera.with_focal(math.sqrt(lo * hi)) if problem.focal_range else problem.camera
+        return match_pyramid(problem.x, problem.y, camera, pdb, focal_tolerance=tolerance, options=options)
+
+    return run, field_stars(settings.max_mag, settings.epoch_jyear)
+
+
+MATCHERS = {"quads": _quads, "pyramid": _pyramid}
+"""Lost-in-space matchers by name: a function of the problem that loads its database and returns
+(the matcher, the catalog stars for the final re-match)."""
+
+PYRAMID_MAX_FOCAL_TOLERANCE = 0.05
+
+
 def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height: int | None = None,
                 fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
                 camera: Camera | None = None, flux: ArrayLike | None = None, epoch=None,
-                options: MatcherOptions | None = None) -> AttitudeSolution:
+                method: str = "quads", options: MatcherOptions | PyramidOptions | None = None) -> AttitudeSolution:
     """Lost-in-space attitude from a list of star centroids.
 
     Parameters
@@ -257,7 +290,12 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
         Brightness of each star, to order them.
     epoch : astropy.time.Time or float, optional
         Epoch of the catalog positions (Julian year, TDB); default J2000.0.
-    options : MatcherOptions, optional
+    method : {"quads", "pyramid"}
+        The lost-in-space matcher: four-star patterns (the default; any FOV knowledge) or the
+        Pyramid on the star-pair directory (a FOV known to 5 % or a camera). See
+        ``docs/identification.md``.
+    options : MatcherOptions or PyramidOptions, optional
+        Settings of the chosen matcher.
 
     Returns
     -------
@@ -271,26 +309,29 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
     InvalidInputError
         For NaN or out-of-frame coordinates, a bad image size or field of view.
     """
+    if method not in MATCHERS:
+        raise InvalidInputError(f"method must be one of {', '.join(MATCHERS)}, got {method!r}")
     problem = _problem(x, y, width, height, fov_deg, fov_range_deg, camera, flux, epoch)
-    db = load_database(database_settings_for(problem.fov_range_deg))
+    matcher, stars = MATCHERS[method](problem)  # loads (or builds) the database first
     t0 = time.perf_counter()
-    outcome = match_lost_in_space(problem.x, problem.y, problem.camera, db, problem.focal_range, options)
+    outcome = matcher(options)
     if outcome.candidate is None:
         return AttitudeSolution(status=outcome.status, reason=outcome.reason,
                                 solve_time_s=time.perf_counter() - t0)
-    return _solution(problem, db, outcome.candidate, t0)
+    return _solution(problem, stars, outcome.candidate, t0)
 
 
 def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
                 camera: Camera | None = None, epoch=None, channel: str | int | None = None,
-                detector=None, options: MatcherOptions | None = None) -> AttitudeSolution:
+                detector=None, method: str = "quads",
+                options: MatcherOptions | PyramidOptions | None = None) -> AttitudeSolution:
     """Lost-in-space attitude of an image: read, detect, solve.
 
     Parameters
     ----------
     image : path, ndarray or startrack.io.Image
         A FITS, PNG, JPEG or TIFF file, or a 2-D (or colour) array in counts.
-    fov_deg, fov_range_deg, camera, epoch, options
+    fov_deg, fov_range_deg, camera, epoch, method, options
         As in :func:`solve_stars`.
     channel : str or int, optional
         Colour channel to use: 'r', 'g' or 'b' (default: R + G + B; see :mod:`startrack.io.channels`).
@@ -314,5 +355,6 @@ def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[flo
         raise InvalidInputError(f"the camera is {camera.width} x {camera.height} px but the image is "
                                 f"{width} x {height} px")
     solution = solve_stars(found.x, found.y, width=width, height=height, fov_deg=fov_deg,
-                           fov_range_deg=fov_range_deg, camera=camera, epoch=epoch, options=options)
+                           fov_range_deg=fov_range_deg, camera=camera, epoch=epoch, method=method,
+                           options=options)
     return replace(solution, solve_time_s=time.perf_counter() - t0, detections=found)
