@@ -57,6 +57,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--no-range", action="store_true", help="only run with the FOV known")
     parser.add_argument("--no-peer", action="store_true", help="do not run cedar-solve")
     parser.add_argument("--no-ours", action="store_true", help="do not run startrack")
+    parser.add_argument("--matchers", nargs="+", default=["quads"], choices=["quads", "pyramid"],
+                        help="startrack matchers to run (pyramid only where the FOV is known)")
     parser.add_argument("--cedar-timeout-ms", type=float, default=5000.0)
     parser.add_argument("--progress", type=int, default=100, help="progress line every N trials")
     parser.add_argument("--out", type=Path, default=None,
@@ -73,9 +75,11 @@ def knowledge_list(fov_deg: float, args: argparse.Namespace) -> list[FovKnowledg
 
 def run_methods(lists, conditions, knowledge, args, skip_ours: str | None) -> list[MethodRun]:
     runs = []
-    if not skip_ours:
-        print(f"startrack on {conditions.name}, {knowledge.label}", file=sys.stderr, flush=True)
-        runs.append(solve_ours(lists, conditions, knowledge, progress=args.progress))
+    for matcher in ([] if skip_ours else args.matchers):
+        if matcher == "pyramid" and knowledge.fov_deg is None:
+            continue  # the Pyramid needs a known field of view
+        print(f"startrack ({matcher}) on {conditions.name}, {knowledge.label}", file=sys.stderr, flush=True)
+        runs.append(solve_ours(lists, conditions, knowledge, matcher=matcher, progress=args.progress))
     if not args.no_peer:
         print(f"cedar-solve on {conditions.name}, {knowledge.label}", file=sys.stderr, flush=True)
         runs.append(solve_cedar(lists, conditions, knowledge, timeout_ms=args.cedar_timeout_ms,

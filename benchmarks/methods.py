@@ -81,10 +81,10 @@ class MethodRun:
 
 
 def solve_ours(lists: list[StarList], conditions: Conditions, knowledge: FovKnowledge,
-               *, warmup: bool = True, progress: int = 0) -> MethodRun:
-    """Solve every list with ``startrack.solve_stars`` (in this process)."""
+               *, matcher: str = "quads", warmup: bool = True, progress: int = 0) -> MethodRun:
+    """Solve every list with ``startrack.solve_stars(method=matcher)`` (in this process)."""
     kwargs = dict(width=conditions.width, height=conditions.height, epoch=conditions.epoch_jyear,
-                  **knowledge.ours_kwargs())
+                  method=matcher, **knowledge.ours_kwargs())
     if warmup and lists:
         solve_stars(lists[0].x, lists[0].y, flux=lists[0].flux, **kwargs)
     solved = np.zeros(len(lists), dtype=bool)
@@ -98,7 +98,8 @@ def solve_ours(lists: list[StarList], conditions: Conditions, knowledge: FovKnow
         times[i] = time.perf_counter() - t0
         solved[i] = bool(sol.status)
         estimates.append(sol.rot_cam_from_icrs if solved[i] else None)
-    return MethodRun("startrack", solved, estimates, times)
+    name = "startrack" if matcher == "quads" else f"st-{matcher}"
+    return MethodRun(name, solved, estimates, times)
 
 
 def solve_cedar(lists: list[StarList], conditions: Conditions, knowledge: FovKnowledge,
