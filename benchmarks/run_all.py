@@ -3,6 +3,7 @@
 1. ``lis_benchmark.py``: lost-in-space on seeded star lists, startrack beside cedar-solve;
 2. ``image_path_benchmark.py``: read + detect + solve of 1024 x 1024 PNG frames;
 3. ``database_report.py``: the pattern database's build time, size and memory (5-35 deg),
+   (then ``tracking_benchmark.py``: the Tracker over 1000-frame tumbles, step cost vs lost-in-space),
    beside cedar-solve's shipped one.
 
 The cedar-solve environment (``benchmarks/.venv-cedar``) is created first if needed. A benchmark
@@ -22,6 +23,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import database_report  # noqa: E402
 import image_path_benchmark  # noqa: E402
 import lis_benchmark  # noqa: E402
+import tracking_benchmark  # noqa: E402
 from peers.cedar_env import ensure_cedar_env  # noqa: E402
 
 
@@ -45,6 +47,7 @@ def main(argv: list[str] | None = None) -> int:
         _run("lis_benchmark", lis_benchmark.main, lis_args),
         _run("image_path_benchmark", image_path_benchmark.main, []),
         _run("database_report", database_report.main, []),
+        _run("tracking_benchmark", tracking_benchmark.main, []),
     ]
     return 0 if all(ok) else 1
 
