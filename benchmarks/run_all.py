@@ -3,8 +3,8 @@
 1. ``lis_benchmark.py``: lost-in-space on seeded star lists, startrack beside cedar-solve;
 2. ``image_path_benchmark.py``: read + detect + solve of 1024 x 1024 PNG frames;
 3. ``database_report.py``: the pattern database's build time, size and memory (5-35 deg),
-   (then ``tracking_benchmark.py``: the Tracker over 1000-frame tumbles, step cost vs lost-in-space),
-   beside cedar-solve's shipped one.
+   beside cedar-solve's shipped one;
+4. ``tracking_benchmark.py``: the Tracker over 1000-frame tumbles, step cost vs lost-in-space.
 
 The cedar-solve environment (``benchmarks/.venv-cedar``) is created first if needed. A benchmark
 that fails is reported and the others still run; the exit status is 1 if any failed.
