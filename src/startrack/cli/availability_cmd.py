@@ -24,7 +24,11 @@ def _camera(args) -> Camera:
 
 
 def main(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser(prog="startrack availability", description=__doc__)
+    parser = argparse.ArgumentParser(
+        prog="startrack availability", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="--json keys: camera, fov_deg, fov_height_deg, max_mag, catalog_stars, pointings, mean, min, max, "
+               "p_below_3, p_below_4, probability (pointing fraction by star count), reduced_catalog_stars.\n"
+               "Exit status: 0 done, 2 on bad input.")
     parser.add_argument("--camera", help="camera preset")
     parser.add_argument("--fov-deg", type=float, help="pinhole camera: horizontal FOV")
     parser.add_argument("--width", type=int, default=1024)

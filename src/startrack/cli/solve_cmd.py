@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from ..io import Image, read_image
+from ..io.wcs import write_wcs
 from ..results import AttitudeSolution, Detections, Status
 from ..solve import solve_image
 from .common import SOLUTION_FORMATS, add_epoch_option, add_fov_options, epoch_option, fov_kwargs, report
@@ -26,6 +27,8 @@ def _parser() -> argparse.ArgumentParser:
                         help="colour channel to use (default: the mean of R, G and B)")
     add_epoch_option(parser)
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.add_argument("--wcs", metavar="OUT",
+                        help="when solved, write the image's FITS WCS (TAN-SIP, FITS 1-based pixels) to OUT")
     return parser
 
 
@@ -39,6 +42,8 @@ def main(argv: list[str]) -> int:
         detections = solution.detections
     except InvalidInputError as exc:  # a problem with this image's content (size, no finite pixel...)
         raise InvalidInputError(f"{args.image}: {exc}") from exc
+    if args.wcs and solution.solved:
+        write_wcs(args.wcs, solution.rot_cam_from_icrs, solution.camera)
     return report(_explain_blank(solution, detections, image), detections, args.json)
 
 
