@@ -32,6 +32,7 @@ output (table, the default)
   false match  upper bound on the probability that the identification is wrong
   time         solve time (detection and identification), ms
   qx qy qz qw  the quaternion of rot_cam_from_icrs, scalar last
+  alt, az      (with a ground site) apparent altitude and azimuth of the boresight, deg
   When not solved: status, reason, (stars detected) and time.
 
 output (--json)
@@ -40,7 +41,9 @@ output (--json)
   dec_deg, roll_deg, fov_deg, qx, qy, qz, qw, focal_px, sigma_cross_boresight_arcsec,
   sigma_roll_arcsec, residual_rms_arcsec, false_match_prob, and matches: a list of
   {index, hip, residual_arcsec[, x, y]} (index into the detections or star list; x, y in
-  0-based pixels). Values that are undefined are null.
+  0-based pixels). Values that are undefined are null. With a ground site (solve --site or
+  --latitude-deg / --longitude-deg) also: time_utc, site, latitude_deg, longitude_deg,
+  altitude_deg, azimuth_deg.
 
 exit status
   0 solved; 1 not solved (the reason is printed); 2 misuse (bad option, unreadable file or
@@ -128,13 +131,28 @@ def _table(lines: list[tuple[str, str]]) -> str:
     return "\n".join(f"{k:<12}{v}" for k, v in lines)
 
 
-def report(solution: AttitudeSolution, detections: Detections | None, as_json: bool) -> int:
-    """Print a solve as JSON or as a table; exit status 0 when solved, 1 otherwise."""
+def report(solution: AttitudeSolution, detections: Detections | None, as_json: bool, ground=None) -> int:
+    """Print a solve as JSON or as a table; exit status 0 when solved, 1 otherwise.
+
+    ``ground`` (a :class:`startrack.calibrate.ground_solve.GroundSolution`) adds the time, site,
+    altitude and azimuth of a photo taken from the ground."""
+    extra = {} if ground is None else {
+        "time_utc": ground.time.utc.isot, "site": ground.site.name,
+        "latitude_deg": ground.site.latitude_deg, "longitude_deg": ground.site.longitude_deg,
+        "altitude_deg": _finite_or_none(ground.altitude_deg), "azimuth_deg": _finite_or_none(ground.azimuth_deg)}
     if as_json:
-        print_json(solution_to_dict(solution, detections))
+        print_json({**solution_to_dict(solution, detections), **extra})
     else:
         print(solution_table(solution, detections))
+        if extra and solution.solved:
+            print(_table([("time", f"{extra['time_utc']} UTC at {extra['site']}"),
+                          ("alt, az", f"{ground.altitude_deg:.4f} deg, {ground.azimuth_deg:.4f} deg "
+                                      "(apparent altitude, azimuth east of north)")]))
     return 0 if solution.solved else 1
+
+
+def _finite_or_none(value: float) -> float | None:
+    return float(value) if np.isfinite(value) else None
 
 
 def positive_int(text: str) -> int:

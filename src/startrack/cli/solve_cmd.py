@@ -29,7 +29,28 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--wcs", metavar="OUT",
                         help="when solved, write the image's FITS WCS (TAN-SIP, FITS 1-based pixels) to OUT")
+    ground = parser.add_argument_group(
+        "a photo from the ground (adds altitude / azimuth and corrects for aberration and refraction)")
+    ground.add_argument("--site", help="a saved or built-in site name (see startrack.calibrate.sites)")
+    ground.add_argument("--latitude-deg", type=float, help="site latitude, north positive")
+    ground.add_argument("--longitude-deg", type=float, help="site longitude, east positive")
+    ground.add_argument("--height-m", type=float, default=0.0, help="site height (default 0 m)")
+    ground.add_argument("--time", help="UTC time of the photo, ISO 8601 (default: from the EXIF / FITS header)")
+    ground.add_argument("--utc-offset-hours", type=float, help="offset of a local EXIF time from UTC")
     return parser
+
+
+def _site(args):
+    """The site the options name, or None for a photo not taken from the ground."""
+    from ..calibrate.sites import Site, get_site
+
+    if args.site:
+        return get_site(args.site)
+    if args.latitude_deg is None and args.longitude_deg is None:
+        return None
+    if args.latitude_deg is None or args.longitude_deg is None:
+        raise InvalidInputError("give both --latitude-deg and --longitude-deg (or --site NAME)")
+    return Site("command-line", args.latitude_deg, args.longitude_deg, args.height_m)
 
 
 def main(argv: list[str]) -> int:
@@ -37,14 +58,35 @@ def main(argv: list[str]) -> int:
     solver_options = {**fov_kwargs(args), "epoch": epoch_option(args)}
     image = read_image(args.image, channel=args.channel)
     ensure_database_for(solver_options["fov_deg"], solver_options["fov_range_deg"], solver_options["camera"])
+    site = _site(args)
     try:
-        solution = solve_image(image, **solver_options)
+        if site is None:
+            solution, ground = solve_image(image, **solver_options), None
+        else:
+            ground = _solve_ground(image, site, args, solver_options)
+            solution = ground.solution
         detections = solution.detections
     except InvalidInputError as exc:  # a problem with this image's content (size, no finite pixel...)
         raise InvalidInputError(f"{args.image}: {exc}") from exc
     if args.wcs and solution.solved:
         write_wcs(args.wcs, solution.rot_cam_from_icrs, solution.camera)
-    return report(_explain_blank(solution, detections, image), detections, args.json)
+    return report(_explain_blank(solution, detections, image), detections, args.json, ground=ground)
+
+
+def _solve_ground(image, site, args, solver_options):
+    from astropy.time import Time
+
+    from ..calibrate.ground_solve import solve_ground_photo
+
+    when = None
+    if args.time:
+        try:
+            when = Time(args.time, scale="utc")
+        except ValueError as exc:
+            raise InvalidInputError(f"--time must be an ISO 8601 UTC time such as 2024-08-12T03:15:00, "
+                                    f"got {args.time!r}") from exc
+    options = {k: v for k, v in solver_options.items() if k != "epoch"}
+    return solve_ground_photo(image, site, time=when, utc_offset_hours=args.utc_offset_hours, **options)
 
 
 def _explain_blank(solution: AttitudeSolution, detections: Detections, image: Image) -> AttitudeSolution:
