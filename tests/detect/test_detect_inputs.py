@@ -171,3 +171,43 @@ def test_missing_half_frame_gives_no_false_stars_at_its_border():
         counts.append(len(det))
         assert det.noise == pytest.approx(2.0, rel=0.1)
     assert sum(counts) == 0
+
+
+# --- saturated stars, empty frames, new settings ----------------------------------------------
+
+
+def test_saturated_stars_are_found_and_centred():
+    x, y = np.array([40.3, 90.8]), np.array([50.6, 70.2])
+    image = render_stars((128, 160), x, y, [5e5, 2e4], sigma_px=1.5, background=100.0,
+                         read_noise=3.0, rng=4)
+    clipped = np.minimum(image, 4095.0).astype(np.uint16)  # a 12-bit ADC: the first star's core
+    assert (clipped == 4095).sum() > 9
+    for method in ("weighted", "windowed", "mle"):
+        det = detect(clipped, centroid=method)
+        assert _matched(det, x, y, tol=0.1 * PIXEL) == 2, method
+
+
+def test_a_frame_without_stars_and_one_of_pure_noise():
+    rng = np.random.default_rng(17)
+    sky = np.rint(rng.normal(200.0, 6.0, (256, 320))).astype(np.uint16)
+    for method in ("weighted", "windowed", "mle"):
+        assert len(detect(sky, centroid=method)) <= 1
+    for threshold in ("dynamic", "prefilter-window", "prefilter-grid"):
+        assert len(detect(sky, threshold=threshold, pixel_sigma=3.0)) <= 1
+
+
+@pytest.mark.parametrize("settings", [
+    {"centroid": "gauss"}, {"threshold": "otsu"}, {"grouping": "flood"}, {"denoise": "median"},
+    {"jump_px": 0}, {"target_stars": 0}, {"prefilter_count": 26}, {"min_packing": -1},
+    {"smear_px": (1.0,)}, {"smear_px": (np.nan, 1.0)}, {"dark_columns": (-1, 2)},
+    {"psf_sigma_px": 0}, {"gain_e_per_adu": -2}, {"window_half_px": 0},
+    {"dark_frame": np.zeros(5)}, {"max_block_px": 10}, {"mag_zero_point": float("inf")},
+])
+def test_bad_new_settings_raise(settings):
+    with pytest.raises(InvalidInputError, match=next(iter(settings))):
+        StarDetector(**settings)
+
+
+def test_settings_show_the_dark_frame_as_its_shape():
+    settings = StarDetector(dark_frame=np.zeros((4, 5))).settings()
+    assert settings["dark_frame"] == "array(4, 5)" and settings["centroid"] == "windowed"

@@ -19,6 +19,13 @@ stars not detected at all / detected but ranked below 30 / rejected by a filter)
 * pleiades (3 / 8 / 1): real stars brighter than eight matched ones are not in astrometry.net's
   index files, so not in the .corr, yet rightly take places in our top 30.
 
+The three low-signal openstartracker frames must give at least the stars astrometry.net matched
+(``n_match`` in ``truth.csv``: 9, 9 and 13) among all our detections. Their own fixed-pattern
+map ``median_image.png`` is truncated (a 64 KiB file; only rows 0-48 decode), so the test builds
+the seed 000 §4.1 median dark from the three frames themselves: the fields differ, so the median
+keeps the hot pixels and drops the stars. With it we find 12 / 12, 11 / 12 and 15 / 16 of the
+``.corr`` stars at the default 5 sigma (the misses are at 3.4 and 4.5 sigma).
+
 So each image has a regression floor (what the detector finds now, minus one star for the
 JPEGs), and the 80 % goal is kept as a strict xfail where it is not met: it turns into a
 failure, asking for the mark to go, the day it passes.
@@ -34,7 +41,7 @@ from astropy.io import fits
 from PIL import Image
 
 from startrack.conventions import from_fits_pixels
-from startrack.detect import detect
+from startrack.detect import detect, median_frame, to_single_channel
 from startrack.units import PIXEL
 
 TOP_N = 30
@@ -90,3 +97,23 @@ def test_matched_stars_are_in_our_top_30(results, name):
 def test_eighty_percent_goal(results, name):
     found, _ = results[name]
     assert found.mean() >= GOAL, f"{name}: {found.sum()}/{found.size} found"
+
+
+OPENSTARTRACKER = ("img3.png", "img4.png", "img6.png")
+
+
+@pytest.mark.parametrize("name", OPENSTARTRACKER)
+def test_low_signal_frames_give_the_matched_stars(realdata_dir, truth_table, name):
+    folder = realdata_dir / "UBNanosatLab-openstartracker"
+    frames = {}
+    for other in OPENSTARTRACKER:
+        with Image.open(folder / other) as img:
+            frames[other] = to_single_channel(np.asarray(img))
+    dark = median_frame(list(frames.values()))
+    corr = fits.getdata(folder / "truth" / (Path(name).stem + ".corr"))
+    x, y = from_fits_pixels(np.asarray(corr["field_x"], float), np.asarray(corr["field_y"], float))
+    det = detect(frames[name], dark_frame=dark)
+    distance = np.hypot(x[:, None] - det.x[None], y[:, None] - det.y[None]).min(axis=1)
+    n_match = int(next(row["n_match"] for row in truth_table if row["file"] == name))
+    assert (distance < MATCH_RADIUS).sum() >= max(n_match, len(x) - 1)
+    assert np.median(distance[distance < MATCH_RADIUS]) < 0.3 * PIXEL

@@ -10,8 +10,17 @@ one module per stage::
     label        8-connected regions above 3 sigma that reach 5 sigma (hysteresis)
     deblend      split regions with several separate peaks
     filters      edge, area, peak, elongation, flatness, hot-pixel and clutter rejection
-    centroid     weighted sum over the full-resolution pixels of each region: x, y, flux,
-                 peak, second moments (elongation), 1-sigma centroid error
+    centroid     weighted sum over the full-resolution pixels of each region (flux, peak,
+                 second moments, elongation), then the iteratively windowed Gaussian-weighted
+                 centroid about it (the default ``centroid="windowed"``, within a few per cent
+                 of the Cramér-Rao bound, see docs/detection.md) with its 1-sigma error
+
+Every stage has alternatives selectable by name (:class:`StarDetector`): dark / median-frame
+and row-reference subtraction (:mod:`.dark`), denoising (:mod:`.denoise`), k-sigma, dynamic and
+seed 000 pre-filter thresholds (:mod:`.threshold`, :mod:`.prefilters`), 8-connected labelling
+or seed 002 region growing (:mod:`.region_grow`), shape and smear tests (:mod:`.shape`), and six
+centroiders (:mod:`.centroiders`); predictive windows (:mod:`.predictive`); the Cramér-Rao
+bound (:mod:`.crb`); instrument magnitudes (:mod:`.magnitude`).
 
 ``detect(image)`` runs it with the default settings; :class:`StarDetector` holds other
 settings. x, y are in our pixel convention (0-based pixel centres, x = column); detections
@@ -21,6 +30,26 @@ are sorted brightest (largest flux) first.
 from __future__ import annotations
 
 from .channels import to_single_channel
+from .crb import crb_sigma_px, flux_for_snr, integrated_snr
+from .dark import median_frame, subtract_dark
+from .denoise import stack_frames
+from .details import DetectionDetails
 from .detector import StarDetector, detect
+from .magnitude import calibrate_zero_point, instrument_magnitude
+from .predictive import WindowDetections
 
-__all__ = ["StarDetector", "detect", "to_single_channel"]
+__all__ = [
+    "DetectionDetails",
+    "StarDetector",
+    "WindowDetections",
+    "calibrate_zero_point",
+    "crb_sigma_px",
+    "detect",
+    "flux_for_snr",
+    "instrument_magnitude",
+    "integrated_snr",
+    "median_frame",
+    "stack_frames",
+    "subtract_dark",
+    "to_single_channel",
+]

@@ -15,7 +15,7 @@ about 1 on sky with or without stars, several times more on lit leaves or roof t
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -55,6 +55,10 @@ class BackgroundModel:
         Per-tile clutter ratio (module docstring); None for a constant model.
     centres_y, centres_x : ndarray, shape (ny,), (nx,), or None
         Tile-centre coordinates, in the pixel convention of the image they are evaluated on.
+    level_map : ndarray of float32, shape of the measured image, or None
+        The interpolated level at every pixel of the image the model was measured on, when it
+        was computed anyway (tiles covering the whole image); saves the thresholding one
+        interpolation.
     """
 
     level: float
@@ -64,6 +68,7 @@ class BackgroundModel:
     clutter_grid: NDArray[np.float64] | None = None
     centres_y: NDArray[np.float64] | None = None
     centres_x: NDArray[np.float64] | None = None
+    level_map: NDArray[np.float32] | None = field(default=None, repr=False, compare=False)
 
     @property
     def is_tiled(self) -> bool:
@@ -76,6 +81,12 @@ class BackgroundModel:
             return self.level, self.noise
         return (_grid_map(self.level_grid, self.centres_y, self.centres_x, ys, xs, True),
                 _grid_map(self.noise_grid, self.centres_y, self.centres_x, ys, xs, False))
+
+    def noise_map(self, ys: NDArray, xs: NDArray) -> NDArray | float:
+        """The noise alone on the grid of rows ``ys`` x columns ``xs`` (see :meth:`maps`)."""
+        if not self.is_tiled:
+            return self.noise
+        return _grid_map(self.noise_grid, self.centres_y, self.centres_x, ys, xs, False)
 
     def at(self, x: NDArray, y: NDArray) -> tuple[NDArray, NDArray]:
         """Level and noise at points (x, y) (arrays of one shape), bilinearly interpolated."""
@@ -185,7 +196,8 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
         return global_background(image)
     level, lower = _median3(median, linear=True), _median3(median - q_lo)
     # noise from the residual, so that a gradient across a tile does not count as noise
-    residual = sample - _grid_map(level, centres_y, centres_x, rows, cols, True)
+    level_map = _grid_map(level, centres_y, centres_x, rows, cols, True)
+    residual = sample - level_map
     q_lo, q_hi = _tile_quantiles(residual, (ny, nx), (GAUSS_LO, GAUSS_HI))
     noise = _median3(0.5 * (q_hi - q_lo))
     noise_global = float(np.quantile(noise, CLEAN_SKY_QUANTILE))
@@ -197,6 +209,7 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
         level=float(np.median(level)), noise=noise_global, level_grid=level,
         noise_grid=np.maximum(noise, MIN_NOISE_RATIO * noise_global), clutter_grid=clutter,
         centres_y=offset + scale * centres_y, centres_x=offset + scale * centres_x,
+        level_map=level_map if level_map.shape == image.shape else None,
     )
 
 

@@ -72,6 +72,9 @@ class SpotMeasurements:
         Seed 003 "flatness factor" as a fraction: std of the spot's values / peak.
     spread_px2 : float
         sum_i (x_i - x_c)^2 + (y_i - y_c)^2 over positive pixels, for the propagated sigma.
+    size_px : float
+        Intensity-weighted RMS radius per axis, sqrt((cxx + cyy) / 2) without the pixel's own
+        1/12 px^2: about the PSF's standard deviation (less, when a threshold cut the wings).
     """
 
     x: NDArray[np.float64]
@@ -85,6 +88,7 @@ class SpotMeasurements:
     elongation: NDArray[np.float64]
     flatness: NDArray[np.float64]
     spread_px2: NDArray[np.float64]
+    size_px: NDArray[np.float64]
 
 
 def measure_spots(regions: Regions, signal: NDArray[np.float64]) -> SpotMeasurements:
@@ -118,7 +122,7 @@ def measure_spots(regions: Regions, signal: NDArray[np.float64]) -> SpotMeasurem
         x=xc, y=yc, flux=regions.sum(signal), weight=total, peak=signal[top],
         peak_x=regions.x[top], peak_y=regions.y[top], area_px=regions.counts,
         elongation=_elongation(cxx, cyy, cxy), flatness=_flatness(regions, signal, signal[top]),
-        spread_px2=spread,
+        spread_px2=spread, size_px=np.sqrt(np.maximum(0.5 * (cxx + cyy) - PIXEL_VARIANCE, 0.0)),
     )
 
 

@@ -1,140 +1,164 @@
-"""The configured star detector: background -> threshold -> label -> filter -> centroid.
+"""The configured star detector: every detection method selectable by name, one interface.
 
-See the package docstring of :mod:`startrack.detect` for the pipeline and its defaults.
+See the package docstring of :mod:`startrack.detect` for the pipeline and its defaults, and
+``docs/detection.md`` for the methods and how close each comes to the Cramér-Rao bound.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidInputError
 from ..io.channels import channel_index
 from ..results import Detections
-from . import filters
-from .background import (
-    BackgroundModel,
-    global_background,
-    pixel_noise,
-    tiled_background,
-    with_noise_floor,
-)
-from .centroid import (
-    UNCERTAINTY_MODELS,
-    SpotMeasurements,
-    centroid_sigma,
-    measure_spots,
-    take_spots,
-)
-from .deblend import split_regions
-from .label import Regions, hysteresis_regions
-from .prepare import PreparedImage, prepare_image
-from .smooth import KERNELS, detection_image
-from .threshold import significance
+from . import settings_checks as checks
+from .blocks import detect_in_strips
+from .centroid import UNCERTAINTY_MODELS
+from .centroiders import CENTROIDERS
+from .denoise import DENOISE_METHODS
+from .details import DetectionDetails
+from .pipeline import detect_frame
+from .predictive import WindowDetections, measure_windows
+from .smooth import KERNELS
 
 BACKGROUND_MODES = ("tiled", "global")
-NOISE_FLOOR_FRACTION = 1e-6
-"""Noise floor relative to the largest absolute value, for noise-free (simulated) images."""
+THRESHOLDS = ("ksigma", "dynamic", "prefilter-window", "prefilter-grid")
+GROUPINGS = ("label8", "region-grow")
+DEFAULT_MAX_BLOCK_PX = 1 << 24
 
 
 @dataclass(frozen=True)
 class StarDetector:
     """Star detector with fixed settings (validated once, when constructed).
 
-    Parameters
-    ----------
-    sigma : float
-        Detection threshold k, in noise units of the detection image (binned and smoothed).
-    grow_sigma : float
-        Lower threshold to which a detected spot is grown (hysteresis); equal to ``sigma``
-        for a single threshold.
-    binning : int
-        Block size of the mean binning of the detection image (1 = none).
-    kernel : {"binomial", "box"}
-        Smoothing kernel applied after binning (see :mod:`.smooth`).
-    kernel_px : int
-        Odd size of that kernel in binned pixels (1 = no smoothing).
-    background : {"tiled", "global"}
-        Tiled: median and noise per ``tile_px`` tile, interpolated (for gradients, trees,
-        moonlight). Global: one level and noise for the whole frame.
-    tile_px : int
-        Tile side in full-resolution pixels.
-    min_area_px, max_area_px : int, int or None
-        Limits on the spot's pixel count at full resolution (a binned pixel counts
-        ``binning**2``).
-    min_peak_snr : float
-        Minimum peak pixel / pixel noise.
-    max_elongation : float or None
-        Maximum ratio of the principal axes of the spot.
-    min_flatness : float
-        Minimum std / peak of the spot's values (seed 003 flatness factor / 100).
-    max_peak_fraction : float or None
-        Hot-pixel rejection: maximum peak / sum of the 3 x 3 pixels around it.
-    max_clutter : float or None
-        Clutter rejection: drop spots where the local lower-half noise of the background
-        exceeds this multiple of the clean sky's (lit trees, roofs); tiled background only.
-    deblend : bool
-        Split clusters that hold several separate peaks (see :mod:`.deblend`).
-    reject_edge : bool
-        Drop spots that touch the image border.
-    channel : {None, "r", "g", "b", 0, 1, 2}
-        Plane of a colour image to use; None sums R + G + B (see :mod:`startrack.io.channels`).
-    max_stars : int or None
-        Keep only this many spots, the brightest.
-    uncertainty : {"propagated", "eq4.2"}
-        Model of ``Detections.sigma_px`` (see :mod:`.centroid`).
+    Background and noise
+        dark_frame : ndarray (H, W) or None -- dark or median (fixed-pattern) frame to subtract
+        (:mod:`.dark`). dark_columns : (leading, trailing) -- dark reference columns per row
+        (seed 002), subtracted row by row and cut off (x stays in the full frame's pixels).
+        background : {"tiled", "global"} -- local (per ``tile_px`` tile, interpolated) or
+        global level and noise; with ``threshold="ksigma"`` these are the local and global
+        k-sigma thresholds.
+    Noise removal (optional, :mod:`.denoise`)
+        denoise : {"none", "gaussian", "diffusion"}; denoise_sigma_px; diffusion_iterations;
+        diffusion_kappa_sigma (the edge threshold K in noise units). Stacking:
+        :func:`startrack.detect.stack_frames` before detection.
+    Detection image (:mod:`.smooth`)
+        binning, kernel {"binomial", "box"}, kernel_px (odd).
+    Threshold (:mod:`.threshold`, :mod:`.prefilters`)
+        threshold : {"ksigma", "dynamic", "prefilter-window", "prefilter-grid"}.
+        sigma -- k of the detection image (the lowest k of "dynamic"); grow_sigma -- the
+        level spots are grown to; target_stars, max_sigma -- the dynamic threshold's target
+        count and highest k; pixel_sigma, prefilter_count -- single-pixel k and the count of
+        25 of seed 000's 5 x 5 pre-filters (which work on full-resolution pixels).
+    Grouping (:mod:`.label`, :mod:`.region_grow`)
+        grouping : {"label8", "region-grow"}; jump_px -- the region growing's scan step;
+        deblend; reject_edge; min_area_px, max_area_px (full-resolution pixels);
+        min_packing -- the proximity filter (0 = off).
+    Spot filters (:mod:`.filters`, :mod:`.shape`)
+        min_peak_snr, max_elongation (the eccentricity test: e = sqrt(1 - 1 / elongation^2)),
+        min_flatness, max_peak_fraction (hot pixels), max_clutter; smear_px (dx, dy),
+        smear_tolerance_px, smear_angle_deg, max_axis_difference_px -- seed 002's shape test.
+    Centroid (:mod:`.centroiders`)
+        centroid : {"peak", "area", "weighted", "weighted-raw", "windowed", "mle"};
+        psf_sigma_px -- known PSF width (None: estimated; fitted by "mle");
+        window_half_px -- window of the window methods (None: ceil(3 sigma) + 1);
+        gain_e_per_adu -- adds the stars' shot noise to the weights and errors (None: the
+        background noise only); uncertainty {"propagated", "eq4.2"} -- the method's own error
+        (propagated noise or fit covariance) or seed 000's eq. 4.2; mag_zero_point -- of the
+        instrument magnitude (:mod:`.magnitude`).
+    Output
+        channel : {None, "r", "g", "b", 0, 1, 2} -- colour plane (None: R + G + B);
+        max_stars -- keep only the brightest; max_block_px -- frames larger than this are
+        processed in strips (:mod:`.blocks`).
     """
 
-    sigma: float = 5.0
-    grow_sigma: float = 3.0
+    dark_frame: NDArray | None = field(default=None, repr=False, compare=False)
+    dark_columns: tuple[int, int] = (0, 0)
+    background: str = "tiled"
+    tile_px: int = 32
+    denoise: str = "none"
+    denoise_sigma_px: float = 1.0
+    diffusion_iterations: int = 10
+    diffusion_kappa_sigma: float = 3.0
     binning: int = 2
     kernel: str = "binomial"
     kernel_px: int = 3
-    background: str = "tiled"
-    tile_px: int = 32
+    threshold: str = "ksigma"
+    sigma: float = 5.0
+    grow_sigma: float = 3.0
+    target_stars: int = 30
+    max_sigma: float = 1000.0
+    pixel_sigma: float = 2.0
+    prefilter_count: int = 9
+    grouping: str = "label8"
+    jump_px: int = 3
+    deblend: bool = True
+    reject_edge: bool = True
     min_area_px: int = 4
     max_area_px: int | None = 4096
+    min_packing: float = 0.0
     min_peak_snr: float = 0.0
     max_elongation: float | None = 5.0
     min_flatness: float = 0.0
     max_peak_fraction: float | None = 0.75
     max_clutter: float | None = 2.5
-    deblend: bool = True
-    reject_edge: bool = True
+    smear_px: tuple[float, float] | None = None
+    smear_tolerance_px: float = 2.0
+    smear_angle_deg: float = 30.0
+    max_axis_difference_px: float | None = None
+    centroid: str = "windowed"
+    psf_sigma_px: float | None = None
+    window_half_px: int | None = None
+    gain_e_per_adu: float | None = None
+    uncertainty: str = "propagated"
+    mag_zero_point: float = 0.0
     channel: str | int | None = None
     max_stars: int | None = None
-    uncertainty: str = "propagated"
+    max_block_px: int = DEFAULT_MAX_BLOCK_PX
 
     def __post_init__(self) -> None:
-        _check_positive(self, ("sigma", "grow_sigma"))
-        _check_int(self, ("binning", "kernel_px", "tile_px", "min_area_px"), minimum=1)
-        _check_int(self, ("max_area_px", "max_stars"), minimum=1, optional=True)
-        _check_positive(self, ("max_elongation", "max_peak_fraction", "max_clutter"),
-                        optional=True)
-        _check_non_negative(self, ("min_peak_snr", "min_flatness"))
+        checks.check_positive(self, ("sigma", "grow_sigma", "denoise_sigma_px",
+                                     "diffusion_kappa_sigma", "max_sigma", "pixel_sigma",
+                                     "smear_tolerance_px", "smear_angle_deg"))
+        checks.check_positive(self, ("max_elongation", "max_peak_fraction", "max_clutter",
+                                     "psf_sigma_px", "gain_e_per_adu", "max_axis_difference_px"),
+                              optional=True)
+        checks.check_int(self, ("binning", "kernel_px", "tile_px", "min_area_px", "jump_px",
+                                "target_stars", "diffusion_iterations"), minimum=1)
+        checks.check_int(self, ("prefilter_count",), minimum=1)
+        checks.check_int(self, ("max_block_px",), minimum=1024)
+        checks.check_int(self, ("max_area_px", "max_stars", "window_half_px"), minimum=1,
+                         optional=True)
+        checks.check_non_negative(self, ("min_peak_snr", "min_flatness", "min_packing"))
+        if not isinstance(self.mag_zero_point, int | float) or not np.isfinite(self.mag_zero_point):
+            raise InvalidInputError(f"mag_zero_point must be a finite number, got "
+                                    f"{self.mag_zero_point!r}")
         if self.kernel_px % 2 == 0:
             raise InvalidInputError(
                 f"kernel_px must be an odd integer (1, 3, 5...), got {self.kernel_px}")
-        if self.kernel not in KERNELS:
-            raise InvalidInputError(f"kernel must be one of {KERNELS}, got {self.kernel!r}")
-        if self.background not in BACKGROUND_MODES:
-            raise InvalidInputError(
-                f"background must be one of {BACKGROUND_MODES}, got {self.background!r}")
-        if self.uncertainty not in UNCERTAINTY_MODELS:
-            raise InvalidInputError(
-                f"uncertainty must be one of {UNCERTAINTY_MODELS}, got {self.uncertainty!r}")
+        if self.prefilter_count > 25:
+            raise InvalidInputError(f"prefilter_count must be 1..25, got {self.prefilter_count}")
+        for name, choices in (("kernel", KERNELS), ("background", BACKGROUND_MODES),
+                              ("uncertainty", UNCERTAINTY_MODELS), ("threshold", THRESHOLDS),
+                              ("grouping", GROUPINGS), ("centroid", CENTROIDERS),
+                              ("denoise", DENOISE_METHODS)):
+            checks.check_choice(self, name, choices)
+        checks.check_pair(self, "dark_columns", optional=False, integer=True)
+        checks.check_pair(self, "smear_px", optional=True, integer=False)
+        checks.check_dark(self.dark_frame)
         channel_index(self.channel)
-        for name in ("reject_edge", "deblend"):
-            if not isinstance(getattr(self, name), bool | np.bool_):
-                raise InvalidInputError(
-                    f"{name} must be True or False, got {getattr(self, name)!r}")
+        checks.check_bool(self, ("reject_edge", "deblend"))
 
     def settings(self) -> dict:
-        """The settings as a plain dict (for logs and result files)."""
-        return asdict(self)
+        """The settings as a plain dict (for logs and result files; the dark frame as its
+        shape)."""
+        out = asdict(self)
+        if self.dark_frame is not None:
+            out["dark_frame"] = f"array{np.shape(self.dark_frame)}"
+        return out
 
     def detect(self, image: NDArray) -> Detections:
         """Find and centroid the stars of ``image``.
@@ -152,127 +176,48 @@ class StarDetector:
         Raises
         ------
         InvalidInputError
-            Bad shape, dtype or size, or no finite pixel.
+            Bad shape, dtype or size, no finite pixel, or a dark frame of another shape.
         """
-        prepared = prepare_image(image, self.channel)
-        binning = min(self.binning, *prepared.data.shape)
-        det = detection_image(prepared.data, binning, self.kernel, self.kernel_px,
-                              prepared.invalid)
-        model = self._background_model(det, binning)
-        noise_px = pixel_noise(prepared.data, model) or _floor(prepared.data, model.level)
-        empty = Detections(background=model.level, noise=noise_px, width=prepared.data.shape[1],
-                           height=prepared.data.shape[0])
-        if model.noise <= 0:  # a constant image
-            return empty
-        regions = self._find_regions(det, significance(det, model, binning))
-        if len(regions) == 0:
-            return empty
-        spots, local_noise = self._measure(prepared, regions.upsample(binning), model, noise_px)
-        return self._to_detections(spots, local_noise, empty)
+        return self.detect_details(image).detections
 
-    def _find_regions(self, det: NDArray, snr: NDArray) -> Regions:
-        """Threshold, label, deblend and edge-filter on the detection image's grid."""
-        regions = hysteresis_regions(snr, self.sigma, self.grow_sigma)
-        if self.deblend and len(regions):
-            regions = split_regions(regions, snr, self.sigma)
-        if self.reject_edge and len(regions):
-            core = snr[regions.y, regions.x] > self.sigma
-            regions = regions.select(filters.away_from_edge(regions, det.shape, core))
-        return regions
+    def detect_details(self, image: NDArray) -> DetectionDetails:
+        """As :meth:`detect`, with the instrument magnitude, the spot shape, the PSF width and
+        the threshold used (:class:`startrack.detect.DetectionDetails`)."""
+        array = np.asarray(image)
+        h, w = array.shape[:2] if array.ndim >= 2 else (0, 0)
+        if h * w > self.max_block_px and array.ndim in (2, 3):
+            return detect_in_strips(self, array)
+        return detect_frame(self, array, self.dark_frame)
 
-    def _background_model(self, det: NDArray, binning: int) -> BackgroundModel:
-        """Background of the detection image, tile centres in full-resolution pixels."""
-        if self.background == "global":
-            model = global_background(det)
-        else:
-            tile = max(1, self.tile_px // binning)
-            model = tiled_background(det, tile, scale=binning, offset=(binning - 1) / 2)
-        return with_noise_floor(model, _floor(det, model.level)) if model.noise <= 0 else model
+    def measure_windows(self, image: NDArray, x: ArrayLike, y: ArrayLike,
+                        half_width_px: int = 6) -> WindowDetections:
+        """Predictive centroiding: find and centroid stars only in square windows of
+        half-width ``half_width_px`` centred on the predicted positions (x, y) (seed 004;
+        :mod:`.predictive`). The background of each window is its outer ring.
 
-    def _measure(self, prepared: PreparedImage, regions: Regions, model: BackgroundModel,
-                 noise_px: float) -> tuple[SpotMeasurements, NDArray]:
-        """Measure the spots and apply the spot filters; returns the kept spots and the pixel
-        noise at each."""
-        level, _ = model.at(regions.x, regions.y)
-        signal = prepared.data[regions.y, regions.x] - level
-        if prepared.invalid is not None:
-            signal[prepared.invalid[regions.y, regions.x]] = 0.0
-        spots = measure_spots(regions, signal)
-        peak_level, peak_noise = model.at(spots.peak_x, spots.peak_y)
-        local_noise = noise_px * peak_noise / model.noise
-        clutter = model.clutter_at(spots.peak_x, spots.peak_y)
-        keep = self._filter(spots, local_noise, clutter, prepared.data, peak_level)
-        return take_spots(spots, keep), local_noise[keep]
-
-    def _filter(self, spots: SpotMeasurements, local_noise: NDArray, clutter: NDArray,
-                data: NDArray, peak_level: NDArray) -> NDArray[np.bool_]:
-        """The AND of all spot filters (see :mod:`.filters`), shape (N,)."""
-        fraction = filters.peak_fraction(data, peak_level, spots.peak_x, spots.peak_y)
-        keep = np.isfinite(spots.x) & (spots.flux > 0)
-        keep &= filters.area_ok(spots.area_px, self.min_area_px, self.max_area_px)
-        keep &= filters.peak_ok(spots.peak / local_noise, self.min_peak_snr)
-        keep &= filters.elongation_ok(spots.elongation, self.max_elongation)
-        keep &= filters.flatness_ok(spots.flatness, self.min_flatness)
-        keep &= filters.hot_pixel_ok(fraction, self.max_peak_fraction)
-        keep &= filters.clutter_ok(clutter, self.max_clutter)
-        return keep
-
-    def _to_detections(self, spots: SpotMeasurements, local_noise: NDArray, empty: Detections
-                       ) -> Detections:
-        """Sort brightest first, cut to ``max_stars`` and pack into :class:`Detections`."""
-        order = np.argsort(-spots.flux, kind="stable")[: self.max_stars]
-        spots, local_noise = take_spots(spots, order), local_noise[order]
-        return Detections(
-            x=spots.x, y=spots.y, flux=spots.flux,
-            sigma_px=centroid_sigma(spots, local_noise, self.uncertainty),
-            area_px=spots.area_px.astype(np.int64), peak=spots.peak, elongation=spots.elongation,
-            background=empty.background, noise=empty.noise, width=empty.width, height=empty.height,
-        )
+        Returns
+        -------
+        WindowDetections
+            Detections (brightest first) and the index of the prediction each belongs to;
+            predictions with no star in their window are absent.
+        """
+        x = np.atleast_1d(np.asarray(x, dtype=np.float64))
+        y = np.atleast_1d(np.asarray(y, dtype=np.float64))
+        if x.shape != y.shape or x.ndim != 1 or not np.all(np.isfinite(x) & np.isfinite(y)):
+            raise InvalidInputError("x and y must be 1-D arrays of one length of finite "
+                                    "predicted positions")
+        if not (isinstance(half_width_px, int | np.integer) and half_width_px >= 2):
+            raise InvalidInputError(f"half_width_px must be an integer >= 2, got {half_width_px!r}")
+        if x.size == 0:
+            return WindowDetections()
+        return measure_windows(self, image, x, y, int(half_width_px))
 
 
 def detect(image: NDArray, **settings) -> Detections:
     """Detect and centroid stars with a :class:`StarDetector` built from ``settings``.
 
-    ``detect(image, sigma=4)`` is ``StarDetector(sigma=4).detect(image)``; see
-    :class:`StarDetector` for the settings and :meth:`StarDetector.detect` for the result.
+    ``detect(image, sigma=4, centroid="mle")`` is
+    ``StarDetector(sigma=4, centroid="mle").detect(image)``; see :class:`StarDetector` for the
+    settings and :meth:`StarDetector.detect` for the result.
     """
     return StarDetector(**settings).detect(image)
-
-
-def _floor(values: NDArray, level: float) -> float:
-    """Noise floor for a noise-free (simulated) image: a millionth of the largest deviation
-    from the background (0 when the image is constant)."""
-    largest = float(np.fmax.reduce(np.abs(values - np.float32(level)), axis=None))  # NaN-free
-    return NOISE_FLOOR_FRACTION * largest if np.isfinite(largest) else 0.0
-
-
-def _check_positive(obj, names: tuple[str, ...], optional: bool = False) -> None:
-    for name in names:
-        value = getattr(obj, name)
-        if optional and value is None:
-            continue
-        if not (isinstance(value, int | float | np.number) and math.isfinite(value) and value > 0):
-            raise InvalidInputError(
-                f"{name} must be a positive number{_or_none(optional)}, got {value!r}")
-
-
-def _check_non_negative(obj, names: tuple[str, ...]) -> None:
-    for name in names:
-        value = getattr(obj, name)
-        if not (isinstance(value, int | float | np.number) and math.isfinite(value) and value >= 0):
-            raise InvalidInputError(f"{name} must be a number >= 0, got {value!r}")
-
-
-def _check_int(obj, names: tuple[str, ...], minimum: int, optional: bool = False) -> None:
-    for name in names:
-        value = getattr(obj, name)
-        if optional and value is None:
-            continue
-        is_int = isinstance(value, int | np.integer) and not isinstance(value, bool)
-        if not (is_int and value >= minimum):
-            raise InvalidInputError(
-                f"{name} must be an integer >= {minimum}{_or_none(optional)}, got {value!r}")
-
-
-def _or_none(optional: bool) -> str:
-    return " or None" if optional else ""

@@ -27,10 +27,13 @@ def bin_mean(image: NDArray, factor: int) -> NDArray[np.float32]:
     if factor == 1:
         return image.astype(np.float32, copy=False)
     h, w = image.shape[0] // factor, image.shape[1] // factor
-    out = np.zeros((h, w), dtype=np.float32)
-    for dy in range(factor):
-        for dx in range(factor):
-            out += image[dy: h * factor: factor, dx: w * factor: factor]
+    cropped = image[: h * factor, : w * factor]
+    rows = cropped[0::factor].astype(np.float32)  # sum the rows of each block first ...
+    for dy in range(1, factor):
+        rows += cropped[dy::factor]
+    out = rows[:, 0::factor].copy()  # ... then its columns: half the work of 2-D strides
+    for dx in range(1, factor):
+        out += rows[:, dx::factor]
     out *= np.float32(1.0 / factor**2)
     return out
 

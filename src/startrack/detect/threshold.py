@@ -34,7 +34,11 @@ def significance(image: NDArray[np.float32], model: BackgroundModel, binning: in
     """
     h, w = image.shape
     centre = (binning - 1) / 2
-    level, noise = model.maps(centre + binning * np.arange(h), centre + binning * np.arange(w))
+    ys, xs = centre + binning * np.arange(h), centre + binning * np.arange(w)
+    if model.level_map is not None and model.level_map.shape == image.shape:
+        level, noise = model.level_map, model.noise_map(ys, xs)
+    else:
+        level, noise = model.maps(ys, xs)
     snr = image - np.float32(level) if np.isscalar(level) else image - level
     if np.isscalar(noise):
         snr *= np.float32(1.0 / noise)

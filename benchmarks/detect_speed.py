@@ -1,0 +1,186 @@
+"""Detection speed and accuracy beside SEP and photutils' DAOStarFinder, on the same frames.
+
+Frames: 1024 x 1024 uint16, 30 stars each (PSF sigma 1.5 px, integrated SNR log-uniform in
+10-300, 100 e- sky, 5 e- read noise; ``detect_frames.py``). Per method: the median time per frame
+(median over ``--repeats`` runs of each frame, then over frames), the completeness and the false
+detections per frame against the truth (2 px), the RMS centroid error over the stars it found
+and over the stars every method found (the same stars for all). The peers run in their own
+environment (``peers/detect_env.py``) in a subprocess reading the same frames from an ``.npz``.
+Also: the predictive pass over 20 windows, and with ``--huge`` the peak memory of a 20,000 x
+20,000 frame (``tracemalloc``).
+
+    .venv/bin/python benchmarks/detect_speed.py [--frames 5] [--repeats 15] [--no-peers] [--huge]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from detect_frames import grid_positions, match, render_frame  # noqa: E402
+from peers.detect_env import run_peers  # noqa: E402
+
+from startrack.detect import StarDetector, crb  # noqa: E402
+from startrack.simulate import render_gaussian_psf  # noqa: E402
+
+SHAPE = (1024, 1024)
+PSF_SIGMA_PX = 1.5
+N_STARS = 30
+
+
+def make_frames(n: int, seed: int) -> list:
+    rng = np.random.default_rng(seed)
+    frames = []
+    for _ in range(n):
+        x, y = grid_positions(SHAPE, 150, rng, margin=40)
+        pick = rng.choice(x.size, N_STARS, replace=False)
+        snr = np.exp(rng.uniform(np.log(10.0), np.log(300.0), N_STARS))
+        flux = crb.flux_for_snr(snr, PSF_SIGMA_PX, 100.0, 5.0)
+        frames.append(render_frame(SHAPE, x[pick], y[pick], flux, PSF_SIGMA_PX, rng))
+    return frames
+
+
+def time_ours(detector: StarDetector, frames: list, repeats: int
+              ) -> tuple[list, np.ndarray, np.ndarray]:
+    results, times, best = [], [], []
+    for frame in frames:
+        detector.detect(frame.image)  # warm-up
+        samples = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            det = detector.detect(frame.image)
+            samples.append(time.perf_counter() - t0)
+        results.append((det.x, det.y))
+        times.append(np.median(samples))
+        best.append(np.min(samples))
+    return results, np.array(times), np.array(best)
+
+
+def score(frames: list, results: list) -> tuple[float, float, list]:
+    """Completeness, false per frame, and per frame the error of each true star (NaN if
+    missed)."""
+    found = false = 0
+    errors = []
+    for frame, (x, y) in zip(frames, results, strict=True):
+        idx, ok = match(frame.x, frame.y, x, y)
+        found += ok.sum()
+        false += len(x) - ok.sum()
+        err = np.full(frame.x.size, np.nan)
+        err[ok] = np.hypot(x[idx[ok]] - frame.x[ok], y[idx[ok]] - frame.y[ok])
+        errors.append(err)
+    total = sum(f.x.size for f in frames)
+    return found / total, false / len(frames), errors
+
+
+def predictive_time(frame, repeats: int) -> tuple[float, float, int]:
+    rng = np.random.default_rng(3)
+    pick = np.arange(min(20, frame.x.size))
+    px, py = frame.x[pick] + rng.uniform(-1, 1, pick.size), frame.y[pick] + rng.uniform(-1, 1, pick.size)
+    detector = StarDetector()
+    result = detector.measure_windows(frame.image, px, py, 6)
+    samples = []
+    for _ in range(repeats * 5):
+        t0 = time.perf_counter()
+        detector.measure_windows(frame.image, px, py, 6)
+        samples.append(time.perf_counter() - t0)
+    return float(np.median(samples)), float(np.min(samples)), len(result)
+
+
+def peers(frames: list, repeats: int) -> dict:
+    with tempfile.TemporaryDirectory() as tmp:
+        src, out = Path(tmp) / "frames.npz", Path(tmp) / "peers.npz"
+        np.savez(src, frames=np.stack([f.image for f in frames]), psf_sigma_px=PSF_SIGMA_PX)
+        raw = run_peers(src, out, repeats=repeats)
+    res = {}
+    for name in ("sep", "sep_win", "dao"):
+        per_frame = [(raw[f"{name}_x"][raw[f"{name}_frame"] == k],
+                      raw[f"{name}_y"][raw[f"{name}_frame"] == k]) for k in range(len(frames))]
+        res[name] = (per_frame, raw[f"{name}_time_s"], raw[f"{name}_best_s"])
+    res["versions"] = tuple(raw["versions"])
+    return res
+
+
+def report(rows: dict, frames: list) -> None:
+    scores = {name: score(frames, res) for name, (res, _, _) in rows.items()}
+    common = np.all([np.isfinite(np.concatenate(s[2])) for s in scores.values()], axis=0)
+    ref = np.median(rows["startrack (default)"][1])
+    print(f"\n{'method':<26}{'median ms':>10}{'best ms':>8}{'x ours':>8}{'complete':>10}"
+          f"{'false/fr':>9}{'rms px':>8}{'rms common':>11}")
+    for name, (_, times, best) in rows.items():
+        comp, false, errors = scores[name]
+        err = np.concatenate(errors)
+        rms = np.sqrt(np.nanmean(err**2))
+        rms_common = np.sqrt(np.mean(err[common] ** 2))
+        ms = np.median(times) * 1e3
+        print(f"{name:<26}{ms:10.2f}{np.min(best) * 1e3:8.2f}{ms / (ref * 1e3):8.2f}{comp:10.3f}"
+              f"{false:9.1f}{rms:8.4f}{rms_common:11.4f}")
+    print(f"(rms common: over the {common.sum()} of {common.size} stars every method found)")
+
+
+def huge_frame_memory(size: int = 20_000) -> None:
+    """Peak traced memory of detect() on a size x size uint16 frame with 400 stars."""
+    rng = np.random.default_rng(5)
+    image = np.empty((size, size), dtype=np.uint16)
+    for start in range(0, size, 1000):
+        band = rng.standard_normal((min(1000, size - start), size), dtype=np.float32)
+        image[start: start + band.shape[0]] = np.clip(100 + 5 * band, 0, 65535)
+    x, y = rng.uniform(50, size - 50, 400), rng.uniform(50, size - 50, 400)
+    stamp = render_gaussian_psf((21, 21), [10.0], [10.0], [2e4], PSF_SIGMA_PX)
+    for xi, yi in zip(x.astype(int), y.astype(int), strict=True):
+        image[yi - 10: yi + 11, xi - 10: xi + 11] += stamp.astype(np.uint16)
+    tracemalloc.start()
+    t0 = time.perf_counter()
+    det = StarDetector().detect(image)
+    elapsed = time.perf_counter() - t0
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    idx, ok = match(x.astype(int) + 0.0, y.astype(int) + 0.0, det.x, det.y)
+    strip = StarDetector().max_block_px
+    print(f"\n{size} x {size} uint16 frame ({image.nbytes / 2**20:.0f} MiB input): {len(det)} "
+          f"detections, {ok.sum()} of 400 stars, {elapsed:.1f} s; peak traced memory "
+          f"{peak / 2**20:.0f} MiB = {peak / strip:.1f} bytes per pixel of a {strip / 1e6:.1f} Mpx "
+          f"strip (the input itself not counted)")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--frames", type=int, default=5)
+    parser.add_argument("--repeats", type=int, default=15)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--no-peers", action="store_true")
+    parser.add_argument("--huge", action="store_true", help="also the 20,000 x 20,000 frame")
+    args = parser.parse_args(argv)
+    print(f"load average {os.getloadavg()[0]:.2f}")
+    frames = make_frames(args.frames, args.seed)
+    rows = {
+        "startrack (default)": time_ours(StarDetector(), frames, args.repeats),
+        "startrack weighted": time_ours(StarDetector(centroid="weighted"), frames, args.repeats),
+        "startrack mle": time_ours(StarDetector(centroid="mle"), frames, args.repeats),
+    }
+    if not args.no_peers:
+        peer = peers(frames, args.repeats)
+        print(f"SEP {peer['versions'][0]}, photutils {peer['versions'][1]}")
+        rows["SEP extract"] = peer["sep"]
+        rows["SEP extract + winpos"] = peer["sep_win"]
+        rows["photutils DAOStarFinder"] = peer["dao"]
+    report(rows, frames)
+    t, best, n = predictive_time(frames[0], args.repeats)
+    print(f"\npredictive pass, 20 windows of 13 x 13 px: {t * 1e3:.3f} ms median, "
+          f"{best * 1e3:.3f} ms best, {n} found")
+    print(f"load average {os.getloadavg()[0]:.2f}")
+    if args.huge:
+        huge_frame_memory()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,247 @@
+"""The detection pipeline of one frame, stage by stage, for a :class:`.StarDetector`'s settings.
+
+prepare (+ dark, row reference, denoise) -> detection image -> background -> threshold and
+grouping -> deblend, edge -> spot measurements and filters -> centroid -> Detections.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..results import Detections
+from . import filters
+from .background import (
+    BackgroundModel,
+    global_background,
+    pixel_noise,
+    tiled_background,
+    with_noise_floor,
+)
+from .centroid import SpotMeasurements, centroid_sigma, measure_spots, sigma_eq42, take_spots
+from .centroiders import CentroidInputs, run_centroider
+from .dark import subtract_dark, subtract_row_reference
+from .deblend import split_regions
+from .denoise import anisotropic_diffusion, gaussian_smooth
+from .details import DetectionDetails
+from .label import Regions, label_regions
+from .magnitude import instrument_magnitude
+from .prefilters import packing, prefilter
+from .prepare import PreparedImage, prepare_image
+from .region_grow import grow_regions
+from .shape import smear_ok, spot_shape
+from .smooth import detection_image
+from .threshold import significance
+
+if TYPE_CHECKING:
+    from .detector import StarDetector
+
+NOISE_FLOOR_FRACTION = 1e-6
+"""Noise floor relative to the largest absolute value, for noise-free (simulated) images."""
+
+
+@dataclass(frozen=True)
+class Frame:
+    """A prepared frame with its background: what every later stage reads."""
+
+    prepared: PreparedImage
+    model: BackgroundModel
+    noise_px: float
+    binning: int
+    x_offset: int
+
+
+def detect_frame(cfg: StarDetector, image: NDArray, dark: NDArray | None) -> DetectionDetails:
+    """Run the whole pipeline on one frame (or one strip of a large frame)."""
+    prepared, x_offset = preprocess(cfg, image, dark)
+    binning = min(cfg.binning, *prepared.data.shape)
+    det = detection_image(prepared.data, binning, cfg.kernel, cfg.kernel_px, prepared.invalid)
+    model = background_model(cfg, det, binning)
+    noise_px = pixel_noise(prepared.data, model) or noise_floor(prepared.data, model.level)
+    frame = Frame(prepared, model, noise_px, binning, x_offset)
+    if model.noise <= 0:  # a constant image
+        return empty_details(frame, image.shape[1], cfg)
+    regions, k_sigma = find_regions(cfg, frame, det)
+    if len(regions) == 0:
+        return empty_details(frame, image.shape[1], cfg, k_sigma)
+    return measure(cfg, frame, regions, k_sigma, image.shape[1])
+
+
+def preprocess(cfg: StarDetector, image: NDArray, dark: NDArray | None
+               ) -> tuple[PreparedImage, int]:
+    """Check and reduce the image, subtract the dark frame and the row reference, denoise.
+    Returns the prepared plane and the number of leading columns cut off."""
+    prepared = prepare_image(image, cfg.channel)
+    data, x_offset = prepared.data, 0
+    if dark is not None:
+        data = subtract_dark(data, dark)
+    if sum(cfg.dark_columns):
+        data = subtract_row_reference(data, *cfg.dark_columns)
+        x_offset = cfg.dark_columns[0]
+    if cfg.denoise == "gaussian":
+        data = gaussian_smooth(data, cfg.denoise_sigma_px)
+    elif cfg.denoise == "diffusion":
+        noise = global_background(np.asarray(data, dtype=np.float32)).noise or 1.0
+        data = anisotropic_diffusion(data, cfg.diffusion_iterations,
+                                     cfg.diffusion_kappa_sigma * noise)
+    if data is prepared.data:
+        return prepared, x_offset
+    invalid = prepared.invalid
+    if invalid is not None and x_offset:
+        invalid = invalid[:, x_offset: x_offset + data.shape[1]]
+    return PreparedImage(data, invalid), x_offset
+
+
+def background_model(cfg: StarDetector, det: NDArray, binning: int) -> BackgroundModel:
+    """Background of the detection image, tile centres in full-resolution pixels."""
+    if cfg.background == "global":
+        model = global_background(det)
+    else:
+        tile = max(1, cfg.tile_px // binning)
+        model = tiled_background(det, tile, scale=binning, offset=(binning - 1) / 2)
+    return with_noise_floor(model, noise_floor(det, model.level)) if model.noise <= 0 else model
+
+
+def noise_floor(values: NDArray, level: float) -> float:
+    """Noise floor for a noise-free (simulated) image: a millionth of the largest deviation
+    from the background (0 when the image is constant)."""
+    largest = float(np.fmax.reduce(np.abs(values - np.float32(level)), axis=None))  # NaN-free
+    return NOISE_FLOOR_FRACTION * largest if np.isfinite(largest) else 0.0
+
+
+# --- threshold and grouping -------------------------------------------------------------------
+
+def group(cfg: StarDetector, mask: NDArray[np.bool_], jump: int) -> Regions:
+    """8-connected labelling, or seed 002's region growing from a jump grid."""
+    return grow_regions(mask, jump) if cfg.grouping == "region-grow" else label_regions(mask)
+
+
+def find_regions(cfg: StarDetector, frame: Frame, det: NDArray) -> tuple[Regions, float]:
+    """Threshold and group by the chosen method; deblend; drop spots at the edge.
+
+    Returns full-resolution regions and the threshold used (noise units).
+    """
+    if cfg.threshold.startswith("prefilter"):
+        return _prefiltered_regions(cfg, frame), cfg.pixel_sigma
+    binning = frame.binning
+    snr = significance(det, frame.model, binning)
+    regions = group(cfg, snr > min(cfg.grow_sigma, cfg.sigma), max(1, cfg.jump_px // binning))
+    peak = regions.max(snr[regions.y, regions.x]) if len(regions) else np.zeros(0)
+    k_sigma = dynamic_sigma(peak, cfg) if cfg.threshold == "dynamic" else cfg.sigma
+    regions = regions.select(peak > k_sigma) if len(regions) else regions
+    if cfg.deblend and len(regions):
+        regions = split_regions(regions, snr, k_sigma)
+    if cfg.reject_edge and len(regions):
+        core = snr[regions.y, regions.x] > k_sigma
+        regions = regions.select(filters.away_from_edge(regions, det.shape, core))
+    return regions.upsample(binning), k_sigma
+
+
+def dynamic_sigma(peak_snr: NDArray, cfg: StarDetector) -> float:
+    """Seed 000 §8.2.3's dynamic threshold for one frame: the lowest k in [sigma, max_sigma]
+    that leaves at most ``target_stars`` spots (by their peak significance)."""
+    if peak_snr.size <= cfg.target_stars:
+        return float(cfg.sigma)
+    kth = float(np.sort(peak_snr)[::-1][cfg.target_stars])  # the first spot left out
+    return float(min(max(cfg.sigma, kth), cfg.max_sigma))
+
+
+def _prefiltered_regions(cfg: StarDetector, frame: Frame) -> Regions:
+    """Seed 000's single-pixel threshold + 5 x 5 pre-filter (window or grid), at full
+    resolution, then grouping and the edge filter."""
+    data = frame.prepared.data
+    h, w = data.shape
+    level, noise = frame.model.maps(np.arange(h), np.arange(w))
+    scale = frame.noise_px / frame.model.noise
+    with np.errstate(invalid="ignore"):
+        mask = (data - level) > cfg.pixel_sigma * scale * np.asarray(noise)
+    mask = prefilter(mask, cfg.threshold.removeprefix("prefilter-"), cfg.prefilter_count)
+    regions = group(cfg, mask, cfg.jump_px)
+    if cfg.reject_edge and len(regions):
+        regions = regions.select(filters.away_from_edge(regions, data.shape))
+    return regions
+
+
+# --- measurement, filters, centroid ------------------------------------------------------------
+
+def measure(cfg: StarDetector, frame: Frame, regions: Regions, k_sigma: float,
+            full_width: int) -> DetectionDetails:
+    """Measure the spots, filter them, centroid the survivors and pack the result."""
+    data, invalid, model = frame.prepared.data, frame.prepared.invalid, frame.model
+    level, _ = model.at(regions.x, regions.y)
+    signal = data[regions.y, regions.x].astype(np.float64) - level
+    if invalid is not None:
+        signal[invalid[regions.y, regions.x]] = 0.0
+    spots = measure_spots(regions, signal)
+    peak_level, peak_noise = model.at(spots.peak_x, spots.peak_y)
+    local_noise = frame.noise_px * peak_noise / model.noise
+    keep = spot_filters(cfg, frame, regions, spots, local_noise, peak_level)
+    regions, spots = regions.select(keep), take_spots(spots, keep)
+    raw = data[regions.y, regions.x].astype(np.float64)
+    inputs = CentroidInputs(data, invalid, regions, spots, raw, peak_level[keep],
+                            local_noise[keep])
+    return pack(cfg, frame, inputs, k_sigma, full_width)
+
+
+def spot_filters(cfg: StarDetector, frame: Frame, regions: Regions, spots: SpotMeasurements,
+                 local_noise: NDArray, peak_level: NDArray) -> NDArray[np.bool_]:
+    """The AND of all spot filters (see :mod:`.filters`, :mod:`.prefilters`, :mod:`.shape`)."""
+    data = frame.prepared.data
+    fraction = filters.peak_fraction(data, peak_level, spots.peak_x, spots.peak_y)
+    keep = np.isfinite(spots.x) & (spots.flux > 0)
+    keep &= filters.area_ok(spots.area_px, cfg.min_area_px, cfg.max_area_px)
+    keep &= filters.peak_ok(spots.peak / local_noise, cfg.min_peak_snr)
+    keep &= filters.elongation_ok(spots.elongation, cfg.max_elongation)
+    keep &= filters.flatness_ok(spots.flatness, cfg.min_flatness)
+    keep &= filters.hot_pixel_ok(fraction, cfg.max_peak_fraction)
+    keep &= filters.clutter_ok(frame.model.clutter_at(spots.peak_x, spots.peak_y), cfg.max_clutter)
+    if cfg.min_packing > 0:
+        keep &= packing(regions) >= cfg.min_packing
+    if cfg.smear_px is not None or cfg.max_axis_difference_px is not None:
+        keep &= smear_ok(spot_shape(regions), cfg.smear_px, cfg.smear_tolerance_px,
+                         cfg.max_axis_difference_px, cfg.smear_angle_deg)
+    return keep
+
+
+def pack(cfg: StarDetector, frame: Frame, inputs: CentroidInputs, k_sigma: float,
+         full_width: int) -> DetectionDetails:
+    """Centroid with the chosen method (falling back to the weighted sum where it fails), sort
+    brightest first, cut to ``max_stars``, and pack with the extra measurements."""
+    spots, noise = inputs.spots, inputs.noise
+    result = run_centroider(cfg.centroid, inputs, psf_sigma_px=cfg.psf_sigma_px,
+                            half=cfg.window_half_px, gain_e_per_adu=cfg.gain_e_per_adu)
+    ok = result.ok
+    x, y = np.where(ok, result.x, spots.x), np.where(ok, result.y, spots.y)
+    flux = np.where(ok & np.isfinite(result.flux), result.flux, spots.flux)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        peak_snr = spots.peak / noise
+    if cfg.uncertainty == "eq4.2":
+        sigma = sigma_eq42(peak_snr)
+    else:
+        sigma = np.where(ok, result.sigma_px, centroid_sigma(spots, noise, "propagated"))
+    order = np.argsort(-flux, kind="stable")[: cfg.max_stars]
+    shape = spot_shape(inputs.regions)
+    psf = np.where(np.isfinite(result.psf_sigma_px), result.psf_sigma_px, spots.size_px)
+    detections = Detections(
+        x=(x + frame.x_offset)[order], y=y[order], flux=flux[order], sigma_px=sigma[order],
+        area_px=spots.area_px.astype(np.int64)[order], peak=spots.peak[order],
+        elongation=spots.elongation[order], background=frame.model.level, noise=frame.noise_px,
+        width=full_width, height=frame.prepared.data.shape[0])
+    return DetectionDetails(
+        detections=detections, mag=instrument_magnitude(flux[order], cfg.mag_zero_point),
+        peak_snr=peak_snr[order], major_px=shape.major_px[order], minor_px=shape.minor_px[order],
+        angle_deg=shape.angle_deg[order], psf_sigma_px=psf[order], k_sigma=float(k_sigma),
+        centroid=cfg.centroid)
+
+
+def empty_details(frame: Frame, full_width: int, cfg: StarDetector,
+                  k_sigma: float | None = None) -> DetectionDetails:
+    """No detection: the frame's background and noise only."""
+    detections = Detections(background=frame.model.level, noise=frame.noise_px, width=full_width,
+                            height=frame.prepared.data.shape[0])
+    return DetectionDetails(detections=detections,
+                            k_sigma=float(cfg.sigma if k_sigma is None else k_sigma),
+                            centroid=cfg.centroid)
