@@ -20,7 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
 
+from ..errors import InvalidInputError
 from ._inputs import as_per_vector, as_vector_batch, degenerate_mask
 
 
@@ -67,3 +69,49 @@ def attitude_covariance(observed: ArrayLike, sigma_rad: ArrayLike) -> NDArray[np
     if np.any(ok):
         cov[ok] = covariance_batch(obs[ok], sigma[ok])
     return cov if batched else cov[0]
+
+
+def roll_cross_boresight(
+    covariance_rad2: ArrayLike, boresight: ArrayLike = (0.0, 0.0, 1.0)
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """1-sigma attitude uncertainty about the boresight (roll) and across it, radians.
+
+    Parameters
+    ----------
+    covariance_rad2 : array_like, shape (..., 3, 3)
+        Attitude covariance in the camera frame (rad^2), e.g. from :func:`attitude_covariance`.
+    boresight : array_like, shape (3,)
+        The roll axis in the same frame; the camera's +z by default.
+
+    Returns
+    -------
+    sigma_roll_rad, sigma_cross_rad : ndarray, shape (...)
+        ``sqrt(u^T P u)`` for the boresight u, and the rms of the two cross-boresight sigmas,
+        ``sqrt((tr P - u^T P u) / 2)``. Seed 000 §7.2 (notes §1.30): for a narrow field the roll
+        sigma is about ``f / d`` times the cross-boresight one (d the star spread in pixels).
+    """
+    cov = np.asarray(covariance_rad2, dtype=float)
+    axis = np.asarray(boresight, dtype=float)
+    if cov.shape[-2:] != (3, 3) or axis.shape != (3,) or not np.linalg.norm(axis) > 0:
+        raise InvalidInputError(
+            f"covariance_rad2 must have shape (..., 3, 3) and boresight be a non-zero 3-vector, "
+            f"got {cov.shape} and {axis.shape}"
+        )
+    axis = axis / np.linalg.norm(axis)
+    var_roll = np.einsum("i,...ij,j->...", axis, cov, axis)
+    var_cross = 0.5 * (np.trace(cov, axis1=-2, axis2=-1) - var_roll)
+    return np.sqrt(var_roll), np.sqrt(var_cross)
+
+
+def roll_cross_boresight_error(
+    truth: Rotation, estimate: Rotation
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Actual attitude error split into roll and cross-boresight parts, radians.
+
+    The error rotation ``truth * estimate.inv()`` acts on camera vectors; its rotation vector's
+    z component is the roll error and the length of its (x, y) part the pointing error (the
+    angle between the true and estimated boresights, to first order). Seed 003 §7.III.B (notes
+    §1.9, "pointing and boresight-roll components", whose formula the seed does not give).
+    """
+    error = (truth * estimate.inv()).as_rotvec()
+    return np.abs(error[..., 2]), np.hypot(error[..., 0], error[..., 1])

@@ -43,9 +43,9 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial.transform import Rotation
 
-from ._linalg import matvec, quat_product
+from ._linalg import matvec
+from ._refine import FLIP_DIAGONALS, flipped_profiles, refine, unflip
 from .wahba import WahbaResult, attitude_profile_matrix, davenport_parts, solve_with
 
 NEWTON_MAX_ITER = 60
@@ -55,13 +55,8 @@ NEWTON_TOL = 1e-15
 REFINE_PASSES = 2
 """QUEST passes on the residual problem after the first (see the module docstring)."""
 
-_FRAME_FLIPS = np.array([[1.0, 1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, -1.0, 1.0]])
-"""Diagonals of R_k: no turn, then 180 degrees about x, y and z."""
-
-_FRAME_QUATS = np.array(
-    [[0.0, 0.0, 0.0, 1.0], [1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]
-)
-"""Scalar-last quaternions of R_k, in the order of :data:`_FRAME_FLIPS`."""
+_FRAME_FLIPS = FLIP_DIAGONALS
+"""Diagonals of R_k: no turn, then 180 degrees about x, y and z (:mod:`._refine`)."""
 
 
 def _polynomial(sigma, s, z, kappa, delta):
@@ -99,10 +94,13 @@ def largest_eigenvalue(
     return lam
 
 
-def _frame_invariants(profile):
-    """sigma (M, 4), S (M, 4, 3, 3), z (M, 4, 3), kappa and Delta (M, 4) in the four frames."""
-    turned = profile[:, None, :, :] * _FRAME_FLIPS[None, :, None, :]  # B R_k
-    sigma, s, z = davenport_parts(turned)
+def frame_invariants(profile):
+    """sigma (M, 4), S (M, 4, 3, 3), z (M, 4, 3), kappa and Delta (M, 4) in the four frames.
+
+    Frame 0 is the original one, frames 1-3 have the references turned by 180 degrees about x,
+    y and z (``B -> B R_k``). Shared with ESOQ2, which picks its frame from the same numbers.
+    """
+    sigma, s, z = davenport_parts(flipped_profiles(profile))  # B R_k
     s00, s11, s22 = s[..., 0, 0], s[..., 1, 1], s[..., 2, 2]
     s01, s02, s12 = s[..., 0, 1], s[..., 0, 2], s[..., 1, 2]
     kappa = s00 * s11 - s01**2 + s00 * s22 - s02**2 + s11 * s22 - s12**2  # tr adj S
@@ -118,7 +116,7 @@ def quest_step(profile: NDArray[np.float64]) -> NDArray[np.float64]:
     B must be built with weights summing to one. Handles 180-degree rotations by the sequential
     rotation method (module docstring).
     """
-    sigma, s, z, kappa, delta = _frame_invariants(profile)
+    sigma, s, z, kappa, delta = frame_invariants(profile)
     lam = largest_eigenvalue(sigma[:, 0], s[:, 0], z[:, 0], kappa[:, 0], delta[:, 0])[:, None]
     alpha = lam**2 - sigma**2 + kappa
     gamma = (lam + sigma) * alpha - delta
@@ -130,7 +128,7 @@ def quest_step(profile: NDArray[np.float64]) -> NDArray[np.float64]:
     x = alpha_b[:, None] * z_b + beta_b[:, None] * sz + matvec(s_b, sz)
     turned = np.concatenate([x, gamma[rows, best][:, None]], axis=1)
     turned /= np.linalg.norm(turned, axis=1, keepdims=True)
-    return quat_product(turned, _FRAME_QUATS[best])  # R = R' R_k
+    return unflip(turned, best)  # R = R' R_k
 
 
 def quest_quaternions(
@@ -142,12 +140,7 @@ def quest_quaternions(
     :mod:`.wahba`). One QUEST solve plus :data:`REFINE_PASSES` passes on the residual problem.
     """
     profile = attitude_profile_matrix(observed, reference, weights)
-    quat = quest_step(profile)
-    for _ in range(REFINE_PASSES):
-        matrix = Rotation.from_quat(quat).as_matrix()
-        residual = profile @ np.swapaxes(matrix, -1, -2)  # B R1^T
-        quat = quat_product(quest_step(residual), quat)
-    return quat
+    return refine(quest_step, profile, quest_step(profile), REFINE_PASSES)
 
 
 def quest(

@@ -17,11 +17,20 @@ eigenvector of K is directly the scipy quaternion of R (the tests check ``R.appl
 Every solver (one module each) provides a *core*: a function of batched, normalised inputs
 ``(observed (M, N, 3), reference (M, N, 3), weights (M, N) summing to 1)`` returning scalar-last
 quaternions (M, 4). :func:`solve_with` wraps a core with the input checks, the degeneracy test,
-the loss and the covariance, so every solver has the same signature and result.
+the loss and the covariance, so every solver has the same signature and result. A solver whose
+error statistics differ from the optimum's (TRIAD) or that has its own closed form (SVD, FOAM)
+also passes a *covariance core* ``(observed, reference, weights, sigma_rad) -> (M, 3, 3)``; the
+default is the QUEST covariance, which is that of every solver reaching the Wahba optimum.
+
+Why :class:`WahbaResult` and not :class:`startrack.results.AttitudeSolution`: a solver works on
+a batch of M problems at once and knows nothing of images, so its result holds stacked arrays
+(rotation, loss, covariance, status); ``AttitudeSolution`` is the per-image result (RA, Dec,
+roll, camera, matches, residuals) that the solve pipeline builds from one of these.
 """
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -36,14 +45,26 @@ from .covariance import covariance_batch
 
 Vectors = NDArray[np.float64]
 SolverCore = Callable[[Vectors, Vectors, NDArray[np.float64]], NDArray[np.float64]]
+CovarianceCore = Callable[[Vectors, Vectors, NDArray[np.float64], NDArray[np.float64]], NDArray[np.float64]]
 
 DEGENERATE_REASON = (
     "fewer than two non-parallel vectors with non-zero weight: the rotation about their common "
     "direction is undetermined"
 )
 
-METHODS: tuple[str, ...] = ("quest", "qmethod")
-"""Names accepted by :func:`solve_wahba`'s ``method``."""
+METHODS: tuple[str, ...] = ("quest", "qmethod", "svd", "foam", "esoq2", "olae", "pad", "triad")
+"""Names accepted by :func:`solve_wahba`'s ``method`` (one module each)."""
+
+_MODULES = {
+    "quest": ("quest", "quest"),
+    "qmethod": ("qmethod", "q_method"),
+    "svd": ("svd", "svd_method"),
+    "foam": ("foam", "foam"),
+    "esoq2": ("esoq2", "esoq2"),
+    "olae": ("olae", "olae"),
+    "pad": ("pad", "pad"),
+    "triad": ("triad", "triad"),
+}
 
 
 @dataclass(frozen=True)
@@ -185,6 +206,13 @@ def _solve_ok(core: SolverCore, obs, ref, w, ok) -> NDArray[np.float64]:
     return quat
 
 
+def quest_covariance_core(
+    observed: Vectors, reference: Vectors, weights: NDArray[np.float64], sigma_rad: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """The default covariance core: the QUEST covariance of the observed vectors (seed 000 eq. 6.36)."""
+    return covariance_batch(observed, sigma_rad)
+
+
 def solve_with(
     core: SolverCore,
     observed: ArrayLike,
@@ -192,11 +220,13 @@ def solve_with(
     weights: ArrayLike | None = None,
     *,
     sigma_rad: ArrayLike | None = None,
+    covariance: CovarianceCore = quest_covariance_core,
 ) -> WahbaResult:
     """Check the inputs, run a solver core on the solvable problems and assemble the result.
 
-    Arguments are those of :func:`solve_wahba` (without ``method``). Degenerate problems are not
-    passed to the core; they get status DEGENERATE.
+    Arguments are those of :func:`solve_wahba` (without ``method``); ``covariance`` computes the
+    covariance from the solvable problems (batched unit vectors, normalised weights and sigmas).
+    Degenerate problems are not passed to the cores; they get status DEGENERATE.
     """
     obs, ref, w, sigma, batched = _checked_inputs(observed, reference, weights, sigma_rad)
     ok = ~degenerate_mask(obs, ref, w)
@@ -205,7 +235,8 @@ def solve_with(
     cov = None
     if sigma is not None:
         cov = np.full(obs.shape[:1] + (3, 3), np.nan)
-        cov[ok] = covariance_batch(obs[ok], sigma[ok])
+        if np.any(ok):
+            cov[ok] = covariance(obs[ok], ref[ok], normalised_weights(w[ok]), sigma[ok])
     status = np.array([Status.OK if k else Status.DEGENERATE for k in ok], dtype=object)
     reason = np.array(["" if k else DEGENERATE_REASON for k in ok], dtype=object)
     if batched:
@@ -235,12 +266,17 @@ def solve_wahba(
     weights : array_like, shape (N,) or (M, N), optional
         Non-negative weights; default ``1 / sigma_rad^2`` when ``sigma_rad`` is given, else 1.
         Only their ratios matter for the rotation.
-    method : {"quest", "qmethod"}
-        Shuster's QUEST (:mod:`.quest`) or Davenport's q-method (:mod:`.qmethod`).
+    method : {"quest", "qmethod", "svd", "foam", "esoq2", "olae", "pad", "triad"}
+        Shuster's QUEST with sequential rotations (:mod:`.quest`), Davenport's q-method
+        (:mod:`.qmethod`), Markley's SVD (:mod:`.svd`), FOAM (:mod:`.foam`), Mortari's ESOQ2
+        (:mod:`.esoq2`), OLAE (:mod:`.olae`), Crassidis-Markley predictive attitude
+        determination (:mod:`.pad`) or TRIAD (:mod:`.triad`, two vectors of the set; not the
+        optimum for more). All but TRIAD return the Wahba optimum.
     sigma_rad : float or array_like, shape (N,) or (M, N), optional
         1-sigma angular error of each observed vector (radians, per axis perpendicular to the
-        vector). When given, the result carries the QUEST covariance (camera frame, rad^2),
-        which assumes weights proportional to ``1 / sigma_rad^2``.
+        vector). When given, the result carries the solver's covariance (camera frame, rad^2):
+        the QUEST measurement model, which assumes weights proportional to ``1 / sigma_rad^2``
+        (its SVD and FOAM closed forms for those methods, Shuster and Oh's for TRIAD).
 
     Returns
     -------
@@ -260,10 +296,8 @@ def solve_wahba(
 
 def _solver(method: str) -> Callable[..., WahbaResult]:
     """The public solver function named ``method``."""
-    from .qmethod import q_method  # deferred: the solver modules import this one
-    from .quest import quest
-
-    solvers = {"quest": quest, "qmethod": q_method}
-    if method not in solvers:
+    if not isinstance(method, str) or method not in _MODULES:
         raise InvalidInputError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    return solvers[method]
+    module_name, function = _MODULES[method]
+    module = importlib.import_module(f"{__package__}.{module_name}")  # deferred: they import us
+    return getattr(module, function)

@@ -1,0 +1,24 @@
+"""Angular rate: from attitudes, from matched vectors, filtered, and from streaked images.
+
+Convention: ``omega_rad_s`` is the camera's angular velocity relative to ICRS in camera-frame
+components (``rot_cam_from_icrs(t + dt) = exp(-[omega x] dt) rot_cam_from_icrs(t)``); see
+:mod:`.estimate`. Modules: :mod:`.from_attitudes` (seed 004 eq. 3), :mod:`.from_vectors`
+(frame-to-frame, no catalog), :mod:`.filter` (a constant-rate Kalman filter), and the streak
+chain of seed 001 chapters 3-4.
+"""
+
+from .estimate import RateEstimate, axis_error_rad
+from .filter import FilterState, RateFilter
+from .from_attitudes import rate_between, rate_from_attitudes
+from .from_vectors import match_frames, rate_from_vectors
+
+__all__ = [
+    "FilterState",
+    "RateEstimate",
+    "RateFilter",
+    "axis_error_rad",
+    "match_frames",
+    "rate_between",
+    "rate_from_attitudes",
+    "rate_from_vectors",
+]

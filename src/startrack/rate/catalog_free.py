@@ -1,0 +1,132 @@
+"""Catalog-free rate from one streaked image: OLAE between the two endpoint sets.
+
+Seed 001 ch. 4 "Catalog-Free Rate Estimation", eqs. 4.1-4.10 (notes seed-001-004 §1.21). The
+group-A end of each streak (camera vector r_i) and its group-B end (b_i) are the same star at
+the two ends of the exposure, so the relative attitude ``Delta = rot_cam_B_from_cam_A`` solves
+Wahba's problem between the two sets with no catalog and no identification. OLAE
+(:mod:`startrack.attitude.olae`) solves it linearly and gives a residual ``e_i`` per streak
+(eq. 4.7); streaks whose residual is an outlier (an RSO, an overlapping pair, a bad end) are
+dropped and the rate solved again. The rate is ``omega = -rotvec(Delta) / T`` (camera frame,
+rad/s, eqs. 4.9-4.10 with the frame change of notes §7 item 12).
+
+Outlier rule: seed 001 flags ``|e_i - mean| > k sigma`` with k = 2.5 and warns that a lower
+bound on sigma is needed when all streaks agree closely. Here the centre and spread are the
+median and the MAD-based sigma (one outlier does not inflate them), and sigma is at least
+``floor_rad``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..attitude.olae import olae_gibbs, olae_residuals
+from ..errors import InvalidInputError
+from ..results import Status
+from .estimate import RateEstimate, failed
+
+METHOD = "catalog-free OLAE"
+K_SIGMA = 2.5
+
+
+def robust_z(values: NDArray[np.float64], floor: float) -> NDArray[np.float64]:
+    """``(x - median) / max(1.4826 MAD, floor)`` of a set of indicator values (NaN-aware)."""
+    centre = np.nanmedian(values)
+    spread = max(1.4826 * float(np.nanmedian(np.abs(values - centre))), floor)
+    return (values - centre) / spread
+
+
+@dataclass(frozen=True)
+class CatalogFreeRate:
+    """The catalog-free rate of one image, and the residual of every streak.
+
+    ``residuals`` (N,) are OLAE's ``e_i`` for the final solution (unitless, ~ twice the angle
+    mismatch in radians); ``estimate.used`` marks the streaks kept.
+    """
+
+    estimate: RateEstimate
+    residuals: NDArray[np.float64]
+    gibbs: NDArray[np.float64]
+
+
+def catalog_free_rate(
+    vectors_a: ArrayLike,
+    vectors_b: ArrayLike,
+    exposure_s: float,
+    *,
+    k_sigma: float = K_SIGMA,
+    floor_rad: float = 1e-5,
+    max_rounds: int = 5,
+    min_streaks: int = 3,
+) -> CatalogFreeRate:
+    """Rate between the group-A and group-B ends (N, 3) of N streaks, rejecting outliers.
+
+    Parameters
+    ----------
+    vectors_a, vectors_b : array_like, shape (N, 3)
+        Camera-frame unit vectors of each streak's two ends (row i is one streak).
+    exposure_s : float
+        Time between the two ends (the exposure), seconds.
+    k_sigma : float
+        Outlier threshold in robust sigmas (seed: 2.5).
+    floor_rad : float
+        Lower bound on the residual spread (the seed's variance floor); about twice the
+        endpoint precision in radians (2 x 0.1 px x the pixel angle).
+    max_rounds, min_streaks : int
+        Rejection rounds; fewest streaks to keep.
+
+    Returns
+    -------
+    CatalogFreeRate
+        The rate is for the A -> B order; TOO_FEW_STARS status with fewer than 2 streaks.
+    """
+    a, b = np.asarray(vectors_a, dtype=float), np.asarray(vectors_b, dtype=float)
+    if a.shape != b.shape or a.ndim != 2 or a.shape[1:] != (3,):
+        raise InvalidInputError(f"vectors_a and vectors_b must both have shape (N, 3), got {a.shape}, {b.shape}")
+    if not (np.isfinite(exposure_s) and exposure_s > 0):
+        raise InvalidInputError(f"exposure_s must be positive seconds, got {exposure_s!r}")
+    a = a / np.linalg.norm(a, axis=1, keepdims=True)
+    b = b / np.linalg.norm(b, axis=1, keepdims=True)
+    if len(a) < 2:
+        return CatalogFreeRate(failed(Status.TOO_FEW_STARS, "fewer than two streaks", METHOD),
+                               np.full(len(a), np.nan), np.full(3, np.nan))
+    used = np.ones(len(a), dtype=bool)
+    for _ in range(max_rounds):
+        gibbs = olae_gibbs(b[used], a[used], np.full(used.sum(), 1.0 / used.sum()))
+        residuals = olae_residuals(b, a, gibbs)
+        keep = np.abs(robust_z(residuals, floor_rad)) <= k_sigma
+        if keep.sum() < min(min_streaks, len(a)) or np.array_equal(keep, used):
+            break
+        used = keep
+    return CatalogFreeRate(_estimate(gibbs, exposure_s, used), residuals, gibbs)
+
+
+def _estimate(gibbs: NDArray[np.float64], exposure_s: float, used: NDArray[np.bool_]) -> RateEstimate:
+    """Rate from the Gibbs vector of ``Delta``: angle 2 atan|g| about g, omega = -angle axis / T."""
+    norm = np.linalg.norm(gibbs)
+    rotvec = gibbs * (2.0 * np.arctan(norm) / norm) if norm > 0 else np.zeros(3)
+    return RateEstimate(Status.OK, omega_rad_s=-rotvec / exposure_s, method=METHOD, used=used)
+
+
+def regroup(vectors_a: ArrayLike, vectors_b: ArrayLike, *, rounds: int = 2) -> NDArray[np.bool_]:
+    """Which streaks (N,) to swap so that every streak's ends agree with the common rotation.
+
+    The centre-of-rotation sign rule (:mod:`.grouping`) can put the ends of a few streaks in the
+    wrong groups when the centre is poorly determined (streaks nearly parallel, or the curved
+    trails of a wide field). Given a grouping that is right for most streaks, a robust OLAE fit
+    gives the common rotation, and a streak whose swapped ends fit it better is swapped.
+    """
+    a, b = np.asarray(vectors_a, dtype=float), np.asarray(vectors_b, dtype=float)
+    swap = np.zeros(len(a), dtype=bool)
+    for _ in range(rounds):
+        aa, bb = np.where(swap[:, None], b, a), np.where(swap[:, None], a, b)
+        fit = catalog_free_rate(aa, bb, 1.0, floor_rad=1e-9)
+        if not fit.estimate.ok:
+            break
+        worse = olae_residuals(aa, bb, fit.gibbs) < fit.residuals  # swapped ends fit better
+        if not np.any(worse):
+            break
+        swap ^= worse
+    return swap

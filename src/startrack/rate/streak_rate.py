@@ -1,0 +1,288 @@
+"""The streaked-image chain of seed 001: streaks -> endpoints -> groups -> rate (and attitudes).
+
+Seed 001 §3-4 (notes seed-001-004 §1.23). :func:`measure_streaks` finds the streaks
+(:mod:`.streak_detect`), locates both ends of each (:mod:`.endpoints`) and groups them into the
+two exposure times (:mod:`.grouping`). Then either
+
+- :func:`streak_rate` (seed 001 ch. 4, no catalog): OLAE between the groups with outlier
+  rejection (:mod:`.catalog_free`) and the three RSO indicators (:mod:`.rso`); or
+- :func:`streak_attitudes` (seed 001 ch. 3): identify the group-A ends lost-in-space against the
+  catalog, reuse the same identities for the group-B ends (they are the same stars), solve the
+  attitude at both ends (ESOQ2, as the seed) and take the rate between them
+  (:mod:`.from_attitudes`).
+
+Time order: one image tells which ends are simultaneous, not which set came first. With a prior
+rate (a gyro, the previous frame, the commanded slew) the order whose rate agrees with it is
+chosen (``time_order_known``); without one, group A is taken as the start.
+
+:func:`choose_mode` is the automatic switch between point-star and streak processing: streaks
+shorter than about 10 % of the field of view approach the point-star regime where the corner
+detectors fail (seed 001 p.37-38), so the point-star solver is used there.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
+
+from ..attitude import solve_wahba
+from ..camera import Camera
+from ..errors import InvalidInputError
+from ..results import AttitudeSolution, Status
+from .catalog_free import catalog_free_rate, regroup
+from .endpoints import locate_endpoints
+from .estimate import RateEstimate, failed
+from .from_attitudes import rate_between
+from .grouping import CentreOfRotation, centre_of_rotation, group_endpoints
+from .rso import RsoIndicators, rso_indicators
+from .streak_detect import StreakRegion, find_streaks
+
+MIN_STREAK_FRACTION = 0.10
+"""Streaks shorter than this fraction of the image width are processed as point stars."""
+
+
+@dataclass(frozen=True)
+class StreakMeasurement:
+    """Streaks with two clean ends, grouped by exposure time.
+
+    ``ends_a`` and ``ends_b`` (N, 2) are the pixel ends of the N kept streaks (``regions``);
+    ``rejected`` counts the regions without two clean ends.
+    """
+
+    status: Status
+    reason: str
+    regions: list[StreakRegion]
+    ends_a: NDArray[np.float64]
+    ends_b: NDArray[np.float64]
+    cor: CentreOfRotation | None
+    rejected: int
+
+
+def measure_streaks(
+    image: ArrayLike,
+    camera: Camera | None = None,
+    *,
+    detector: str = "harris",
+    bias_px: float = 0.0,
+    min_length_px: float = 6.0,
+    find_options: dict | None = None,
+    endpoint_options: dict | None = None,
+) -> StreakMeasurement:
+    """Find the streaks of an image, locate and group their ends (module docstring).
+
+    ``find_options`` go to :func:`.streak_detect.find_streaks`, ``endpoint_options`` to
+    :func:`.endpoints.locate_endpoints` (with ``detector`` and ``bias_px``). With a ``camera``,
+    the centre-of-rotation grouping is checked against the common rotation and streaks whose
+    ends fit it better the other way round are swapped (:func:`.catalog_free.regroup`). Fewer
+    than two streaks give status TOO_FEW_STARS.
+    """
+    img = np.asarray(image, dtype=float)
+    found = find_streaks(img, **(find_options or {}))
+    kept, ends = [], []
+    for region in found.regions:
+        if region.length_moments_px < min_length_px:
+            continue
+        roi = img[region.rows, region.cols] - found.background
+        result = locate_endpoints(roi, region.origin_xy, detector, bias_px=bias_px, **(endpoint_options or {}))
+        if result.ok:
+            kept.append(region)
+            ends.append(result.xy)
+    rejected = len(found.regions) - len(kept)
+    if len(kept) < 2:
+        empty = np.zeros((0, 2))
+        return StreakMeasurement(Status.TOO_FEW_STARS, f"{len(kept)} streaks with two clean ends (2 needed)",
+                                 kept, empty, empty, None, rejected)
+    ends = np.array(ends)
+    # A centre farther than ~2 focal lengths (spin axis > 63 deg from the boresight) is too
+    # poorly fixed by nearly parallel bisectors: use the parallel forms (seed 001's trigger).
+    far = 1e5 if camera is None else 2.0 * camera.fx
+    cor = centre_of_rotation(ends[:, 0], ends[:, 1], max_distance_px=far)
+    if camera is None or len(kept) < 3:
+        group_a, group_b, _ = group_endpoints(ends[:, 0], ends[:, 1], cor)
+    else:
+        group_a, group_b = _checked_groups(ends, cor, camera)
+    return StreakMeasurement(Status.OK, "", kept, group_a, group_b, cor, rejected)
+
+
+def _checked_groups(ends: NDArray, cor: CentreOfRotation, camera: Camera) -> tuple[NDArray, NDArray]:
+    """The grouping (by the centre, or by the dominant direction) that best fits one rotation.
+
+    Each candidate is corrected streak by streak (:func:`.catalog_free.regroup`); the one with
+    the smaller median OLAE residual wins.
+    """
+    best, best_cost = None, np.inf
+    for as_parallel in (False, True):
+        if cor.parallel and not as_parallel:
+            continue
+        group_a, group_b, _ = group_endpoints(ends[:, 0], ends[:, 1], cor, as_parallel=as_parallel)
+        va = camera.pixel_to_vector(group_a[:, 0], group_a[:, 1])
+        vb = camera.pixel_to_vector(group_b[:, 0], group_b[:, 1])
+        swap = regroup(va, vb)
+        va, vb = np.where(swap[:, None], vb, va), np.where(swap[:, None], va, vb)
+        cost = float(np.median(catalog_free_rate(va, vb, 1.0, floor_rad=1e-9).residuals))
+        if cost < best_cost:
+            group_a, group_b = np.where(swap[:, None], group_b, group_a), np.where(swap[:, None], group_a, group_b)
+            best, best_cost = (group_a, group_b), cost
+    return best
+
+
+@dataclass(frozen=True)
+class StreakRate:
+    """Catalog-free rate of a streaked image (seed 001 ch. 4), with the RSO indicators.
+
+    ``rate`` is ``omega`` from the start set to the end set (camera frame, rad/s; ``rate.used``
+    marks the streaks kept); ``vectors_start`` / ``vectors_end`` (N, 3) are the camera vectors of
+    the ends in that order; ``residuals`` the OLAE residual per streak; ``rso`` the indicators.
+    """
+
+    rate: RateEstimate
+    measurement: StreakMeasurement
+    vectors_start: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
+    vectors_end: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
+    residuals: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    rso: RsoIndicators | None = None
+    time_order_known: bool = False
+
+
+def _ordered(omega: NDArray, prior: ArrayLike | None) -> tuple[bool, bool]:
+    """(swap the groups?, order known?) from the A -> B rate and an optional prior rate."""
+    if prior is None:
+        return False, False
+    return bool(np.dot(omega, np.asarray(prior, dtype=float)) < 0), True
+
+
+def _swapped(estimate: RateEstimate) -> RateEstimate:
+    return RateEstimate(estimate.status, estimate.reason, -estimate.omega_rad_s, estimate.covariance_rad2_s2,
+                        estimate.method, estimate.used)
+
+
+def streak_rate(
+    image: ArrayLike,
+    camera: Camera,
+    exposure_s: float,
+    *,
+    detector: str = "harris",
+    bias_px: float = 0.0,
+    prior_omega_rad_s: ArrayLike | None = None,
+    k_sigma: float = 2.5,
+    endpoint_sigma_px: float = 0.3,
+    measurement: StreakMeasurement | None = None,
+) -> StreakRate:
+    """Catalog-free rate and RSO candidates of one streaked image (module docstring).
+
+    Parameters
+    ----------
+    image : array_like, shape (H, W)
+        The streaked image (counts).
+    camera : Camera
+        The calibrated camera (pixel -> vector).
+    exposure_s : float
+        Exposure time, seconds (the time between the two ends of every streak).
+    detector, bias_px : str, float
+        Endpoint detector and its calibrated bias (:mod:`.endpoints`).
+    prior_omega_rad_s : array_like, shape (3,), optional
+        A rough rate of the right sign, to order the two ends in time.
+    k_sigma, endpoint_sigma_px : float
+        Outlier threshold and the endpoint precision that sets the indicators' floors.
+    measurement : StreakMeasurement, optional
+        Reuse an earlier :func:`measure_streaks` of this image.
+    """
+    meas = measurement or measure_streaks(image, camera, detector=detector, bias_px=bias_px)
+    if meas.status is not Status.OK:
+        return StreakRate(failed(meas.status, meas.reason, "catalog-free OLAE"), meas)
+    va = camera.pixel_to_vector(meas.ends_a[:, 0], meas.ends_a[:, 1])
+    vb = camera.pixel_to_vector(meas.ends_b[:, 0], meas.ends_b[:, 1])
+    pixel_angle = 1.0 / camera.fx
+    floor = 2 * np.sqrt(2) * endpoint_sigma_px * pixel_angle
+    fit = catalog_free_rate(va, vb, exposure_s, k_sigma=k_sigma, floor_rad=floor)
+    rso = rso_indicators(meas.ends_a, meas.ends_b, meas.cor, fit.residuals, pixel_angle, k_sigma=k_sigma,
+                         endpoint_sigma_px=endpoint_sigma_px)
+    swap, known = _ordered(fit.estimate.omega_rad_s, prior_omega_rad_s)
+    if swap:
+        return StreakRate(_swapped(fit.estimate), meas, vb, va, fit.residuals, rso, known)
+    return StreakRate(fit.estimate, meas, va, vb, fit.residuals, rso, known)
+
+
+@dataclass(frozen=True)
+class StreakAttitudes:
+    """Attitudes at the two ends of the exposure and the rate between (seed 001 ch. 3)."""
+
+    status: Status
+    reason: str
+    rot_start: Rotation | None
+    rot_end: Rotation | None
+    rate: RateEstimate
+    solution: AttitudeSolution | None
+    time_order_known: bool
+
+
+def attitudes_from_matches(
+    vectors_a: ArrayLike, vectors_b: ArrayLike, catalog_icrs: ArrayLike, *, method: str = "esoq2"
+) -> tuple[Rotation, Rotation]:
+    """Attitudes (rot_cam_from_icrs) of both ends from the same identified stars (N, 3) each."""
+    rot_a = solve_wahba(vectors_a, catalog_icrs, method=method)
+    rot_b = solve_wahba(vectors_b, catalog_icrs, method=method)
+    if not (rot_a.ok and rot_b.ok):
+        raise InvalidInputError("need at least two non-parallel identified streaks")
+    return rot_a.rotation, rot_b.rotation
+
+
+def streak_attitudes(
+    measurement: StreakMeasurement,
+    camera: Camera,
+    exposure_s: float,
+    *,
+    prior_omega_rad_s: ArrayLike | None = None,
+    epoch=None,
+) -> StreakAttitudes:
+    """Identify the group-A ends lost-in-space and solve the attitude at both ends.
+
+    Uses :func:`startrack.solve_stars` with the camera on the group-A ends (brightest streaks
+    first), then the matched catalog stars for both groups (:func:`attitudes_from_matches`).
+    """
+    from ..solve import solve_stars  # deferred: the solve pipeline imports much more
+
+    if measurement.status is not Status.OK:
+        return StreakAttitudes(measurement.status, measurement.reason, None, None,
+                               failed(measurement.status, measurement.reason, "attitudes"), None, False)
+    ends_a, ends_b = measurement.ends_a, measurement.ends_b
+    solution = solve_stars(ends_a[:, 0], ends_a[:, 1], camera=camera, epoch=epoch)
+    if not solution.solved or len(solution.matches) < 2:
+        return StreakAttitudes(solution.status, solution.reason, None, None,
+                               failed(solution.status, solution.reason, "attitudes"), solution, False)
+    index = solution.matches.det_index
+    va = camera.pixel_to_vector(ends_a[index, 0], ends_a[index, 1])
+    vb = camera.pixel_to_vector(ends_b[index, 0], ends_b[index, 1])
+    rot_a, rot_b = attitudes_from_matches(va, vb, solution.matches.cat_vectors)
+    omega = rate_between(rot_a, rot_b, exposure_s)
+    swap, known = _ordered(omega, prior_omega_rad_s)
+    if swap:
+        rot_a, rot_b, omega = rot_b, rot_a, -omega
+    rate = RateEstimate(Status.OK, omega_rad_s=omega, method="attitudes at both streak ends")
+    return StreakAttitudes(Status.OK, "", rot_a, rot_b, rate, solution, known)
+
+
+@dataclass(frozen=True)
+class ModeDecision:
+    """``mode`` "streak" or "point", the median streak length as a fraction of the width, why."""
+
+    mode: str
+    length_fraction: float
+    reason: str
+
+
+def choose_mode(image: ArrayLike, *, min_streak_fraction: float = MIN_STREAK_FRACTION,
+                brightest: int = 20) -> ModeDecision:
+    """Point-star or streak processing for an image, from the median length of its brightest blobs."""
+    img = np.asarray(image, dtype=float)
+    regions = find_streaks(img).regions[:brightest]
+    if not regions:
+        return ModeDecision("point", 0.0, "no stars found")
+    fraction = float(np.median([r.length_moments_px for r in regions])) / img.shape[1]
+    if fraction >= min_streak_fraction:
+        return ModeDecision("streak", fraction, f"median streak {100 * fraction:.1f} % of the width")
+    return ModeDecision("point", fraction,
+                        f"median streak {100 * fraction:.1f} % of the width, below {100 * min_streak_fraction:.0f} %")
