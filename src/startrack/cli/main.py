@@ -18,8 +18,11 @@ from ..errors import StartrackError
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "solve": ("startrack.cli.solve_cmd", "solve an image lost-in-space (FITS, PNG, JPEG, TIFF)"),
     "solve-stars": ("startrack.cli.solve_stars_cmd", "solve a CSV star list (x, y in 0-based pixels)"),
+    "detect": ("startrack.cli.detect_cmd", "detect and centroid the stars of an image"),
     "simulate": ("startrack.cli.simulate_cmd", "simulate a star image with its truth"),
     "track": ("startrack.cli.track_cmd", "follow the attitude over a sequence of images, write a CSV"),
+    "rate": ("startrack.cli.rate_cmd", "angular rate from a streaked image or an image pair (no catalog)"),
+    "calibrate": ("startrack.cli.calibrate_cmd", "calibrate a camera from star or checkerboard images"),
     "availability": ("startrack.cli.availability_cmd", "stars in the field over random pointings (histogram)"),
     "demo": ("startrack.cli.demo_cmd", "simulate a random sky image, solve it, compare with the truth"),
 }
