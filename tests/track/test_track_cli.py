@@ -6,11 +6,11 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from startrack import Camera
+from startrack.attitude.propagation import propagate as propagate_attitude
 from startrack.cli.main import main
 from startrack.frames import attitude_error, random_rotations
 from startrack.io import write_png
 from startrack.simulate import get_sensor_preset, simulate_frame
-from startrack.track import propagate_attitude
 from startrack.units import ARCSEC, DEG
 
 CAMERA = Camera.from_fov(512, 512, 12.0)

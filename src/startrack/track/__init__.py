@@ -4,7 +4,6 @@ lost-in-space when tracking fails). DESIGN.md §1; seed 004 §2.2, seed 002 §4,
 
 from __future__ import annotations
 
-from .predict import propagate_attitude, rate_from_attitudes
 from .relative import RelativeMatch, rate_match, triangle_match
 from .tracker import Tracker, TrackerOptions, TrackStep
 from .windows import WindowMatch, match_in_windows
@@ -16,8 +15,6 @@ __all__ = [
     "TrackerOptions",
     "WindowMatch",
     "match_in_windows",
-    "propagate_attitude",
-    "rate_from_attitudes",
     "rate_match",
     "triangle_match",
 ]

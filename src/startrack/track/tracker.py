@@ -22,13 +22,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
+from ..attitude.propagation import propagate
 from ..camera import Camera
 from ..errors import InvalidInputError
 from ..frames import radec_roll_from_rotation
 from ..identify.field_stars import field_stars
+from ..rate.from_attitudes import rate_between
 from ..results import Status
 from ..solve import epoch_jyear, solve_stars
-from .predict import propagate_attitude, rate_from_attitudes
 from .windows import match_in_windows
 
 LOST_IN_SPACE = "lost-in-space"
@@ -160,7 +161,7 @@ class Tracker:
     def _track(self, x: NDArray, y: NDArray, t_s: float) -> TrackStep | None:
         opt = self.options
         dt = t_s - self._t
-        predicted = propagate_attitude(self._rot, self._rate if self._rate is not None else np.zeros(3), dt)
+        predicted = propagate(self._rot, self._rate if self._rate is not None else np.zeros(3), dt)
         stars = field_stars(opt.catalog_max_mag, epoch_jyear(self._epoch))
         found = match_in_windows(x, y, self._camera, predicted, stars, window_px=self._window_px(dt),
                                  match_px=opt.match_px, min_stars=opt.min_stars)
@@ -186,7 +187,7 @@ class Tracker:
     def _advance(self, rot: Rotation, t_s: float) -> None:
         """Take a new attitude; update the smoothed rate from the previous one (if any)."""
         if self._rot is not None and self._t is not None and t_s > self._t:
-            measured = rate_from_attitudes(self._rot, rot, t_s - self._t)
+            measured = rate_between(self._rot, rot, t_s - self._t)
             gain = self.options.rate_gain
             self._rate = measured if self._rate is None else (1 - gain) * self._rate + gain * measured
         self._rot, self._t = rot, t_s
