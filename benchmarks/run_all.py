@@ -4,9 +4,21 @@
 2. ``image_path_benchmark.py``: read + detect + solve of 1024 x 1024 PNG frames;
 3. ``database_report.py``: the pattern database's build time, size and memory (5-35 deg),
    beside cedar-solve's shipped one;
-4. ``tracking_benchmark.py``: the Tracker over 1000-frame tumbles, step cost vs lost-in-space.
+4. ``tracking_benchmark.py``: the Tracker over 1000-frame tumbles, step cost vs lost-in-space;
+5. ``detect_accuracy.py``: every centroider against the Cramér-Rao bound, pixel-phase bias,
+   detection quality of every threshold method;
+6. ``detect_speed.py``: detection time and accuracy beside SEP and photutils, the predictive
+   pass;
+7. ``detect_seed000.py``: seed 000's Table 4.2 (WS vs MLE) and Table 7.2 (pre-filter time);
+8. ``detect_realdata.py``: detections on the real images against astrometry.net;
+9. ``attitude_benchmark.py``: every Wahba solver batched and one by one, beside scipy and ahrs
+   (``benchmarks/.venv-ahrs``, created on first use);
+10. ``streak_benchmark.py``: seed 001 Tables 3.1, 4.1, 4.2, 4.4 and seed 004 Table 2;
+11. ``simulate_benchmark.py``: simulator speed beside a plain per-pixel loop, seed 004 Table 1,
+    seed 000 Tables 5.1 and 5.3.
 
-The cedar-solve environment (``benchmarks/.venv-cedar``) is created first if needed. A benchmark
+The cedar-solve environment (``benchmarks/.venv-cedar``) and the SEP / photutils one
+(``benchmarks/.venv-detectpeers``) are created first if needed. A benchmark
 that fails is reported and the others still run; the exit status is 1 if any failed.
 Arguments after ``--`` go to ``lis_benchmark.py`` (e.g. ``-- --trials 1000``).
 """
@@ -20,11 +32,20 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import attitude_benchmark  # noqa: E402
+import calibration_benchmark  # noqa: E402
 import database_report  # noqa: E402
+import detect_accuracy  # noqa: E402
+import detect_realdata  # noqa: E402
+import detect_seed000  # noqa: E402
+import detect_speed  # noqa: E402
 import image_path_benchmark  # noqa: E402
 import lis_benchmark  # noqa: E402
+import simulate_benchmark  # noqa: E402
+import streak_benchmark  # noqa: E402
 import tracking_benchmark  # noqa: E402
 from peers.cedar_env import ensure_cedar_env  # noqa: E402
+from peers.detect_env import ensure_detect_env  # noqa: E402
 
 
 def _run(name: str, func, argv: list[str]) -> bool:
@@ -43,11 +64,20 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     lis_args = argv[argv.index("--") + 1:] if "--" in argv else argv
     ensure_cedar_env()
+    ensure_detect_env()
     ok = [
         _run("lis_benchmark", lis_benchmark.main, lis_args),
         _run("image_path_benchmark", image_path_benchmark.main, []),
         _run("database_report", database_report.main, []),
         _run("tracking_benchmark", tracking_benchmark.main, []),
+        _run("calibration_benchmark", calibration_benchmark.main, []),
+        _run("detect_accuracy", detect_accuracy.main, []),
+        _run("detect_speed", detect_speed.main, []),
+        _run("detect_seed000", detect_seed000.main, []),
+        _run("detect_realdata", detect_realdata.main, []),
+        _run("attitude_benchmark", attitude_benchmark.main, []),
+        _run("streak_benchmark", streak_benchmark.main, []),
+        _run("simulate_benchmark", simulate_benchmark.main, []),
     ]
     return 0 if all(ok) else 1
 

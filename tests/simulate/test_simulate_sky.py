@@ -105,3 +105,12 @@ def test_a_synthetic_sky_model_renders_its_own_stars(camera, vectors_at):
     np.testing.assert_allclose(sim.truth.x, [640.0, 100.0], atol=1e-9)
     assert sim.truth.epoch_jyear == 2030.0
     assert mags.flags.writeable and not sky.mags.flags.writeable  # a read-only copy
+
+
+def test_false_stars_join_the_sky_with_negative_ids(camera):
+    sky = SkyModel.from_catalog(max_mag=4.0).with_false_stars(4000, rng=1, mag_range=(3.0, 3.5))
+    assert np.sum(sky.ids < 0) == 4000 and np.all(sky.mags[sky.ids < 0] <= 3.5)
+    sim = simulate_frame(camera, random_attitude(2), max_mag=4.0, sky=sky, noise=False)
+    false = sim.truth.ids < 0
+    assert 0 < false.sum() < 4000  # about 4000 x the field's share of the sky (~2 %)
+    assert np.all(sim.truth.mag[false] >= 3.0)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 
 import numpy as np
@@ -10,8 +11,8 @@ from scipy.spatial.transform import Rotation
 
 from ..camera import Camera, get_preset
 from ..errors import InvalidInputError
-from ..frames import random_rotations, rotation_from_radec_roll
-from ..simulate import Sensor, get_sensor_preset, simulate_frame
+from ..frames import boresight, random_rotations, rotation_from_radec_roll
+from ..simulate import PASSBANDS, FrameTiming, NoiseModel, Sensor, SkyBackground, get_sensor_preset, simulate_frame
 from ..solve import DEFAULT_EPOCH_JYEAR
 from .common import epoch_option
 
@@ -100,6 +101,10 @@ def scene_seed(args: argparse.Namespace) -> int:
 def simulate_scene(args: argparse.Namespace):
     """Check the scene options and render the frame.
 
+    The options of :func:`add_render_options` (rate, noise switches, detector effects, sky
+    background, optics) are used when the parser has them; ``startrack demo`` has only the
+    scene options and renders a still frame with all noise on (or none with --no-noise).
+
     Returns
     -------
     seed : int
@@ -108,9 +113,86 @@ def simulate_scene(args: argparse.Namespace):
         ``sim.image`` in ADU and ``sim.truth``.
     """
     seed = scene_seed(args)
-    camera, sensor, epoch = scene_camera(args), scene_sensor(args), scene_epoch(args)
+    camera, sensor, epoch = scene_camera(args), render_sensor(args), scene_epoch(args)
     rng = np.random.default_rng(seed)
     rot = scene_attitude(args, rng)
-    sim = simulate_frame(camera, rot, max_mag=args.max_mag, sensor=sensor, rng=rng, noise=not args.no_noise,
-                         epoch_jyear=epoch)
+    sim = simulate_frame(camera, rot, max_mag=args.max_mag, sensor=sensor, rng=rng, noise=noise_model(args),
+                         epoch_jyear=epoch, rate_rad_s=scene_rate(args),
+                         timing=FrameTiming(line_time_s=getattr(args, "line_time_s", None) or 0.0),
+                         sky_background=sky_background(args, rot))
     return seed, sim
+
+
+def add_render_options(parser: argparse.ArgumentParser) -> None:
+    """Motion, noise switches, detector effects, sky background and optics (startrack simulate)."""
+    mot = parser.add_argument_group("motion")
+    mot.add_argument("--rate-deg-s", type=float, nargs=3, metavar=("WX", "WY", "WZ"),
+                     help="angular rate of the camera in the camera frame, deg/s (default 0 0 0)")
+    mot.add_argument("--line-time-s", type=float, metavar="S", help="rolling shutter: delay between rows, s")
+    noi = parser.add_argument_group("noise switches (all on by default)")
+    for term in ("shot", "dark", "read", "bias", "quantize", "saturate", "background"):
+        noi.add_argument(f"--no-{term}", action="store_true", help=f"leave out the {term} term")
+    noi.add_argument("--blooming", action="store_true", help="spill charge above the full well along columns")
+    det = parser.add_argument_group("detector effects (off by default)")
+    det.add_argument("--prnu", type=float, metavar="RMS", help="photo-response non-uniformity, fraction rms")
+    det.add_argument("--dsnu", type=float, metavar="RMS", help="dark-signal non-uniformity, fraction rms")
+    det.add_argument("--hot-pixels", type=float, metavar="FRACTION", help="fraction of hot pixels")
+    det.add_argument("--dead-pixels", type=float, metavar="FRACTION", help="fraction of dead pixels")
+    sky = parser.add_argument_group("sky background and optics")
+    sky.add_argument("--sky-mag-arcsec2", type=float, metavar="MU",
+                     help="sky surface brightness, V mag per arcsec^2 (default: none)")
+    sky.add_argument("--zodiacal", action="store_true", help="sky from the coarse zodiacal model at the boresight")
+    sky.add_argument("--stray-e-s", type=float, metavar="RATE", help="stray light, e- per s per pixel")
+    sky.add_argument("--psf", choices=("gaussian", "airy"), help="PSF shape (default: the sensor's)")
+    sky.add_argument("--psf-sigma-px", type=float, metavar="SIGMA", help="Gaussian PSF sigma, px")
+    sky.add_argument("--passband", choices=sorted(PASSBANDS), help="spectral band (default: V)")
+
+
+def noise_model(args: argparse.Namespace) -> NoiseModel:
+    """The NoiseModel of --no-noise and the --no-TERM / --blooming switches."""
+    if args.no_noise:
+        return NoiseModel.ideal()
+    off = {term: False for term in ("shot", "dark", "read", "bias", "quantize", "saturate", "background")
+           if getattr(args, f"no_{term}", False)}
+    return NoiseModel(blooming=bool(getattr(args, "blooming", False)), **off)
+
+
+def scene_rate(args: argparse.Namespace) -> np.ndarray | None:
+    """--rate-deg-s in rad/s, or None."""
+    rate = getattr(args, "rate_deg_s", None)
+    if rate is None:
+        return None
+    if not all(math.isfinite(v) for v in rate):
+        raise InvalidInputError("--rate-deg-s needs three finite numbers (deg/s)")
+    return np.radians(np.asarray(rate, dtype=float))
+
+
+def render_sensor(args: argparse.Namespace) -> Sensor:
+    """The sensor preset with --exposure-s, the detector effects, PSF and passband options."""
+    sensor = scene_sensor(args)
+    effects = {name: getattr(args, option, None) for name, option in (
+        ("prnu_rms", "prnu"), ("dsnu_rms", "dsnu"), ("hot_pixel_fraction", "hot_pixels"),
+        ("dead_pixel_fraction", "dead_pixels"))}
+    effects = {k: v for k, v in effects.items() if v is not None}
+    optics = {k: v for k, v in (("psf", getattr(args, "psf", None)),
+                                ("psf_sigma_px", getattr(args, "psf_sigma_px", None))) if v is not None}
+    try:
+        detector = dataclasses.replace(sensor.detector, **effects)
+        sensor = dataclasses.replace(sensor, detector=detector, optics=dataclasses.replace(sensor.optics, **optics))
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"detector or optics option: {exc}") from None
+    band = getattr(args, "passband", None)
+    return sensor if band is None else dataclasses.replace(sensor, passband=PASSBANDS[band])
+
+
+def sky_background(args: argparse.Namespace, rot: Rotation) -> SkyBackground | None:
+    """The SkyBackground of --sky-mag-arcsec2 / --zodiacal / --stray-e-s, or None."""
+    mu, zodiacal, stray = (getattr(args, k, None) for k in ("sky_mag_arcsec2", "zodiacal", "stray_e_s"))
+    if mu is not None and zodiacal:
+        raise InvalidInputError("give --sky-mag-arcsec2 or --zodiacal, not both")
+    if mu is None and not zodiacal and stray is None:
+        return None
+    stray_rate = 0.0 if stray is None else stray
+    if zodiacal:
+        return SkyBackground.zodiacal(boresight(rot), stray_e_s_px=stray_rate)
+    return SkyBackground(mag_arcsec2=mu, stray_e_s_px=stray_rate)

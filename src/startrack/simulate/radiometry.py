@@ -16,7 +16,9 @@ This agrees with the textbook rule of about 1000 photons s^-1 cm^-2 A^-1 at V fo
 magnitude-0 star (8.8e9 over 88 nm) and with the "about 1e10 photons s^-1 m^-2" of the notes
 (seed-001-004.md §1.4). It counts only V-band photons: an unfiltered silicon sensor collects
 several times more from the same star, which a caller models with ``zero_point_photons_s_m2`` or
-an effective QE. Colour (B - V) terms are not modelled yet.
+an effective QE, or gives the sensor a :class:`.passband.Passband`: then each star's V-band
+photons are scaled by the colour factor of its ``B - V`` (a blackbody ratio, see
+:mod:`.passband`).
 
 Settings are frozen dataclasses: :class:`Optics` (aperture, transmission, PSF width),
 :class:`Detector` (QE, gain, read noise, dark current, bias, full well, ADC bits) and
@@ -40,6 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidInputError
 from . import _checks
+from .passband import Passband
 
 PLANCK_J_S: float = 6.62607015e-34
 V_BAND_ZERO_POINT_JY: float = 3636.0
@@ -68,18 +71,50 @@ class Optics:
         sigma = psfWidth / 4, notes §1.2).
     zero_point_photons_s_m2 : float
         Photon flux of a magnitude-0 star in the band the detector sees, photons s^-1 m^-2.
+    psf : {"gaussian", "airy"}
+        PSF shape (see :mod:`.optics`): the pixel-integrated Gaussian of seed 000, or the Airy
+        pattern of a diffraction-limited circular aperture.
+    airy_first_zero_px : float or None
+        Radius of the Airy pattern's first dark ring (1.22 lambda N / pitch), px; None takes the
+        Airy pattern whose best-fit Gaussian has ``psf_sigma_px`` (r0 = sigma / 0.3443).
+    field_curvature : float
+        PSF growth at the image corner: sigma(r) = sigma (1 + field_curvature (r / r_corner)^2)
+        (seed 000 §2.3: a single lens's field curvature), >= 0.
+    natural_vignetting : bool
+        Apply the cos^4 law: stars dim by cos(theta) (projected aperture), the sky background
+        per pixel by cos^4(theta) (seed 003 §1.3).
+    vignetting_edge : float
+        Extra (mechanical / optical) fall-off: the fraction of light lost at the image corner,
+        with a (r / r_corner)^2 profile, in [0, 1).
     """
 
     aperture_area_m2: float
     transmission: float = 1.0
     psf_sigma_px: float = 1.0
     zero_point_photons_s_m2: float = V_MAG0_PHOTONS_S_M2
+    psf: str = "gaussian"
+    airy_first_zero_px: float | None = None
+    field_curvature: float = 0.0
+    natural_vignetting: bool = False
+    vignetting_edge: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("aperture_area_m2", "psf_sigma_px", "zero_point_photons_s_m2"):
             object.__setattr__(self, name, _checks.positive(name, getattr(self, name)))
         transmission = _checks.fraction("transmission", self.transmission)
         object.__setattr__(self, "transmission", transmission)
+        if self.psf not in ("gaussian", "airy"):
+            raise InvalidInputError(f"psf must be 'gaussian' or 'airy', got {self.psf!r}")
+        if self.airy_first_zero_px is not None:
+            value = _checks.positive("airy_first_zero_px", self.airy_first_zero_px)
+            object.__setattr__(self, "airy_first_zero_px", value)
+        curvature = _checks.positive("field_curvature", self.field_curvature, allow_zero=True)
+        object.__setattr__(self, "field_curvature", curvature)
+        edge = _checks.positive("vignetting_edge", self.vignetting_edge, allow_zero=True)
+        if edge >= 1.0:
+            raise InvalidInputError(f"vignetting_edge must be in [0, 1), got {self.vignetting_edge!r}")
+        object.__setattr__(self, "vignetting_edge", edge)
+        object.__setattr__(self, "natural_vignetting", bool(self.natural_vignetting))
 
     @classmethod
     def from_diameter(cls, aperture_diameter_m: float, **kwargs) -> Optics:
@@ -113,6 +148,17 @@ class Detector:
         Pixel capacity in electrons; charge above it is lost (saturation).
     bit_depth : int
         ADC resolution, 1 to 16 bits; quantised values lie in [0, 2**bit_depth - 1].
+    prnu_rms : float
+        Photo-response non-uniformity: rms of the per-pixel gain about 1 (fraction, >= 0).
+    dsnu_rms : float
+        Dark-signal non-uniformity: rms of the per-pixel dark current about its mean (fraction).
+    hot_pixel_fraction, dead_pixel_fraction : float
+        Fractions of pixels that are hot (dark current ``hot_pixel_dark_e_s``) or dead (no
+        response, no dark current: they read bias + read noise), in [0, 1].
+    hot_pixel_dark_e_s : float
+        Dark current of a hot pixel, electrons per second.
+    pixel_map_seed : int
+        Seed of the fixed-pattern maps (:mod:`.detector`): one sensor, one map, frame after frame.
     """
 
     quantum_efficiency: float = 1.0
@@ -122,15 +168,27 @@ class Detector:
     bias_adu: float = 0.0
     full_well_e: float = 1e5
     bit_depth: int = 16
+    prnu_rms: float = 0.0
+    dsnu_rms: float = 0.0
+    hot_pixel_fraction: float = 0.0
+    hot_pixel_dark_e_s: float = 1000.0
+    dead_pixel_fraction: float = 0.0
+    pixel_map_seed: int = 0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "quantum_efficiency",
                            _checks.fraction("quantum_efficiency", self.quantum_efficiency))
         for name in ("gain_e_per_adu", "full_well_e"):
             object.__setattr__(self, name, _checks.positive(name, getattr(self, name)))
-        for name in ("read_noise_e", "dark_current_e_s", "bias_adu"):
+        for name in ("read_noise_e", "dark_current_e_s", "bias_adu", "prnu_rms", "dsnu_rms",
+                     "hot_pixel_fraction", "hot_pixel_dark_e_s", "dead_pixel_fraction"):
             value = _checks.positive(name, getattr(self, name), allow_zero=True)
             object.__setattr__(self, name, value)
+        if self.hot_pixel_fraction + self.dead_pixel_fraction > 1.0:
+            raise InvalidInputError("hot_pixel_fraction + dead_pixel_fraction must be at most 1, got "
+                                    f"{self.hot_pixel_fraction} + {self.dead_pixel_fraction}")
+        if not (isinstance(self.pixel_map_seed, int | np.integer) and self.pixel_map_seed >= 0):
+            raise InvalidInputError(f"pixel_map_seed must be a whole number >= 0, got {self.pixel_map_seed!r}")
         if not (isinstance(self.bit_depth, int | np.integer) and 1 <= self.bit_depth <= 16):
             raise InvalidInputError(
                 f"bit_depth must be an integer from 1 to 16, got {self.bit_depth!r}")
@@ -153,6 +211,9 @@ class Sensor:
         Integration time in seconds.
     name, source : str
         A label and where the numbers come from.
+    passband : Passband or None
+        Relative spectral response of optics + detector; None is the V band (every star's colour
+        factor is 1, the behaviour of the seeds).
     """
 
     optics: Optics
@@ -160,6 +221,7 @@ class Sensor:
     exposure_s: float = 0.1
     name: str = ""
     source: str = ""
+    passband: Passband | None = None
 
     def __post_init__(self) -> None:
         for name, kind in (("optics", Optics), ("detector", Detector)):
@@ -167,6 +229,8 @@ class Sensor:
                 raise InvalidInputError(f"{name} must be a {kind.__name__}, "
                                         f"got {type(getattr(self, name)).__name__}")
         object.__setattr__(self, "exposure_s", _checks.positive("exposure_s", self.exposure_s))
+        if self.passband is not None and not isinstance(self.passband, Passband):
+            raise InvalidInputError(f"passband must be a Passband or None, got {self.passband!r}")
 
     @property
     def psf_sigma_px(self) -> float:
@@ -181,13 +245,24 @@ class Sensor:
         """The same sensor with another integration time."""
         return replace(self, exposure_s=exposure_s)
 
-    def electrons(self, mag: ArrayLike) -> NDArray[np.float64]:
-        """Expected signal electrons of stars of V magnitude ``mag`` in one exposure."""
+    def electrons(self, mag: ArrayLike, b_v: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Expected signal electrons of stars of V magnitude ``mag`` in one exposure.
+
+        ``b_v`` (same shape, NaN allowed) applies the colour factor of :attr:`passband`; it is
+        ignored without a passband (V band).
+        """
         optics = self.optics
-        return electrons_from_magnitude(
+        electrons = electrons_from_magnitude(
             mag, aperture_area_m2=optics.aperture_area_m2, exposure_s=self.exposure_s,
             transmission=optics.transmission, quantum_efficiency=self.detector.quantum_efficiency,
             zero_point_photons_s_m2=optics.zero_point_photons_s_m2)
+        return electrons * self.colour_factor(b_v)
+
+    def colour_factor(self, b_v: ArrayLike | None) -> NDArray[np.float64] | float:
+        """Sensor-band photons per V-band photon for colour ``b_v`` (1 without a passband)."""
+        if self.passband is None:
+            return 1.0
+        return self.passband.colour_factor(np.nan if b_v is None else b_v)
 
 
 def photon_flux_from_magnitude(mag: ArrayLike,

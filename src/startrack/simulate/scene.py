@@ -1,104 +1,91 @@
-"""Scene assembly: stars (ICRS vectors + magnitudes) and an attitude in, an image and its truth out.
+"""Scene assembly: point sources and an attitude (or an attitude profile) in, an image and its
+truth out.
 
 The pipeline is the one of seed 000 Ch. 7 (notes ``seed-000.md`` §1.4) and of seed 001 Fig. 2.5
-(notes ``seed-001-004.md`` §1.2-1.7): rotate catalog vectors into the camera frame, cull those
-behind or outside the field, project with the camera model (distortion included), turn magnitudes
-into electrons (:mod:`.radiometry`), draw pixel-integrated Gaussians (:mod:`.psf`) and read the
-detector out with its noise (:mod:`.noise`). The renderer works on plain arrays; the catalog-based
-convenience :func:`startrack.simulate.sky.simulate_frame` feeds it.
+(notes ``seed-001-004.md`` §1.2-1.9): rotate catalog vectors into the camera frame at each
+sub-step of the exposure (:mod:`.motion`, :mod:`.sampling`), cull those behind or outside the
+field, project with the camera model (distortion included), turn magnitudes and colours into
+electrons (:mod:`.radiometry`, :mod:`.passband`) dimmed by vignetting (:mod:`.optics`), draw
+pixel-integrated PSFs along each path (:mod:`.streaks`), add satellites (:mod:`.rso`) and the sky
+background (:mod:`.background`), and read the detector out with its noise (:mod:`.noise`). The
+renderer works on plain arrays; :func:`startrack.simulate.sky.simulate_frame` feeds it from the
+catalog.
+
+Timing: an exposure of ``sensor.exposure_s`` on the clock of the attitude profile. A single
+``Rotation`` with ``rate_rad_s`` becomes a constant-rate profile whose t = 0 is the frame's mid
+time, so the attitude given is the truth attitude at mid-exposure; with a profile the exposure
+starts at ``FrameTiming.start_s`` (0 by default).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
+from astropy.time import Time, TimeDelta
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
 from ..errors import InvalidInputError
-from ..frames import random_rotations
+from ..frames import boresight, random_rotations
 from . import _checks
+from .background import SkyBackground
+from .motion import AttitudeProfile, ConstantRate
 from .noise import NoiseModel, read_out
-from .psf import DEFAULT_RADIUS_SIGMAS, render_gaussian_psf, stamp_radius_px
+from .optics import airy_first_zero_px, airy_stamp_radius_px, psf_sigma_px, star_illumination
+from .passband import SUN_B_V
+from .psf import DEFAULT_RADIUS_SIGMAS, stamp_radius_px
 from .radiometry import SENSOR_PRESETS, Sensor
+from .rso import LinesOfSight, OrbitalScene, Snapshot
+from .sampling import FixedDirections, SourcePaths, positions, sample_sources
+from .streaks import Shutter, add_airy_paths, add_gaussian_paths
+from .truth import RSOTruth, SimulatedImage, Truth
 
 DEFAULT_SENSOR: Sensor = SENSOR_PRESETS["far-mst"]
-
-
-@dataclass(frozen=True)
-class Truth:
-    """What a simulated image contains, brightest star first.
-
-    Attributes
-    ----------
-    rot_cam_from_icrs : Rotation
-        The attitude the image was rendered at.
-    camera : Camera
-    ids : ndarray of int64, shape (K,)
-        Star identifiers (Hipparcos numbers for catalog frames) of every star that put light on
-        the detector, including stars centred just outside it (see :meth:`inside`).
-    x, y : ndarray, shape (K,)
-        True positions in our pixel convention (0-based pixel centres, x = column).
-    mag : ndarray, shape (K,)
-        Magnitudes used for the radiometry.
-    electrons : ndarray, shape (K,)
-        Expected signal electrons of each star in the exposure (before clipping at the edge).
-    vectors_icrs : ndarray, shape (K, 3)
-        ICRS unit vectors of the stars as rendered.
-    exposure_s : float
-    sensor : Sensor
-    noise : NoiseModel
-    background_e : float or ndarray
-        Expected sky / stray-light electrons per pixel (dark current not included).
-    epoch_jyear : float or None
-        Catalog epoch of the star positions, when known.
-    """
-
-    rot_cam_from_icrs: Rotation
-    camera: Camera
-    ids: NDArray[np.int64]
-    x: NDArray[np.float64]
-    y: NDArray[np.float64]
-    mag: NDArray[np.float64]
-    electrons: NDArray[np.float64]
-    vectors_icrs: NDArray[np.float64]
-    exposure_s: float
-    sensor: Sensor
-    noise: NoiseModel = field(default_factory=NoiseModel)
-    background_e: float | NDArray[np.float64] = 0.0
-    epoch_jyear: float | None = None
-
-    def __len__(self) -> int:
-        return int(self.ids.shape[0])
-
-    def inside(self, margin_px: float = 0.0) -> NDArray[np.bool_]:
-        """Mask of stars whose true position is in the image, ``margin_px`` from its edge."""
-        return self.camera.in_image(self.x, self.y, margin_px=margin_px)
-
-    @property
-    def background_adu(self) -> float | NDArray[np.float64]:
-        """Expected per-pixel level without stars, in ADU: (background + dark) / gain + bias."""
-        det = self.sensor.detector
-        electrons = self.background_e + (self.sensor.dark_e if self.noise.dark else 0.0)
-        return electrons / det.gain_e_per_adu + (det.bias_adu if self.noise.bias else 0.0)
-
+DEFAULT_SUBSTEP_PX: float = 0.25
 
 @dataclass(frozen=True)
-class SimulatedImage:
-    """A rendered image and the truth it was rendered from.
+class FrameTiming:
+    """When a frame is exposed and how finely motion is sampled.
 
-    Attributes
+    Parameters
     ----------
-    image : ndarray, shape (height, width)
-        ADU; uint16 when quantised, float64 otherwise. Indexed ``image[y, x]``.
-    truth : Truth
+    start_s : float or None
+        Start of the exposure (of row 0) on the attitude profile's clock, s; None centres the
+        frame on t = 0.
+    line_time_s : float
+        Rolling shutter: delay between the starts of consecutive rows, s (0: global shutter).
+    substep_px : float
+        Largest motion of a source between two samples of its path, px.
+    epoch : astropy.time.Time or None
+        Absolute time of t = 0 (needed for satellites; recorded in the truth).
     """
 
-    image: NDArray
-    truth: Truth
+    start_s: float | None = None
+    line_time_s: float = 0.0
+    substep_px: float = DEFAULT_SUBSTEP_PX
+    epoch: Time | None = None
+
+    def __post_init__(self) -> None:
+        if self.start_s is not None and not math.isfinite(self.start_s):
+            raise InvalidInputError(f"start_s must be finite seconds or None, got {self.start_s!r}")
+        _checks.positive("line_time_s", self.line_time_s, allow_zero=True)
+        _checks.positive("substep_px", self.substep_px)
+        if self.epoch is not None and not (isinstance(self.epoch, Time) and self.epoch.isscalar):
+            raise InvalidInputError("epoch must be a single astropy Time or None")
+
+    def shutter(self, exposure_s: float, height: int) -> Shutter:
+        """The row timing of a frame of ``height`` rows."""
+        if self.start_s is None:
+            start = -0.5 * exposure_s - 0.5 * (height - 1) * self.line_time_s
+        else:
+            start = self.start_s
+        return Shutter(start, exposure_s, self.line_time_s)
+
+    def time_at(self, t_s: float) -> Time | None:
+        return None if self.epoch is None else self.epoch + TimeDelta(t_s, format="sec")
 
 
 def random_attitude(rng: np.random.Generator | int | None = None) -> Rotation:
@@ -142,39 +129,71 @@ def project_stars(camera: Camera, rot_cam_from_icrs: Rotation, vectors_icrs: NDA
     return x, y, near & camera.in_image(x, y, margin_px=-margin_px)
 
 
-def render_stars(camera: Camera, rot_cam_from_icrs: Rotation, star_vectors_icrs: ArrayLike,
+def attitude_profile(attitude: Rotation | AttitudeProfile,
+                     rate_rad_s: ArrayLike | None = None) -> tuple[AttitudeProfile, bool]:
+    """The profile of a Rotation (+ a constant camera-frame rate) or a profile; and whether it
+    turns (False only for a constant zero rate)."""
+    if isinstance(attitude, Rotation):
+        if not attitude.single:
+            raise InvalidInputError("rot_cam_from_icrs must be a single scipy Rotation (not a stack)")
+        profile = ConstantRate(attitude, np.zeros(3) if rate_rad_s is None else rate_rad_s)
+        return profile, not profile.static
+    if not (hasattr(attitude, "attitudes") and hasattr(attitude, "rates")):
+        raise InvalidInputError("the attitude must be a single scipy Rotation or an attitude profile "
+                                f"(startrack.simulate.motion), got {type(attitude).__name__}")
+    if rate_rad_s is not None:
+        raise InvalidInputError("rate_rad_s goes with a single Rotation; a profile has its own rates")
+    return attitude, not (isinstance(attitude, ConstantRate) and attitude.static)
+
+
+def render_stars(camera: Camera, rot_cam_from_icrs: Rotation | AttitudeProfile, star_vectors_icrs: ArrayLike,
                  mags: ArrayLike, ids: ArrayLike, *, sensor: Sensor | None = None,
                  background_e: float | ArrayLike = 0.0,
                  rng: np.random.Generator | int | None = None, noise: bool | NoiseModel = True,
-                 radius_sigmas: float = DEFAULT_RADIUS_SIGMAS,
-                 epoch_jyear: float | None = None) -> SimulatedImage:
-    """Render a star image at a known attitude.
+                 radius_sigmas: float = DEFAULT_RADIUS_SIGMAS, epoch_jyear: float | None = None,
+                 b_v: ArrayLike | None = None, rate_rad_s: ArrayLike | None = None,
+                 timing: FrameTiming | None = None, sky_background: SkyBackground | None = None,
+                 orbital: OrbitalScene | Snapshot | None = None) -> SimulatedImage:
+    """Render a star image at a known attitude, or over an attitude profile.
 
     Parameters
     ----------
     camera : Camera
         Image size, intrinsics and distortion.
-    rot_cam_from_icrs : Rotation
-        A single attitude mapping ICRS vectors to the camera frame.
+    rot_cam_from_icrs : Rotation or attitude profile
+        A single attitude (at the frame's mid time) mapping ICRS vectors to the camera frame, or a
+        profile from :mod:`startrack.simulate.motion`.
     star_vectors_icrs : array_like, shape (N, 3)
         ICRS unit vectors of candidate stars (any part of the sky; stars outside the field are
         dropped).
     mags : array_like, shape (N,)
-        Their magnitudes, in the band of ``sensor.optics.zero_point_photons_s_m2`` (V by default).
+        Their V magnitudes.
     ids : array_like of int, shape (N,)
         Their identifiers (Hipparcos numbers), copied into the truth.
     sensor : Sensor, optional
         Optics, detector and exposure; the seed 000 FAR-MST sensor when None.
     background_e : float or array_like, shape (height, width)
-        Expected sky / stray-light electrons per pixel in the exposure.
+        Expected extra background electrons per pixel in the exposure (added to
+        ``sky_background``).
     rng : numpy.random.Generator, int or None
         Noise source; the same seed gives a bit-identical image.
     noise : bool or NoiseModel
         True: all detector effects; False: the expected image (see :class:`NoiseModel`).
     radius_sigmas : float
-        PSF stamp half-width in PSF sigmas.
+        Gaussian PSF stamp half-width in PSF sigmas.
     epoch_jyear : float, optional
         Epoch of the star vectors, recorded in the truth.
+    b_v : array_like, shape (N,), optional
+        Star colours (NaN: unknown), used when the sensor has a passband.
+    rate_rad_s : array_like, shape (3,), optional
+        Constant angular velocity of the camera (camera frame, rad/s) with a single Rotation.
+    timing : FrameTiming, optional
+        Exposure start, rolling shutter, sub-step size, absolute epoch.
+    sky_background : SkyBackground, optional
+        Zodiacal light and stray light.
+    orbital : OrbitalScene or Snapshot, optional
+        Observer, satellites, Sun and Moon (an OrbitalScene needs ``timing.epoch``; a Snapshot
+        must be taken at the frame's mid time).
 
     Returns
     -------
@@ -183,20 +202,121 @@ def render_stars(camera: Camera, rot_cam_from_icrs: Rotation, star_vectors_icrs:
     """
     sensor = DEFAULT_SENSOR if sensor is None else sensor
     vectors, mags, ids = star_arrays(star_vectors_icrs, mags, ids)
-    rot = _single_rotation(rot_cam_from_icrs)
-    margin = float(stamp_radius_px(sensor.psf_sigma_px, radius_sigmas))
-    x, y, visible = project_stars(camera, rot, vectors, margin)
-    order = np.flatnonzero(visible)[np.argsort(mags[visible], kind="stable")]
-    electrons = sensor.electrons(mags[order])
-    signal = render_gaussian_psf((camera.height, camera.width), x[order], y[order], electrons,
-                                 sensor.psf_sigma_px, radius_sigmas=radius_sigmas)
+    colours = _colours(b_v, len(ids))
+    profile, moving = attitude_profile(rot_cam_from_icrs, rate_rad_s)
+    timing = FrameTiming() if timing is None else timing
+    shutter = timing.shutter(sensor.exposure_s, camera.height)
+    radius = psf_radius_px(camera, sensor, _checks.positive("radius_sigmas", radius_sigmas))
+    max_off_axis = field_radius_rad(camera, radius)
+    paths = sample_sources(camera, profile, shutter, FixedDirections(vectors), radius, timing.substep_px,
+                           max_off_axis, moving)
+    order = np.argsort(mags[paths.keep], kind="stable")
+    paths = _reordered(paths, order)
+    keep = paths.keep
+    electrons = sensor.electrons(mags[keep], colours[keep]) * star_illumination(camera, sensor.optics,
+                                                                                *paths.mid)
+    signal = np.zeros((camera.height, camera.width))
+    add_sources(signal, paths, electrons, camera, sensor, radius, shutter)
+    t_mid = shutter.mid_s(camera.height)
+    rot_mid = rot_cam_from_icrs if not moving and isinstance(rot_cam_from_icrs, Rotation) else \
+        profile.attitudes([t_mid])[0]
+    snapshot = _snapshot(orbital, timing, t_mid)
+    rsos = None if snapshot is None else render_rsos(signal, camera, profile, shutter, snapshot, sensor,
+                                                      radius, timing.substep_px, max_off_axis)
+    background = _background(background_e, sky_background, camera, sensor)
     model = NoiseModel.coerce(noise)
-    image = read_out(signal, sensor, background_e=background_e, noise=model, rng=rng)
-    truth = Truth(rot_cam_from_icrs=rot, camera=camera, ids=ids[order], x=x[order], y=y[order],
-                  mag=mags[order], electrons=electrons, vectors_icrs=vectors[order],
-                  exposure_s=sensor.exposure_s, sensor=sensor, noise=model,
-                  background_e=_frozen(background_e), epoch_jyear=epoch_jyear)
+    image = read_out(signal, sensor, background_e=background, noise=model, rng=rng)
+    ends = profile.attitudes([shutter.start_s, shutter.start_s + shutter.exposure_s
+                              + (camera.height - 1) * shutter.line_time_s])
+    truth = Truth(rot_cam_from_icrs=rot_mid, camera=camera, ids=ids[keep], x=paths.mid[0], y=paths.mid[1],
+                  mag=mags[keep], electrons=electrons, vectors_icrs=vectors[keep], exposure_s=sensor.exposure_s,
+                  sensor=sensor, noise=model, background_e=_frozen(background), epoch_jyear=epoch_jyear,
+                  x_start=paths.start[0], y_start=paths.start[1], x_end=paths.end[0], y_end=paths.end[1],
+                  b_v=colours[keep], rate_cam_rad_s=profile.rates([t_mid])[0], rot_start=ends[0],
+                  rot_end=ends[1], t_mid_s=t_mid, time_mid=timing.time_at(t_mid),
+                  line_time_s=shutter.line_time_s, rsos=rsos,
+                  bright_bodies=None if snapshot is None else snapshot.bright_bodies(boresight(rot_mid), camera),
+                  substeps=int(paths.samples.x.shape[1]))
     return SimulatedImage(image=image, truth=truth)
+
+
+def psf_radius_px(camera: Camera, sensor: Sensor, radius_sigmas: float = DEFAULT_RADIUS_SIGMAS) -> int:
+    """Half-width (px) of the PSF stamps: 5 sigma of the widest Gaussian in the field, or 5 Airy
+    first-zero radii."""
+    optics = sensor.optics
+    if optics.psf == "airy":
+        return airy_stamp_radius_px(airy_first_zero_px(optics))
+    return stamp_radius_px(optics.psf_sigma_px * (1.0 + optics.field_curvature), radius_sigmas)
+
+
+def add_sources(signal: NDArray[np.float64], paths: SourcePaths, electrons: NDArray, camera: Camera,
+                sensor: Sensor, radius: int, shutter: Shutter) -> NDArray[np.float64]:
+    """Add the light of sampled sources into ``signal`` with the sensor's PSF (in place)."""
+    optics = sensor.optics
+    if optics.psf == "airy":
+        return add_airy_paths(signal, paths.samples, electrons, airy_first_zero_px(optics), radius, shutter)
+    sigma = np.broadcast_to(psf_sigma_px(camera, optics, *paths.mid), electrons.shape)
+    return add_gaussian_paths(signal, paths.samples, electrons, np.ascontiguousarray(sigma), radius, shutter)
+
+
+def render_rsos(signal: NDArray[np.float64], camera: Camera, profile: AttitudeProfile, shutter: Shutter,
+                snapshot: Snapshot, sensor: Sensor, radius: int, substep_px: float,
+                max_off_axis_rad: float) -> RSOTruth:
+    """Add the lit satellites of ``snapshot`` into ``signal`` and return their truth."""
+    t_mid = shutter.mid_s(camera.height)
+    n = len(snapshot.rso_r)
+    los = LinesOfSight(snapshot, t_mid, np.arange(n))
+    mags = snapshot.rso_magnitudes()
+    lit = np.isfinite(mags)
+    paths = sample_sources(camera, profile, shutter, los.take(np.flatnonzero(lit)), radius, substep_px,
+                           max_off_axis_rad, True)
+    keep = np.flatnonzero(lit)[paths.keep]
+    electrons = np.zeros(n)
+    electrons[lit] = sensor.electrons(mags[lit], np.full(int(lit.sum()), SUN_B_V))
+    flux = electrons[keep] * star_illumination(camera, sensor.optics, *paths.mid)
+    add_sources(signal, paths, flux, camera, sensor, radius, shutter)
+    marks = np.array([shutter.start_s, t_mid, shutter.start_s + shutter.exposure_s])
+    x, y = positions(camera, profile, los, marks, max_off_axis_rad)
+    rendered = np.zeros(n, dtype=bool)
+    rendered[keep] = True
+    ids = np.array([r.ident for r in snapshot.scene.rsos], dtype=np.int64)
+    return RSOTruth(ids=ids, x=x[:, 1], y=y[:, 1], x_start=x[:, 0], y_start=y[:, 0], x_end=x[:, 2],
+                    y_end=y[:, 2], mag=mags, electrons=electrons, range_km=snapshot.rso_ranges_km(), lit=lit,
+                    rendered=rendered)
+
+
+def _snapshot(orbital: OrbitalScene | Snapshot | None, timing: FrameTiming, t_mid: float) -> Snapshot | None:
+    if orbital is None or isinstance(orbital, Snapshot):
+        return orbital
+    if not isinstance(orbital, OrbitalScene):
+        raise InvalidInputError(f"orbital must be an OrbitalScene or a Snapshot, got {type(orbital).__name__}")
+    if timing.epoch is None:
+        raise InvalidInputError("satellites need an absolute time: give FrameTiming(epoch=Time(...))")
+    return orbital.snapshots(timing.time_at(t_mid))[0]
+
+
+def _reordered(paths: SourcePaths, order: NDArray[np.intp]) -> SourcePaths:
+    s = paths.samples
+    samples = type(s)(s.x[order], s.y[order], s.t_lo[order], s.t_hi[order])
+    pick = [(p[0][order], p[1][order]) for p in (paths.start, paths.mid, paths.end)]
+    return SourcePaths(paths.keep[order], samples, *pick)
+
+
+def _colours(b_v: ArrayLike | None, n: int) -> NDArray[np.float64]:
+    if b_v is None:
+        return np.full(n, np.nan)
+    colours = np.asarray(b_v, dtype=float)
+    if colours.shape != (n,):
+        raise InvalidInputError(f"b_v must have shape ({n},), got {colours.shape}")
+    return colours
+
+
+def _background(background_e, sky_background: SkyBackground | None, camera: Camera, sensor: Sensor):
+    if sky_background is None:
+        return background_e
+    if not isinstance(sky_background, SkyBackground):
+        raise InvalidInputError("sky_background must be a SkyBackground or None")
+    return np.asarray(background_e, dtype=float) + sky_background.electrons(camera, sensor)
 
 
 def star_arrays(vectors: ArrayLike, mags: ArrayLike, ids: ArrayLike
@@ -210,12 +330,6 @@ def star_arrays(vectors: ArrayLike, mags: ArrayLike, ids: ArrayLike
         raise InvalidInputError(
             f"ids must be an integer array of shape ({n},), got {ids.dtype} {ids.shape}")
     return vectors, mags, ids.astype(np.int64)
-
-
-def _single_rotation(rot: Rotation) -> Rotation:
-    if not isinstance(rot, Rotation) or not rot.single:
-        raise InvalidInputError("rot_cam_from_icrs must be a single scipy Rotation (not a stack)")
-    return rot
 
 
 def _frozen(background_e: float | ArrayLike) -> float | NDArray[np.float64]:
