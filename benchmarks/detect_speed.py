@@ -81,11 +81,11 @@ def score(frames: list, results: list) -> tuple[float, float, list]:
     return found / total, false / len(frames), errors
 
 
-def predictive_time(frame, repeats: int) -> tuple[float, float, int]:
+def predictive_time(frame, repeats: int, centroid: str = "windowed") -> tuple[float, float, int]:
     rng = np.random.default_rng(3)
     pick = np.arange(min(20, frame.x.size))
     px, py = frame.x[pick] + rng.uniform(-1, 1, pick.size), frame.y[pick] + rng.uniform(-1, 1, pick.size)
-    detector = StarDetector()
+    detector = StarDetector(centroid=centroid)
     result = detector.measure_windows(frame.image, px, py, 6)
     samples = []
     for _ in range(repeats * 5):
@@ -173,9 +173,11 @@ def main(argv: list[str] | None = None) -> int:
         rows["SEP extract + winpos"] = peer["sep_win"]
         rows["photutils DAOStarFinder"] = peer["dao"]
     report(rows, frames)
-    t, best, n = predictive_time(frames[0], args.repeats)
-    print(f"\npredictive pass, 20 windows of 13 x 13 px: {t * 1e3:.3f} ms median, "
-          f"{best * 1e3:.3f} ms best, {n} found")
+    print()
+    for centroid in ("windowed", "weighted"):
+        t, best, n = predictive_time(frames[0], args.repeats, centroid)
+        print(f"predictive pass, 20 windows of 13 x 13 px, {centroid} centroid: {t * 1e3:.3f} ms median, "
+              f"{best * 1e3:.3f} ms best, {n} found")
     print(f"load average {os.getloadavg()[0]:.2f}")
     if args.huge:
         huge_frame_memory()
