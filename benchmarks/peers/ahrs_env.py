@@ -13,61 +13,25 @@ Run as a script to create the environment::
 
 from __future__ import annotations
 
-import argparse
-import json
-import os
-import shutil
 import subprocess
 import sys
-import time
-import venv
 from pathlib import Path
 
 import numpy as np
 
-PEERS_DIR = Path(__file__).resolve().parent
-AHRS_VENV = PEERS_DIR.parent / ".venv-ahrs"
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # as a script, or imported as peers.*
+from peer_venv import BENCH_DIR, PEERS_DIR, PeerEnv  # noqa: E402
+
+AHRS_VENV = BENCH_DIR / ".venv-ahrs"
 RUNNER = PEERS_DIR / "ahrs_runner.py"
 AHRS_VERSION = "0.4.0"
-REQUIREMENTS = (f"ahrs=={AHRS_VERSION}", "numpy")
-STAMP_NAME = ".ahrs-installed.json"
+AHRS = PeerEnv("ahrs", AHRS_VENV, ((f"ahrs=={AHRS_VERSION}", "numpy"),),
+               versions_code="import ahrs, numpy; print(ahrs.__version__, numpy.__version__)")
 
 
-def _python(env_dir: Path) -> Path:
-    return env_dir / ("Scripts" if os.name == "nt" else "bin") / "python"
-
-
-def _wanted() -> dict:
-    return {"ahrs": AHRS_VERSION, "requirements": list(REQUIREMENTS), "base_python": sys.version.split()[0]}
-
-
-def read_stamp(env_dir: Path = AHRS_VENV) -> dict | None:
-    """What the environment was created with, or None if it is not ready."""
-    path = env_dir / STAMP_NAME
-    if not (path.exists() and _python(env_dir).exists()):
-        return None
-    try:
-        return json.loads(path.read_text())
-    except (OSError, json.JSONDecodeError):
-        return None
-
-
-def ensure_ahrs_env(env_dir: Path = AHRS_VENV, *, force: bool = False) -> Path:
+def ensure_ahrs_env(*, force: bool = False) -> Path:
     """Create the ahrs environment unless it is current; return its Python interpreter."""
-    stamp = read_stamp(env_dir)
-    if not force and stamp is not None and all(stamp.get(k) == v for k, v in _wanted().items()):
-        return _python(env_dir)
-    if env_dir.exists():
-        shutil.rmtree(env_dir)
-    t0 = time.perf_counter()
-    print(f"creating the ahrs environment in {env_dir}", file=sys.stderr, flush=True)
-    venv.EnvBuilder(with_pip=True).create(env_dir)
-    python = _python(env_dir)
-    cmd = [str(python), "-m", "pip", "install", "--quiet", "--disable-pip-version-check", *REQUIREMENTS]
-    subprocess.run(cmd, check=True)
-    created_s = time.perf_counter() - t0
-    (env_dir / STAMP_NAME).write_text(json.dumps({**_wanted(), "created_s": created_s}, indent=1))
-    return python
+    return AHRS.ensure(force=force)
 
 
 def run_ahrs(problems_npz: Path, out_npz: Path, *, python: Path | None = None) -> dict[str, np.ndarray]:
@@ -83,13 +47,5 @@ def run_ahrs(problems_npz: Path, out_npz: Path, *, python: Path | None = None) -
         return {name: npz[name] for name in npz.files}
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--force", action="store_true", help="re-create the environment")
-    args = parser.parse_args(argv)
-    print(ensure_ahrs_env(force=args.force))
-    return 0
-
-
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(AHRS.main())

@@ -13,71 +13,26 @@ Run as a script to create the environment::
 
 from __future__ import annotations
 
-import argparse
-import json
-import os
-import shutil
 import subprocess
 import sys
-import time
-import venv
 from pathlib import Path
 
 import numpy as np
 
-PEERS_DIR = Path(__file__).resolve().parent
-BENCH_DIR = PEERS_DIR.parent
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # as a script, or imported as peers.*
+from peer_venv import BENCH_DIR, PEERS_DIR, PeerEnv  # noqa: E402
+
 PEERS_VENV = BENCH_DIR / ".venv-detectpeers"
 RUNNER = PEERS_DIR / "detect_runner.py"
 REQUIREMENTS = ("sep==1.4.1", "photutils==3.0.0", "numpy>=2")
-STAMP_NAME = ".detectpeers-installed.json"
+DETECT_PEERS = PeerEnv("SEP / photutils", PEERS_VENV, (REQUIREMENTS,),
+                       versions_code="import sep, photutils, numpy; "
+                                     "print(sep.__version__, photutils.__version__, numpy.__version__)")
 
 
-def _python(env_dir: Path) -> Path:
-    return env_dir / ("Scripts" if os.name == "nt" else "bin") / "python"
-
-
-def _wanted() -> dict:
-    return {"requirements": list(REQUIREMENTS), "base_python": sys.version.split()[0]}
-
-
-def read_stamp(env_dir: Path = PEERS_VENV) -> dict | None:
-    """What the environment was created with, or None if it is not ready."""
-    path = env_dir / STAMP_NAME
-    if not (path.exists() and _python(env_dir).exists()):
-        return None
-    try:
-        return json.loads(path.read_text())
-    except (OSError, json.JSONDecodeError):
-        return None
-
-
-def ensure_detect_env(env_dir: Path = PEERS_VENV, *, force: bool = False) -> Path:
-    """Create the SEP + photutils environment unless it is current; returns its interpreter."""
-    stamp = read_stamp(env_dir)
-    wanted = _wanted()
-    if not force and stamp is not None and all(stamp.get(k) == v for k, v in wanted.items()):
-        return _python(env_dir)
-    if env_dir.exists():
-        shutil.rmtree(env_dir)
-    t0 = time.perf_counter()
-    print(f"creating the SEP / photutils environment in {env_dir}", file=sys.stderr, flush=True)
-    venv.EnvBuilder(with_pip=True).create(env_dir)
-    python = _python(env_dir)
-    cmd = [str(python), "-m", "pip", "install", "--quiet", "--disable-pip-version-check",
-           *REQUIREMENTS]
-    print("+", " ".join(cmd), file=sys.stderr, flush=True)
-    subprocess.run(cmd, check=True)
-    created_s = time.perf_counter() - t0
-    versions = subprocess.run(
-        [str(python), "-c", "import sep, photutils, numpy; "
-         "print(sep.__version__, photutils.__version__, numpy.__version__)"],
-        check=True, capture_output=True, text=True).stdout.split()
-    stamp = {**wanted, "created_s": created_s, "versions": dict(zip(
-        ("sep", "photutils", "numpy"), versions, strict=True))}
-    (env_dir / STAMP_NAME).write_text(json.dumps(stamp, indent=1))
-    print(f"peer environment ready in {created_s:.1f} s", file=sys.stderr, flush=True)
-    return python
+def ensure_detect_env(*, force: bool = False) -> Path:
+    """Create the SEP + photutils environment unless it is current; return its interpreter."""
+    return DETECT_PEERS.ensure(force=force)
 
 
 def run_peers(frames_npz: Path, out_npz: Path, *, repeats: int = 5,
@@ -95,16 +50,5 @@ def run_peers(frames_npz: Path, out_npz: Path, *, repeats: int = 5,
         return {name: npz[name] for name in npz.files}
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--force", action="store_true", help="re-create the environment")
-    args = parser.parse_args(argv)
-    python = ensure_detect_env(force=args.force)
-    stamp = read_stamp() or {}
-    print(f"python: {python}")
-    print(f"versions: {stamp.get('versions')}; created in {stamp.get('created_s', 0):.1f} s")
-    return 0
-
-
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(DETECT_PEERS.main())
