@@ -214,7 +214,7 @@ def render_stars(camera: Camera, rot_cam_from_icrs: Rotation | AttitudeProfile, 
     paths = _reordered(paths, order)
     keep = paths.keep
     electrons = sensor.electrons(mags[keep], colours[keep]) * star_illumination(camera, sensor.optics,
-                                                                                *paths.mid)
+                                                                                *optics_position(paths))
     signal = np.zeros((camera.height, camera.width))
     add_sources(signal, paths, electrons, camera, sensor, radius, shutter)
     t_mid = shutter.mid_s(camera.height)
@@ -240,6 +240,22 @@ def render_stars(camera: Camera, rot_cam_from_icrs: Rotation | AttitudeProfile, 
     return SimulatedImage(image=image, truth=truth)
 
 
+def optics_position(paths: SourcePaths) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Where each source's PSF width and vignetting are evaluated: its mid-exposure position, or,
+    when that is not defined (the source is behind the field's edge at mid-exposure while its
+    streak still reaches the image), the first defined sample of its path."""
+    x, y = paths.mid
+    bad = ~(np.isfinite(x) & np.isfinite(y))
+    if not np.any(bad):
+        return x, y
+    sx, sy = paths.samples.x[bad], paths.samples.y[bad]
+    first = np.argmax(np.isfinite(sx) & np.isfinite(sy), axis=1)
+    rows = np.arange(first.size)
+    x, y = x.copy(), y.copy()
+    x[bad], y[bad] = sx[rows, first], sy[rows, first]
+    return x, y
+
+
 def psf_radius_px(camera: Camera, sensor: Sensor, radius_sigmas: float = DEFAULT_RADIUS_SIGMAS) -> int:
     """Half-width (px) of the PSF stamps: 5 sigma of the widest Gaussian in the field, or 5 Airy
     first-zero radii."""
@@ -255,7 +271,7 @@ def add_sources(signal: NDArray[np.float64], paths: SourcePaths, electrons: NDAr
     optics = sensor.optics
     if optics.psf == "airy":
         return add_airy_paths(signal, paths.samples, electrons, airy_first_zero_px(optics), radius, shutter)
-    sigma = np.broadcast_to(psf_sigma_px(camera, optics, *paths.mid), electrons.shape)
+    sigma = np.broadcast_to(psf_sigma_px(camera, optics, *optics_position(paths)), electrons.shape)
     return add_gaussian_paths(signal, paths.samples, electrons, np.ascontiguousarray(sigma), radius, shutter)
 
 
