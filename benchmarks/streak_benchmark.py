@@ -16,8 +16,9 @@ The camera of 1-3 is stated nowhere in seed 001 (notes seed-001-004 §4.3): we u
 read noise 5 e-, stars of 1e5-5e5 e- per exposure. Part 4 uses stars of 1.5e3-6e3 e-, sky
 10 e-, read noise 10 e-, chosen so that the unsmeared centroid error is near the seed's 35.6 urad
 baseline (its noise model is not given), and leaves out stars with a neighbour within 8 px.
-Scenes come from ``tests/rate/streak_scenes.py``
-(a Gaussian integrated along each path). Streaks that cross are avoided, as the seed's corrupted-ROI
+Scenes come from the simulator (``startrack.simulate.render_stars``) through
+``tests/rate/streak_scenes.py``; the RSO is a simulated satellite.
+Streaks that cross are avoided, as the seed's corrupted-ROI
 rule would drop them. The RSO frames of part 3 replace seed 001's orbit propagation (Table 4.3) by
 an RSO whose own motion across the sky is 0.2-0.8 of the camera's rate in a random direction (an
 assumption, stated as such).
@@ -257,6 +258,10 @@ def table_2(rng, images) -> list[dict]:
     return rows
 
 
+def _jsonable(o):
+    return str(o) if isinstance(o, Path) else np.asarray(o).tolist()
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=6, help="frames per Table 3.1 cell")
@@ -278,7 +283,7 @@ def main(argv: list[str] | None = None) -> int:
     out = args.out or RESULTS_DIR / f"streak-{datetime.now():%Y%m%d-%H%M%S}.json"
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps({"args": vars(args), "table_3_1": t31, "tables_4_1_4_2": t4, "table_4_4": t44,
-                               "seed004_table_2": t2}, indent=1, default=lambda o: np.asarray(o).tolist()))
+                               "seed004_table_2": t2}, indent=1, default=_jsonable))
     print(f"\nfinished in {time.perf_counter() - t0:.0f} s; results saved to {out}")
     return 0
 

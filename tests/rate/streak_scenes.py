@@ -1,13 +1,15 @@
-"""Streaked star images with known truth, for the rate tests and the streak benchmark.
+"""Streaked star frames with known truth from the simulator, for the rate tests and benchmark.
 
-A small stand-in for the simulator's motion blur until it lands: each star (and optional RSO) is
-a Gaussian PSF integrated along its path during the exposure (seed 001 §2 "Streaking Dynamics",
-notes seed-001-004 §1.8, with samples at mid-step times so the flux is not double-counted at
-the ends), then Poisson shot noise, a flat sky background and Gaussian read noise (electrons).
+Thin set-up around :func:`startrack.simulate.render_stars` (its sub-step streaks, noise chain and
+truth; docs/simulation.md): stars are placed where their whole path stays in the image (and, by
+the callers, apart), given the electrons asked for through the sensor's zero point, and rendered
+at a constant camera-frame rate. An RSO is a satellite of a :class:`startrack.simulate.Snapshot`
+200 km from the observer, whose line of sight turns across the sky at a chosen angular rate;
+the simulator draws its streak and gives its truth. Noise: Poisson shot noise on signal + a flat
+sky, Gaussian read noise, no quantisation (float images), no bias, no full well.
 
-The camera turns at a constant camera-frame rate omega, so a star at camera vector v0 at the
-start of the exposure is at ``exp(-[omega x] t) v0`` at time t; an RSO also moves across the sky
-at its own (inertial) angular velocity.
+The camera turns at omega (camera frame): a star at camera vector v0 at the start of the
+exposure is at ``exp(-[omega x] t) v0`` at time t.
 """
 
 from __future__ import annotations
@@ -15,17 +17,33 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from astropy.time import Time
 from scipy.spatial.transform import Rotation
 
 from startrack.camera import Camera
-from startrack.simulate import render_gaussian_psf
+from startrack.simulate import (
+    RSO,
+    Detector,
+    NoiseModel,
+    Optics,
+    Orbit,
+    OrbitalScene,
+    Sensor,
+    Snapshot,
+    magnitude_from_electrons,
+    render_stars,
+)
 
-STEP_PX = 0.2
+EPOCH = Time("2026-03-20T12:00:00", scale="utc")
+OBSERVER_R_KM = np.array([7000.0, 0.0, 0.0])  # on the Sun's side of the Earth: the RSO is lit
+OBSERVER_V_KM_S = np.array([0.0, 7.5, 0.0])
+SUN_KM = np.array([1.496e8, 0.0, 0.0])
+RSO_RANGE_KM = 200.0
 
 
 @dataclass(frozen=True)
 class StreakScene:
-    """A rendered frame and its truth (N objects: the stars, then any RSOs)."""
+    """A rendered frame and its truth (N objects: the stars in the order given, then any RSO)."""
 
     image: np.ndarray
     camera: Camera
@@ -33,39 +51,27 @@ class StreakScene:
     rot_end: Rotation
     omega_rad_s: np.ndarray
     exposure_s: float
-    start_xy: np.ndarray  # (N, 2) pixel positions at the start
+    start_xy: np.ndarray  # (N, 2) pixel positions at the start (simulator truth)
     end_xy: np.ndarray
     icrs: np.ndarray  # (N, 3) reference directions (stars; an RSO's at the start)
     is_rso: np.ndarray  # (N,) bool
 
-    @property
-    def start_vectors(self) -> np.ndarray:
-        return self.camera.pixel_to_vector(self.start_xy[:, 0], self.start_xy[:, 1])
 
-    @property
-    def end_vectors(self) -> np.ndarray:
-        return self.camera.pixel_to_vector(self.end_xy[:, 0], self.end_xy[:, 1])
+def _sensor(exposure_s: float, psf_sigma_px: float, read_noise_e: float) -> Sensor:
+    detector = Detector(read_noise_e=read_noise_e, full_well_e=1e12)
+    return Sensor(Optics(aperture_area_m2=1e-3, psf_sigma_px=psf_sigma_px), detector, exposure_s=exposure_s)
 
 
-def _paths(camera, vectors_cam0, omega, exposure_s, rso_omega_cam):
-    """Pixel paths (N, K, 2) at K mid-step times, and the exact start and end positions."""
-    ends = _project(camera, vectors_cam0, omega, rso_omega_cam, np.array([0.0, exposure_s]))
-    length = np.max(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=-1))
-    steps = max(int(np.ceil(length * 1.7 / STEP_PX)), 1)  # arcs are longer than their chords
-    mid = (np.arange(steps) + 0.5) / steps * exposure_s
-    return _project(camera, vectors_cam0, omega, rso_omega_cam, mid), ends[:, 0], ends[:, 1]
-
-
-def _project(camera, vectors_cam0, omega, rso_omega_cam, times):
-    """Pixel positions (N, T, 2) of the objects at the given times."""
-    out = []
-    for t in times:
-        own = Rotation.from_rotvec(rso_omega_cam * t)  # RSO's own motion (identity for stars)
-        turn = Rotation.from_rotvec(-omega * t)
-        v = turn.apply(own.apply(vectors_cam0))
-        x, y = camera.vector_to_pixel(v)
-        out.append(np.stack([x, y], axis=-1))
-    return np.stack(out, axis=1)
+def _snapshot(rot_start: Rotation, vector_cam0: np.ndarray, own_cam: np.ndarray, exposure_s: float,
+              mag: float) -> Snapshot:
+    """One satellite seen along ``vector_cam0`` at the start, its sight line turning at ``own_cam``
+    (rad/s, camera axes at the start); the snapshot is at mid-exposure (t = 0)."""
+    own = rot_start.inv().apply(own_cam)
+    los_mid = Rotation.from_rotvec(own * exposure_s / 2).apply(rot_start.inv().apply(vector_cam0))
+    r = OBSERVER_R_KM + RSO_RANGE_KM * los_mid
+    v = OBSERVER_V_KM_S + RSO_RANGE_KM * np.cross(own, los_mid)
+    scene = OrbitalScene(Orbit(EPOCH, OBSERVER_R_KM, OBSERVER_V_KM_S), (RSO(Orbit(EPOCH, r, v), 90001, mag),))
+    return Snapshot(EPOCH, OBSERVER_R_KM, OBSERVER_V_KM_S, r[None], v[None], SUN_KM, -SUN_KM / 400, scene)
 
 
 def render_streak_scene(
@@ -82,23 +88,37 @@ def render_streak_scene(
     read_noise_e: float = 5.0,
     rng=None,
 ) -> StreakScene:
-    """Render N objects (camera vectors at the start) turning with the camera for ``exposure_s``.
+    """Simulate N objects (camera vectors at the start, electrons ``flux_e``) for ``exposure_s``.
 
-    ``rso_omega_cam`` (N, 3), rad/s, is each object's own angular velocity across the sky (zero
-    for stars), in camera axes at the start.
+    ``rso_omega_cam`` (N, 3), rad/s: at most one row (the last) non-zero, that object's own
+    angular velocity across the sky in camera axes at the start; it is rendered as a satellite.
     """
-    rng = np.random.default_rng(rng)
     omega = np.asarray(omega_rad_s, dtype=float)
-    n = len(vectors_cam0)
-    own = np.zeros((n, 3)) if rso_omega_cam is None else np.asarray(rso_omega_cam, dtype=float)
-    path, start, end = _paths(camera, vectors_cam0, omega, exposure_s, own)
-    k = path.shape[1]
-    image = render_gaussian_psf((camera.height, camera.width), path[..., 0].ravel(), path[..., 1].ravel(),
-                                np.repeat(np.asarray(flux_e, dtype=float) / k, k), psf_sigma_px)
-    image = rng.poisson(image + background_e).astype(float) + rng.normal(scale=read_noise_e, size=image.shape)
-    rot_end = Rotation.from_rotvec(-omega * exposure_s) * rot_start
-    return StreakScene(image, camera, rot_start, rot_end, omega, exposure_s, start, end,
-                       rot_start.inv().apply(vectors_cam0), np.linalg.norm(own, axis=1) > 0)
+    vectors = np.asarray(vectors_cam0, dtype=float)
+    flux = np.asarray(flux_e, dtype=float)
+    own = np.zeros((len(vectors), 3)) if rso_omega_cam is None else np.asarray(rso_omega_cam, dtype=float)
+    is_rso = np.linalg.norm(own, axis=1) > 0
+    if np.any(is_rso[:-1]):
+        raise ValueError("only the last object may be an RSO")
+    sensor = _sensor(exposure_s, psf_sigma_px, read_noise_e)
+    mags = magnitude_from_electrons(flux, sensor)
+    rot_mid = Rotation.from_rotvec(-omega * exposure_s / 2) * rot_start
+    stars = ~is_rso
+    icrs = rot_start.inv().apply(vectors)
+    orbital = _snapshot(rot_start, vectors[-1], own[-1], exposure_s, float(mags[-1])) if is_rso[-1] else None
+    sim = render_stars(camera, rot_mid, icrs[stars], mags[stars], np.flatnonzero(stars), sensor=sensor,
+                       background_e=background_e, rng=rng, rate_rad_s=omega, orbital=orbital,
+                       noise=NoiseModel(quantize=False, saturate=False, bias=False))
+    t = sim.truth
+    start = np.full((len(vectors), 2), np.nan)
+    end = np.full((len(vectors), 2), np.nan)
+    start[t.ids] = np.stack([t.x_start, t.y_start], axis=1)
+    end[t.ids] = np.stack([t.x_end, t.y_end], axis=1)
+    if orbital is not None:
+        start[-1] = [t.rsos.x_start[0], t.rsos.y_start[0]]
+        end[-1] = [t.rsos.x_end[0], t.rsos.y_end[0]]
+    return StreakScene(np.asarray(sim.image, dtype=float), camera, t.rot_start, t.rot_end, omega, exposure_s,
+                       start, end, icrs, is_rso)
 
 
 def star_field(camera: Camera, omega_rad_s, exposure_s: float, count: int, rng, margin_px: float = 12.0):

@@ -90,3 +90,23 @@ def test_tracker_uses_a_gyro_rate_and_falls_back_when_the_prediction_is_wrong():
     third = tracker.update(*field.stars(attitudes[2]), t_s=0.2, gyro_rate_rad_s=-20 * rate)
     assert third.status is Status.OK and third.mode == "lost-in-space"
     assert attitude_error(attitudes[2], third.rot_cam_from_icrs) < PIXEL
+
+
+def test_update_image_measures_the_rate_of_a_streaked_frame(monkeypatch):
+    # Streaks 15 % of the field: the frame's own rate (ordered by a rough gyro) replaces the gyro's.
+    from startrack.simulate import get_sensor_preset, random_attitude, simulate_frame
+
+    camera = Camera.from_fov(1024, 1024, fov_deg=20.0)
+    rng = np.random.default_rng(1)  # seeds 0, 3, 4 hit a simulator NaN (stars entering the field)
+    omega = 0.05 * np.array([0.6, -0.8, 0.0])  # spin axis in the focal plane: streaks of full length
+    exposure = 0.15 * 20 * DEG / 0.05
+    sim = simulate_frame(camera, random_attitude(rng), sensor=get_sensor_preset("generic-cmos").with_exposure(exposure),
+                         max_mag=6.0, rng=rng, rate_rad_s=omega)
+    tracker = Tracker(camera=camera)
+    passed = []
+    monkeypatch.setattr(tracker, "update", lambda x, y, t_s, gyro_rate_rad_s=None: passed.append(gyro_rate_rad_s))
+    rough = 1.2 * omega
+    tracker.update_image(sim.image, 0.0, gyro_rate_rad_s=rough, streak_exposure_s=exposure, streak_bias_px=0.64)
+    tracker.update_image(sim.image, 0.0, gyro_rate_rad_s=rough)
+    assert np.linalg.norm(passed[0] - omega) < 0.01 * 0.05
+    np.testing.assert_array_equal(passed[1], rough)

@@ -30,6 +30,10 @@ parallel (directions spread by less than ~3 degrees: the spin axis within ~20 de
 focal plane for a 20-degree field), where the bisectors fix no usable centre."""
 
 
+OUTLIER_Z = 3.0
+"""Robust z-score beyond which a streak is left out of the second centre-of-rotation fit."""
+
+
 @dataclass(frozen=True)
 class CentreOfRotation:
     """The least-squares centre of rotation of a set of streaks.
@@ -65,22 +69,53 @@ def dominant_direction(directions: NDArray[np.float64]) -> NDArray[np.float64]:
     return axis if axis[np.argmax(np.abs(axis))] > 0 else -axis
 
 
-def centre_of_rotation(first_xy: ArrayLike, second_xy: ArrayLike, *, max_distance_px: float = 1e5) -> CentreOfRotation:
-    """Centre of rotation of N >= 2 streaks from their ends (N, 2) each (module docstring)."""
+def centre_of_rotation(first_xy: ArrayLike, second_xy: ArrayLike, *, max_distance_px: float = 1e5,
+                       outlier_z: float = OUTLIER_Z) -> CentreOfRotation:
+    """Centre of rotation of N >= 2 streaks from their ends (N, 2) each (module docstring).
+
+    With four or more streaks the fit is repeated without the streaks whose bisectors miss the
+    first centre by more than ``outlier_z`` robust sigmas (an RSO or a corrupted streak would
+    otherwise pull the centre, or make parallel streaks look convergent); the residuals of all
+    streaks are then taken from that centre.
+    """
     p1, p2 = np.asarray(first_xy, dtype=float), np.asarray(second_xy, dtype=float)
     if p1.shape != p2.shape or p1.ndim != 2 or p1.shape[1] != 2 or len(p1) < 2:
         raise InvalidInputError(f"streak ends must be two (N, 2) arrays with N >= 2, got {p1.shape}, {p2.shape}")
     d = _directions(p1, p2)
     mid = 0.5 * (p1 + p2)
     rhs = np.sum(d * mid, axis=1)
-    singular = np.linalg.svd(d, compute_uv=False)
-    axis = dominant_direction(d)
+    cor = _fit(d, mid, rhs, np.ones(len(d), dtype=bool), max_distance_px)
+    if len(d) >= 4:
+        inliers = np.abs(_robust_z(_distances(cor, d, mid, rhs))) <= outlier_z
+        if 3 <= inliers.sum() < len(d):
+            cor = _fit(d, mid, rhs, inliers, max_distance_px)
+    return cor
+
+
+def _fit(d: NDArray, mid: NDArray, rhs: NDArray, use: NDArray[np.bool_], max_distance_px: float) -> CentreOfRotation:
+    """Least-squares centre of the streaks ``use`` (or parallel); residuals of all streaks."""
+    singular = np.linalg.svd(d[use], compute_uv=False)
+    axis = dominant_direction(d[use])
+    parallel = CentreOfRotation(np.full(2, np.nan), True, axis, np.full(len(d), np.nan))
     if singular[-1] < PARALLEL_CONDITION * singular[0]:
-        return CentreOfRotation(np.full(2, np.nan), True, axis, np.full(len(d), np.nan))
-    xy, *_ = np.linalg.lstsq(d, rhs, rcond=None)
-    if np.linalg.norm(xy - mid.mean(axis=0)) > max_distance_px:
-        return CentreOfRotation(np.full(2, np.nan), True, axis, np.full(len(d), np.nan))
+        return parallel
+    xy, *_ = np.linalg.lstsq(d[use], rhs[use], rcond=None)
+    if np.linalg.norm(xy - mid[use].mean(axis=0)) > max_distance_px:
+        return parallel
     return CentreOfRotation(xy, False, axis, d @ xy - rhs)
+
+
+def _distances(cor: CentreOfRotation, d: NDArray, mid: NDArray, rhs: NDArray) -> NDArray[np.float64]:
+    """Bisector residuals (px) of a finite centre, or slope offsets (rad) of parallel streaks."""
+    if not cor.parallel:
+        return cor.residual_px
+    return np.arcsin(np.clip(d @ np.array([-cor.direction[1], cor.direction[0]]), -1.0, 1.0))
+
+
+def _robust_z(values: NDArray[np.float64]) -> NDArray[np.float64]:
+    centre = np.median(values)
+    spread = 1.4826 * float(np.median(np.abs(values - centre)))
+    return (values - centre) / max(spread, 1e-12 * (1.0 + abs(centre)))
 
 
 def group_endpoints(

@@ -72,16 +72,22 @@ def rso_indicators(
     *,
     k_sigma: float = K_SIGMA,
     endpoint_sigma_px: float = 0.3,
+    parallel: bool | None = None,
 ) -> RsoIndicators:
     """The three indicators for N streaks (ends (N, 2) each, in the grouped order A, B).
 
     ``pixel_angle_rad`` converts the endpoint precision into the OLAE residual floor
-    (``2 sqrt(2) endpoint_sigma`` pixel angles).
+    (``2 sqrt(2) endpoint_sigma`` pixel angles). ``parallel`` True forces the slope and length
+    forms even when a finite centre was fitted (None: only when ``cor`` is parallel). With the spin
+    axis near the focal plane the star paths are conics whose bisectors cross at a point that is
+    no centre of rotation, so the centre-of-rotation forms mislead there (:func:`.streak_rate.streak_rate`
+    passes True when the fitted axis is more than 63 deg from the boresight).
     """
     p1, p2 = np.asarray(first_xy, dtype=float), np.asarray(second_xy, dtype=float)
     lengths = np.linalg.norm(p2 - p1, axis=1)
     scale = float(np.median(lengths))
-    if cor.parallel:
+    far = cor.parallel or bool(parallel)
+    if far:
         cor_values, cor_floor = _slopes(p1, p2, cor.direction), 2.0 * endpoint_sigma_px / scale
         disp_values, disp_floor = lengths, 2.0 * endpoint_sigma_px
     else:
@@ -93,4 +99,4 @@ def rso_indicators(
     floors = [cor_floor, disp_floor, 2.0 * np.sqrt(2.0) * endpoint_sigma_px * pixel_angle_rad]
     z = {name: robust_z(values[name], floor) for name, floor in zip(INDICATORS, floors, strict=True)}
     flags = {name: np.abs(z[name]) > k_sigma for name in INDICATORS}
-    return RsoIndicators(values, z, flags, cor.parallel)
+    return RsoIndicators(values, z, flags, far)

@@ -44,6 +44,29 @@ MIN_STREAK_FRACTION = 0.10
 """Streaks shorter than this fraction of the image width are processed as point stars."""
 
 
+RSO_PARALLEL_TAN = 2.0
+"""The RSO indicators use the slope and length forms when the fitted spin axis is more than
+atan(2) = 63 deg from the boresight (its image more than 2 focal lengths from the centre, the
+limit :func:`measure_streaks` uses for the grouping): there the streaks are conics without a
+centre of rotation in the image (:func:`.rso.rso_indicators`)."""
+LENGTH_TOLERANCE = (3.0, 0.05)
+"""Largest difference between a streak's end separation and its moment length: 3 px + 5 %.
+Measured good ends differ by -1.5 to +0.5 px (Harris, minimum eigenvalue) and up to -3 px
+(Trajkovic) before the bias correction, on 10 % and 50 % streaks (docs/attitude_and_rate.md)."""
+
+
+def length_mismatch(ends_xy: ArrayLike, length_moments_px: float,
+                    tolerance: tuple[float, float] = LENGTH_TOLERANCE) -> bool:
+    """True when the ends (2, 2) are farther from the moment length than ``tolerance`` allows.
+
+    The moment length (:class:`.streak_detect.StreakRegion`) does not depend on the corner
+    detector, so it catches an end placed on a false corner along the body or beyond the streak.
+    """
+    ends = np.asarray(ends_xy, dtype=float)
+    separation = float(np.linalg.norm(ends[1] - ends[0]))
+    return abs(separation - length_moments_px) > tolerance[0] + tolerance[1] * length_moments_px
+
+
 @dataclass(frozen=True)
 class StreakMeasurement:
     """Streaks with two clean ends, grouped by exposure time.
@@ -68,13 +91,17 @@ def measure_streaks(
     detector: str = "harris",
     bias_px: float = 0.0,
     min_length_px: float = 6.0,
+    length_tolerance: tuple[float, float] = LENGTH_TOLERANCE,
     find_options: dict | None = None,
     endpoint_options: dict | None = None,
 ) -> StreakMeasurement:
     """Find the streaks of an image, locate and group their ends (module docstring).
 
     ``find_options`` go to :func:`.streak_detect.find_streaks`, ``endpoint_options`` to
-    :func:`.endpoints.locate_endpoints` (with ``detector`` and ``bias_px``). With a ``camera``,
+    :func:`.endpoints.locate_endpoints` (with ``detector`` and ``bias_px``). A streak whose
+    (bias-corrected) end separation differs from its moment length by more than
+    ``length_tolerance`` = (px, fraction of the length) is rejected: one end was put on a false
+    corner (:func:`length_mismatch`). With a ``camera``,
     the centre-of-rotation grouping is checked against the common rotation and streaks whose
     ends fit it better the other way round are swapped (:func:`.catalog_free.regroup`). Fewer
     than two streaks give status TOO_FEW_STARS.
@@ -87,7 +114,7 @@ def measure_streaks(
             continue
         roi = img[region.rows, region.cols] - found.background
         result = locate_endpoints(roi, region.origin_xy, detector, bias_px=bias_px, **(endpoint_options or {}))
-        if result.ok:
+        if result.ok and not length_mismatch(result.xy, region.length_moments_px, length_tolerance):
             kept.append(region)
             ends.append(result.xy)
     rejected = len(found.regions) - len(kept)
@@ -127,6 +154,14 @@ def _checked_groups(ends: NDArray, cor: CentreOfRotation, camera: Camera) -> tup
             group_a, group_b = np.where(swap[:, None], group_b, group_a), np.where(swap[:, None], group_a, group_b)
             best, best_cost = (group_a, group_b), cost
     return best
+
+
+def _axis_off_boresight(omega_rad_s: NDArray) -> bool:
+    """True when the rate's axis is farther than ``atan(RSO_PARALLEL_TAN)`` from +-z (or unknown)."""
+    omega = np.asarray(omega_rad_s, dtype=float)
+    if not np.all(np.isfinite(omega)):
+        return False
+    return bool(np.hypot(omega[0], omega[1]) > RSO_PARALLEL_TAN * abs(omega[2]))
 
 
 @dataclass(frozen=True)
@@ -199,7 +234,7 @@ def streak_rate(
     floor = 2 * np.sqrt(2) * endpoint_sigma_px * pixel_angle
     fit = catalog_free_rate(va, vb, exposure_s, k_sigma=k_sigma, floor_rad=floor)
     rso = rso_indicators(meas.ends_a, meas.ends_b, meas.cor, fit.residuals, pixel_angle, k_sigma=k_sigma,
-                         endpoint_sigma_px=endpoint_sigma_px)
+                         endpoint_sigma_px=endpoint_sigma_px, parallel=_axis_off_boresight(fit.estimate.omega_rad_s))
     swap, known = _ordered(fit.estimate.omega_rad_s, prior_omega_rad_s)
     if swap:
         return StreakRate(_swapped(fit.estimate), meas, vb, va, fit.residuals, rso, known)

@@ -136,14 +136,34 @@ class Tracker:
             step = self._lost_in_space(x, y, t_s)
         return _with_time(step, time.perf_counter() - t0)
 
-    def update_image(self, image, t_s: float, *, detector=None, gyro_rate_rad_s=None) -> TrackStep:
-        """Detect the stars of an image (array or path) and :meth:`update` with them."""
+    def update_image(self, image, t_s: float, *, detector=None, gyro_rate_rad_s=None,
+                     streak_exposure_s: float | None = None, streak_bias_px: float = 0.0) -> TrackStep:
+        """Detect the stars of an image (array or path) and :meth:`update` with them.
+
+        With ``streak_exposure_s`` (s) and a known camera, a streaked image (``choose_mode``)
+        gives its own rate (:func:`startrack.rate.streak_rate.streak_rate`, Harris ends with
+        ``streak_bias_px``), ordered in time by ``gyro_rate_rad_s`` or the tracker's rate; it
+        replaces the gyro rate for this frame. Without an order, or if it fails, the gyro rate
+        (if any) is used.
+        """
         from ..detect import StarDetector
         from ..io import read_image
 
         data = read_image(image).data
+        if streak_exposure_s is not None:
+            gyro_rate_rad_s = self._streak_rate(data, streak_exposure_s, streak_bias_px, gyro_rate_rad_s)
         found = (detector or StarDetector()).detect(data)
         return self.update(found.x, found.y, t_s, gyro_rate_rad_s=gyro_rate_rad_s)
+
+    def _streak_rate(self, data: NDArray, exposure_s: float, bias_px: float, gyro_rate_rad_s) -> NDArray | None:
+        """The rate of a streaked frame (time-ordered by the gyro or tracker rate), else the gyro's."""
+        from ..rate.streak_rate import choose_mode, streak_rate
+
+        prior = gyro_rate_rad_s if gyro_rate_rad_s is not None else self._rate
+        if self._camera is None or prior is None or choose_mode(data).mode != "streak":
+            return gyro_rate_rad_s
+        found = streak_rate(data, self._camera, exposure_s, bias_px=bias_px, prior_omega_rad_s=prior)
+        return found.rate.omega_rad_s if found.rate.ok and found.time_order_known else gyro_rate_rad_s
 
     def reset(self) -> None:
         """Forget the attitude and rate (the next frame is solved lost-in-space)."""
