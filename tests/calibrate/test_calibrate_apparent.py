@@ -22,10 +22,16 @@ from startrack.calibrate.apparent import (
     observer_state,
     rotation_tod_from_icrs,
 )
+from startrack.calibrate.deflection import (
+    deflect_by_planets,
+    deflection_near_planet_rad,
+    limb_deflection_rad,
+    planet_table,
+)
 from startrack.catalog import StarCatalog
 from startrack.errors import InvalidInputError
-from startrack.frames import angle_between, radec_to_vector, random_rotations
-from startrack.units import ARCSEC, DEG
+from startrack.frames import angle_between, normalize, radec_to_vector, random_rotations
+from startrack.units import ARCMIN, ARCSEC, DEG, MAS
 
 DATA = json.loads((Path(__file__).parent / "data" / "apparent_reference.json").read_text())
 TIMES = [entry["time_utc"] for entry in DATA["times"]]
@@ -143,3 +149,43 @@ def test_bad_inputs_raise():
         apparent_vectors(_catalog(), 2020.0)
     with pytest.raises(InvalidInputError, match="not both"):
         observer_state(t, velocity_m_s=[1, 2, 3], orbit=CircularOrbit(700e3, 1.0, 0.0, 0.0, t))
+
+
+def _retarded_direction(table_row, observer_au):
+    """Observer -> planet, the planet moved back along its track by the light time (au/day units)."""
+    c_au_day = 299_792_458.0 * 86_400.0 / 149_597_870_700.0
+    pos, vel = np.asarray(table_row["pv"]["p"]), np.asarray(table_row["pv"]["v"])
+    tau = 0.0
+    for _ in range(3):
+        rel = pos - tau * vel - observer_au
+        tau = np.linalg.norm(rel) / c_au_day
+    return rel / np.linalg.norm(rel), float(np.linalg.norm(rel))
+
+
+@pytest.mark.parametrize("planet", ["jupiter", "saturn"])
+def test_planet_deflection_follows_4GM_over_c2_d_theta_and_pushes_stars_away(planet):
+    t = Time("2024-12-07T00:00:00", scale="utc")  # Jupiter at opposition
+    observer = earth_state(t).position_au
+    toward, dist_au = _retarded_direction(planet_table(t, (planet,))[0], observer)
+    separation = np.array([0.5, 1.0, 5.0, 30.0, 300.0]) * ARCMIN
+    gen = np.random.default_rng(7)
+    side = normalize(np.cross(toward, gen.normal(size=(separation.size, 3))))
+    stars = normalize(np.cos(separation)[:, None] * toward + np.sin(separation)[:, None] * side)
+    seen = deflect_by_planets(stars, observer, t, names=(planet,))
+    expected = deflection_near_planet_rad(planet, dist_au * 149_597_870_700.0, separation)
+    np.testing.assert_allclose(angle_between(seen, stars), expected, rtol=1e-3)
+    assert np.all(angle_between(seen, toward[None]) > separation)  # away from the planet
+    assert expected[0] > 1 * MAS  # half an arcminute away: milliarcseconds, far above rounding
+
+
+def test_planet_deflection_sizes_and_switch():
+    assert limb_deflection_rad("sun") / ARCSEC == pytest.approx(1.751, abs=0.002)
+    assert limb_deflection_rad("jupiter") / MAS == pytest.approx(16.3, abs=0.1)
+    assert limb_deflection_rad("saturn") / MAS == pytest.approx(5.8, abs=0.1)
+    cat, t = _catalog(), _time(TIMES[0])
+    with_planets = apparent_vectors(cat, t, planets=True)
+    change = angle_between(with_planets, apparent_vectors(cat, t))
+    assert np.all(change < 1 * MAS)  # 40 stars, none within degrees of a planet
+    assert np.max(change) > 0.0
+    with pytest.raises(InvalidInputError, match="body"):
+        limb_deflection_rad("pluto")

@@ -5,7 +5,9 @@ Circular 179):
 
 1. **space motion** to the time of observation (:mod:`startrack.catalog.propagation`);
 2. **parallax**: the star seen from the observer's barycentric position, not the barycentre;
-3. **light deflection** by the Sun (general relativity; 1.75 arcsec at the limb, 4 mas at 90 deg);
+3. **light deflection** by the Sun (general relativity; 1.75 arcsec at the limb, 4 mas at 90 deg),
+   optionally first by Jupiter and Saturn (at most 16 and 6 mas, within arcminutes of them;
+   :mod:`.deflection`);
 4. **aberration** from the observer's barycentric velocity: the Earth's orbital motion (annual
    aberration, up to 20.5 arcsec) plus, for a spacecraft, its velocity about the Earth (orbital
    aberration, up to 5.1 arcsec in low orbit; seed 002 §7.5, notes ``seed-002.md`` §1.15 with the
@@ -35,6 +37,7 @@ from ..catalog.star_catalog import StarCatalog
 from ..errors import InvalidInputError
 from ..frames import cross, normalize
 from ..units import MAS
+from .deflection import deflect_by_planets
 
 SPEED_OF_LIGHT_M_S: float = 299_792_458.0
 AU_M: float = 149_597_870_700.0
@@ -236,7 +239,7 @@ def attitude_in_true_of_date(rot_cam_from_icrs: Rotation, time: Time) -> Rotatio
 
 def apparent_vectors(catalog: StarCatalog, time: Time, *, observer: ObserverState | None = None,
                      parallax: bool = True, deflection: bool = True, aberration: bool = True,
-                     frame: str = "icrs") -> NDArray[np.float64]:
+                     planets: bool = False, frame: str = "icrs") -> NDArray[np.float64]:
     """Apparent directions (N, 3) of catalog stars at ``time``.
 
     Parameters
@@ -250,6 +253,9 @@ def apparent_vectors(catalog: StarCatalog, time: Time, *, observer: ObserverStat
         (orbital aberration) or a ground site.
     parallax, deflection, aberration : bool
         Switch the effects off one by one (space motion is always applied).
+    planets : bool
+        Also the light deflection by Jupiter and Saturn (:mod:`.deflection`; milliarcseconds
+        within arcminutes of the planet, ERFA ``ldn``), applied before the Sun's.
     frame : {"icrs", "tod"}
         "icrs": on ICRS axes (astropy's GCRS); "tod": on the true equator and equinox of date
         (astropy's TETE).
@@ -266,6 +272,8 @@ def apparent_vectors(catalog: StarCatalog, time: Time, *, observer: ObserverStat
     v = catalog.vectors(time)
     if parallax:
         v = apply_parallax(v, catalog.parallax_mas, obs.position_au)
+    if deflection and planets:
+        v = deflect_by_planets(v, obs.position_au, time)
     if deflection:
         v = deflect_by_sun(v, obs.sun_to_observer_au)
     if aberration:

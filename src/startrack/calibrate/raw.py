@@ -5,9 +5,13 @@ positions the honest image is the mosaic reduced cell by cell: each 2 x 2 cell (
 order) becomes one pixel, either the **sum** of its four counts (the colour rule of
 :mod:`startrack.io.channels`: counts stay counts) or one colour (``"r"``, ``"g"`` = the sum of
 the two greens, ``"b"``; seed 003 used the green channel of its phone, the best SNR). The result
-has half the resolution: pixel (i, j) of the reduced image is centred on the full-resolution
-position ``(2 i + 0.5, 2 j + 0.5)`` (our convention, pixel centres) - use :func:`full_resolution_xy`
-to go back. The black level is subtracted; nothing is scaled.
+has half the resolution. Pixel (i, j) of the reduced image samples the full-resolution position
+``(2 i + ox, 2 j + oy)`` (our convention, pixel centres), where the *origin* ``(ox, oy)`` is the
+mean position of the sites used inside their cell: (0.5, 0.5) for the sum and for green (two
+diagonal sites), but the R or B site itself for one of those, e.g. (0, 0) for R in an RGGB
+mosaic - half a full-resolution pixel from the cell centre in x and y. :func:`read_raw` stores it
+in the header as ``raw_origin_xy``; :func:`full_resolution_xy` maps positions back with it. The
+black level of every site is subtracted; nothing is scaled.
 
 ``rawpy`` is imported only when a RAW file is read (``pip install rawpy``).
 """
@@ -15,6 +19,7 @@ to go back. The black level is subtracted; nothing is scaled.
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -53,16 +58,43 @@ def bayer_cells(mosaic: NDArray, pattern: NDArray, channel: str | None = None) -
     return out
 
 
-def full_resolution_xy(x: ArrayLike, y: ArrayLike) -> tuple[NDArray, NDArray]:
-    """Positions in a cell-reduced image -> positions in the full-resolution mosaic."""
-    return 2.0 * np.asarray(x, float) + 0.5, 2.0 * np.asarray(y, float) + 0.5
+def cell_origin(pattern: NDArray, channel: str | None = None) -> tuple[float, float]:
+    """Mean (x, y) position, inside a 2 x 2 cell, of the sites :func:`bayer_cells` adds for
+    ``channel`` (full-resolution pixels from the cell's first site): (0.5, 0.5) for the sum."""
+    pattern = np.asarray(pattern)
+    if channel is None:
+        return 0.5, 0.5
+    rows, cols = np.nonzero(np.isin(pattern, _COLOURS[str(channel).lower()]))
+    return float(cols.mean()), float(rows.mean())
+
+
+def full_resolution_xy(x: ArrayLike, y: ArrayLike, origin_xy: tuple[float, float] = (0.5, 0.5)
+                       ) -> tuple[NDArray, NDArray]:
+    """Positions in a cell-reduced image -> positions (x, y) in the full-resolution mosaic.
+
+    ``origin_xy`` is the image's ``header["raw_origin_xy"]`` (:func:`cell_origin`); the default,
+    the cell centre, is right for the sum of the four sites and for green.
+    """
+    return 2.0 * np.asarray(x, float) + origin_xy[0], 2.0 * np.asarray(y, float) + origin_xy[1]
 
 
 def read_raw(path: str | os.PathLike, channel: str | None = None) -> Image:
     """Read a camera RAW file as a cell-reduced single-channel :class:`~startrack.io.Image`.
 
-    The header holds ``Model``, ``ExposureTime`` and ``DateTimeOriginal`` (EXIF format) when
-    LibRaw reports them; ``raw_cells`` = True marks the half-resolution geometry.
+    Parameters
+    ----------
+    path : path
+        Any file LibRaw reads (CR2, NEF, ARW, DNG, ...) with a 2 x 2 Bayer mosaic.
+    channel : {None, "r", "g", "b"}
+        See :func:`bayer_cells`.
+
+    Returns
+    -------
+    Image
+        ``data`` (H // 2, W // 2) int64 counts above the black level. The header holds
+        ``raw_cells`` = True (the half-resolution geometry), ``raw_origin_xy``
+        (:func:`full_resolution_xy`), and when LibRaw reports them ``ExposureTime`` (s) and
+        ``DateTimeOriginal`` (EXIF format, the camera clock) for :func:`.ground.time_from_header`.
     """
     try:
         import rawpy
@@ -70,9 +102,30 @@ def read_raw(path: str | os.PathLike, channel: str | None = None) -> Image:
         raise ImportError("RAW files need rawpy: pip install rawpy") from None
     try:
         with rawpy.imread(os.fspath(path)) as raw:
-            mosaic = raw.raw_image_visible.astype(np.int64) - np.asarray(raw.black_level_per_channel).mean()
-            data = bayer_cells(np.round(mosaic).astype(np.int64), raw.raw_pattern, channel)
-            header = {"raw_cells": True, "Model": getattr(raw, "camera_model", "")}
+            pattern = _bayer_pattern(raw, path)
+            black = np.asarray(raw.black_level_per_channel, dtype=np.int64)[raw.raw_colors_visible]
+            data = bayer_cells(raw.raw_image_visible.astype(np.int64) - black, pattern, channel)
+            header = {"raw_cells": True, "raw_origin_xy": cell_origin(pattern, channel), **_exif(raw)}
     except (rawpy.LibRawError, OSError) as exc:
         raise ImageReadError(f"{path}: not a readable RAW file ({exc})") from exc
-    return Image(data=data, header=header, bit_depth=16, colour=True)
+    return Image(data=data, path=Path(path), header=header, bit_depth=16, colour=True)
+
+
+def _bayer_pattern(raw, path) -> NDArray:
+    pattern = raw.raw_pattern
+    if pattern is None or np.shape(pattern) != (2, 2) or sorted(np.ravel(pattern)) not in ([0, 1, 2, 3], [0, 1, 1, 2]):
+        raise ImageReadError(f"{path}: not a 2 x 2 Bayer mosaic (LibRaw pattern {pattern!r})")
+    return np.asarray(pattern)
+
+
+def _exif(raw) -> dict:
+    """ExposureTime and DateTimeOriginal from LibRaw (``RawPy.other``, rawpy >= 0.25)."""
+    other = getattr(raw, "other", None)
+    out: dict = {}
+    if other is None:
+        return out
+    if other.shutter_speed > 0:
+        out["ExposureTime"] = float(other.shutter_speed)
+    if other.timestamp.year > 1970:  # LibRaw's 0 = unknown; local-time round trip = camera clock
+        out["DateTimeOriginal"] = other.timestamp.strftime("%Y:%m:%d %H:%M:%S")
+    return out

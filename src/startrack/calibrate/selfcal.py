@@ -87,14 +87,19 @@ def affordable_fit(fit: tuple[str, ...], n_stars: int) -> tuple[str, ...]:
     return tuple(ordered[:n])
 
 
+def pinhole_of(camera: Camera) -> Camera:
+    """The camera's focal length with a centred principal point, square pixels and no distortion:
+    the start of every calibration, so that pruning always returns a term to its null value (not
+    to what an earlier round, on other stars, made of it)."""
+    return Camera(width=camera.width, height=camera.height, fx=camera.fx, fy=camera.fx)
+
+
 def _pinhole_on_the_same_stars(frame: CalibrationFrame, cal: CalibrationResult) -> CalibrationResult:
     """Attitude + focal length (no distortion, centred principal point) fitted by plain least
     squares to the stars the calibrated model kept."""
     keep = cal.inliers[0]
     sub = CalibrationFrame(frame.x[keep], frame.y[keep], frame.vectors_icrs[keep], cal.rotations[0])
-    cam = cal.camera
-    start = Camera(width=cam.width, height=cam.height, fx=cam.fx, fy=cam.fx)
-    return calibrate_from_stars(sub, start, fit=PINHOLE_FIT, prune=False, reject_sigma=np.inf)
+    return calibrate_from_stars(sub, pinhole_of(cal.camera), fit=PINHOLE_FIT, prune=False, reject_sigma=np.inf)
 
 
 def self_calibrate(image, *, fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
@@ -126,7 +131,7 @@ def self_calibrate(image, *, fov_deg: float | None = None, fov_range_deg: tuple[
     first_rms = float(np.sqrt(np.mean(solution.residuals_arcsec**2)))
     cal, rounds = None, 0
     for rounds in range(1, max_rounds + 1):  # noqa: B007 (rounds is reported)
-        new_cal = calibrate_from_stars(frame, solution.camera, fit=affordable_fit(fit, len(frame)))
+        new_cal = calibrate_from_stars(frame, pinhole_of(solution.camera), fit=affordable_fit(fit, len(frame)))
         if not new_cal.status:
             break
         new_solution = solve_image(img, camera=new_cal.camera, epoch=epoch)
@@ -139,7 +144,7 @@ def self_calibrate(image, *, fov_deg: float | None = None, fov_range_deg: tuple[
     if cal is None:
         return SelfCalibration(status=Status.OK, reason="too few stars to calibrate; the first solve is kept",
                                solution=solution, first_solve_rms_arcsec=first_rms)
-    final = calibrate_from_stars(frame, cal.camera, fit=affordable_fit(fit, len(frame)))
+    final = calibrate_from_stars(frame, pinhole_of(cal.camera), fit=affordable_fit(fit, len(frame)))
     final = final if final.status else cal
     pinhole = _pinhole_on_the_same_stars(frame, final)
     n = int(np.count_nonzero(final.inliers[0]))
