@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from startrack.calibrate.ground import time_from_header
-from startrack.calibrate.raw import cell_origin, full_resolution_xy, read_raw
 from startrack.errors import ImageReadError
+from startrack.io import read_image
+from startrack.io.raw import cell_origin, full_resolution_xy, read_raw
 from startrack.simulate import render_gaussian_psf
 from startrack.units import PIXEL
 
@@ -105,3 +106,12 @@ def test_cell_origin_and_unreadable_raw(tmp_path):
     bad.write_bytes(b"II*\0" + bytes(64))
     with pytest.raises(ImageReadError, match="not a readable RAW"):
         read_raw(bad)
+
+
+def test_read_image_routes_raw_file_names_through_rawpy(tmp_path):
+    mosaic = np.full((64, 96), 600, dtype=np.uint16)
+    path = tmp_path / "frame.dng"
+    write_dng(path, mosaic)
+    image = read_image(path, channel="g")
+    assert image.data.shape == (32, 48)
+    assert image.header["raw_cells"] is True

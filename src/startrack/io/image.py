@@ -107,6 +107,16 @@ def _sniff(path: Path) -> str:
     )
 
 
+RAW_SUFFIXES = frozenset({".dng", ".cr2", ".cr3", ".nef", ".arw", ".raf", ".orf", ".rw2", ".pef", ".srw"})
+"""Camera RAW file names, decoded through rawpy by :func:`startrack.io.raw.read_raw` (Bayer cells
+reduced to one value each: half the resolution, see that module)."""
+
+
+def _raw_channel(channel: str | int | None) -> str | None:
+    index = channel_index(channel)
+    return None if index is None else "rgb"[index]
+
+
 def read_image(
     source: str | os.PathLike | np.ndarray, *, channel: str | int | None = None
 ) -> Image:
@@ -115,7 +125,8 @@ def read_image(
     Parameters
     ----------
     source : str, Path or ndarray
-        A FITS, PNG, JPEG or TIFF file (8 or 16 bit, grey or colour; float FITS / TIFF), or an
+        A FITS, PNG, JPEG or TIFF file (8 or 16 bit, grey or colour; float FITS / TIFF), a camera
+        RAW file (:data:`RAW_SUFFIXES`, through rawpy, at half resolution), or an
         array of shape (H, W) or (H, W, C) with C = 1 (grey), 2 (grey + alpha), 3 (RGB) or
         4 (RGBA).
     channel : {None, "r", "g", "b", 0, 1, 2}
@@ -145,6 +156,10 @@ def read_image(
             f"source must be a file path or a numpy array, got {type(source).__name__}"
         )
     path = Path(source)
+    if path.suffix.lower() in RAW_SUFFIXES:
+        from .raw import read_raw  # needs rawpy (the "raw" extra); says so if it is missing
+
+        return read_raw(path, channel=_raw_channel(channel))
     if _sniff(path) == "FITS":
         data, header, bit_depth = read_fits(path)
     else:

@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ImageReadError, InvalidInputError
-from ..io.image import Image
+from .image import Image
 
 _COLOURS = {"r": (0,), "g": (1, 3), "b": (2,)}
 
