@@ -138,8 +138,11 @@ def _grid_map(grid: NDArray, centres_y: NDArray, centres_x: NDArray, ys: NDArray
     x0, x1, wx = _axis_weights(centres_x, np.asarray(xs, dtype=float), extrapolate)
     grid = grid.astype(np.float32)
     rows = grid[:, x0] + wx.astype(np.float32) * (grid[:, x1] - grid[:, x0])  # (ny, len(xs))
-    low = rows[y0]
-    return low + wy.astype(np.float32)[:, None] * (rows[y1] - low)
+    low, out = rows[y0], rows[y1]  # two (len(ys), len(xs)) gathers; the blend is done in place
+    out -= low
+    out *= wy.astype(np.float32)[:, None]
+    out += low
+    return out
 
 
 def global_background(image: NDArray) -> BackgroundModel:

@@ -121,12 +121,12 @@ def measure_spots(regions: Regions, signal: NDArray[np.float64]) -> SpotMeasurem
     return SpotMeasurements(
         x=xc, y=yc, flux=regions.sum(signal), weight=total, peak=signal[top],
         peak_x=regions.x[top], peak_y=regions.y[top], area_px=regions.counts,
-        elongation=_elongation(cxx, cyy, cxy), flatness=_flatness(regions, signal, signal[top]),
+        elongation=axis_ratio(cxx, cyy, cxy), flatness=_flatness(regions, signal, signal[top]),
         spread_px2=spread, size_px=np.sqrt(np.maximum(0.5 * (cxx + cyy) - PIXEL_VARIANCE, 0.0)),
     )
 
 
-def _elongation(cxx: NDArray, cyy: NDArray, cxy: NDArray) -> NDArray[np.float64]:
+def axis_ratio(cxx: NDArray, cyy: NDArray, cxy: NDArray) -> NDArray[np.float64]:
     """Ratio of principal axes of the 2 x 2 moment matrices [[cxx, cxy], [cxy, cyy]]."""
     mean = 0.5 * (cxx + cyy)
     half_diff = np.sqrt(0.25 * (cxx - cyy) ** 2 + cxy**2)

@@ -31,11 +31,13 @@ found from the windowed second moment ``v = s_e^2 s_w^2 / (s_e^2 + s_w^2)``.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numpy.typing import NDArray
 from scipy.special import erf
 
-from .windows import Centroids, Windows
+from .windows import Centroids, Windows, fast_median, separable_moments
 
 TOLERANCE_PX = 1e-3
 MAX_ITERATIONS = 20
@@ -81,40 +83,56 @@ def windowed_centroid(windows: Windows, level: NDArray, noise: NDArray, x_start:
         window.
     """
     n = len(windows)
-    sw = np.broadcast_to(np.asarray(window_sigma_px, dtype=float), (n,))[:, None, None]
+    sw = np.broadcast_to(np.asarray(window_sigma_px, dtype=float), (n,))
     signal = windows.values - np.asarray(level, dtype=float)[:, None, None]
     valid = np.isfinite(signal)
-    signal = np.where(valid, signal, 0.0)
-    cx, cy, total = _iterate(windows, signal, np.array(x_start, dtype=float),
-                             np.array(y_start, dtype=float), sw[:, 0, 0])
-    sigma = _sigma(windows, signal, valid, cx, cy, sw, psf_sigma_px, noise, gain_e_per_adu)
+    signal[~valid] = 0.0
+    axes = _Axes.of(windows, sw)
+    cx, cy, total = _iterate(axes, signal, np.array(x_start, dtype=float), np.array(y_start, dtype=float))
+    sigma = _sigma(axes.at(cx, cy), signal, valid, sw * sw, psf_sigma_px, noise, gain_e_per_adu)
     half = windows.half
     inside = (np.abs(cx - (windows.x0 + half)) <= half) & (np.abs(cy - (windows.y0 + half)) <= half)
     ok = inside & (total > 0) & np.isfinite(sigma)
-    return Centroids(x=cx, y=cy, flux=np.full(n, np.nan), sigma_px=sigma,
-                     psf_sigma_px=sw[:, 0, 0].copy(), ok=ok)
+    return Centroids(x=cx, y=cy, flux=np.full(n, np.nan), sigma_px=sigma, psf_sigma_px=sw.copy(), ok=ok)
 
 
-def _iterate(windows: Windows, signal: NDArray, cx: NDArray, cy: NDArray, sw: NDArray
-             ) -> tuple[NDArray, NDArray, NDArray]:
+@dataclass(frozen=True)
+class _Axes:
+    """Per-axis pixel coordinates of N windows, shape (N, S) each, and the Gaussian weight's
+    ``-1 / (2 s_w^2)``, shape (N, 1); with a centre, the per-axis offsets and weights."""
+
+    px: NDArray
+    py: NDArray
+    inv: NDArray
+    dx: NDArray | None = None
+    dy: NDArray | None = None
+    wx: NDArray | None = None
+    wy: NDArray | None = None
+
+    @classmethod
+    def of(cls, windows: Windows, sw: NDArray) -> _Axes:
+        k = np.arange(windows.values.shape[1], dtype=np.float64)
+        return cls(windows.x0[:, None] + k, windows.y0[:, None] + k, (-0.5 / (sw * sw))[:, None])
+
+    def at(self, cx: NDArray, cy: NDArray) -> _Axes:
+        """Offsets and Gaussian weights about the centres (cx, cy), shape (N,) each."""
+        dx, dy = self.px - cx[:, None], self.py - cy[:, None]
+        return _Axes(self.px, self.py, self.inv, dx, dy, np.exp(dx * dx * self.inv),
+                     np.exp(dy * dy * self.inv))
+
+
+def _iterate(axes: _Axes, signal: NDArray, cx: NDArray, cy: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     """The fixed-point (Newton) iteration of the module docstring; returns cx, cy and the last
-    weighted sum. The Gaussian weight is separable, so each step is two small contractions
-    of the (N, S, S) windows with per-axis weights instead of (N, S, S) exponentials."""
-    k = np.arange(signal.shape[1], dtype=np.float64)
-    px, py = windows.x0[:, None] + k, windows.y0[:, None] + k  # (N, S) pixel coordinates
-    inv = (-0.5 / (sw * sw))[:, None]
+    weighted sum. Each step takes the separable weighted moments of the signal."""
     total = np.zeros(len(cx))
     for _ in range(MAX_ITERATIONS):
-        dx, dy = px - cx[:, None], py - cy[:, None]
-        wx, wy = np.exp(dx * dx * inv), np.exp(dy * dy * inv)
-        rows = signal @ np.stack([wx, wx * dx, wx * dx * dx], axis=2)  # (N, S, 3): x sums
-        total = (rows[:, :, 0] * wy).sum(axis=1)
+        at = axes.at(cx, cy)
+        m = separable_moments(signal, at.wx, at.dx, at.wy, at.dy)
+        total = m[:, 0, 0]
         with np.errstate(invalid="ignore", divide="ignore"):
-            first = np.stack([(rows[:, :, 1] * wy).sum(axis=1),
-                              (rows[:, :, 0] * wy * dy).sum(axis=1)]) / total
-            v = ((rows[:, :, 2] * wy).sum(axis=1)
-                 + (rows[:, :, 0] * wy * dy * dy).sum(axis=1)) / (2.0 * total)
-            gain = np.clip(1.0 / (1.0 - v * (-2.0 * inv[:, 0])), 1.0, 4.0)  # 1 / (1 - v / s_w^2)
+            first = np.stack([m[:, 0, 1], m[:, 1, 0]]) / total
+            v = (m[:, 0, 2] + m[:, 2, 0]) / (2.0 * total)
+            gain = np.clip(1.0 / (1.0 + 2.0 * v * axes.inv[:, 0]), 1.0, 4.0)  # 1 / (1 - v / s_w^2)
         step = first * np.where(np.isfinite(gain), gain, 2.0)
         step[~np.isfinite(step)] = 0.0
         np.clip(step, -MAX_STEP_PX, MAX_STEP_PX, out=step)
@@ -125,69 +143,58 @@ def _iterate(windows: Windows, signal: NDArray, cx: NDArray, cy: NDArray, sw: ND
     return cx, cy, total
 
 
-def _weights(xs: NDArray, ys: NDArray, cx: NDArray, cy: NDArray, sw: NDArray) -> NDArray:
-    """Gaussian weights of width ``sw`` about (cx, cy), shape (N, S, S)."""
-    inv = -0.5 / (sw * sw)
-    return np.exp((xs - cx[:, None, None]) ** 2 * inv) * np.exp((ys - cy[:, None, None]) ** 2 * inv)
-
-
-def _sigma(windows: Windows, signal: NDArray, valid: NDArray, cx: NDArray, cy: NDArray,
-           sw: NDArray, psf_sigma_px: NDArray | None, noise: NDArray,
-           gain_e_per_adu: float | None) -> NDArray[np.float64]:
+def _sigma(at: _Axes, signal: NDArray, valid: NDArray, sw2: NDArray, psf_sigma_px: NDArray | None,
+           noise: NDArray, gain_e_per_adu: float | None) -> NDArray[np.float64]:
     """Linearised 1-sigma error per axis (module docstring), the mean of the x and y terms.
 
     The numerator takes the larger of the noise model's value and its empirical value from the
     residuals ``S - A w`` (A fitted by least squares): when the gain is unknown the model has
-    only the background noise, and the residuals add the bright stars' shot noise.
+    only the background noise, and the residuals add the bright stars' shot noise. The sums
+    over ``w^2 r^2`` are the separable moments of the squared axis weights.
     """
-    xs, ys = windows.coords()
-    w = _weights(xs, ys, cx, cy, sw) * valid
-    var = pixel_variance(signal, noise, gain_e_per_adu)
-    r2 = (xs - cx[:, None, None]) ** 2 + (ys - cy[:, None, None]) ** 2
-    sw2 = sw[:, 0, 0] ** 2
     if sw2.size == 0:
         return np.zeros(0)
+    m = separable_moments(signal, at.wx, at.dx, at.wy, at.dy)  # signal is 0 on invalid pixels
     if psf_sigma_px is None:  # one width for the frame: a single star's estimate is noisy
-        sp2 = np.full(sw2.shape, np.median(_psf_variance(w, signal, r2, sw2)))
+        sp2 = np.full(sw2.shape, fast_median(_psf_variance(m, sw2)))
     else:
         sp2 = np.broadcast_to(np.asarray(psf_sigma_px, float) ** 2, sw2.shape)
-    d = (w * signal).sum(axis=(1, 2)) * sw2 / (sp2 + 1.0 / 12 + sw2)
-    lever = w * w * r2
+    d = m[:, 0, 0] * sw2 / (sp2 + 1.0 / 12 + sw2)
     with np.errstate(invalid="ignore", divide="ignore"):
-        shape = _pixel_gaussian(xs, ys, cx, cy, np.sqrt(sp2)) * valid
+        shape = _pixel_gaussian(at, np.sqrt(sp2)) * valid
         residual = _residual(signal, shape, valid)
-        model = (lever * var).sum(axis=(1, 2))
-        empirical = (lever * residual * residual).sum(axis=(1, 2))
-        num = 0.5 * np.maximum(model, empirical)
+        var = pixel_variance(signal, noise, gain_e_per_adu) * valid
+        lever = separable_moments(np.stack([var, residual * residual]), at.wx**2, at.dx, at.wy**2, at.dy)
+        num = 0.5 * np.maximum(*(lever[:, :, 0, 2] + lever[:, :, 2, 0]))
         return np.where(d > 0, np.sqrt(num) / d, np.nan)
 
 
 def _residual(signal: NDArray, shape: NDArray, valid: NDArray) -> NDArray:
-    """``signal - (A shape + B)`` with A, B fitted by linear least squares per window."""
-    n = valid.sum(axis=(1, 2))
-    sx, sy = shape.sum(axis=(1, 2)), (signal * valid).sum(axis=(1, 2))
-    sxx, sxy = (shape * shape).sum(axis=(1, 2)), (shape * signal).sum(axis=(1, 2))
+    """``signal - (A shape + B)`` with A, B fitted by linear least squares per window
+    (``signal`` and ``shape`` are 0 on invalid pixels)."""
+    n, sx, sy, sxx, sxy = np.stack([valid, shape, signal, shape * shape, shape * signal]).sum(axis=(2, 3))
     det = n * sxx - sx * sx
     a = (n * sxy - sx * sy) / det
     b = (sy - a * sx) / n
     return (signal - a[:, None, None] * shape - b[:, None, None]) * valid
 
 
-def _pixel_gaussian(xs: NDArray, ys: NDArray, cx: NDArray, cy: NDArray, s: NDArray) -> NDArray:
-    """Pixel-integrated unit Gaussian of width ``s`` (N,) centred on (cx, cy), (N, S, S)."""
-    scale = 1.0 / (np.sqrt(2.0) * s)[:, None]
-    def share(coords: NDArray, centre: NDArray) -> NDArray:
-        d = coords - centre[:, None]
-        return 0.5 * (erf((d + 0.5) * scale) - erf((d - 0.5) * scale))
-    return share(ys[:, :, 0], cy)[:, :, None] * share(xs[:, 0, :], cx)[:, None, :]
+def _pixel_gaussian(at: _Axes, s: NDArray) -> NDArray:
+    """Pixel-integrated unit Gaussian of width ``s`` (N,) centred on the axes' centre, (N, S, S):
+    per axis, the differences of erf at the S + 1 pixel edges (both axes in one erf call)."""
+    d = np.stack([at.dy, at.dx])  # (2, N, S)
+    edges = np.concatenate([d - 0.5, d[:, :, -1:] + 0.5], axis=2) * (1.0 / (np.sqrt(2.0) * s))[:, None]
+    share = 0.5 * np.diff(erf(edges), axis=2)
+    return share[0][:, :, None] * share[1][:, None, :]
 
 
-def _psf_variance(w: NDArray, signal: NDArray, r2: NDArray, sw2: NDArray) -> NDArray:
-    """PSF variance s_p^2 from the windowed second moment: a pixel-integrated Gaussian is close
-    to a Gaussian of variance s_e^2 = s_p^2 + 1/12, and its moment under the Gaussian weight is
-    v = s_e^2 s_w^2 / (s_e^2 + s_w^2). Clipped to [s_w^2 / 4, 4 s_w^2]."""
+def _psf_variance(m: NDArray, sw2: NDArray) -> NDArray:
+    """PSF variance s_p^2 from the windowed second moment (moments ``m`` of the signal, (N, 3, 3)):
+    a pixel-integrated Gaussian is close to a Gaussian of variance s_e^2 = s_p^2 + 1/12, and its
+    moment under the Gaussian weight is v = s_e^2 s_w^2 / (s_e^2 + s_w^2). Clipped to
+    [s_w^2 / 4, 4 s_w^2]."""
     with np.errstate(invalid="ignore", divide="ignore"):
-        v = 0.5 * (w * signal * r2).sum(axis=(1, 2)) / (w * signal).sum(axis=(1, 2))
+        v = 0.5 * (m[:, 0, 2] + m[:, 2, 0]) / m[:, 0, 0]
         sp2 = v * sw2 / (sw2 - v) - 1.0 / 12
     sp2 = np.where(np.isfinite(sp2) & (v < sw2), sp2, 4.0 * sw2)
     return np.clip(sp2, 0.25 * sw2, 4.0 * sw2)

@@ -55,6 +55,39 @@ class Windows:
         return np.concatenate([v[:, 0, :], v[:, -1, :], v[:, 1:-1, 0], v[:, 1:-1, -1]], axis=1)
 
 
+def separable_moments(q: NDArray, wx: NDArray, dx: NDArray, wy: NDArray, dy: NDArray) -> NDArray:
+    """Weighted moments of windows under separable weights,
+    ``M[..., a, b] = sum_j sum_i wy[n, j] dy[n, j]^a q[..., n, j, i] wx[n, i] dx[n, i]^b``.
+
+    Parameters
+    ----------
+    q : ndarray, shape (..., N, S, S)
+        Window values (one or more stacks of N windows).
+    wx, dx, wy, dy : ndarray, shape (N, S)
+        Per-axis weights and coordinates (columns for x, rows for y).
+
+    Returns
+    -------
+    ndarray, shape (..., N, 3, 3)
+        Moments for a, b in 0, 1, 2: two matrix products instead of (N, S, S) products, which
+        is what makes per-window sums cheap on small windows.
+    """
+    along_x = np.stack([wx, wx * dx, wx * dx * dx], axis=2)  # (N, S, 3)
+    along_y = np.stack([wy, wy * dy, wy * dy * dy], axis=1)  # (N, 3, S)
+    return along_y @ (q @ along_x)
+
+
+def fast_median(values: NDArray) -> NDArray:
+    """Median along the last axis of NaN-free ``values`` (non-empty): ``np.median``'s value
+    from one ``np.partition``, without its overhead on small arrays."""
+    n = values.shape[-1]
+    mid = n // 2
+    if n % 2:
+        return np.partition(values, mid, axis=-1)[..., mid]
+    part = np.partition(values, (mid - 1, mid), axis=-1)
+    return (part[..., mid - 1] + part[..., mid]) / 2.0
+
+
 def extract_windows(data: NDArray, cx: NDArray, cy: NDArray, half: int,
                     invalid: NDArray[np.bool_] | None = None) -> Windows:
     """Cut (2 half + 1)-pixel square windows centred on pixels (cx, cy).
