@@ -19,10 +19,10 @@ from startrack.calibrate.ground import (
     time_from_header,
     unrefract_icrs,
 )
-from startrack.calibrate.raw import bayer_cells, full_resolution_xy
 from startrack.calibrate.sites import BUILTIN_SITES, Site, delete_site, get_site, load_sites, save_site
 from startrack.errors import InvalidInputError
 from startrack.frames import angle_between, radec_to_vector, rotation_from_radec_roll
+from startrack.io.raw import bayer_cells, full_resolution_xy
 from startrack.units import ARCSEC, DEG
 
 SITE = BUILTIN_SITES["logan-ut-2012"]
