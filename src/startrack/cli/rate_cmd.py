@@ -19,9 +19,8 @@ from ..camera import Camera, get_preset
 from ..errors import InvalidInputError
 from ..io import read_image
 from ..rate import RateEstimate, match_frames, rate_from_vectors
-from ..rate.endpoints import DETECTORS
 from ..rate.streak_detect import find_streaks
-from ..rate.streak_rate import StreakRate, streak_rate
+from ..rate.streak_rate import METHODS, SEGMENT, StreakRate, streak_rate
 from ..units import DEG
 from .common import print_json
 
@@ -41,7 +40,8 @@ def build_parser() -> argparse.ArgumentParser:
     camera.add_argument("--fov-deg", type=float, metavar="F", help="horizontal FOV of a pinhole camera, deg")
     parser.add_argument("--exposure-s", type=float, help="exposure of a streaked image, s (one image)")
     parser.add_argument("--dt-s", type=float, help="time between the two images, s (two images)")
-    parser.add_argument("--detector", choices=DETECTORS, default="harris", help="streak endpoint detector")
+    parser.add_argument("--detector", choices=METHODS, default=SEGMENT,
+                        help="streak endpoint method: the segment fit, or a corner detector")
     parser.add_argument("--bias-px", type=float, default=0.0, help="calibrated inward endpoint bias, px")
     parser.add_argument("--prior-rate-deg-s", type=float, nargs=3, metavar=("WX", "WY", "WZ"),
                         help="a rough rate (camera frame) to order the streak ends in time")

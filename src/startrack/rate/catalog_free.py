@@ -60,6 +60,7 @@ def catalog_free_rate(
     floor_rad: float = 1e-5,
     max_rounds: int = 5,
     min_streaks: int = 3,
+    initial_used: ArrayLike | None = None,
 ) -> CatalogFreeRate:
     """Rate between the group-A and group-B ends (N, 3) of N streaks, rejecting outliers.
 
@@ -76,6 +77,9 @@ def catalog_free_rate(
         endpoint precision in radians (2 x 0.1 px x the pixel angle).
     max_rounds, min_streaks : int
         Rejection rounds; fewest streaks to keep.
+    initial_used : array_like of bool, shape (N,), optional
+        The streaks to start from (e.g. a :func:`consensus`); all when None. The median and
+        spread of the residuals are taken over the streaks in use.
 
     Returns
     -------
@@ -92,11 +96,16 @@ def catalog_free_rate(
     if len(a) < 2:
         return CatalogFreeRate(failed(Status.TOO_FEW_STARS, "fewer than two streaks", METHOD),
                                np.full(len(a), np.nan), np.full(3, np.nan))
-    used = np.ones(len(a), dtype=bool)
+    used = np.ones(len(a), dtype=bool) if initial_used is None else np.asarray(initial_used, dtype=bool).copy()
+    if used.sum() < 2:
+        return CatalogFreeRate(failed(Status.TOO_FEW_STARS, "fewer than two streaks", METHOD),
+                               np.full(len(a), np.nan), np.full(3, np.nan))
     for _ in range(max_rounds):
         gibbs = olae_gibbs(b[used], a[used], np.full(used.sum(), 1.0 / used.sum()))
         residuals = olae_residuals(b, a, gibbs)
-        keep = np.abs(robust_z(residuals, floor_rad)) <= k_sigma
+        centre = np.median(residuals[used])
+        spread = max(1.4826 * float(np.median(np.abs(residuals[used] - centre))), floor_rad)
+        keep = np.abs(residuals - centre) <= k_sigma * spread
         if keep.sum() < min(min_streaks, len(a)) or np.array_equal(keep, used):
             break
         used = keep
@@ -108,6 +117,64 @@ def _estimate(gibbs: NDArray[np.float64], exposure_s: float, used: NDArray[np.bo
     norm = np.linalg.norm(gibbs)
     rotvec = gibbs * (2.0 * np.arctan(norm) / norm) if norm > 0 else np.zeros(3)
     return RateEstimate(Status.OK, omega_rad_s=-rotvec / exposure_s, method=METHOD, used=used)
+
+
+@dataclass(frozen=True)
+class Consensus:
+    """The largest set of streaks that agree on one rotation (:func:`consensus`).
+
+    ``used`` (N,) marks the agreeing streaks, ``swap`` (N,) those whose ends must be exchanged
+    to agree, ``gibbs`` (3,) is the rotation refitted on them.
+    """
+
+    used: NDArray[np.bool_]
+    swap: NDArray[np.bool_]
+    gibbs: NDArray[np.float64]
+
+
+def _scores(a: NDArray, b: NDArray, gibbs: NDArray, tolerance: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """Per hypothesis (H, 3) and streak: inlier (either way round), swapped, best residual (H, N)."""
+    direct = olae_residuals(b[None], a[None], gibbs)
+    swapped = olae_residuals(a[None], b[None], gibbs)
+    best = np.minimum(direct, swapped)
+    return best <= tolerance, swapped < direct, best
+
+
+def consensus(
+    vectors_a: ArrayLike,
+    vectors_b: ArrayLike,
+    tolerance: ArrayLike,
+    *,
+    candidates: int = 15,
+    rounds: int = 3,
+) -> Consensus:
+    """The rotation most streaks agree with, from pairs of the first ``candidates`` streaks.
+
+    Not in seed 001 (whose k-sigma rejection starts from all streaks and fails when the bad ones
+    are many: the fragments of faint streaks, stars leaving the field). Each pair of the
+    ``candidates`` first streaks (put the most precise first), with the second one's ends
+    either way round, proposes a rotation (OLAE on two streaks); every streak whose ends fit it,
+    either way round, within its ``tolerance`` (N,) (OLAE residual units, ~ radians) votes
+    for it. The winner is refitted on its voters ``rounds`` times.
+    """
+    a, b = np.asarray(vectors_a, dtype=float), np.asarray(vectors_b, dtype=float)
+    tol = np.broadcast_to(np.asarray(tolerance, dtype=float), (len(a),))
+    first, second = np.triu_indices(min(candidates, len(a)), k=1)
+    pair_a = np.concatenate([np.stack([a[first], a[second]], 1), np.stack([a[first], b[second]], 1)])
+    pair_b = np.concatenate([np.stack([b[first], b[second]], 1), np.stack([b[first], a[second]], 1)])
+    gibbs = olae_gibbs(pair_b, pair_a, np.full(pair_a.shape[:2], 0.5))
+    inlier, _, best = _scores(a, b, gibbs, tol)
+    votes = inlier.sum(axis=1) - 1e-6 * np.where(inlier, best / tol, 0.0).sum(axis=1)
+    g = gibbs[np.argmax(votes)]
+    for _ in range(rounds):
+        inlier, swap, _ = _scores(a, b, g[None], tol)
+        used, swap = inlier[0], swap[0]
+        if used.sum() < 2:
+            break
+        aa, bb = np.where(swap[:, None], b, a), np.where(swap[:, None], a, b)
+        g = olae_gibbs(bb[used], aa[used], np.full(used.sum(), 1.0 / used.sum()))
+    inlier, swap, _ = _scores(a, b, g[None], tol)
+    return Consensus(inlier[0], swap[0], g)
 
 
 def regroup(vectors_a: ArrayLike, vectors_b: ArrayLike, *, rounds: int = 2) -> NDArray[np.bool_]:

@@ -1,11 +1,14 @@
 """The streaked-image chain of seed 001: streaks -> endpoints -> groups -> rate (and attitudes).
 
 Seed 001 §3-4 (notes seed-001-004 §1.23). :func:`measure_streaks` finds the streaks
-(:mod:`.streak_detect`), locates both ends of each (:mod:`.endpoints`) and groups them into the
-two exposure times (:mod:`.grouping`). Then either
+(:mod:`.streak_detect`), locates both ends of each (by default a blurred-segment fit,
+:mod:`.segment_fit`, which works on faint catalog streaks; or the seed's corner detectors,
+:mod:`.endpoints`) and groups them into the two exposure times (:mod:`.grouping`, then the
+rotation most streaks agree with, :func:`.catalog_free.consensus`). Then either
 
 - :func:`streak_rate` (seed 001 ch. 4, no catalog): OLAE between the groups with outlier
-  rejection (:mod:`.catalog_free`) and the three RSO indicators (:mod:`.rso`); or
+  rejection (:mod:`.catalog_free`), a trust check (:mod:`.trust`: no rate when too few streaks
+  agree or its uncertainty exceeds 5 %) and the three RSO indicators (:mod:`.rso`); or
 - :func:`streak_attitudes` (seed 001 ch. 3): identify the group-A ends lost-in-space against the
   catalog, reuse the same identities for the group-B ends (they are the same stars), solve the
   attitude at both ends (ESOQ2, as the seed) and take the rate between them
@@ -26,19 +29,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy import ndimage
 from scipy.spatial.transform import Rotation
 
 from ..attitude import solve_wahba
 from ..camera import Camera
 from ..errors import InvalidInputError
 from ..results import AttitudeSolution, Status
-from .catalog_free import catalog_free_rate, regroup
-from .endpoints import locate_endpoints
+from .catalog_free import CatalogFreeRate, catalog_free_rate, consensus, regroup
+from .endpoints import DETECTORS, locate_endpoints
 from .estimate import RateEstimate, failed
 from .from_attitudes import rate_between
 from .grouping import CentreOfRotation, centre_of_rotation, group_endpoints
 from .rso import RsoIndicators, rso_indicators
+from .segment_fit import BAND_PX, fit_segment
 from .streak_detect import StreakRegion, find_streaks
+from .trust import MAX_RELATIVE_UNCERTAINTY, consensus_tolerance_px, consistency, rate_covariance
 
 MIN_STREAK_FRACTION = 0.10
 """Streaks shorter than this fraction of the image width are processed as point stars."""
@@ -67,12 +73,28 @@ def length_mismatch(ends_xy: ArrayLike, length_moments_px: float,
     return abs(separation - length_moments_px) > tolerance[0] + tolerance[1] * length_moments_px
 
 
+SEGMENT = "segment"
+"""The blurred-segment fit (:mod:`.segment_fit`): the default endpoint method."""
+METHODS = (SEGMENT, *DETECTORS)
+SEGMENT_FIND_OPTIONS = {"line_filter_px": 25.0, "threshold_sigma": 5.0, "margin_px": 6}
+"""Segmentation for the segment fit: a 25-px line filter at 5 sigma keeps faint streaks whole."""
+MAX_END_SIGMA_PX = 2.0
+"""Segment fits whose ends are less precise than this (1 sigma along the streak) are dropped."""
+BLUR_TOLERANCE = 0.35
+"""Largest relative difference of a streak's fitted blur from the median (one PSF for all)."""
+CHI2_FACTOR = 3.0
+"""Largest chi-square per pixel of a segment fit relative to the median (crossing streaks)."""
+
+
 @dataclass(frozen=True)
 class StreakMeasurement:
     """Streaks with two clean ends, grouped by exposure time.
 
     ``ends_a`` and ``ends_b`` (N, 2) are the pixel ends of the N kept streaks (``regions``);
-    ``rejected`` counts the regions without two clean ends.
+    ``rejected`` counts the regions without two clean ends; ``end_sigma_px`` (N,) is each end's
+    1-sigma precision (px; the segment fit's, or a nominal 0.3 px for the corner detectors);
+    ``agree`` (N,) marks the streaks consistent with one common rotation (all True when it was
+    not checked: no camera, or a corner detector).
     """
 
     status: Status
@@ -82,32 +104,12 @@ class StreakMeasurement:
     ends_b: NDArray[np.float64]
     cor: CentreOfRotation | None
     rejected: int
+    end_sigma_px: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    agree: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
 
-def measure_streaks(
-    image: ArrayLike,
-    camera: Camera | None = None,
-    *,
-    detector: str = "harris",
-    bias_px: float = 0.0,
-    min_length_px: float = 6.0,
-    length_tolerance: tuple[float, float] = LENGTH_TOLERANCE,
-    find_options: dict | None = None,
-    endpoint_options: dict | None = None,
-) -> StreakMeasurement:
-    """Find the streaks of an image, locate and group their ends (module docstring).
-
-    ``find_options`` go to :func:`.streak_detect.find_streaks`, ``endpoint_options`` to
-    :func:`.endpoints.locate_endpoints` (with ``detector`` and ``bias_px``). A streak whose
-    (bias-corrected) end separation differs from its moment length by more than
-    ``length_tolerance`` = (px, fraction of the length) is rejected: one end was put on a false
-    corner (:func:`length_mismatch`). With a ``camera``,
-    the centre-of-rotation grouping is checked against the common rotation and streaks whose
-    ends fit it better the other way round are swapped (:func:`.catalog_free.regroup`). Fewer
-    than two streaks give status TOO_FEW_STARS.
-    """
-    img = np.asarray(image, dtype=float)
-    found = find_streaks(img, **(find_options or {}))
+def _corner_ends(img, found, detector, bias_px, min_length_px, length_tolerance, endpoint_options):
+    """Regions and ends (N, 2, 2) located by a corner detector, checked against the moment length."""
     kept, ends = [], []
     for region in found.regions:
         if region.length_moments_px < min_length_px:
@@ -117,6 +119,73 @@ def measure_streaks(
         if result.ok and not length_mismatch(result.xy, region.length_moments_px, length_tolerance):
             kept.append(region)
             ends.append(result.xy)
+    return kept, ends, np.full(len(kept), 0.3)
+
+
+def _segment_ends(img, found, min_length_px):
+    """Regions, ends (N, 2, 2) and end sigmas (N,) from the segment fit, with a common blur."""
+    fits = []
+    for region in found.regions:
+        labels = found.labels[region.rows, region.cols]
+        others = ndimage.binary_dilation((labels > 0) & (labels != _label_of(region, found.labels)), iterations=3)
+        result = fit_segment(img[region.rows, region.cols] - found.background, region.origin_xy,
+                             region.centroid_xy, region.direction, found.noise, mask=~others, image_shape=img.shape,
+                             band_px=BAND_PX + 2.0 * region.width_px)
+        length = np.linalg.norm(result.xy[1] - result.xy[0])
+        if result.ok and length >= min_length_px and np.max(result.sigma_xy_px) <= MAX_END_SIGMA_PX:
+            fits.append((region, result))
+    if not fits:
+        return [], [], np.zeros(0)
+    blur = np.array([f.blur_px for _, f in fits])
+    chi2 = np.array([f.reduced_chi2 for _, f in fits])
+    common = (np.abs(blur / np.median(blur) - 1.0) <= BLUR_TOLERANCE) & (chi2 <= CHI2_FACTOR * np.median(chi2))
+    fits = [f for f, ok in zip(fits, common, strict=True) if ok]
+    return [r for r, _ in fits], [f.xy for _, f in fits], np.array([np.max(f.sigma_xy_px) for _, f in fits])
+
+
+def _label_of(region: StreakRegion, labels: NDArray) -> int:
+    """The label of a region: the most common non-zero label inside its ROI's unpadded core."""
+    values = labels[region.rows, region.cols]
+    values = values[values > 0]
+    return int(np.bincount(values).argmax()) if values.size else 0
+
+
+def measure_streaks(
+    image: ArrayLike,
+    camera: Camera | None = None,
+    *,
+    detector: str = SEGMENT,
+    bias_px: float = 0.0,
+    min_length_px: float = 6.0,
+    length_tolerance: tuple[float, float] = LENGTH_TOLERANCE,
+    find_options: dict | None = None,
+    endpoint_options: dict | None = None,
+) -> StreakMeasurement:
+    """Find the streaks of an image, locate and group their ends (module docstring).
+
+    ``detector`` is ``"segment"`` (the blurred-segment fit, :mod:`.segment_fit`, on a
+    line-filtered segmentation) or a corner detector of :mod:`.endpoints`. ``find_options`` go
+    to :func:`.streak_detect.find_streaks`, ``endpoint_options`` to
+    :func:`.endpoints.locate_endpoints` (with ``detector`` and ``bias_px``). With a corner
+    detector, a streak whose (bias-corrected) end separation differs from its moment length by
+    more than ``length_tolerance`` = (px, fraction of the length) is rejected: one end was put
+    on a false corner (:func:`length_mismatch`). With a ``camera``,
+    the centre-of-rotation grouping is checked against the common rotation and streaks whose
+    ends fit it better the other way round are swapped (:func:`.catalog_free.regroup`); with
+    the segment fit, the largest set of streaks agreeing on one rotation is found first
+    (:func:`.catalog_free.consensus`, marked in ``agree``). Fewer than two streaks give status
+    TOO_FEW_STARS.
+    """
+    if detector not in METHODS:
+        raise InvalidInputError(f"detector must be one of {', '.join(METHODS)}, got {detector!r}")
+    img = np.asarray(image, dtype=float)
+    defaults = SEGMENT_FIND_OPTIONS if detector == SEGMENT else {}
+    found = find_streaks(img, **(defaults | (find_options or {})))
+    if detector == SEGMENT:
+        kept, ends, sigmas = _segment_ends(img, found, min_length_px)
+    else:
+        kept, ends, sigmas = _corner_ends(img, found, detector, bias_px, min_length_px, length_tolerance,
+                                          endpoint_options)
     rejected = len(found.regions) - len(kept)
     if len(kept) < 2:
         empty = np.zeros((0, 2))
@@ -127,11 +196,24 @@ def measure_streaks(
     # poorly fixed by nearly parallel bisectors: use the parallel forms (seed 001's trigger).
     far = 1e5 if camera is None else 2.0 * camera.fx
     cor = centre_of_rotation(ends[:, 0], ends[:, 1], max_distance_px=far)
+    agree = np.ones(len(kept), dtype=bool)
     if camera is None or len(kept) < 3:
         group_a, group_b, _ = group_endpoints(ends[:, 0], ends[:, 1], cor)
+    elif detector == SEGMENT:
+        group_a, group_b, agree = _consensus_groups(ends, cor, sigmas, camera)
     else:
         group_a, group_b = _checked_groups(ends, cor, camera)
-    return StreakMeasurement(Status.OK, "", kept, group_a, group_b, cor, rejected)
+    return StreakMeasurement(Status.OK, "", kept, group_a, group_b, cor, rejected, sigmas, agree)
+
+
+def _consensus_groups(ends: NDArray, cor: CentreOfRotation, sigmas: NDArray, camera: Camera):
+    """Groups by the centre of rotation, corrected by the consensus rotation; agreeing streaks."""
+    group_a, group_b, _ = group_endpoints(ends[:, 0], ends[:, 1], cor)
+    va = camera.pixel_to_vector(group_a[:, 0], group_a[:, 1])
+    vb = camera.pixel_to_vector(group_b[:, 0], group_b[:, 1])
+    found = consensus(va, vb, consensus_tolerance_px(sigmas) / camera.fx)
+    swap = found.swap[:, None]
+    return np.where(swap, group_b, group_a), np.where(swap, group_a, group_b), found.used
 
 
 def _checked_groups(ends: NDArray, cor: CentreOfRotation, camera: Camera) -> tuple[NDArray, NDArray]:
@@ -199,11 +281,11 @@ def streak_rate(
     camera: Camera,
     exposure_s: float,
     *,
-    detector: str = "harris",
+    detector: str = SEGMENT,
     bias_px: float = 0.0,
     prior_omega_rad_s: ArrayLike | None = None,
     k_sigma: float = 2.5,
-    endpoint_sigma_px: float = 0.3,
+    endpoint_sigma_px: float | None = None,
     measurement: StreakMeasurement | None = None,
 ) -> StreakRate:
     """Catalog-free rate and RSO candidates of one streaked image (module docstring).
@@ -221,7 +303,8 @@ def streak_rate(
     prior_omega_rad_s : array_like, shape (3,), optional
         A rough rate of the right sign, to order the two ends in time.
     k_sigma, endpoint_sigma_px : float
-        Outlier threshold and the endpoint precision that sets the indicators' floors.
+        Outlier threshold and the endpoint precision (px) that sets the indicators' floors;
+        None takes the measurement's median end precision.
     measurement : StreakMeasurement, optional
         Reuse an earlier :func:`measure_streaks` of this image.
     """
@@ -231,14 +314,46 @@ def streak_rate(
     va = camera.pixel_to_vector(meas.ends_a[:, 0], meas.ends_a[:, 1])
     vb = camera.pixel_to_vector(meas.ends_b[:, 0], meas.ends_b[:, 1])
     pixel_angle = 1.0 / camera.fx
+    if endpoint_sigma_px is None:
+        endpoint_sigma_px = float(np.median(meas.end_sigma_px)) if len(meas.end_sigma_px) else 0.3
     floor = 2 * np.sqrt(2) * endpoint_sigma_px * pixel_angle
-    fit = catalog_free_rate(va, vb, exposure_s, k_sigma=k_sigma, floor_rad=floor)
+    agree = meas.agree if len(meas.agree) == len(va) else None
+    fit = catalog_free_rate(va, vb, exposure_s, k_sigma=k_sigma, floor_rad=floor, initial_used=agree)
+    fit = _checked(fit, meas, camera, va + vb, exposure_s)
     rso = rso_indicators(meas.ends_a, meas.ends_b, meas.cor, fit.residuals, pixel_angle, k_sigma=k_sigma,
                          endpoint_sigma_px=endpoint_sigma_px, parallel=_axis_off_boresight(fit.estimate.omega_rad_s))
     swap, known = _ordered(fit.estimate.omega_rad_s, prior_omega_rad_s)
     if swap:
         return StreakRate(_swapped(fit.estimate), meas, vb, va, fit.residuals, rso, known)
     return StreakRate(fit.estimate, meas, va, vb, fit.residuals, rso, known)
+
+
+def _checked(fit: CatalogFreeRate, meas: StreakMeasurement, camera: Camera, vectors: NDArray,
+             exposure_s: float) -> CatalogFreeRate:
+    """The fit with its covariance, or a not-OK one saying why its streaks do not support it
+    (:func:`consistency`, and a 3-sigma uncertainty above :data:`MAX_RELATIVE_UNCERTAINTY`).
+
+    The covariance of :func:`rate_covariance` is scaled up by the Birge ratio (rms of the OLAE
+    residuals over their expected size) when the streaks scatter more than their fits claim."""
+    est = fit.estimate
+    if not est.ok:
+        return fit
+    status, reason = consistency(est.used, fit.residuals * camera.fx, meas.end_sigma_px)
+    cov = None
+    if status is Status.OK and len(meas.end_sigma_px) == len(vectors):
+        sigma = meas.end_sigma_px[est.used]
+        birge = np.sqrt(np.mean((fit.residuals[est.used] * camera.fx / (np.sqrt(2.0) * sigma)) ** 2))
+        cov = rate_covariance(vectors[est.used], sigma, camera.fx, exposure_s) * max(birge, 1.0) ** 2
+        relative = 3.0 * np.sqrt(np.trace(cov)) / max(np.linalg.norm(est.omega_rad_s), 1e-12)
+        if relative > MAX_RELATIVE_UNCERTAINTY:
+            limit = 100 * MAX_RELATIVE_UNCERTAINTY
+            status, reason = Status.DEGENERATE, (f"rate uncertain by {100 * relative:.1f} % (3 sigma, > {limit:.0f} %):"
+                                                 " too few or too imprecise streaks")
+    if status is Status.OK:
+        return CatalogFreeRate(RateEstimate(Status.OK, "", est.omega_rad_s, cov, est.method, est.used),
+                               fit.residuals, fit.gibbs)
+    return CatalogFreeRate(RateEstimate(status, reason, np.full(3, np.nan), cov, est.method, est.used),
+                           fit.residuals, fit.gibbs)
 
 
 @dataclass(frozen=True)
