@@ -110,3 +110,15 @@ def test_update_image_measures_the_rate_of_a_streaked_frame(monkeypatch):
     tracker.update_image(sim.image, 0.0, gyro_rate_rad_s=rough)
     assert np.linalg.norm(passed[0] - omega) < 0.01 * 0.05
     np.testing.assert_array_equal(passed[1], rough)
+
+
+def test_update_image_with_the_dynamic_threshold_tracks_a_faint_frame():
+    from startrack.simulate import get_sensor_preset, simulate_frame
+    from startrack.track import TrackerOptions
+
+    truth = random_rotations(None, rng=31)
+    sensor = get_sensor_preset("generic-cmos").with_exposure(0.05)  # a short, faint exposure
+    image = simulate_frame(CAMERA, truth, max_mag=8.0, sensor=sensor, rng=2).image
+    tracker = Tracker(camera=CAMERA, options=TrackerOptions(target_stars=25))
+    step = tracker.update_image(image, 0.0)
+    assert step.status is Status.OK and attitude_error(truth, step.rot_cam_from_icrs) < 2 * PIXEL

@@ -58,6 +58,9 @@ class TrackerOptions:
         Weight of the newest frame-to-frame rate in the smoothed rate (0 < gain <= 1).
     catalog_max_mag : float
         Faintest catalog star predicted (V).
+    target_stars : int or None
+        For :meth:`Tracker.update_image`: detect with the dynamic threshold aiming at this many
+        stars (None: the detector's default k-sigma threshold).
     """
 
     min_stars: int = 5
@@ -68,6 +71,7 @@ class TrackerOptions:
     max_residual_px: float = 1.0
     rate_gain: float = 0.5
     catalog_max_mag: float = 9.5
+    target_stars: int | None = None
 
 
 @dataclass(frozen=True)
@@ -141,10 +145,16 @@ class Tracker:
         """Detect the stars of an image (array or path) and :meth:`update` with them.
 
         With ``streak_exposure_s`` (s) and a known camera, a streaked image (``choose_mode``)
-        gives its own rate (:func:`startrack.rate.streak_rate.streak_rate`, Harris ends with
-        ``streak_bias_px``), ordered in time by ``gyro_rate_rad_s`` or the tracker's rate; it
-        replaces the gyro rate for this frame. Without an order, or if it fails, the gyro rate
-        (if any) is used.
+        gives its own rate (:func:`startrack.rate.streak_rate.streak_rate` with Harris endpoints,
+        which take a fraction of a second where the fitted segments of the default can take
+        seconds on long streaks; ends corrected by ``streak_bias_px``; a rate its consistency
+        checks refuse is not used), ordered in time by ``gyro_rate_rad_s`` or
+        the tracker's rate; it replaces the gyro rate for this frame. Without an order, or if it
+        fails, the gyro rate (if any) is used.
+
+        Without a ``detector``, stars are detected with :attr:`TrackerOptions.target_stars`:
+        None uses the default k-sigma threshold, a number the dynamic threshold that adapts to
+        reach that many stars (seed 000 §8.2.3).
         """
         from ..detect import StarDetector
         from ..io import read_image
@@ -152,7 +162,10 @@ class Tracker:
         data = read_image(image).data
         if streak_exposure_s is not None:
             gyro_rate_rad_s = self._streak_rate(data, streak_exposure_s, streak_bias_px, gyro_rate_rad_s)
-        found = (detector or StarDetector()).detect(data)
+        if detector is None:
+            target = self.options.target_stars
+            detector = StarDetector() if target is None else StarDetector(threshold="dynamic", target_stars=target)
+        found = detector.detect(data)
         return self.update(found.x, found.y, t_s, gyro_rate_rad_s=gyro_rate_rad_s)
 
     def _streak_rate(self, data: NDArray, exposure_s: float, bias_px: float, gyro_rate_rad_s) -> NDArray | None:
@@ -162,7 +175,8 @@ class Tracker:
         prior = gyro_rate_rad_s if gyro_rate_rad_s is not None else self._rate
         if self._camera is None or prior is None or choose_mode(data).mode != "streak":
             return gyro_rate_rad_s
-        found = streak_rate(data, self._camera, exposure_s, bias_px=bias_px, prior_omega_rad_s=prior)
+        found = streak_rate(data, self._camera, exposure_s, detector="harris", bias_px=bias_px,
+                            prior_omega_rad_s=prior)
         return found.rate.omega_rad_s if found.rate.ok and found.time_order_known else gyro_rate_rad_s
 
     def reset(self) -> None:
