@@ -22,13 +22,13 @@ SVD covariance exactly.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ..frames import cross
 from ._inputs import normalised_weights
 from ._refine import refine
-from .wahba import WahbaResult, attitude_profile_matrix, solve_with
+from .wahba import attitude_profile_matrix, wahba_solver
 
 NEWTON_MAX_ITER = 60
 NEWTON_TOL = 1e-15
@@ -93,18 +93,8 @@ def foam_covariance(
     return (sigma_tot2 / zeta)[:, None, None] * (kappa[:, None, None] * np.eye(3) + bbt)
 
 
-def foam(
-    observed: ArrayLike,
-    reference: ArrayLike,
-    weights: ArrayLike | None = None,
-    *,
-    sigma_rad: ArrayLike | None = None,
-) -> WahbaResult:
-    """Solve Wahba's problem by Markley's FOAM.
-
-    Same parameters and result as :func:`startrack.attitude.wahba.solve_wahba`:
-    ``result.rotation.apply(reference) ~ observed``, with the FOAM covariance.
-    """
-    return solve_with(
-        foam_quaternions, observed, reference, weights, sigma_rad=sigma_rad, covariance=foam_covariance
-    )
+foam = wahba_solver(
+    foam_quaternions, foam_covariance, name="foam", module=__name__,
+    summary="Solve Wahba's problem by Markley's FOAM.",
+    covariance_name="the FOAM covariance",
+)

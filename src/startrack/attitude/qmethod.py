@@ -10,9 +10,9 @@ and the reference the faster ones are compared with.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
-from .wahba import WahbaResult, attitude_profile_matrix, davenport_matrix, solve_with
+from .wahba import attitude_profile_matrix, davenport_matrix, wahba_solver
 
 
 def q_method_quaternions(
@@ -28,16 +28,7 @@ def q_method_quaternions(
     return vectors[..., :, 3]
 
 
-def q_method(
-    observed: ArrayLike,
-    reference: ArrayLike,
-    weights: ArrayLike | None = None,
-    *,
-    sigma_rad: ArrayLike | None = None,
-) -> WahbaResult:
-    """Solve Wahba's problem by Davenport's q-method.
-
-    Same parameters and result as :func:`startrack.attitude.wahba.solve_wahba` (without
-    ``method``): ``result.rotation.apply(reference) ~ observed``.
-    """
-    return solve_with(q_method_quaternions, observed, reference, weights, sigma_rad=sigma_rad)
+q_method = wahba_solver(
+    q_method_quaternions, name="q_method", module=__name__,
+    summary="Solve Wahba's problem by Davenport's q-method.",
+)

@@ -21,11 +21,11 @@ differs from it at second order in the noise.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ._inputs import normalised_weights
-from .wahba import WahbaResult, attitude_profile_matrix, solve_with
+from .wahba import attitude_profile_matrix, wahba_solver
 
 
 def _signed_svd(profile: NDArray[np.float64]):
@@ -62,18 +62,8 @@ def svd_covariance(
     return sigma_tot2[:, None, None] * (u * diag[:, None, :]) @ np.swapaxes(u, -1, -2)
 
 
-def svd_method(
-    observed: ArrayLike,
-    reference: ArrayLike,
-    weights: ArrayLike | None = None,
-    *,
-    sigma_rad: ArrayLike | None = None,
-) -> WahbaResult:
-    """Solve Wahba's problem by Markley's SVD method.
-
-    Same parameters and result as :func:`startrack.attitude.wahba.solve_wahba`:
-    ``result.rotation.apply(reference) ~ observed``, with the SVD covariance.
-    """
-    return solve_with(
-        svd_quaternions, observed, reference, weights, sigma_rad=sigma_rad, covariance=svd_covariance
-    )
+svd_method = wahba_solver(
+    svd_quaternions, svd_covariance, name="svd_method", module=__name__,
+    summary="Solve Wahba's problem by Markley's SVD method.",
+    covariance_name="the SVD covariance",
+)

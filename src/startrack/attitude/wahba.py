@@ -247,6 +247,32 @@ def solve_with(
     return WahbaResult(rotation[0], float(loss[0]), cov0, status[0], reason[0])
 
 
+SOLVER_DOC = """
+
+    Same parameters and result as :func:`solve_wahba` (without ``method``):
+    ``result.rotation.apply(reference) ~ observed``, with {covariance}."""
+
+
+def wahba_solver(core: SolverCore, covariance: CovarianceCore = quest_covariance_core, *, name: str,
+                 module: str, summary: str, covariance_name: str = "the QUEST covariance"
+                 ) -> Callable[..., WahbaResult]:
+    """The public function of a solver module: its core run through :func:`solve_with`.
+
+    Every solver has the same signature ``(observed, reference, weights=None, *,
+    sigma_rad=None) -> WahbaResult``; this builds it once instead of in every module.
+    ``summary`` is the first line of its docstring, ``name`` and ``module`` its identity.
+    """
+
+    def solve(observed: ArrayLike, reference: ArrayLike, weights: ArrayLike | None = None, *,
+              sigma_rad: ArrayLike | None = None) -> WahbaResult:
+        return solve_with(core, observed, reference, weights, sigma_rad=sigma_rad, covariance=covariance)
+
+    solve.__name__ = solve.__qualname__ = name
+    solve.__module__ = module
+    solve.__doc__ = summary + SOLVER_DOC.format(covariance=covariance_name)
+    return solve
+
+
 def solve_wahba(
     observed: ArrayLike,
     reference: ArrayLike,
