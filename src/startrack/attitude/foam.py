@@ -26,9 +26,8 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ..frames import cross
-from ._inputs import normalised_weights
 from ._refine import refine
-from .wahba import attitude_profile_matrix, wahba_solver
+from .wahba import attitude_profile_matrix, sigma_weighted_profile, wahba_solver
 
 NEWTON_MAX_ITER = 60
 NEWTON_TOL = 1e-15
@@ -85,9 +84,7 @@ def foam_covariance(
     sigma_rad: NDArray[np.float64],
 ) -> NDArray[np.float64]:
     """FOAM covariance (M, 3, 3), camera frame, rad^2 (module docstring)."""
-    inv_var = 1.0 / sigma_rad**2
-    sigma_tot2 = 1.0 / inv_var.sum(axis=-1)
-    profile = attitude_profile_matrix(observed, reference, normalised_weights(inv_var))
+    sigma_tot2, profile = sigma_weighted_profile(observed, reference, sigma_rad)
     _, kappa, zeta, _, _ = foam_parts(profile)
     bbt = profile @ np.swapaxes(profile, -1, -2)
     return (sigma_tot2 / zeta)[:, None, None] * (kappa[:, None, None] * np.eye(3) + bbt)

@@ -24,8 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ._inputs import normalised_weights
-from .wahba import attitude_profile_matrix, wahba_solver
+from .wahba import attitude_profile_matrix, sigma_weighted_profile, wahba_solver
 
 
 def _signed_svd(profile: NDArray[np.float64]):
@@ -54,9 +53,7 @@ def svd_covariance(
     sigma_rad: NDArray[np.float64],
 ) -> NDArray[np.float64]:
     """Markley's SVD covariance (M, 3, 3), camera frame, rad^2 (module docstring)."""
-    inv_var = 1.0 / sigma_rad**2
-    sigma_tot2 = 1.0 / inv_var.sum(axis=-1)
-    profile = attitude_profile_matrix(observed, reference, normalised_weights(inv_var))
+    sigma_tot2, profile = sigma_weighted_profile(observed, reference, sigma_rad)
     u, s, _ = _signed_svd(profile)
     diag = 1.0 / np.stack([s[:, 1] + s[:, 2], s[:, 2] + s[:, 0], s[:, 0] + s[:, 1]], axis=-1)
     return sigma_tot2[:, None, None] * (u * diag[:, None, :]) @ np.swapaxes(u, -1, -2)

@@ -213,6 +213,15 @@ def quest_covariance_core(
     return covariance_batch(observed, sigma_rad)
 
 
+def sigma_weighted_profile(observed: Vectors, reference: Vectors, sigma_rad: NDArray[np.float64]
+                           ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``sigma_tot^2`` (M,) and the attitude profile matrix B (M, 3, 3) with weights 1 / sigma^2
+    (normalised), the two pieces every closed-form covariance starts from (seed 000 §6.1.4)."""
+    inv_var = 1.0 / sigma_rad**2
+    profile = attitude_profile_matrix(observed, reference, normalised_weights(inv_var))
+    return 1.0 / inv_var.sum(axis=-1), profile
+
+
 def solve_with(
     core: SolverCore,
     observed: ArrayLike,
