@@ -35,6 +35,7 @@ from scipy.spatial import cKDTree
 
 from .. import cache
 from ..catalog import flag_doubles, load_catalog
+from ..catalog.thinning import fibonacci_sphere
 from ..errors import InvalidInputError
 from .kvector import KVector
 from .patterns import edge_ratios, pair_angles
@@ -132,15 +133,6 @@ class PatternDatabase:
 
 
 # --- building ---------------------------------------------------------------------------------
-def fibonacci_sphere(n: int) -> NDArray[np.float64]:
-    """``n`` nearly evenly spaced unit vectors (golden-angle spiral), shape (n, 3)."""
-    i = np.arange(n) + 0.5
-    z = 1.0 - 2.0 * i / n
-    phi = math.pi * (3.0 - math.sqrt(5.0)) * i
-    r = np.sqrt(1.0 - z * z)
-    return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
-
-
 def _chord(angle_rad: float) -> float:
     return 2.0 * math.sin(angle_rad / 2.0)
 
