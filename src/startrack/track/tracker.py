@@ -211,7 +211,7 @@ class Tracker:
         if not solution.solved:
             self.reset()
             return TrackStep(t_s, LOST_IN_SPACE, solution.status, solution.reason)
-        self._camera = self._camera or solution.camera.with_distortion(k1=0.0)
+        self._camera = self._camera or solution.camera  # with the fitted focal length (and k1)
         self._advance(solution.rot_cam_from_icrs, t_s)
         rms = float(np.sqrt(np.mean(solution.residuals_arcsec**2)) / solution.camera.pixel_scale_arcsec)
         return TrackStep(t_s, LOST_IN_SPACE, Status.OK, "", solution.rot_cam_from_icrs, self._rate_copy(),
