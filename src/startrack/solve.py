@@ -28,7 +28,7 @@ from .identify.field_stars import FieldStars, field_stars
 from .identify.pair_database import PairSettings, load_pair_database
 from .identify.pyramid import PyramidOptions, match_pyramid
 from .identify.refine import refine_pointing
-from .identify.verify import match_nearest, project_stars
+from .identify.verify import match_nearest
 from .results import AttitudeSolution, StarMatches, Status
 from .units import ARCSEC
 
@@ -175,11 +175,33 @@ def database_settings_for(fov_range_deg: tuple[float, float] = DEFAULT_FOV_RANGE
                             fov_max_deg=max(hi, default.fov_max_deg) * 1.03)
 
 
-def _rematch(problem: _Problem, stars: FieldStars, rot, camera, radius_px: float):
-    """Match every image star to its nearest catalog star within the radius: (image index, catalog row)."""
-    proj = project_stars(stars.tree, stars.vectors, rot, camera)
-    img_i, cat_i = match_nearest(problem.x, problem.y, proj.x, proj.y, radius_px)
-    return img_i, stars.rows[proj.star[cat_i]]
+def _rematch(problem: _Problem, stars: FieldStars, near: NDArray, rot: Rotation, camera: Camera, radius_px: float):
+    """Match every image star to its nearest catalog star within the radius: (image index, catalog row).
+
+    ``near`` are the indices (into ``stars``) of the catalog stars around the field, found once.
+    """
+    x, y = camera.vector_to_pixel(stars.vectors[near] @ rot.as_matrix().T)
+    inside = camera.in_image(x, y)
+    img_i, cat_i = match_nearest(problem.x, problem.y, x[inside], y[inside], radius_px)
+    return img_i, stars.rows[near[inside][cat_i]]
+
+
+FIELD_MARGIN = 1.1
+"""Catalog stars within this many half-diagonals of the candidate's boresight take part in the
+re-match (the refinement moves the boresight and focal length by far less than the margin)."""
+
+
+SETTLED_PX = 0.05
+"""Once a re-fit moves no star by more than this, re-matching cannot change the matches (bar a
+star within 0.05 px of the re-match radius) and the loop stops."""
+
+
+def _pose_shift_px(rot_a: Rotation, cam_a: Camera, rot_b: Rotation, cam_b: Camera) -> float:
+    """Largest shift (pixels) of an image point between two attitudes and focal lengths."""
+    turn = float(np.linalg.norm((rot_a * rot_b.inv()).as_rotvec()))
+    half_diagonal_px = 0.5 * math.hypot(cam_a.width, cam_a.height)
+    focal_change = abs(cam_a.fx / cam_b.fx - 1.0)
+    return turn * cam_b.fx * (1.0 + (half_diagonal_px / cam_b.fx) ** 2) + focal_change * half_diagonal_px
 
 
 def _refined(problem: _Problem, stars: FieldStars, cand: Candidate):
@@ -190,17 +212,18 @@ def _refined(problem: _Problem, stars: FieldStars, cand: Candidate):
     Returns the attitude, camera, matched image indices, their catalog rows, the rows' ICRS
     vectors at the solve epoch and the pixel residuals.
     """
-    catalog = load_catalog()
     fit_focal = problem.focal_range is not None
     fit_k1 = fit_focal and problem.focal_range[1] > problem.focal_range[0] * (1 + K1_FOCAL_SPAN)
     rot, camera = cand.rot_cam_from_icrs, cand.camera
     img, rows = cand.image_index, cand.catalog_rows
+    near = stars.near(rot.as_matrix()[2], FIELD_MARGIN * math.radians(camera.fov_diagonal_deg) / 2.0)
     for round_ in range(MAX_REFINE_ROUNDS):
-        ref = catalog.take(rows).vectors(problem.epoch_jyear)
+        ref = stars.vectors_of(rows)
+        before = (rot, camera)
         rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=fit_focal)
-        if round_ == MAX_REFINE_ROUNDS - 1:
+        if round_ == MAX_REFINE_ROUNDS - 1 or (round_ > 0 and _pose_shift_px(*before, rot, camera) < SETTLED_PX):
             break
-        new_img, new_rows = _rematch(problem, stars, rot, camera, REMATCH_RADIUS_PX)
+        new_img, new_rows = _rematch(problem, stars, near, rot, camera, REMATCH_RADIUS_PX)
         unchanged = np.array_equal(new_img, img) and np.array_equal(new_rows, rows)
         if unchanged or new_img.size < img.size:
             break
@@ -240,7 +263,7 @@ def _quads(problem: _Problem):
     def run(options):
         return match_lost_in_space(problem.x, problem.y, problem.camera, db, problem.focal_range, options)
 
-    return run, field_stars(db.settings.max_mag, db.settings.epoch_jyear)
+    return run, field_stars(db.settings.max_mag, problem.epoch_jyear)
 
 
 def _pyramid(problem: _Problem):
@@ -256,7 +279,7 @@ def _pyramid(problem: _Problem):
         camera = problem.camera.with_focal(math.sqrt(lo * hi)) if problem.focal_range else problem.camera
         return match_pyramid(problem.x, problem.y, camera, pdb, focal_tolerance=tolerance, options=options)
 
-    return run, field_stars(settings.max_mag, settings.epoch_jyear)
+    return run, field_stars(settings.max_mag, problem.epoch_jyear)
 
 
 MATCHERS = {"quads": _quads, "pyramid": _pyramid}

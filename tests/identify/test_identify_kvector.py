@@ -39,3 +39,15 @@ def test_empty_and_outside_ranges():
 def test_unsorted_keys_are_refused():
     with pytest.raises(InvalidInputError, match="sorted"):
         KVector.build(np.array([2.0, 1.0]))
+
+
+def test_integer_keys_with_bounds_on_the_keys():
+    """The pattern database's keys are uint32 with many repeats, and its bounds are integers too."""
+    rng = np.random.default_rng(3)
+    keys = np.sort(rng.integers(0, 2000, 20_000)).astype(np.uint32)
+    kv = KVector.build(keys)
+    lows = rng.integers(0, 2100, 500).astype(float)
+    highs = lows + rng.integers(0, 30, 500)
+    starts, stops = kv.query_many(lows, highs)
+    assert np.array_equal(starts, np.searchsorted(keys, lows.astype(np.uint32), side="left"))
+    assert np.array_equal(stops, np.searchsorted(keys, highs.astype(np.uint32), side="right"))

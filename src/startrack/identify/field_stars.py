@@ -26,6 +26,20 @@ class FieldStars:
     vectors: NDArray[np.float64]
     tree: cKDTree
     epoch_jyear: float
+    index_of_row: NDArray[np.int64]
+    """Position in ``rows`` of every catalog row, -1 for rows fainter than the limit."""
+
+    def vectors_of(self, catalog_rows: NDArray) -> NDArray[np.float64]:
+        """ICRS unit vectors (K, 3) of catalog rows at :attr:`epoch_jyear` (any magnitude)."""
+        index = self.index_of_row[catalog_rows]
+        if np.all(index >= 0):
+            return self.vectors[index]
+        return load_catalog().take(catalog_rows).vectors(self.epoch_jyear)
+
+    def near(self, boresight: NDArray, radius_rad: float) -> NDArray[np.int64]:
+        """Indices (into :attr:`rows`) of the stars within ``radius_rad`` of a unit vector."""
+        chord = 2.0 * np.sin(min(radius_rad, np.pi) / 2.0)
+        return np.asarray(self.tree.query_ball_point(boresight, chord), dtype=np.int64)
 
 
 @lru_cache(maxsize=4)
@@ -35,4 +49,6 @@ def field_stars(max_mag: float, epoch_jyear: float) -> FieldStars:
     rows = np.flatnonzero(np.isfinite(catalog.v_mag) & (catalog.v_mag <= max_mag))
     rows = rows[np.argsort(catalog.v_mag[rows], kind="stable")]
     vectors = catalog.take(rows).vectors(epoch_jyear)
-    return FieldStars(rows, vectors, cKDTree(vectors), epoch_jyear)
+    index_of_row = np.full(len(catalog.hip), -1, dtype=np.int64)
+    index_of_row[rows] = np.arange(rows.size)
+    return FieldStars(rows, vectors, cKDTree(vectors), epoch_jyear, index_of_row)

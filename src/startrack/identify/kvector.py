@@ -81,15 +81,27 @@ class KVector:
         return start, np.maximum(start, stop)
 
     def _bucket_start(self, bound: NDArray, upper: bool = False) -> NDArray[np.int64]:
-        """Index of the first key >= bound (or > bound when ``upper``)."""
+        """Index of the first key >= bound (or > bound when ``upper``).
+
+        The line gives the bucket [k[j], k[j + 1]] that holds the answer. Buckets hold one key on
+        average, so the short ones (at most :data:`SHORT_BUCKET` keys) are trimmed by one small
+        gather; the few long ones (clusters of equal or close keys) by a binary search.
+        """
         n = self.keys.size
-        j = np.clip(np.floor((bound - self.intercept) / self.slope).astype(np.int64), 0, n)
+        j = np.clip(np.floor((bound - self.intercept) / self.slope).astype(np.int64), 0, n - 1)
         first = self.k[j].astype(np.int64)  # keys[:first] <= z(j) <= bound
-        window = first[:, None] + np.arange(self.max_bucket + 1)
-        inside = window < n
-        values = self.keys[np.minimum(window, n - 1)]
-        typed = bound.astype(self.keys.dtype)[:, None]
-        below = (values <= typed) if upper else (values < typed)
-        return first + np.count_nonzero(below & inside, axis=1)
+        width = self.k[j + 1].astype(np.int64) - first
+        typed = bound.astype(self.keys.dtype)
+        window = np.minimum(first[:, None] + np.arange(SHORT_BUCKET), n - 1)
+        values = self.keys[window]
+        below = (values <= typed[:, None]) if upper else (values < typed[:, None])
+        inside = np.arange(SHORT_BUCKET) < width[:, None]
+        result = first + np.count_nonzero(below & inside, axis=1)
+        long = np.flatnonzero(width > SHORT_BUCKET)
+        if long.size:
+            result[long] = np.searchsorted(self.keys, typed[long], side="right" if upper else "left")
+        return result
 
 
+SHORT_BUCKET = 4
+"""Buckets of the k-vector up to this many keys are trimmed by a gather, longer ones by a search."""

@@ -8,6 +8,8 @@ focal length (fx and fy scale together). Gauss-Newton with the analytic Jacobian
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
@@ -15,47 +17,69 @@ from scipy.spatial.transform import Rotation
 from ..camera import Camera
 
 _MAX_ITER = 6
-_CONVERGED = 1e-9
-"""Stop when no parameter moves more than this (radians, or relative focal length)."""
-
-
-def _skew(v: NDArray) -> NDArray:
-    """Cross-product matrices [v x], shape (N, 3, 3)."""
-    zero = np.zeros(v.shape[0])
-    x, y, z = v[:, 0], v[:, 1], v[:, 2]
-    return np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1), np.stack([-y, x, zero], -1)], 1)
+_CONVERGED_PX = 1e-4
+"""Stop when the step moves no image point by more than this (pixels)."""
 
 
 def _rodrigues(rotvec: NDArray) -> NDArray:
     """Rotation matrix of a rotation vector (radians)."""
-    angle = float(np.sqrt(rotvec @ rotvec))
+    angle = math.sqrt(float(rotvec @ rotvec))
     if angle < 1e-15:
         return np.eye(3)
-    k = _skew(rotvec[None] / angle)[0]
-    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
+    kx, ky, kz = rotvec / angle
+    k = np.array([[0.0, -kz, ky], [kz, 0.0, -kx], [-ky, kx, 0.0]])
+    return np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * (k @ k)
 
 
-def _step(matrix: NDArray, camera: Camera, ref_icrs: NDArray, x: NDArray, y: NDArray, fit_focal: bool,
-          fit_k1: bool = False) -> NDArray:
-    """One Gauss-Newton step for the parameters (rotation vector, [ln f], [k1])."""
-    cam_vec = ref_icrs @ matrix.T
-    px, py, jac_v = camera.project_with_jacobian(cam_vec)
-    # A small rotation d of the camera frame moves c to c + d x c = c - [c x] d.
-    jac = -np.einsum("nij,njk->nik", jac_v, _skew(cam_vec))  # (N, 2, 3)
-    if fit_focal:
-        jac_f = np.stack([px - camera.cx, py - camera.cy], axis=1)[:, :, None]  # d / d ln f
-        jac = np.concatenate([jac, jac_f], axis=2)
-    if fit_k1:  # d / d k1 of x = cx + fx a (1 + k1 r^2 + ...), with a, b the pinhole coordinates
-        a, b = cam_vec[:, 0] / cam_vec[:, 2], cam_vec[:, 1] / cam_vec[:, 2]
+def _jacobian(camera: Camera, cam_vec: NDArray, n_params: int) -> tuple[NDArray, NDArray, NDArray]:
+    """Pixels (x, y) of camera vectors (N, 3) and the Jacobian (2N, n_params) of (x0, y0, x1, ...)
+    with respect to (small rotation of the camera frame, [ln f], [k1]).
+
+    A rotation d moves a camera vector v to v + d x v; for the pinhole coordinates a = v_x / v_z,
+    b = v_y / v_z that is da/dd = (-a b, 1 + a^2, -b) and db/dd = (-(1 + b^2), a b, a), then
+    through the distortion's 2 x 2 Jacobian and the focal lengths.
+    """
+    inv_z = 1.0 / cam_vec[:, 2]
+    a, b = cam_vec[:, 0] * inv_z, cam_vec[:, 1] * inv_z
+    da = np.column_stack([-a * b, 1.0 + a * a, -b])
+    db = np.column_stack([-(1.0 + b * b), a * b, a])
+    if camera.has_distortion:
+        daa, dab, dba, dbb = camera._distort_jacobian(a, b)
+        da, db = daa[:, None] * da + dab[:, None] * db, dba[:, None] * da + dbb[:, None] * db
+        ad, bd = camera._distort(a, b)
+    else:
+        ad, bd = a, b
+    x, y = camera.cx + camera.fx * ad, camera.cy + camera.fy * bd
+    jac = np.empty((a.size, 2, n_params))
+    jac[:, 0, :3], jac[:, 1, :3] = camera.fx * da, camera.fy * db
+    if n_params > 3:  # d / d ln f: fx and fy scale together
+        jac[:, 0, 3], jac[:, 1, 3] = x - camera.cx, y - camera.cy
+    if n_params > 4:  # d / d k1 of x = cx + fx a (1 + k1 r^2 + ...)
         r2 = a * a + b * b
-        jac = np.concatenate([jac, np.stack([camera.fx * a * r2, camera.fy * b * r2], axis=1)[:, :, None]], axis=2)
-    jac = jac.reshape(-1, jac.shape[2])
-    res = np.stack([px - x, py - y], axis=1).reshape(-1)
-    normal = jac.T @ jac
+        jac[:, 0, 4], jac[:, 1, 4] = camera.fx * a * r2, camera.fy * b * r2
+    return x, y, jac.reshape(-1, n_params)
+
+
+def _step(matrix: NDArray, camera: Camera, ref_icrs: NDArray, x: NDArray, y: NDArray, n_params: int) -> NDArray:
+    """One Gauss-Newton step for the parameters (rotation vector, [ln f], [k1])."""
+    px, py, jac = _jacobian(camera, ref_icrs @ matrix.T, n_params)
+    res = np.column_stack([px - x, py - y]).reshape(-1)
     try:
-        return np.linalg.solve(normal, -(jac.T @ res))
+        return np.linalg.solve(jac.T @ jac, -(jac.T @ res))
     except np.linalg.LinAlgError:
         return np.linalg.lstsq(jac, -res, rcond=None)[0]
+
+
+def _moved_px(delta: NDArray, camera: Camera) -> float:
+    """Largest image motion (pixels) a step causes, roughly: rotation times focal length, plus
+    the focal and k1 changes at the image corner."""
+    corner = 0.5 * math.hypot(camera.width, camera.height)
+    moved = float(np.max(np.abs(delta[:3]))) * camera.fx * 2.0
+    if delta.size > 3:
+        moved += abs(float(delta[3])) * corner
+    if delta.size > 4:
+        moved += abs(float(delta[4])) * corner * (corner / camera.fx) ** 2
+    return moved
 
 
 def refine_pointing(rot_cam_from_icrs: Rotation, camera: Camera, ref_icrs: NDArray, x: NDArray,
@@ -87,14 +111,15 @@ def refine_pointing(rot_cam_from_icrs: Rotation, camera: Camera, ref_icrs: NDArr
     fit_focal = fit_focal and len(x) >= 3
     fit_k1 = fit_k1 and fit_focal and len(x) >= 8
     matrix = rot_cam_from_icrs.as_matrix()
+    n_params = 3 + int(fit_focal) + int(fit_k1)
     for _ in range(_MAX_ITER):
-        delta = _step(matrix, camera, ref_icrs, x, y, fit_focal, fit_k1)
+        delta = _step(matrix, camera, ref_icrs, x, y, n_params)
         matrix = _rodrigues(delta[:3]) @ matrix
         if fit_focal:
-            camera = camera.with_focal(camera.fx * np.exp(delta[3]))
+            camera = camera.with_focal(camera.fx * math.exp(delta[3]))
         if fit_k1:
             camera = camera.with_distortion(k1=camera.k1 + delta[4])
-        if np.max(np.abs(delta)) < _CONVERGED:
+        if _moved_px(delta, camera) < _CONVERGED_PX:
             break
     px, py = camera.vector_to_pixel(ref_icrs @ matrix.T)
     return Rotation.from_matrix(matrix), camera, np.hypot(px - x, py - y)
