@@ -1,6 +1,6 @@
 """Lost-in-space identification by four-star patterns, with an unknown or known focal length.
 
-The default matcher. Steps (after tetra3's pattern hashing, with a k-vector index per scale):
+The default matcher. Steps (after tetra3's pattern hashing, with a sorted key index over all scales):
 
 1. Form four-star patterns from the brightest image stars, brightest combinations first, in
    batches (:func:`pattern_batches`); steps 2-4 run on a whole batch at once
@@ -9,7 +9,7 @@ The default matcher. Steps (after tetra3's pattern hashing, with a k-vector inde
    choose the few trial focal lengths that change the pattern's edge ratios by more than the
    tolerance. Wide fields need several, narrow fields one.
 3. Look the ratios up in the levels of the database whose scale fits the trial field of view:
-   k-vector range on a key of the three smallest ratios, then all five ratios, then the scale.
+   key ranges on a key of the three smallest ratios, then all five ratios, then the scale.
 4. For each candidate, take the star correspondence whose edges agree best, correct the focal
    length from the edge sums, fit the rotation (q-method) and check the residuals.
 5. Verify against the level's verification stars and bound the false-match probability

@@ -5,7 +5,7 @@ The steps of :mod:`.quad_matcher` for a whole batch of image patterns, as array 
 1. :func:`focal_trials` - per pattern, the trial focal lengths (scales f_nominal / f) whose edge
    ratios differ by more than the tolerance;
 2. :func:`trial_geometry` - edge angles, ratios and tolerances of every (pattern, trial);
-3. :func:`candidate_rows` - the database levels each trial may match, the k-vector range
+3. :func:`candidate_rows` - the database levels each trial may match, the key range
    queries per bin of the smallest ratio, and the ratio and scale filters;
 4. :func:`fit_candidates` - the star correspondence from the edges, the rotation (q-method) and
    the residual test.
@@ -142,7 +142,7 @@ def _bins(ratio: NDArray, tol: NDArray) -> tuple[NDArray, NDArray]:
 
 
 def _ranges(db: PatternDatabase, geom: TrialGeometry, trial: NDArray, level: NDArray):
-    """k-vector queries, one per (trial, level, bin of r0, bin of r1): row ranges and their trial.
+    """Key-range queries, one per (trial, level, bin of r0, bin of r1): row ranges and their trial.
 
     See :func:`startrack.identify.database.pattern_key` for the key.
     """
@@ -154,19 +154,10 @@ def _ranges(db: PatternDatabase, geom: TrialGeometry, trial: NDArray, level: NDA
     k = _ramp(count)
     q = np.repeat(np.arange(trial.size), count)
     cell = (b0_lo[q] + k // n1[q]) * KEY_BINS + b1_lo[q] + k % n1[q]
-    r2_lo = np.clip(np.round((r[:, 2] - t[:, 2]) * RATIO_SCALE), 0, RATIO_SCALE)[q]
-    r2_hi = np.clip(np.round((r[:, 2] + t[:, 2]) * RATIO_SCALE), 0, RATIO_SCALE)[q]
-    low, high = cell * 65536.0 + r2_lo, cell * 65536.0 + r2_hi
-    q_level = level[q]
-    start = np.zeros(q.size, dtype=np.int64)
-    stop = np.zeros(q.size, dtype=np.int64)
-    for lev in np.unique(q_level):
-        sel = q_level == lev
-        a, b = db.kvectors[lev].query_many(low[sel], high[sel])
-        start[sel], stop[sel] = a + db.level_offsets[lev], b + db.level_offsets[lev]
-    q_trial = trial[q]
-    order = np.argsort(q_trial, kind="stable")  # keep pattern-major order
-    return start[order], stop[order], q_trial[order]
+    r2_lo = np.clip(np.round((r[:, 2] - t[:, 2]) * RATIO_SCALE), 0, RATIO_SCALE).astype(np.int64)[q]
+    r2_hi = np.clip(np.round((r[:, 2] + t[:, 2]) * RATIO_SCALE), 0, RATIO_SCALE).astype(np.int64)[q]
+    start, stop = db.key_ranges(level[q], cell * 65536 + r2_lo, cell * 65536 + r2_hi)
+    return start, stop, trial[q]
 
 
 def _ramp(count: NDArray) -> NDArray[np.int64]:
