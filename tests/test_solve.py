@@ -121,3 +121,32 @@ def test_distorted_camera_solves_with_its_focal_length_fixed():
     assert solution.solved, solution.reason
     assert attitude_error(truth, solution.rot_cam_from_icrs) < 0.1 * camera.pixel_scale_arcsec * ARCSEC
     assert math.isclose(solution.fov_deg, camera.fov_deg)
+
+
+def test_a_close_double_is_named_after_its_brighter_star():
+    """HIP 42172 (V 5.9) and HIP 42173 (V 7.2) are 10 arcsec apart, a fraction of a Sunsat pixel:
+    the image shows one spot, which must be identified as the brighter star."""
+    from startrack.camera import get_preset
+    from startrack.catalog import load_catalog
+
+    camera = get_preset("sunsat")
+    catalog = load_catalog()
+    row = int(np.flatnonzero(catalog.hip == 42172)[0])
+    target = catalog.take(np.array([row])).vectors(2000.0)[0]
+    ra, dec = math.atan2(target[1], target[0]), math.asin(target[2])
+    rot = rotation_from_radec_roll(ra + 2 * DEG, dec - 1 * DEG, 0.3)
+    bright = catalog.brighter_than(6.5)
+    vec = bright.vectors(2000.0) @ rot.as_matrix().T
+    x, y = camera.vector_to_pixel(np.where(vec[:, 2:] > 0, vec, np.nan))
+    seen = camera.in_image(x, y)
+    order = np.argsort(bright.v_mag[seen])
+    x, y = x[seen][order], y[seen][order]
+    # A centroid error of a tenth of a pixel puts the spot nearer the faint companion.
+    companion = catalog.take(np.flatnonzero(catalog.hip == 42173)).vectors(2000.0) @ rot.as_matrix().T
+    cx, cy = camera.vector_to_pixel(companion)
+    spot = int(np.flatnonzero(bright.hip[seen][order] == 42172)[0])
+    x[spot], y[spot] = x[spot] + 0.7 * (cx[0] - x[spot]), y[spot] + 0.7 * (cy[0] - y[spot])
+    sol = solve_stars(x, y, camera=camera)
+    assert sol.status is Status.OK
+    matched = dict(zip(sol.matches.det_index.tolist(), sol.matches.hip.tolist(), strict=True))
+    assert matched.get(spot) == 42172

@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from astropy.time import Time
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from .attitude import attitude_covariance
@@ -179,11 +180,22 @@ def _rematch(problem: _Problem, stars: FieldStars, near: NDArray, rot: Rotation,
     """Match every image star to its nearest catalog star within the radius: (image index, catalog row).
 
     ``near`` are the indices (into ``stars``) of the catalog stars around the field, found once.
+    A catalog star closer than :data:`BLEND_PX` to a brighter one is left out: in the image the
+    pair is one spot, named after its brighter star.
     """
+    near = np.sort(near)  # field stars are stored brightest first
     x, y = camera.vector_to_pixel(stars.vectors[near] @ rot.as_matrix().T)
-    inside = camera.in_image(x, y)
-    img_i, cat_i = match_nearest(problem.x, problem.y, x[inside], y[inside], radius_px)
-    return img_i, stars.rows[near[inside][cat_i]]
+    inside = np.flatnonzero(camera.in_image(x, y))
+    x, y = x[inside], y[inside]
+    blended = cKDTree(np.column_stack([x, y])).query_pairs(BLEND_PX, output_type="ndarray")
+    visible = np.ones(inside.size, dtype=bool)
+    visible[blended.max(axis=1) if blended.size else []] = False  # the fainter star of each close pair
+    img_i, cat_i = match_nearest(problem.x, problem.y, x[visible], y[visible], radius_px)
+    return img_i, stars.rows[near[inside[visible]][cat_i]]
+
+
+BLEND_PX = 0.5
+"""Catalog stars closer than this (pixels) to a brighter catalog star are not matched separately."""
 
 
 FIELD_MARGIN = 1.1
