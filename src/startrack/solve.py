@@ -23,18 +23,13 @@ from .camera import Camera, focal_px_from_fov
 from .catalog import load_catalog
 from .errors import InvalidInputError
 from .frames import angle_between, radec_roll_from_rotation
-from .identify import DatabaseSettings, MatcherOptions, load_database, match_lost_in_space
 from .identify.candidate import Candidate
-from .identify.field_stars import FieldStars, field_stars
-from .identify.pair_database import PairSettings, load_pair_database
-from .identify.pyramid import PyramidOptions, match_pyramid
+from .identify.field_stars import FieldStars
 from .identify.refine import refine_pointing
+from .identify.registry import DEFAULT_FOV_RANGE_DEG, MATCHERS, prepare_matcher
 from .identify.verify import match_nearest
 from .results import AttitudeSolution, StarMatches, Status
 from .units import ARCSEC
-
-DEFAULT_FOV_RANGE_DEG: tuple[float, float] = (5.0, 35.0)
-"""Searched when no field of view is given: ordinary star trackers and camera lenses."""
 
 FOV_DEG_TOLERANCE = 0.03
 """A given ``fov_deg`` is trusted to this fraction; the solve refines it."""
@@ -66,6 +61,8 @@ class _Problem:
     focal_range: tuple[float, float] | None
     fov_range_deg: tuple[float, float]
     epoch_jyear: float
+    prior_rot: Rotation | None = None
+    prior_sigma_deg: float = 1.0
 
 
 def epoch_jyear(epoch) -> float:
@@ -162,20 +159,6 @@ def _problem(x, y, width, height, fov_deg, fov_range_deg, camera, flux, epoch) -
     return _Problem(xs, ys, rows, nominal, focal_range, fov_range, epoch_jyear(epoch))
 
 
-def database_settings_for(fov_range_deg: tuple[float, float] = DEFAULT_FOV_RANGE_DEG) -> DatabaseSettings:
-    """Settings of the pattern database that serves this range of horizontal FOVs (degrees).
-
-    The default database covers 5 to 35 deg; a range outside it gets a database of its own
-    (built on first use).
-    """
-    lo, hi = fov_range_deg
-    default = DatabaseSettings()
-    if default.fov_min_deg <= lo and hi <= default.fov_max_deg:
-        return default
-    return DatabaseSettings(fov_min_deg=min(lo, default.fov_min_deg) * 0.97,
-                            fov_max_deg=max(hi, default.fov_max_deg) * 1.03)
-
-
 def _rematch(problem: _Problem, stars: FieldStars, near: NDArray, rot: Rotation, camera: Camera, radius_px: float):
     """Match every image star to its nearest catalog star within the radius: (image index, catalog row).
 
@@ -269,42 +252,11 @@ def _solution(problem: _Problem, stars: FieldStars, cand: Candidate, t0: float) 
         false_match_prob=cand.false_match_prob, solve_time_s=time.perf_counter() - t0)
 
 
-def _quads(problem: _Problem):
-    db = load_database(database_settings_for(problem.fov_range_deg))
-
-    def run(options):
-        return match_lost_in_space(problem.x, problem.y, problem.camera, db, problem.focal_range, options)
-
-    return run, field_stars(db.settings.max_mag, problem.epoch_jyear)
-
-
-def _pyramid(problem: _Problem):
-    lo, hi = problem.focal_range or (problem.camera.fx, problem.camera.fx)
-    tolerance = (hi / lo - 1.0) / 2.0
-    if tolerance > PYRAMID_MAX_FOCAL_TOLERANCE:
-        raise InvalidInputError("the pyramid matcher needs the field of view to within 5 %: give fov_deg or a camera "
-                                "(or use method='quads' with a FOV range)")
-    settings = PairSettings(fov_deg=float(math.ceil(problem.camera.fov_diagonal_deg * (1 + tolerance))))
-    pdb = load_pair_database(settings)
-
-    def run(options):
-        camera = problem.camera.with_focal(math.sqrt(lo * hi)) if problem.focal_range else problem.camera
-        return match_pyramid(problem.x, problem.y, camera, pdb, focal_tolerance=tolerance, options=options)
-
-    return run, field_stars(settings.max_mag, problem.epoch_jyear)
-
-
-MATCHERS = {"quads": _quads, "pyramid": _pyramid}
-"""Lost-in-space matchers by name: a function of the problem that loads its database and returns
-(the matcher, the catalog stars for the final re-match)."""
-
-PYRAMID_MAX_FOCAL_TOLERANCE = 0.05
-
-
 def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height: int | None = None,
                 fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
                 camera: Camera | None = None, flux: ArrayLike | None = None, epoch=None,
-                method: str = "quads", options: MatcherOptions | PyramidOptions | None = None) -> AttitudeSolution:
+                method: str = "quads", options: object | None = None,
+                prior_rot_cam_from_icrs: Rotation | None = None, prior_sigma_deg: float = 1.0) -> AttitudeSolution:
     """Lost-in-space attitude from a list of star centroids.
 
     Parameters
@@ -325,12 +277,19 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
         Brightness of each star, to order them.
     epoch : astropy.time.Time or float, optional
         Epoch of the catalog positions (Julian year, TDB); default J2000.0.
-    method : {"quads", "pyramid"}
-        The lost-in-space matcher: four-star patterns (the default; any FOV knowledge) or the
-        Pyramid on the star-pair directory (a FOV known to 5 % or a camera). See
-        ``docs/identification.md``.
-    options : MatcherOptions or PyramidOptions, optional
-        Settings of the chosen matcher.
+    method : str
+        The matcher (:data:`startrack.identify.registry.MATCHERS`): "quads", four-star patterns
+        (the default; any FOV knowledge); the seeds' matchers on the star-pair directory, which
+        need a FOV known to 5 % or a camera ("pyramid", "angle", "triangle-planar",
+        "triangle-spherical", "nvertex-3", "nvertex-4", "nvertex-5", "van-bezooijen"); or
+        "overlay", which needs a prior attitude. See ``docs/identification.md``.
+    options : dataclass, optional
+        Settings of the chosen matcher (``MatcherOptions`` for "quads", ``PyramidOptions`` for
+        "pyramid", and so on).
+    prior_rot_cam_from_icrs : Rotation, optional
+        Prior attitude for the "overlay" matcher.
+    prior_sigma_deg : float
+        Its 1-sigma uncertainty per axis (degrees, up to 10).
 
     Returns
     -------
@@ -346,8 +305,9 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
     """
     if method not in MATCHERS:
         raise InvalidInputError(f"method must be one of {', '.join(MATCHERS)}, got {method!r}")
-    problem = _problem(x, y, width, height, fov_deg, fov_range_deg, camera, flux, epoch)
-    matcher, stars = MATCHERS[method](problem)  # loads (or builds) the database first
+    problem = replace(_problem(x, y, width, height, fov_deg, fov_range_deg, camera, flux, epoch),
+                      prior_rot=prior_rot_cam_from_icrs, prior_sigma_deg=prior_sigma_deg)
+    matcher, stars = prepare_matcher(method, problem)  # loads (or builds) the database first
     t0 = time.perf_counter()
     outcome = matcher(options)
     if outcome.candidate is None:
@@ -358,8 +318,7 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
 
 def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
                 camera: Camera | None = None, epoch=None, channel: str | int | None = None,
-                detector=None, method: str = "quads",
-                options: MatcherOptions | PyramidOptions | None = None) -> AttitudeSolution:
+                detector=None, method: str = "quads", options: object | None = None) -> AttitudeSolution:
     """Lost-in-space attitude of an image: read, detect, solve.
 
     Parameters

@@ -26,7 +26,7 @@ def ensure_database(fov_range_deg: tuple[float, float] | None = None) -> None:
     """Load (building on first use, with a progress bar) the pattern database for a FOV range (deg)."""
     from ..identify import load_database
     from ..identify.database import is_cached
-    from ..solve import DEFAULT_FOV_RANGE_DEG, database_settings_for
+    from ..identify.registry import DEFAULT_FOV_RANGE_DEG, database_settings_for
 
     settings = database_settings_for(tuple(fov_range_deg) if fov_range_deg else DEFAULT_FOV_RANGE_DEG)
     if not is_cached(settings):
