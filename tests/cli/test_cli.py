@@ -249,6 +249,26 @@ def test_solve_stars_match_index_is_the_row_of_the_star_list(sim, tmp_path):
     assert [stars[m["index"]]["hip"] for m in matches] == [m["hip"] for m in matches]
 
 
+@pytest.mark.parametrize("method", ["pyramid", "nvertex-4"])
+def test_solve_stars_with_another_matcher(sim, method):
+    truth = json.loads(sim["truth"].read_text())
+    fov = str(truth["camera"]["fov_deg"])
+    code, out, err = run("solve-stars", sim["csv"], *SIZE, "--fov-deg", fov, "--method", method, "--json")
+    assert code == 0, err
+    solution = strict_json(out)
+    tenth_px = 0.1 * PIXEL / truth["camera"]["fx"]
+    assert attitude_error(rotation_from_quaternion(truth), rotation_from_quaternion(solution)) < tenth_px
+
+
+def test_solve_stars_unknown_matcher_is_refused(sim):
+    code, out, err = run("solve-stars", sim["csv"], *SIZE, "--method", "telepathy")
+    assert code == 2 and out == "" and "--method" in err and "quads" in err and "Traceback" not in err
+
+
+def test_a_pair_matcher_without_a_known_fov_is_refused(sim):
+    assert_misuse(run("solve-stars", sim["csv"], *SIZE, "--method", "pyramid"), "solve-stars", "within 5 %")
+
+
 def test_solve_stars_duplicate_rows_are_refused_cleanly(sim, tmp_path):
     rows = sim["csv"].read_text().splitlines()
     starlist = tmp_path / "duplicates.csv"

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..camera import Camera, get_preset
 from ..errors import InvalidInputError
+from ..identify.registry import MATCHERS
 from ..io.solution_json import solution_to_dict
 from ..results import AttitudeSolution, Detections
 from ..solve import check_fov_deg, epoch_jyear
@@ -59,6 +60,14 @@ def add_fov_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--fov-range-deg", type=float, nargs=2, metavar=("LO", "HI"),
                        help="range of horizontal fields of view to search, deg (default 5 35)")
     group.add_argument("--camera", metavar="PRESET", help="a calibrated camera preset (fixes the focal length)")
+
+
+def add_method_option(parser: argparse.ArgumentParser) -> None:
+    """--method: the lost-in-space matcher (the overlay needs a prior, so it is Python-only)."""
+    names = [name for name in MATCHERS if name != "overlay"]
+    parser.add_argument("--method", choices=names, default="quads",
+                        help="star-identification matcher (default quads; the others need --fov-deg or --camera); "
+                             "see docs/identification.md")
 
 
 def add_epoch_option(parser: argparse.ArgumentParser) -> None:

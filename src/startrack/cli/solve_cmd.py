@@ -14,7 +14,15 @@ from ..io import Image, read_image
 from ..io.wcs import write_wcs
 from ..results import AttitudeSolution, Detections, Status
 from ..solve import solve_image
-from .common import SOLUTION_FORMATS, add_epoch_option, add_fov_options, epoch_option, fov_kwargs, report
+from .common import (
+    SOLUTION_FORMATS,
+    add_epoch_option,
+    add_fov_options,
+    add_method_option,
+    epoch_option,
+    fov_kwargs,
+    report,
+)
 from .progress import ensure_database_for
 
 
@@ -23,6 +31,7 @@ def _parser() -> argparse.ArgumentParser:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("image", help="FITS, PNG, JPEG or TIFF file")
     add_fov_options(parser)
+    add_method_option(parser)
     parser.add_argument("--channel", choices=("r", "g", "b"),
                         help="colour channel to use (default: the mean of R, G and B)")
     add_epoch_option(parser)
@@ -55,7 +64,7 @@ def _site(args):
 
 def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
-    solver_options = {**fov_kwargs(args), "epoch": epoch_option(args)}
+    solver_options = {**fov_kwargs(args), "epoch": epoch_option(args), "method": args.method}
     image = read_image(args.image, channel=args.channel)
     ensure_database_for(solver_options["fov_deg"], solver_options["fov_range_deg"], solver_options["camera"])
     site = _site(args)

@@ -14,7 +14,16 @@ import argparse
 from ..errors import InvalidInputError
 from ..io import read_star_list
 from ..solve import solve_stars
-from .common import SOLUTION_FORMATS, add_epoch_option, add_fov_options, epoch_option, fov_kwargs, positive_int, report
+from .common import (
+    SOLUTION_FORMATS,
+    add_epoch_option,
+    add_fov_options,
+    add_method_option,
+    epoch_option,
+    fov_kwargs,
+    positive_int,
+    report,
+)
 from .progress import ensure_database_for
 
 
@@ -25,6 +34,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--width", type=positive_int, metavar="W", help="image width in pixels")
     parser.add_argument("--height", type=positive_int, metavar="H", help="image height in pixels")
     add_fov_options(parser)
+    add_method_option(parser)
     add_epoch_option(parser)
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     return parser
@@ -35,7 +45,7 @@ def main(argv: list[str]) -> int:
     args = parser.parse_args(argv)
     if args.camera is None and (args.width is None or args.height is None):
         parser.error("--width and --height are required unless --camera gives them")
-    solver_options = {**fov_kwargs(args), "epoch": epoch_option(args)}
+    solver_options = {**fov_kwargs(args), "epoch": epoch_option(args), "method": args.method}
     _check_size(args, solver_options["camera"])
     stars = read_star_list(args.starlist)
     flux = stars.get("flux")

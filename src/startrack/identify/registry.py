@@ -17,20 +17,24 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from functools import partial
 from typing import Protocol
 
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
 from ..errors import InvalidInputError
+from .angle_pivot import AnglePivotOptions, match_angle_pivot
 from .candidate import MatchOutcome
 from .database import DatabaseSettings, load_database
 from .field_stars import FieldStars, field_stars
-from .match_groups import match_van_bezooijen
-from .overlay import catalog_star_set, match_overlay
+from .match_groups import VanBezooijenOptions, match_van_bezooijen
+from .nvertex import NVertexOptions, match_nvertex
+from .overlay import OverlayOptions, catalog_star_set, match_overlay
 from .pair_database import PairSettings, load_pair_database
-from .pyramid import match_pyramid
-from .quad_matcher import match_lost_in_space
+from .pyramid import PyramidOptions, match_pyramid
+from .quad_matcher import MatcherOptions, match_lost_in_space
+from .triangles import TriangleOptions, match_triangles
 
 DEFAULT_FOV_RANGE_DEG: tuple[float, float] = (5.0, 35.0)
 """Searched when no field of view is given: ordinary star trackers and camera lenses."""
@@ -125,10 +129,35 @@ def _overlay(request: MatchRequest) -> tuple[Matcher, FieldStars]:
 MATCHERS: dict[str, Callable[[MatchRequest], tuple[Matcher, FieldStars]]] = {
     "quads": _quads,
     "pyramid": _on_pairs(match_pyramid, "pyramid"),
+    "angle": _on_pairs(match_angle_pivot, "angle"),
+    "triangle-planar": _on_pairs(partial(match_triangles, variant="planar"), "triangle-planar"),
+    "triangle-spherical": _on_pairs(partial(match_triangles, variant="spherical"), "triangle-spherical"),
+    "nvertex-3": _on_pairs(partial(match_nvertex, n=3), "nvertex-3"),
+    "nvertex-4": _on_pairs(partial(match_nvertex, n=4), "nvertex-4"),
+    "nvertex-5": _on_pairs(partial(match_nvertex, n=5), "nvertex-5"),
     "van-bezooijen": _on_pairs(match_van_bezooijen, "van-bezooijen"),
     "overlay": _overlay,
 }
 """Matchers by name (see the module docstring)."""
+
+
+OPTIONS: dict[str, type] = {
+    "quads": MatcherOptions, "pyramid": PyramidOptions, "angle": AnglePivotOptions,
+    "triangle-planar": TriangleOptions, "triangle-spherical": TriangleOptions,
+    "nvertex-3": NVertexOptions, "nvertex-4": NVertexOptions, "nvertex-5": NVertexOptions,
+    "van-bezooijen": VanBezooijenOptions, "overlay": OverlayOptions,
+}
+"""The options dataclass of each matcher."""
+
+
+def options_for(method: str, **settings) -> object:
+    """The named matcher's options with some settings changed, e.g. ``options_for("pyramid", timeout_s=2)``."""
+    if method not in OPTIONS:
+        raise InvalidInputError(f"method must be one of {', '.join(OPTIONS)}, got {method!r}")
+    try:
+        return OPTIONS[method](**settings)
+    except TypeError as exc:
+        raise InvalidInputError(f"bad option for the {method} matcher: {exc}") from None
 
 
 def prepare_matcher(method: str, request: MatchRequest) -> tuple[Matcher, FieldStars]:
@@ -138,4 +167,5 @@ def prepare_matcher(method: str, request: MatchRequest) -> tuple[Matcher, FieldS
     return MATCHERS[method](request)
 
 
-__all__ = ["DEFAULT_FOV_RANGE_DEG", "MATCHERS", "MatchRequest", "database_settings_for", "prepare_matcher"]
+__all__ = ["DEFAULT_FOV_RANGE_DEG", "MATCHERS", "OPTIONS", "MatchRequest", "database_settings_for", "options_for",
+           "prepare_matcher"]
