@@ -19,15 +19,21 @@ corners, so a cornerness map over its region of interest (ROI) has two peaks:
   not need, so the cornerness is computed at full resolution on the (lightly smoothed) ROI.
 
 Localisation (eqs. 3.14-3.16): non-maximum suppression (strictly greater than the 8
-neighbours) above a fraction of the ROI's strongest response; one clean streak must give exactly
-two peaks (more: noise, overlapping streaks or a non-star; here extra peaks along the line between
-the two outermost are accepted as false corners on the streak's body, others reject the ROI);
-then the centre of intensity of the clipped cornerness
-in a (2N + 1)^2 window, with the coordinate weights eq. 3.15 omits (notes §7 item 10).
+neighbours) above a fraction of the strongest response, on the streak's own pixels (a ``mask``
+leaves out the other streaks that a long diagonal streak's bounding box takes in). The seed
+accepts a ROI only with exactly two peaks; here the peaks are told apart by the streak's own
+geometry (:func:`streak_path`: a parabola through its bright pixels, which also follows curved
+streaks): each end is the strongest peak near an end of the path, peaks along the path between
+(false corners on the body: Trajkovic-4 makes them as strong as the ends on diagonal streaks)
+are ignored, and a peak off the path (a crossing, a non-star) rejects the ROI. Then the centre of
+intensity of the clipped cornerness in a (2N + 1)^2 window, with the coordinate weights eq. 3.15
+omits (notes §7 item 10).
 
-Every Gaussian smoothing pulls the peaks inward along the streak (seed 001 p.40): a constant
-``bias_px`` for a camera and detector, removed by moving both ends outward along the streak
-(:func:`calibrate_bias` measures it).
+Every Gaussian smoothing pulls the peaks inward along the streak (seed 001 p.40): a bias for a
+camera and detector, removed by moving both ends outward along the streak. On the pixel grid it
+depends on the streak's direction (Trajkovic-4: 1.2 px along the axes, 2.3 px on the diagonals),
+so :func:`calibrate_bias_model` fits it as harmonics of the direction (:class:`EndpointBias`);
+:func:`calibrate_bias` gives the mean alone.
 """
 
 from __future__ import annotations
@@ -48,6 +54,11 @@ HARRIS_K = 0.04
 than the seed's 0.15 on our simulated streaks (benchmarks/streak_benchmark.py, docs)."""
 INTEGRATION_SIGMA_PX = 1.0
 HALF_WINDOW_PX = 2
+SUPPORT_FRACTION = 0.25
+"""Pixels of the smoothed ROI above this fraction of its maximum outline the streak."""
+END_RADIUS_PX = 5.0
+"""A streak's end is the strongest cornerness peak within this distance of an end of its bright
+pixels (measured: the right peak lies within 3.6 px, body and noise peaks farther)."""
 
 
 def gaussian_derivative_kernel(sigma_px: float = 0.5, radius_px: int = 1) -> NDArray[np.float64]:
@@ -171,15 +182,78 @@ def _failed(peaks: int, reason: str) -> Endpoints:
     return Endpoints(False, np.full((2, 2), np.nan), peaks, reason)
 
 
-def _extreme_pair(points: NDArray[np.float64], line_tolerance_px: float) -> tuple[int, int] | None:
-    """Indices of the two peaks farthest apart along their common line, or None if some peak is
-    off the line through them by more than the tolerance (a crossing or a non-star)."""
-    span = points[:, None, :] - points[None, :, :]
-    i, j = np.unravel_index(np.argmax(np.sum(span**2, axis=-1)), span.shape[:2])
-    axis = points[j] - points[i]
-    axis /= np.linalg.norm(axis)
-    offsets = (points - points[i]) @ np.array([-axis[1], axis[0]])
-    return (int(i), int(j)) if np.max(np.abs(offsets)) <= line_tolerance_px else None
+@dataclass(frozen=True)
+class StreakPath:
+    """The centre line of a streak's bright pixels: a parabola ``d = c0 + c1 t + c2 t^2`` across
+    the streak's principal axis, over ``t_range`` along it (all in ROI pixels).
+
+    ``centre`` (2,) and ``axis`` (2,) (unit) are the (x, y) origin and direction of t; ``coeffs``
+    (3,) are c0, c1, c2. The ends of the path are where the bright pixels end: within a few
+    pixels of the streak's ends, which is how the cornerness peaks are told apart.
+    """
+
+    centre: NDArray[np.float64]
+    axis: NDArray[np.float64]
+    coeffs: NDArray[np.float64]
+    t_range: NDArray[np.float64]
+
+    def _frame(self, points: NDArray) -> tuple[NDArray, NDArray]:
+        rel = np.asarray(points, dtype=float) - self.centre
+        return rel @ self.axis, rel @ np.array([-self.axis[1], self.axis[0]])
+
+    def offsets(self, points: ArrayLike) -> NDArray[np.float64]:
+        """Distance across the path (px) of points (N, 2) (x, y)."""
+        t, d = self._frame(points)
+        return np.abs(d - np.polyval(self.coeffs[::-1], t))
+
+    def ends(self) -> NDArray[np.float64]:
+        """The path's two ends (2, 2) (x, y)."""
+        t = self.t_range
+        d = np.polyval(self.coeffs[::-1], t)
+        return self.centre + t[:, None] * self.axis + d[:, None] * np.array([-self.axis[1], self.axis[0]])
+
+
+def streak_path(roi: ArrayLike, mask: ArrayLike | None = None, fraction: float = SUPPORT_FRACTION,
+                smooth_sigma_px: float = 1.0) -> StreakPath | None:
+    """The path of the streak in a background-subtracted ROI (h, w), from its bright pixels.
+
+    The ROI is smoothed, the pixels above ``fraction`` of its maximum (inside ``mask``) are
+    labelled and the brightest component (largest sum) is the streak; its principal axis and a
+    weighted parabola across it give the path (curved streaks: seed 001 p.35). None when the
+    ROI has no positive pixel.
+    """
+    img = ndimage.gaussian_filter(np.asarray(roi, dtype=float), smooth_sigma_px, mode="nearest")
+    if mask is not None:
+        img = np.where(mask, img, 0.0)
+    top = float(np.max(img))
+    if top <= 0:
+        return None
+    labels, count = ndimage.label(img > fraction * top)
+    keep = 1 + int(np.argmax(ndimage.sum(img, labels, np.arange(1, count + 1))))
+    ys, xs = np.nonzero(labels == keep)
+    w = img[ys, xs]
+    points = np.column_stack([xs, ys]).astype(float)
+    centre = w @ points / w.sum()
+    rel = points - centre
+    _, vectors = np.linalg.eigh((rel * w[:, None]).T @ rel)
+    axis = vectors[:, 1]
+    t, d = rel @ axis, rel @ np.array([-axis[1], axis[0]])
+    degree = 2 if np.ptp(t) > 4.0 else 0
+    coeffs = np.zeros(3)
+    coeffs[: degree + 1] = np.polynomial.polynomial.polyfit(t, d, degree, w=np.sqrt(w))
+    return StreakPath(centre, axis, coeffs, np.array([t.min(), t.max()]))
+
+
+def _end_peaks(points: NDArray, strength: NDArray, path: StreakPath, end_radius_px: float) -> list[int] | None:
+    """Index of the strongest peak within ``end_radius_px`` of each end of the path (None if
+    an end has none, or both ends chose the same peak)."""
+    chosen = []
+    for end in path.ends():
+        near = np.flatnonzero(np.linalg.norm(points - end, axis=1) <= end_radius_px)
+        if len(near) == 0:
+            return None
+        chosen.append(int(near[np.argmax(strength[near])]))
+    return chosen if chosen[0] != chosen[1] else None
 
 
 def locate_endpoints(
@@ -187,10 +261,12 @@ def locate_endpoints(
     origin_xy: ArrayLike = (0.0, 0.0),
     detector: str = "harris",
     *,
+    mask: ArrayLike | None = None,
     half_window_px: int = HALF_WINDOW_PX,
     min_fraction: float = 0.1,
     line_tolerance_px: float = 3.0,
-    bias_px: float = 0.0,
+    end_radius_px: float = END_RADIUS_PX,
+    bias_px: float | EndpointBias = 0.0,
     min_separation_px: float = 3.0,
     **params,
 ) -> Endpoints:
@@ -204,42 +280,53 @@ def locate_endpoints(
         Full-image (x, y) of ``roi[0, 0]``.
     detector : str
         One of :data:`DETECTORS`; ``params`` go to it (k, integration_sigma_px, ...).
+    mask : array_like of bool, shape (h, w), optional
+        Pixels that belong to this streak or the background; False on other streaks that the
+        ROI's bounding box takes in (long diagonal streaks), whose corners and light are then
+        ignored. Default: all pixels.
     half_window_px : int
         N of the (2N + 1)^2 sub-pixel window.
     min_fraction : float
         Peaks below this fraction of the strongest are ignored.
     line_tolerance_px : float
-        With more than two peaks (false corners along the body of a long or diagonal streak),
-        the two farthest apart are the ends, provided every other peak lies within this
-        distance of the line between them; otherwise (a crossing, a non-star) the ROI is
-        rejected, as the seed rejects every ROI with more than two peaks.
-    bias_px : float
-        Calibrated inward bias; both ends are moved outward by it along the streak.
+        Every peak must lie within this distance of the streak's path (:func:`streak_path`, a
+        parabola through its bright pixels, so curved streaks pass); a peak off it (a crossing,
+        a non-star) rejects the ROI, as the seed rejects every ROI with more than two peaks.
+        Peaks on the path between the ends (false corners along the body) are allowed.
+    end_radius_px : float
+        Each end is the strongest peak within this distance of an end of the path.
+    bias_px : float or EndpointBias
+        Calibrated inward bias (px, or as a function of the streak's direction); both ends are
+        moved outward by it along the streak.
     min_separation_px : float
         Two peaks closer than this are not a streak (a point star).
 
     Returns
     -------
     Endpoints
-        ``ok`` False with a reason for fewer than two peaks, peaks off one line, or peaks too
-        close together.
+        ``ok`` False with a reason for fewer than two peaks, peaks off the path, an end of the
+        path without a peak, or peaks too close together.
     """
     img = np.asarray(roi, dtype=float)
-    response = cornerness(img, detector, **params)
+    use = np.ones(img.shape, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+    response = np.where(use, cornerness(img, detector, **params), 0.0)
     rows, cols = local_maxima(response, min_fraction)
-    if len(rows) < 2:
+    path = streak_path(img, use)
+    if len(rows) < 2 or path is None:
         return _failed(len(rows), "fewer than two cornerness peaks")
-    pair = _extreme_pair(np.column_stack([cols, rows]).astype(float), line_tolerance_px)
+    points = np.column_stack([cols, rows]).astype(float)
+    if np.max(path.offsets(points)) > line_tolerance_px:
+        return _failed(len(rows), f"{len(rows)} cornerness peaks off the streak: corrupted or overlapping streaks")
+    pair = _end_peaks(points, response[rows, cols], path, end_radius_px)
     if pair is None:
-        return _failed(len(rows), f"{len(rows)} cornerness peaks off one line: corrupted or overlapping streaks")
+        return _failed(len(rows), "no separate cornerness peak at each end of the streak")
     ends = np.array([subpixel_peak(response, rows[k], cols[k], half_window_px) for k in pair])
     span = ends[1] - ends[0]
     length = np.linalg.norm(span)
     if length < min_separation_px:
         return _failed(len(rows), "the two peaks are too close for a streak")
-    ends = ends + np.asarray(origin_xy, dtype=float)
-    ends[0] -= bias_px * span / length
-    ends[1] += bias_px * span / length
+    shift = bias_px.at(span) if isinstance(bias_px, EndpointBias) else bias_px
+    ends = ends + np.asarray(origin_xy, dtype=float) + np.outer([-shift, shift], span / length)
     return Endpoints(True, ends, len(rows))
 
 
@@ -258,6 +345,71 @@ def along_streak_offsets(measured_xy: ArrayLike, true_xy: ArrayLike) -> NDArray[
     return np.stack([first, second], axis=1)
 
 
+HARMONICS = (4,)
+"""Orders of the direction harmonics of :class:`EndpointBias`: the pixel grid has the symmetry
+of a square, so a detector's bias repeats every 90 degrees of streak direction (a cos 8a term measured below
+0.1 px)."""
+
+
+@dataclass(frozen=True)
+class EndpointBias:
+    """Inward endpoint bias (px) as a function of the streak's direction angle a:
+    ``c0 + sum_k (c_k cos(n_k a) + s_k sin(n_k a))`` over ``harmonics`` n_k.
+
+    The corner detectors work on the pixel grid, so their inward pull depends on the streak's
+    direction: measured, Trajkovic-4 pulls an end in by 1.2 px along the grid axes and 2.3 px
+    on the diagonals; Harris and minimum eigenvalue by nearly the same at every direction.
+    ``coeffs`` holds c0, then (c_k, s_k) for each harmonic. ``float()`` gives the mean c0.
+    """
+
+    coeffs: NDArray[np.float64]
+    harmonics: tuple[int, ...] = HARMONICS
+
+    def at(self, direction_xy: ArrayLike) -> float:
+        """The bias (px) for a streak along ``direction_xy`` (2,) (x, y), either sense."""
+        d = np.asarray(direction_xy, dtype=float)
+        return float(_harmonic_design(np.arctan2(d[..., 1], d[..., 0]), self.harmonics) @ self.coeffs)
+
+    def __float__(self) -> float:
+        return float(self.coeffs[0])
+
+
+def _harmonic_design(angles: ArrayLike, harmonics: tuple[int, ...]) -> NDArray[np.float64]:
+    a = np.atleast_1d(np.asarray(angles, dtype=float))
+    columns = [np.ones_like(a)] + [f(n * a) for n in harmonics for f in (np.cos, np.sin)]
+    return np.squeeze(np.stack(columns, axis=-1))
+
+
+def _inward_offsets(measured: NDArray, reference_xy, length_moments_px) -> tuple[NDArray, NDArray]:
+    """Per-end inward offsets (M,) and the direction angles (M,) of their streaks."""
+    angles = np.arctan2(*(measured[:, 1] - measured[:, 0]).T[::-1])
+    if reference_xy is not None:
+        return -along_streak_offsets(measured, reference_xy).ravel(), np.repeat(angles, 2)
+    if length_moments_px is None:
+        raise InvalidInputError("calibrate_bias needs reference_xy or length_moments_px")
+    lengths = np.linalg.norm(measured[:, 1] - measured[:, 0], axis=1)
+    return 0.5 * (np.asarray(length_moments_px, dtype=float) - lengths), angles
+
+
+def calibrate_bias_model(measured_xy: ArrayLike, reference_xy: ArrayLike | None = None,
+                         length_moments_px: ArrayLike | None = None,
+                         harmonics: tuple[int, ...] = HARMONICS) -> EndpointBias:
+    """The direction-dependent inward bias (:class:`EndpointBias`) from a set of streaks.
+
+    Same inputs as :func:`calibrate_bias` (ends (N, 2, 2) measured with ``bias_px=0``), which
+    should cover the directions: a least-squares fit of the harmonics to each end's inward
+    offset. Harmonics the directions do not fix (all streaks nearly parallel) are left at zero.
+    """
+    offsets, angles = _inward_offsets(np.asarray(measured_xy, dtype=float), reference_xy, length_moments_px)
+    design = _harmonic_design(angles, harmonics).reshape(len(offsets), -1)
+    singular = np.linalg.svd(design / np.sqrt(len(offsets)), compute_uv=False)
+    if len(offsets) < 4 * design.shape[1] or singular[-1] < 0.2:
+        mean = np.mean(offsets) if reference_xy is not None else np.median(offsets)
+        return EndpointBias(np.r_[mean, np.zeros(2 * len(harmonics))], harmonics)
+    coeffs, *_ = np.linalg.lstsq(design, offsets, rcond=None)
+    return EndpointBias(coeffs, harmonics)
+
+
 def calibrate_bias(measured_xy: ArrayLike, reference_xy: ArrayLike | None = None,
                    length_moments_px: ArrayLike | None = None) -> float:
     """Inward endpoint bias (px) to pass as ``bias_px``, from a set of streaks.
@@ -269,9 +421,5 @@ def calibrate_bias(measured_xy: ArrayLike, reference_xy: ArrayLike | None = None
     (seed 001 ch. 6 proposes using the unbiased streak middle the same way).
     """
     measured = np.asarray(measured_xy, dtype=float)
-    if reference_xy is not None:
-        return float(-np.mean(along_streak_offsets(measured, reference_xy)))
-    if length_moments_px is None:
-        raise InvalidInputError("calibrate_bias needs reference_xy or length_moments_px")
-    lengths = np.linalg.norm(measured[:, 1] - measured[:, 0], axis=1)
-    return float(0.5 * np.median(np.asarray(length_moments_px, dtype=float) - lengths))
+    offsets, _ = _inward_offsets(measured, reference_xy, length_moments_px)
+    return float(np.mean(offsets) if reference_xy is not None else np.median(offsets))

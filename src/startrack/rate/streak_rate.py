@@ -115,7 +115,8 @@ def _corner_ends(img, found, detector, bias_px, min_length_px, length_tolerance,
         if region.length_moments_px < min_length_px:
             continue
         roi = img[region.rows, region.cols] - found.background
-        result = locate_endpoints(roi, region.origin_xy, detector, bias_px=bias_px, **(endpoint_options or {}))
+        result = locate_endpoints(roi, region.origin_xy, detector, mask=~_other_streaks(region, found),
+                                  bias_px=bias_px, **(endpoint_options or {}))
         if result.ok and not length_mismatch(result.xy, region.length_moments_px, length_tolerance):
             kept.append(region)
             ends.append(result.xy)
@@ -126,10 +127,9 @@ def _segment_ends(img, found, min_length_px):
     """Regions, ends (N, 2, 2) and end sigmas (N,) from the segment fit, with a common blur."""
     fits = []
     for region in found.regions:
-        labels = found.labels[region.rows, region.cols]
-        others = ndimage.binary_dilation((labels > 0) & (labels != _label_of(region, found.labels)), iterations=3)
         result = fit_segment(img[region.rows, region.cols] - found.background, region.origin_xy,
-                             region.centroid_xy, region.direction, found.noise, mask=~others, image_shape=img.shape,
+                             region.centroid_xy, region.direction, found.noise, mask=~_other_streaks(region, found),
+                             image_shape=img.shape,
                              band_px=BAND_PX + 2.0 * region.width_px)
         length = np.linalg.norm(result.xy[1] - result.xy[0])
         if result.ok and length >= min_length_px and np.max(result.sigma_xy_px) <= MAX_END_SIGMA_PX:
@@ -141,6 +141,13 @@ def _segment_ends(img, found, min_length_px):
     common = (np.abs(blur / np.median(blur) - 1.0) <= BLUR_TOLERANCE) & (chi2 <= CHI2_FACTOR * np.median(chi2))
     fits = [f for f, ok in zip(fits, common, strict=True) if ok]
     return [r for r, _ in fits], [f.xy for _, f in fits], np.array([np.max(f.sigma_xy_px) for _, f in fits])
+
+
+def _other_streaks(region: StreakRegion, found) -> NDArray[np.bool_]:
+    """Pixels of a region's ROI on (or within 3 px of) other labelled blobs, which a long diagonal
+    streak's bounding box takes in."""
+    labels = found.labels[region.rows, region.cols]
+    return ndimage.binary_dilation((labels > 0) & (labels != _label_of(region, found.labels)), iterations=3)
 
 
 def _label_of(region: StreakRegion, labels: NDArray) -> int:
