@@ -39,11 +39,14 @@ from scoring import (  # noqa: E402
 )
 from starlists import Conditions, generate_star_lists, load_sky  # noqa: E402
 
+from startrack.identify.registry import MATCHERS  # noqa: E402
 from startrack.units import ARCSEC  # noqa: E402
 
+LIS_MATCHERS = [name for name in MATCHERS if name != "overlay"]
+
 RESULTS_DIR = Path(__file__).resolve().parent / "results"
-HEADER = (f"{'method':<12} {'condition':<20} {'trials':>6} {'success':>8} {'false':>7} "
-          f"{'median ms':>10} {'p95 ms':>8} {'x cedar med':>11} {'x cedar p95':>11}")
+HEADER = (f"{'method':<22} {'condition':<20} {'trials':>6} {'success':>8} {'false':>7} "
+          f"{'median ms':>10} {'p95 ms':>8} {'x cedar med':>11} {'x cedar p95':>11} {'db MiB':>7}")
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -57,8 +60,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--no-range", action="store_true", help="only run with the FOV known")
     parser.add_argument("--no-peer", action="store_true", help="do not run cedar-solve")
     parser.add_argument("--no-ours", action="store_true", help="do not run startrack")
-    parser.add_argument("--matchers", nargs="+", default=["quads"], choices=["quads", "pyramid"],
-                        help="startrack matchers to run (pyramid only where the FOV is known)")
+    parser.add_argument("--matchers", nargs="+", default=["quads"], choices=LIS_MATCHERS,
+                        help="startrack matchers to run (all but quads only where the FOV is known)")
     parser.add_argument("--cedar-timeout-ms", type=float, default=5000.0)
     parser.add_argument("--progress", type=int, default=100, help="progress line every N trials")
     parser.add_argument("--out", type=Path, default=None,
@@ -76,15 +79,60 @@ def knowledge_list(fov_deg: float, args: argparse.Namespace) -> list[FovKnowledg
 def run_methods(lists, conditions, knowledge, args, skip_ours: str | None) -> list[MethodRun]:
     runs = []
     for matcher in ([] if skip_ours else args.matchers):
-        if matcher == "pyramid" and knowledge.fov_deg is None:
-            continue  # the Pyramid needs a known field of view
+        if matcher != "quads" and knowledge.fov_deg is None:
+            continue  # the pair-directory matchers need a known field of view
         print(f"startrack ({matcher}) on {conditions.name}, {knowledge.label}", file=sys.stderr, flush=True)
-        runs.append(solve_ours(lists, conditions, knowledge, matcher=matcher, progress=args.progress))
+        runs.append(solve_ours_measured(lists, conditions, knowledge, args, matcher))
     if not args.no_peer:
         print(f"cedar-solve on {conditions.name}, {knowledge.label}", file=sys.stderr, flush=True)
         runs.append(solve_cedar(lists, conditions, knowledge, timeout_ms=args.cedar_timeout_ms,
                                 progress=args.progress))
     return runs
+
+
+def _loaded_tables() -> set:
+    """(kind, settings) of every cached table loaded in this process so far."""
+    from startrack.identify import database, pair_database, triangle_database
+
+    return ({("patterns", k) for k in database._LOADED} | {("pairs", k) for k in pair_database._LOADED}
+            | {("triangles", k) for k in triangle_database._LOADED})
+
+
+def _table_bytes(kind: str, key) -> int:
+    from dataclasses import asdict
+
+    from startrack import cache
+    from startrack.identify import database, pair_database, triangle_database
+
+    if kind == "patterns":
+        return database.database_path(key).stat().st_size
+    if kind == "pairs":
+        params, version = asdict(key), pair_database.PAIRS_VERSION
+    else:
+        settings, variant = key
+        params = {**asdict(settings), "variant": variant, "levels": triangle_database.SUBDIVISION_LEVELS}
+        version = triangle_database.TRIANGLES_VERSION
+    return (cache.cache_dir() / f"{kind}-{cache.input_key(kind, version, params)}.npz").stat().st_size
+
+
+_SEEN: dict[tuple, set] = {}
+"""Tables each kind of matcher loaded per condition (a table loaded once is not loaded again)."""
+
+
+def solve_ours_measured(lists, conditions, knowledge, args, matcher) -> MethodRun:
+    """:func:`solve_ours` plus the on-disk size (MiB) of the tables the matcher loaded for it."""
+    before = _loaded_tables()
+    run = solve_ours(lists, conditions, knowledge, matcher=matcher, progress=args.progress)
+    new = _loaded_tables() - before
+    for kind in ("patterns", "pairs"):
+        key = (conditions.name, knowledge.label, kind)
+        _SEEN[key] = _SEEN.get(key, set()) | {t for t in new if t[0] == kind}
+    kind = "patterns" if matcher == "quads" else "pairs"
+    used = _SEEN[(conditions.name, knowledge.label, kind)] | {t for t in new if t[0] == "triangles"}
+    if matcher == "quads" and not used:  # loaded in an earlier condition: the default database
+        used = {t for t in before if t[0] == "patterns"}
+    run.extra["database_mib"] = sum(_table_bytes(k, key) for k, key in used) / 2**20
+    return run
 
 
 def score_runs(runs: list[MethodRun], lists, conditions: Conditions, label: str) -> list[dict]:
@@ -101,6 +149,7 @@ def score_runs(runs: list[MethodRun], lists, conditions: Conditions, label: str)
                          "err_arcsec": err_arcsec}
         if "roll_deg" in run.extra:
             row.update(roll_check(truths, run, err <= tol))
+        row["database_mib"] = run.extra.get("database_mib", run.extra.get("database", {}).get("file_bytes", 0) / 2**20)
         rows.append(row)
     add_ratios(rows)
     return rows
@@ -133,8 +182,9 @@ def add_ratios(rows: list[dict]) -> None:
 def format_row(row: dict) -> str:
     ratio = (f"{row['ratio_median']:>11.2f} {row['ratio_p95']:>11.2f}" if "ratio_median" in row
              else f"{'':>11} {'':>11}")
-    return (f"{row['method']:<12} {row['condition']:<20} {row['n']:>6} {row['success_rate']:>8.1%} "
-            f"{row['false_rate']:>7.1%} {row['median_ms']:>10.2f} {row['p95_ms']:>8.2f} {ratio}")
+    return (f"{row['method']:<22} {row['condition']:<20} {row['n']:>6} {row['success_rate']:>8.1%} "
+            f"{row['false_rate']:>7.1%} {row['median_ms']:>10.2f} {row['p95_ms']:>8.2f} {ratio} "
+            f"{row.get('database_mib', 0.0):>7.1f}")
 
 
 def print_table(rows: list[dict], notes: list[str]) -> None:
