@@ -34,7 +34,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from scoring import TOLERANCE_PIXELS, attitude_errors_rad, summarize, tolerance_rad  # noqa: E402
+from scoring import TOLERANCE_PIXELS, attitude_errors_rad, roll_weight, summarize, tolerance_rad  # noqa: E402
 
 from startrack import solve_image, solve_stars  # noqa: E402
 from startrack.camera import Camera  # noqa: E402
@@ -109,7 +109,7 @@ def time_stages(frames: list, fov_deg: float) -> tuple[dict[str, np.ndarray], li
 def print_end_to_end(frames: list, camera: Camera, args: argparse.Namespace) -> None:
     estimates, times, warmup_s = time_solves(frames, args.fov_deg)
     solved = np.array([e is not None for e in estimates])
-    err = attitude_errors_rad([rot for _, rot in frames], estimates)
+    err = attitude_errors_rad([rot for _, rot in frames], estimates, roll_weight(camera))
     s = summarize(solved, err, times, tolerance_rad(camera))
     verdict = "meets" if s["median_ms"] < TARGET_MEDIAN_MS else "misses"
     print(f"\nimage path (read PNG, detect, solve), {args.size} x {args.size} px, "
@@ -124,7 +124,7 @@ def print_end_to_end(frames: list, camera: Camera, args: argparse.Namespace) -> 
 def print_stages(frames: list, camera: Camera, args: argparse.Namespace) -> None:
     stages, estimates, n_det = time_stages(frames, args.fov_deg)
     total = sum(stages.values())
-    err = attitude_errors_rad([rot for _, rot in frames], estimates)
+    err = attitude_errors_rad([rot for _, rot in frames], estimates, roll_weight(camera))
     solved = np.array([e is not None for e in estimates])
     s = summarize(solved, err, total, tolerance_rad(camera))
     parts = ", ".join(f"{k} {np.median(v) * 1e3:.1f}" for k, v in stages.items())

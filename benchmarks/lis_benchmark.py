@@ -34,6 +34,7 @@ from scoring import (  # noqa: E402
     TOLERANCE_PIXELS,
     attitude_errors_rad,
     boresight_and_roll_errors,
+    roll_weight,
     summarize,
     tolerance_rad,
 )
@@ -63,6 +64,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--matchers", nargs="+", default=["quads"], choices=LIS_MATCHERS,
                         help="startrack matchers to run (all but quads only where the FOV is known)")
     parser.add_argument("--cedar-timeout-ms", type=float, default=5000.0)
+    parser.add_argument("--timeout-s", type=float, default=None,
+                        help="time limit of startrack's matchers (default: each matcher's own, 5 s)")
     parser.add_argument("--progress", type=int, default=100, help="progress line every N trials")
     parser.add_argument("--out", type=Path, default=None,
                         help="JSON file (default: results/lis-*.json)")
@@ -122,7 +125,8 @@ _SEEN: dict[tuple, set] = {}
 def solve_ours_measured(lists, conditions, knowledge, args, matcher) -> MethodRun:
     """:func:`solve_ours` plus the on-disk size (MiB) of the tables the matcher loaded for it."""
     before = _loaded_tables()
-    run = solve_ours(lists, conditions, knowledge, matcher=matcher, progress=args.progress)
+    run = solve_ours(lists, conditions, knowledge, matcher=matcher, progress=args.progress,
+                     timeout_s=args.timeout_s)
     new = _loaded_tables() - before
     for kind in ("patterns", "pairs"):
         key = (conditions.name, knowledge.label, kind)
@@ -141,7 +145,7 @@ def score_runs(runs: list[MethodRun], lists, conditions: Conditions, label: str)
     tol = tolerance_rad(conditions.camera)
     rows = []
     for run in runs:
-        err = attitude_errors_rad(truths, run.estimates)
+        err = attitude_errors_rad(truths, run.estimates, roll_weight(conditions.camera))
         row = {"method": run.method, "condition": f"{conditions.name} {label}", **summarize(
             run.solved, err, run.time_s, tol)}
         err_arcsec = [None if math.isnan(e) else e / ARCSEC for e in err]

@@ -81,10 +81,15 @@ class MethodRun:
 
 
 def solve_ours(lists: list[StarList], conditions: Conditions, knowledge: FovKnowledge,
-               *, matcher: str = "quads", warmup: bool = True, progress: int = 0) -> MethodRun:
-    """Solve every list with ``startrack.solve_stars(method=matcher)`` (in this process)."""
+               *, matcher: str = "quads", warmup: bool = True, progress: int = 0,
+               timeout_s: float | None = None) -> MethodRun:
+    """Solve every list with ``startrack.solve_stars(method=matcher)`` (in this process), with the
+    matcher's default time limit or ``timeout_s``."""
+    from startrack.identify.registry import options_for
+
+    options = None if timeout_s is None else options_for(matcher, timeout_s=timeout_s)
     kwargs = dict(width=conditions.width, height=conditions.height, epoch=conditions.epoch_jyear,
-                  method=matcher, **knowledge.ours_kwargs())
+                  method=matcher, options=options, **knowledge.ours_kwargs())
     if warmup and lists:
         solve_stars(lists[0].x, lists[0].y, flux=lists[0].flux, **kwargs)
     solved = np.zeros(len(lists), dtype=bool)
