@@ -59,6 +59,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
                         metavar=("LO", "HI"),
                         help="FOV range given to the solvers in the unknown-FOV runs (deg)")
     parser.add_argument("--no-range", action="store_true", help="only run with the FOV known")
+    parser.add_argument("--no-known", action="store_true", help="only run with the FOV range")
     parser.add_argument("--no-peer", action="store_true", help="do not run cedar-solve")
     parser.add_argument("--no-ours", action="store_true", help="do not run startrack")
     parser.add_argument("--matchers", nargs="+", default=["quads"], choices=LIS_MATCHERS,
@@ -73,7 +74,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 
 
 def knowledge_list(fov_deg: float, args: argparse.Namespace) -> list[FovKnowledge]:
-    out = [FovKnowledge(fov_deg=fov_deg)]
+    out = [] if args.no_known else [FovKnowledge(fov_deg=fov_deg)]
     if not args.no_range:
         out.append(FovKnowledge(fov_range_deg=(args.fov_range[0], args.fov_range[1])))
     return out
