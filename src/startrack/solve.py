@@ -14,7 +14,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 from astropy.time import Time
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from .attitude import attitude_covariance
@@ -25,9 +24,8 @@ from .errors import InvalidInputError
 from .frames import angle_between, radec_roll_from_rotation
 from .identify.candidate import Candidate
 from .identify.field_stars import FieldStars
-from .identify.refine import refine_pointing
+from .identify.final_fit import settle_matches
 from .identify.registry import DEFAULT_FOV_RANGE_DEG, MATCHERS, prepare_matcher
-from .identify.verify import match_nearest
 from .results import AttitudeSolution, StarMatches, Status
 from .units import ARCSEC
 
@@ -35,19 +33,6 @@ FOV_DEG_TOLERANCE = 0.03
 """A given ``fov_deg`` is trusted to this fraction; the solve refines it."""
 
 DEFAULT_EPOCH_JYEAR = 2000.0
-
-MAX_REFINE_ROUNDS = 4
-"""Fit / re-match rounds after verification (usually two: the second changes nothing)."""
-
-REMATCH_RADIUS_PX = 3.0
-"""After verification, every image star within this distance of a predicted star is matched."""
-
-MIN_STARS_FOR_K1 = 12
-K1_FOCAL_SPAN = 0.1
-"""When the focal length is searched over a range wider than 10 % (an uncalibrated camera), the
-final fit also estimates the radial distortion k1 if at least MIN_STARS_FOR_K1 stars are
-matched: the lenses of photographs are rarely calibrated. A ``fov_deg`` (+-3 %) fits the focal
-length only."""
 
 
 @dataclass(frozen=True)
@@ -159,82 +144,13 @@ def _problem(x, y, width, height, fov_deg, fov_range_deg, camera, flux, epoch) -
     return _Problem(xs, ys, rows, nominal, focal_range, fov_range, epoch_jyear(epoch))
 
 
-def _rematch(problem: _Problem, stars: FieldStars, near: NDArray, rot: Rotation, camera: Camera, radius_px: float):
-    """Match every image star to its nearest catalog star within the radius: (image index, catalog row).
-
-    ``near`` are the indices (into ``stars``) of the catalog stars around the field, found once.
-    A catalog star closer than :data:`BLEND_PX` to a brighter one is left out: in the image the
-    pair is one spot, named after its brighter star.
-    """
-    near = np.sort(near)  # field stars are stored brightest first
-    x, y = camera.vector_to_pixel(stars.vectors[near] @ rot.as_matrix().T)
-    inside = np.flatnonzero(camera.in_image(x, y))
-    x, y = x[inside], y[inside]
-    blended = cKDTree(np.column_stack([x, y])).query_pairs(BLEND_PX, output_type="ndarray")
-    visible = np.ones(inside.size, dtype=bool)
-    visible[blended.max(axis=1) if blended.size else []] = False  # the fainter star of each close pair
-    img_i, cat_i = match_nearest(problem.x, problem.y, x[visible], y[visible], radius_px)
-    return img_i, stars.rows[near[inside[visible]][cat_i]]
-
-
-BLEND_PX = 0.5
-"""Catalog stars closer than this (pixels) to a brighter catalog star are not matched separately."""
-
-
-FIELD_MARGIN = 1.1
-"""Catalog stars within this many half-diagonals of the candidate's boresight take part in the
-re-match (the refinement moves the boresight and focal length by far less than the margin)."""
-
-
-SETTLED_PX = 0.05
-"""Once a re-fit moves no star by more than this, re-matching cannot change the matches (bar a
-star within 0.05 px of the re-match radius) and the loop stops."""
-
-
-def _pose_shift_px(rot_a: Rotation, cam_a: Camera, rot_b: Rotation, cam_b: Camera) -> float:
-    """Largest shift (pixels) of an image point between two attitudes and focal lengths."""
-    turn = float(np.linalg.norm((rot_a * rot_b.inv()).as_rotvec()))
-    half_diagonal_px = 0.5 * math.hypot(cam_a.width, cam_a.height)
-    focal_change = abs(cam_a.fx / cam_b.fx - 1.0)
-    return turn * cam_b.fx * (1.0 + (half_diagonal_px / cam_b.fx) ** 2) + focal_change * half_diagonal_px
-
-
-def _refined(problem: _Problem, stars: FieldStars, cand: Candidate):
-    """Fit attitude (and camera) to the matched stars, re-match every star, and repeat until the
-    matches stop changing (a candidate verified on a few nearby stars can have a focal length
-    that is off enough to miss the far stars, or to pair one with its faint neighbour).
-
-    Returns the attitude, camera, matched image indices, their catalog rows, the rows' ICRS
-    vectors at the solve epoch and the pixel residuals.
-    """
-    fit_focal = problem.focal_range is not None
-    fit_k1 = fit_focal and problem.focal_range[1] > problem.focal_range[0] * (1 + K1_FOCAL_SPAN)
-    rot, camera = cand.rot_cam_from_icrs, cand.camera
-    img, rows = cand.image_index, cand.catalog_rows
-    near = stars.near(rot.as_matrix()[2], FIELD_MARGIN * math.radians(camera.fov_diagonal_deg) / 2.0)
-    for round_ in range(MAX_REFINE_ROUNDS):
-        ref = stars.vectors_of(rows)
-        before = (rot, camera)
-        rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=fit_focal)
-        if round_ == MAX_REFINE_ROUNDS - 1 or (round_ > 0 and _pose_shift_px(*before, rot, camera) < SETTLED_PX):
-            break
-        new_img, new_rows = _rematch(problem, stars, near, rot, camera, REMATCH_RADIUS_PX)
-        unchanged = np.array_equal(new_img, img) and np.array_equal(new_rows, rows)
-        if unchanged or new_img.size < img.size:
-            break
-        img, rows = new_img, new_rows
-    if fit_k1 and img.size >= MIN_STARS_FOR_K1:  # lens distortion last, on the settled matches
-        rot, camera, res = refine_pointing(rot, camera, ref, problem.x[img], problem.y[img], fit_focal=True,
-                                           fit_k1=True)
-    return rot, camera, img, rows, ref, res
-
-
 def _solution(problem: _Problem, stars: FieldStars, cand: Candidate, t0: float) -> AttitudeSolution:
     """The solution from a verified candidate: refined fit, then the Wahba attitude of all matched
     stars (Davenport's q-method: the same optimum as QUEST, and one 4 x 4 eigen-decomposition is
     faster in numpy than QUEST's Newton iteration; both are in :mod:`startrack.attitude`) with the
     QUEST measurement-model covariance (seed 000 §6.1.3)."""
-    rot, camera, img, rows, ref, res_px = _refined(problem, stars, cand)
+    fit = settle_matches(problem.x, problem.y, stars, cand, problem.focal_range)
+    camera, img, rows, ref, res_px = fit.camera, fit.image_index, fit.catalog_rows, fit.ref_icrs, fit.residual_px
     observed = camera.pixel_to_vector(problem.x[img], problem.y[img])
     sigma_rad = max(float(np.sqrt(np.mean(res_px**2))), 0.05) / camera.fx
     weights = np.full((1, len(img)), 1.0 / len(img))
