@@ -16,7 +16,7 @@ from astropy.time import Time
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from .attitude import attitude_covariance
+from .attitude.covariance import covariance_batch
 from .attitude.qmethod import q_method_quaternions
 from .camera import Camera, focal_px_from_fov
 from .catalog import load_catalog
@@ -162,7 +162,7 @@ def _solution(problem: _Problem, stars: FieldStars, cand: Candidate, t0: float) 
                           false_match_prob=cand.false_match_prob)
     return AttitudeSolution(
         status=Status.OK, rot_cam_from_icrs=rot,
-        covariance_rad2=attitude_covariance(observed, np.full(len(img), sigma_rad)),
+        covariance_rad2=covariance_batch(observed[None], np.full((1, len(img)), sigma_rad))[0],  # >= 3 stars, spread
         ra_deg=float(np.degrees(ra)), dec_deg=float(np.degrees(dec)), roll_deg=float(np.degrees(roll)),
         fov_deg=camera.fov_deg, camera=camera, matches=matches, residuals_arcsec=residuals,
         false_match_prob=cand.false_match_prob, solve_time_s=time.perf_counter() - t0)

@@ -10,6 +10,11 @@ logic, seed 004 §2.2 predictive loop, seed 002 §4 tracking).
 
 A lost-in-space solve with an unknown FOV fixes the camera (its fitted focal length) for the
 frames after it.
+
+A tracking step keeps its attitude as a quaternion and predicts, fits and differences attitudes
+with :mod:`.quaternions` (the same kinematics as :func:`startrack.attitude.propagation.propagate`
+and :func:`startrack.rate.from_attitudes.rate_between`, without scipy's per-call overhead); the
+catalog stars around the boresight are kept from frame to frame (:class:`.windows.WindowMatcher`).
 """
 
 from __future__ import annotations
@@ -22,15 +27,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from ..attitude.propagation import propagate
 from ..camera import Camera
 from ..errors import InvalidInputError
 from ..frames import radec_roll_from_rotation
 from ..identify.field_stars import field_stars
-from ..rate.from_attitudes import rate_between
 from ..results import Status
 from ..solve import epoch_jyear, solve_stars
-from .windows import match_in_windows
+from .quaternions import Quat, quat_conjugate, quat_matrix, quat_product, quat_rotvec, rotvec_quat
+from .windows import WindowMatcher
 
 LOST_IN_SPACE = "lost-in-space"
 TRACKING = "tracking"
@@ -120,9 +124,11 @@ class Tracker:
                             "epoch": epoch}
         self._camera = camera
         self._rot: Rotation | None = None
+        self._quat: Quat | None = None
         self._t: float | None = None
         self._rate: NDArray | None = None
         self._epoch = epoch
+        self._matcher: WindowMatcher | None = None
 
     # --- public ---------------------------------------------------------------------------------
     def update(self, x: ArrayLike, y: ArrayLike, t_s: float, *, flux: ArrayLike | None = None,
@@ -134,7 +140,7 @@ class Tracker:
             order = np.argsort(-np.asarray(flux, dtype=float), kind="stable")
             x, y = x[order], y[order]
         if gyro_rate_rad_s is not None:
-            self._rate = np.asarray(gyro_rate_rad_s, dtype=float)
+            self._rate = _checked_rate(gyro_rate_rad_s)
         step = self._track(x, y, t_s) if self._rot is not None and self._camera is not None else None
         if step is None:
             step = self._lost_in_space(x, y, t_s)
@@ -181,7 +187,7 @@ class Tracker:
 
     def reset(self) -> None:
         """Forget the attitude and rate (the next frame is solved lost-in-space)."""
-        self._rot, self._t, self._rate = None, None, None
+        self._rot, self._quat, self._t, self._rate = None, None, None, None
 
     # --- modes ----------------------------------------------------------------------------------
     def _window_px(self, dt: float) -> float:
@@ -189,16 +195,28 @@ class Tracker:
         if self._rate is None:
             motion = math.radians(opt.max_rate_deg_s) * abs(dt)
         else:
-            motion = opt.rate_error_fraction * float(np.linalg.norm(self._rate)) * abs(dt)
+            motion = opt.rate_error_fraction * math.hypot(*self._rate.tolist()) * abs(dt)
         return opt.window_px + motion * self._camera.fx
+
+    def _window_matcher(self) -> WindowMatcher:
+        """The matcher of the current camera and catalog limit (it keeps the stars near the boresight)."""
+        stars = field_stars(self.options.catalog_max_mag, epoch_jyear(self._epoch))
+        if self._matcher is None or self._matcher.camera is not self._camera or self._matcher.stars is not stars:
+            self._matcher = WindowMatcher(self._camera, stars)
+        return self._matcher
+
+    def _predicted_quat(self, dt: float) -> Quat:
+        """The attitude turned by the rate for ``dt`` seconds: ``exp(-[omega x] dt) A`` (camera-frame omega)."""
+        if self._rate is None:
+            return self._quat
+        return quat_product(rotvec_quat(-self._rate * dt), self._quat)
 
     def _track(self, x: NDArray, y: NDArray, t_s: float) -> TrackStep | None:
         opt = self.options
         dt = t_s - self._t
-        predicted = propagate(self._rot, self._rate if self._rate is not None else np.zeros(3), dt)
-        stars = field_stars(opt.catalog_max_mag, epoch_jyear(self._epoch))
-        found = match_in_windows(x, y, self._camera, predicted, stars, window_px=self._window_px(dt),
-                                 match_px=opt.match_px, min_stars=opt.min_stars)
+        found = self._window_matcher().match(x, y, quat_matrix(self._predicted_quat(dt)),
+                                             window_px=self._window_px(dt), match_px=opt.match_px,
+                                             min_stars=opt.min_stars)
         if found.rot_cam_from_icrs is None or not found.residual_rms_px <= opt.max_residual_px:
             return None
         self._advance(found.rot_cam_from_icrs, t_s)
@@ -219,15 +237,27 @@ class Tracker:
 
     # --- state ----------------------------------------------------------------------------------
     def _advance(self, rot: Rotation, t_s: float) -> None:
-        """Take a new attitude; update the smoothed rate from the previous one (if any)."""
-        if self._rot is not None and self._t is not None and t_s > self._t:
-            measured = rate_between(self._rot, rot, t_s - self._t)
+        """Take a new attitude; update the smoothed rate from the previous one (if any).
+
+        The measured rate is ``-rotvec(A_new A_old^T) / dt``, the exact log map of
+        :func:`startrack.rate.from_attitudes.rate_between`.
+        """
+        quat = tuple(rot.as_quat().tolist())
+        if self._quat is not None and self._t is not None and t_s > self._t:
+            measured = -quat_rotvec(quat_product(quat, quat_conjugate(self._quat))) / (t_s - self._t)
             gain = self.options.rate_gain
             self._rate = measured if self._rate is None else (1 - gain) * self._rate + gain * measured
-        self._rot, self._t = rot, t_s
+        self._rot, self._quat, self._t = rot, quat, t_s
 
     def _rate_copy(self) -> NDArray | None:
         return None if self._rate is None else self._rate.copy()
+
+
+def _checked_rate(rate_rad_s: ArrayLike) -> NDArray[np.float64]:
+    rate = np.array(rate_rad_s, dtype=float)
+    if rate.shape != (3,) or not np.all(np.isfinite(rate)):
+        raise InvalidInputError(f"gyro_rate_rad_s must be 3 finite numbers (rad/s, camera frame), got {rate_rad_s!r}")
+    return rate
 
 
 def _with_time(step: TrackStep, seconds: float) -> TrackStep:

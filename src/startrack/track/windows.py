@@ -7,6 +7,11 @@ are matched to the detections within ``window_px`` (the prediction's uncertainty
 is fitted to those pairs (q-method); the same stars are matched again within ``match_px`` of the
 fitted attitude and the attitude refitted. The geometry of the matched stars confirms the result:
 the caller accepts it only if enough stars match with residuals at the centroid-noise level.
+
+:class:`WindowMatcher` does this frame after frame: it keeps the catalog stars of a cone a little
+wider than the field (queried again only when the boresight has moved by more than the extra
+width), so that a frame costs a projection of those stars, two small one-to-one matches and two
+3 x 3 attitude fits (:mod:`.quaternions`).
 """
 
 from __future__ import annotations
@@ -18,13 +23,26 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ..attitude.qmethod import q_method_quaternions
 from ..camera import Camera
 from ..identify.field_stars import FieldStars
 from ..identify.verify import match_nearest
+from .quaternions import fit_quat, quat_matrix
 
 EXTRA_PREDICTED = 2.0
 """Predicted stars kept: this many times the number of detections (at least 30)."""
+
+CONE_SLACK_RAD = math.radians(2.0)
+"""Extra radius of the cached catalog cone: it is queried again when the boresight has moved this far."""
+
+PREFIX_FACTOR = 2.0
+"""The brightest ``PREFIX_FACTOR * count / (image share of the cone)`` stars of the cone are
+projected first; all of them only if fewer than ``count`` of those fall inside the image."""
+
+MAX_CONE_RAD = 1.5
+"""Largest search cone around the boresight (rad)."""
+
+DENSE_PAIRS_LIMIT = 200_000
+"""Above this many (detection, predicted star) pairs, the pairs come from :func:`match_nearest`'s KD-trees."""
 
 
 @dataclass(frozen=True)
@@ -38,18 +56,120 @@ class WindowMatch:
     residual_rms_px: float
 
 
-def _predicted_stars(stars: FieldStars, matrix: NDArray, camera: Camera, margin_rad: float, count: int) -> NDArray:
-    """Indices (into ``stars``) of the ``count`` brightest stars predicted inside the image."""
-    half_diag = math.radians(camera.fov_diagonal_deg) / 2.0 + margin_rad
-    chord = 2.0 * math.sin(min(half_diag, 1.5) / 2.0)
-    idx = np.asarray(stars.tree.query_ball_point(matrix[2], chord, return_sorted=True), dtype=np.int64)
-    x, y = camera.vector_to_pixel(stars.vectors[idx] @ matrix.T)
-    return idx[camera.in_image(x, y)][:count]
+def one_to_one(x: NDArray, y: NDArray, px: NDArray, py: NDArray,
+               radius_px: float) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Pairs (detection index, predicted index) within the radius, each star used once, closest first.
+
+    The pairs of :func:`startrack.identify.verify.match_nearest` (greedy, closest pair first);
+    for the few dozen stars of a tracked frame, the greedy pass runs over Python lists, which
+    costs a fraction of indexing numpy arrays one element at a time.
+    """
+    if x.size * px.size > DENSE_PAIRS_LIMIT:
+        return match_nearest(x, y, px, py, radius_px)
+    d2 = (x[:, None] - px) ** 2 + (y[:, None] - py) ** 2
+    i, c = np.nonzero(d2 <= radius_px * radius_px)
+    order = np.argsort(d2[i, c], kind="stable")
+    taken_i, taken_c, img, cat = set(), set(), [], []
+    for a, b in zip(i[order].tolist(), c[order].tolist(), strict=True):
+        if a not in taken_i and b not in taken_c:
+            taken_i.add(a)
+            taken_c.add(b)
+            img.append(a)
+            cat.append(b)
+    return np.array(img, dtype=np.int64), np.array(cat, dtype=np.int64)
 
 
-def _fit(observed: NDArray, reference: NDArray) -> NDArray:
-    weights = np.full((1, len(observed)), 1.0 / len(observed))
-    return Rotation.from_quat(q_method_quaternions(observed[None], reference[None], weights)[0]).as_matrix()
+class WindowMatcher:
+    """:func:`match_in_windows` for a sequence of frames of one camera and star set.
+
+    Parameters
+    ----------
+    camera : Camera
+    stars : FieldStars
+        Catalog stars, brightest first (:func:`startrack.identify.field_stars.field_stars`).
+    slack_rad : float
+        Extra radius of the cached catalog cone (rad).
+    """
+
+    def __init__(self, camera: Camera, stars: FieldStars, slack_rad: float = CONE_SLACK_RAD):
+        self.camera, self.stars, self.slack_rad = camera, stars, slack_rad
+        self._half_diag = math.radians(camera.fov_diagonal_deg) / 2.0
+        self._centre: tuple[float, float, float] | None = None
+        self._radius = -1.0
+        self._image_fraction = 1.0  # of the stars of the cached cone, the share expected in the image
+        self._idx = np.zeros(0, dtype=np.int64)
+        self._vectors = np.zeros((0, 3))
+
+    def _cone(self, boresight: NDArray, cone_rad: float) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+        """Indices (ascending, so brightest first) and ICRS vectors of a set of catalog stars that
+        holds every star within ``cone_rad`` of the boresight."""
+        b = tuple(boresight.tolist())
+        if self._centre is not None:
+            cos_moved = min(1.0, sum(u * v for u, v in zip(b, self._centre, strict=True)))
+            if math.acos(cos_moved) + cone_rad <= self._radius:
+                return self._idx, self._vectors
+        radius = min(cone_rad + self.slack_rad, math.pi)
+        chord = 2.0 * math.sin(radius / 2.0)
+        self._idx = np.asarray(self.stars.tree.query_ball_point(b, chord, return_sorted=True), dtype=np.int64)
+        self._vectors = self.stars.vectors[self._idx]
+        self._centre, self._radius = b, radius
+        image_sr = (self.camera.width / self.camera.fx) * (self.camera.height / self.camera.fy)
+        self._image_fraction = min(1.0, image_sr / (2.0 * math.pi * (1.0 - math.cos(radius))))
+        return self._idx, self._vectors
+
+    def predicted(self, matrix: NDArray, margin_rad: float, count: int) -> tuple[NDArray, NDArray, NDArray]:
+        """The ``count`` brightest catalog stars predicted inside the image by an attitude.
+
+        Parameters
+        ----------
+        matrix : ndarray, shape (3, 3)
+            ``rot_cam_from_icrs`` as a matrix.
+        margin_rad : float
+            Widens the cone around the boresight searched (the prediction's uncertainty).
+        count : int
+
+        Returns
+        -------
+        idx : ndarray of int, shape (K,)
+            Indices into the star set, brightest first (K <= count).
+        x, y : ndarray, shape (K,)
+            Their predicted pixel positions.
+        """
+        cone = min(self._half_diag + margin_rad, MAX_CONE_RAD)
+        idx, vectors = self._cone(matrix[2], cone)
+        first = min(len(idx), math.ceil(PREFIX_FACTOR * count / self._image_fraction))
+        found = self._inside(idx[:first], vectors[:first], matrix, cone)
+        if found[0].size < count and first < len(idx):  # too few in the brightest prefix: all of them
+            found = self._inside(idx, vectors, matrix, cone)
+        return tuple(part[:count] for part in found)
+
+    def _inside(self, idx: NDArray, vectors: NDArray, matrix: NDArray, cone_rad: float) -> tuple[NDArray, ...]:
+        """Those of the stars within ``cone_rad`` of the boresight that fall inside the image, and
+        their pixel positions."""
+        cam = vectors @ matrix.T
+        near = np.flatnonzero(cam[:, 2] >= math.cos(cone_rad))
+        px, py = self.camera.vector_to_pixel(cam[near])
+        inside = np.flatnonzero(self.camera.in_image(px, py))
+        return idx[near[inside]], px[inside], py[inside]
+
+    def match(self, x: NDArray, y: NDArray, matrix: NDArray, *, window_px: float, match_px: float,
+              min_stars: int) -> WindowMatch:
+        """Match detections to the stars an attitude (a 3 x 3 ``rot_cam_from_icrs``) predicts and
+        refit it; see :func:`match_in_windows` for the parameters and result."""
+        camera = self.camera
+        count = max(30, int(EXTRA_PREDICTED * len(x)))
+        idx, px, py = self.predicted(matrix, window_px / camera.fx, count)
+        reference = self.stars.vectors[idx]
+        observed = camera.pixel_to_vector(x, y)
+        img = cat = np.zeros(0, dtype=np.int64)
+        for radius in (window_px, match_px):
+            img, cat = one_to_one(x, y, px, py, radius)
+            if img.size < min_stars:
+                return WindowMatch(None, img, self.stars.rows[idx[cat]], float("nan"))
+            quat = fit_quat(observed[img], reference[cat])
+            px, py = camera.vector_to_pixel(reference @ quat_matrix(quat).T)
+        rms = float(np.sqrt(np.mean((px[cat] - x[img]) ** 2 + (py[cat] - y[img]) ** 2)))
+        return WindowMatch(Rotation.from_quat(quat), img, self.stars.rows[idx[cat]], rms)
 
 
 def match_in_windows(x: NDArray, y: NDArray, camera: Camera, rot_predicted: Rotation, stars: FieldStars, *,
@@ -77,17 +197,6 @@ def match_in_windows(x: NDArray, y: NDArray, camera: Camera, rot_predicted: Rota
     WindowMatch
         ``rot_cam_from_icrs`` is None when fewer than ``min_stars`` stars matched.
     """
-    matrix = rot_predicted.as_matrix()
-    count = max(30, int(EXTRA_PREDICTED * len(x)))
-    idx = _predicted_stars(stars, matrix, camera, window_px / camera.fx, count)
-    observed_all = camera.pixel_to_vector(x, y)
-    img = cat = np.zeros(0, dtype=np.int64)
-    for radius in (window_px, match_px):
-        px, py = camera.vector_to_pixel(stars.vectors[idx] @ matrix.T)
-        img, cat = match_nearest(x, y, px, py, radius)
-        if img.size < min_stars:
-            return WindowMatch(None, img, stars.rows[idx[cat]], float("nan"))
-        matrix = _fit(observed_all[img], stars.vectors[idx[cat]])
-    px, py = camera.vector_to_pixel(stars.vectors[idx[cat]] @ matrix.T)
-    rms = float(np.sqrt(np.mean((px - x[img]) ** 2 + (py - y[img]) ** 2)))
-    return WindowMatch(Rotation.from_matrix(matrix), img, stars.rows[idx[cat]], rms)
+    return WindowMatcher(camera, stars).match(np.asarray(x, dtype=float), np.asarray(y, dtype=float),
+                                              rot_predicted.as_matrix(), window_px=window_px, match_px=match_px,
+                                              min_stars=min_stars)
