@@ -28,6 +28,9 @@ class FieldStars:
     epoch_jyear: float
     index_of_row: NDArray[np.int64]
     """Position in ``rows`` of every catalog row, -1 for rows fainter than the limit."""
+    brighter_neighbour_rad: NDArray[np.float64]
+    """Angle (S,) from each star to its nearest brighter star, radians; inf when none is closer
+    than :data:`NEIGHBOUR_SEARCH_RAD` (so that blends can be found for any focal length)."""
 
     def vectors_of(self, catalog_rows: NDArray) -> NDArray[np.float64]:
         """ICRS unit vectors (K, 3) of catalog rows at :attr:`epoch_jyear` (any magnitude)."""
@@ -42,6 +45,20 @@ class FieldStars:
         return np.asarray(self.tree.query_ball_point(boresight, chord), dtype=np.int64)
 
 
+NEIGHBOUR_SEARCH_RAD = np.radians(0.05)
+"""Close pairs are looked for out to 0.05 deg: half a pixel of any camera with pixels under 0.1 deg."""
+
+
+def _brighter_neighbour_rad(tree: cKDTree, vectors: NDArray) -> NDArray[np.float64]:
+    """Angle (S,) to the nearest brighter star (stars stored brightest first), inf past the search."""
+    pairs = tree.query_pairs(2.0 * np.sin(NEIGHBOUR_SEARCH_RAD / 2.0), output_type="ndarray")
+    angle = np.full(len(vectors), np.inf)
+    if pairs.size:
+        chord = np.linalg.norm(vectors[pairs[:, 0]] - vectors[pairs[:, 1]], axis=1)
+        np.minimum.at(angle, pairs.max(axis=1), 2.0 * np.arcsin(0.5 * chord))
+    return angle
+
+
 @lru_cache(maxsize=4)
 def field_stars(max_mag: float, epoch_jyear: float) -> FieldStars:
     """Catalog stars with V <= ``max_mag``, brightest first (built once per process and limit)."""
@@ -51,4 +68,5 @@ def field_stars(max_mag: float, epoch_jyear: float) -> FieldStars:
     vectors = catalog.take(rows).vectors(epoch_jyear)
     index_of_row = np.full(len(catalog.hip), -1, dtype=np.int64)
     index_of_row[rows] = np.arange(rows.size)
-    return FieldStars(rows, vectors, cKDTree(vectors), epoch_jyear, index_of_row)
+    tree = cKDTree(vectors)
+    return FieldStars(rows, vectors, tree, epoch_jyear, index_of_row, _brighter_neighbour_rad(tree, vectors))

@@ -22,7 +22,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
@@ -92,10 +91,7 @@ def visible_near(stars: FieldStars, boresight: NDArray, radius_rad: float, focal
     brighter one is left out: in the image the pair is one spot, named after its brighter star.
     """
     near = np.sort(stars.near(boresight, radius_rad))  # field stars are stored brightest first
-    close = cKDTree(stars.vectors[near]).query_pairs(BLEND_PX / focal_px, output_type="ndarray")
-    visible = np.ones(near.size, dtype=bool)
-    visible[close.max(axis=1) if close.size else []] = False  # the fainter star of each close pair
-    return near[visible]
+    return near[stars.brighter_neighbour_rad[near] >= BLEND_PX / focal_px]
 
 
 def rematch(x: NDArray, y: NDArray, stars: FieldStars, near: NDArray, rot: Rotation,

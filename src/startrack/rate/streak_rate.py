@@ -50,11 +50,6 @@ MIN_STREAK_FRACTION = 0.10
 """Streaks shorter than this fraction of the image width are processed as point stars."""
 
 
-RSO_PARALLEL_TAN = 2.0
-"""The RSO indicators use the slope and length forms when the fitted spin axis is more than
-atan(2) = 63 deg from the boresight (its image more than 2 focal lengths from the centre, the
-limit :func:`measure_streaks` uses for the grouping): there the streaks are conics without a
-centre of rotation in the image (:func:`.rso.rso_indicators`)."""
 LENGTH_TOLERANCE = (3.0, 0.05)
 """Largest difference between a streak's end separation and its moment length: 3 px + 5 %.
 Measured good ends differ by -1.5 to +0.5 px (Harris, minimum eigenvalue) and up to -3 px
@@ -245,14 +240,6 @@ def _checked_groups(ends: NDArray, cor: CentreOfRotation, camera: Camera) -> tup
     return best
 
 
-def _axis_off_boresight(omega_rad_s: NDArray) -> bool:
-    """True when the rate's axis is farther than ``atan(RSO_PARALLEL_TAN)`` from +-z (or unknown)."""
-    omega = np.asarray(omega_rad_s, dtype=float)
-    if not np.all(np.isfinite(omega)):
-        return False
-    return bool(np.hypot(omega[0], omega[1]) > RSO_PARALLEL_TAN * abs(omega[2]))
-
-
 @dataclass(frozen=True)
 class StreakRate:
     """Catalog-free rate of a streaked image (seed 001 ch. 4), with the RSO indicators.
@@ -310,8 +297,10 @@ def streak_rate(
     prior_omega_rad_s : array_like, shape (3,), optional
         A rough rate of the right sign, to order the two ends in time.
     k_sigma, endpoint_sigma_px : float
-        Outlier threshold and the endpoint precision (px) that sets the indicators' floors;
-        None takes the measurement's median end precision.
+        Outlier threshold and the endpoint precision (px) that sets the floors of the OLAE
+        rejection and of the RSO indicators; None takes the measurement's median end precision
+        for the rejection and each streak's own for the indicators (:func:`.rso.rso_indicators`,
+        which also marks the streaks cut by the image border).
     measurement : StreakMeasurement, optional
         Reuse an earlier :func:`measure_streaks` of this image.
     """
@@ -321,14 +310,16 @@ def streak_rate(
     va = camera.pixel_to_vector(meas.ends_a[:, 0], meas.ends_a[:, 1])
     vb = camera.pixel_to_vector(meas.ends_b[:, 0], meas.ends_b[:, 1])
     pixel_angle = 1.0 / camera.fx
+    explicit_sigma = endpoint_sigma_px
     if endpoint_sigma_px is None:
         endpoint_sigma_px = float(np.median(meas.end_sigma_px)) if len(meas.end_sigma_px) else 0.3
     floor = 2 * np.sqrt(2) * endpoint_sigma_px * pixel_angle
     agree = meas.agree if len(meas.agree) == len(va) else None
     fit = catalog_free_rate(va, vb, exposure_s, k_sigma=k_sigma, floor_rad=floor, initial_used=agree)
     fit = _checked(fit, meas, camera, va + vb, exposure_s)
-    rso = rso_indicators(meas.ends_a, meas.ends_b, meas.cor, fit.residuals, pixel_angle, k_sigma=k_sigma,
-                         endpoint_sigma_px=endpoint_sigma_px, parallel=_axis_off_boresight(fit.estimate.omega_rad_s))
+    per_streak = explicit_sigma is None and len(meas.end_sigma_px) == len(va)
+    rso = rso_indicators(meas.ends_a, meas.ends_b, camera, fit.residuals, k_sigma=k_sigma,
+                         endpoint_sigma_px=meas.end_sigma_px if per_streak else endpoint_sigma_px)
     swap, known = _ordered(fit.estimate.omega_rad_s, prior_omega_rad_s)
     if swap:
         return StreakRate(_swapped(fit.estimate), meas, vb, va, fit.residuals, rso, known)

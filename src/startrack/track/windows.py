@@ -64,19 +64,33 @@ def one_to_one(x: NDArray, y: NDArray, px: NDArray, py: NDArray,
     for the few dozen stars of a tracked frame, the greedy pass runs over Python lists, which
     costs a fraction of indexing numpy arrays one element at a time.
     """
-    if x.size * px.size > DENSE_PAIRS_LIMIT:
+    if x.size * px.size > DENSE_PAIRS_LIMIT or x.size == 0 or px.size == 0:
         return match_nearest(x, y, px, py, radius_px)
-    d2 = (x[:, None] - px) ** 2 + (y[:, None] - py) ** 2
-    i, c = np.nonzero(d2 <= radius_px * radius_px)
-    order = np.argsort(d2[i, c], kind="stable")
+    d2 = ((x[:, None] - px) ** 2 + (y[:, None] - py) ** 2).ravel()
+    flat = np.flatnonzero(d2 <= radius_px * radius_px)  # row-major, as np.nonzero
+    flat = flat[np.argsort(d2[flat], kind="stable")]
     taken_i, taken_c, img, cat = set(), set(), [], []
-    for a, b in zip(i[order].tolist(), c[order].tolist(), strict=True):
+    rows, cols = np.divmod(flat, px.size)
+    for a, b in zip(rows.tolist(), cols.tolist(), strict=True):
         if a not in taken_i and b not in taken_c:
             taken_i.add(a)
             taken_c.add(b)
             img.append(a)
             cat.append(b)
     return np.array(img, dtype=np.int64), np.array(cat, dtype=np.int64)
+
+
+def project(camera: Camera, vectors: NDArray) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Pixel positions (x, y), each (K,), of camera-frame vectors given as columns (3, K).
+
+    :meth:`Camera.vector_to_pixel`; when every vector is in front of a distortion-free camera
+    (the tracked case), the pinhole projection is written out here, without that method's
+    handling of vectors behind the camera (three times faster on a few hundred stars).
+    """
+    if camera.has_distortion or not np.all(vectors[2] > 0.0):
+        return camera.vector_to_pixel(vectors.T)
+    inv_z = 1.0 / vectors[2]
+    return camera.cx + camera.fx * (vectors[0] * inv_z), camera.cy + camera.fy * (vectors[1] * inv_z)
 
 
 class WindowMatcher:
@@ -98,11 +112,11 @@ class WindowMatcher:
         self._radius = -1.0
         self._image_fraction = 1.0  # of the stars of the cached cone, the share expected in the image
         self._idx = np.zeros(0, dtype=np.int64)
-        self._vectors = np.zeros((0, 3))
+        self._vectors = np.zeros((3, 0))
 
     def _cone(self, boresight: NDArray, cone_rad: float) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
-        """Indices (ascending, so brightest first) and ICRS vectors of a set of catalog stars that
-        holds every star within ``cone_rad`` of the boresight."""
+        """Indices (ascending, so brightest first) and ICRS vectors (3, K) of a set of catalog stars
+        that holds every star within ``cone_rad`` of the boresight."""
         b = tuple(boresight.tolist())
         if self._centre is not None:
             cos_moved = min(1.0, sum(u * v for u, v in zip(b, self._centre, strict=True)))
@@ -111,7 +125,7 @@ class WindowMatcher:
         radius = min(cone_rad + self.slack_rad, math.pi)
         chord = 2.0 * math.sin(radius / 2.0)
         self._idx = np.asarray(self.stars.tree.query_ball_point(b, chord, return_sorted=True), dtype=np.int64)
-        self._vectors = self.stars.vectors[self._idx]
+        self._vectors = np.ascontiguousarray(self.stars.vectors[self._idx].T)
         self._centre, self._radius = b, radius
         image_sr = (self.camera.width / self.camera.fx) * (self.camera.height / self.camera.fy)
         self._image_fraction = min(1.0, image_sr / (2.0 * math.pi * (1.0 - math.cos(radius))))
@@ -138,7 +152,7 @@ class WindowMatcher:
         cone = min(self._half_diag + margin_rad, MAX_CONE_RAD)
         idx, vectors = self._cone(matrix[2], cone)
         first = min(len(idx), math.ceil(PREFIX_FACTOR * count / self._image_fraction))
-        found = self._inside(idx[:first], vectors[:first], matrix, cone)
+        found = self._inside(idx[:first], vectors[:, :first], matrix, cone)
         if found[0].size < count and first < len(idx):  # too few in the brightest prefix: all of them
             found = self._inside(idx, vectors, matrix, cone)
         return tuple(part[:count] for part in found)
@@ -146,9 +160,9 @@ class WindowMatcher:
     def _inside(self, idx: NDArray, vectors: NDArray, matrix: NDArray, cone_rad: float) -> tuple[NDArray, ...]:
         """Those of the stars within ``cone_rad`` of the boresight that fall inside the image, and
         their pixel positions."""
-        cam = vectors @ matrix.T
-        near = np.flatnonzero(cam[:, 2] >= math.cos(cone_rad))
-        px, py = self.camera.vector_to_pixel(cam[near])
+        cam = matrix @ vectors
+        near = np.flatnonzero(cam[2] >= math.cos(cone_rad))
+        px, py = project(self.camera, cam[:, near])
         inside = np.flatnonzero(self.camera.in_image(px, py))
         return idx[near[inside]], px[inside], py[inside]
 
@@ -160,6 +174,7 @@ class WindowMatcher:
         count = max(30, int(EXTRA_PREDICTED * len(x)))
         idx, px, py = self.predicted(matrix, window_px / camera.fx, count)
         reference = self.stars.vectors[idx]
+        reference_t = reference.T
         observed = camera.pixel_to_vector(x, y)
         img = cat = np.zeros(0, dtype=np.int64)
         for radius in (window_px, match_px):
@@ -167,7 +182,7 @@ class WindowMatcher:
             if img.size < min_stars:
                 return WindowMatch(None, img, self.stars.rows[idx[cat]], float("nan"))
             quat = fit_quat(observed[img], reference[cat])
-            px, py = camera.vector_to_pixel(reference @ quat_matrix(quat).T)
+            px, py = project(camera, quat_matrix(quat) @ reference_t)
         rms = float(np.sqrt(np.mean((px[cat] - x[img]) ** 2 + (py[cat] - y[img]) ** 2)))
         return WindowMatch(Rotation.from_quat(quat), img, self.stars.rows[idx[cat]], rms)
 
