@@ -1,8 +1,8 @@
 """The final fit drops a wrong association that a verified candidate carried in.
 
-Regression cases from the 2,000-list FOV-range benchmark (seed 1): a candidate verified on 8
-stars, one of them wrong (a false star at FOV 30, a real star given its neighbour's HIP at FOV
-10), bent the free-focal fit so that the rest of the field was never matched.
+Regression cases from the 10,000-list benchmark (seed 1): a candidate verified on 8 stars, one
+or two of them wrong (false stars, or a real star given its neighbour's HIP), bent the free-focal
+fit so that the rest of the field was never matched.
 """
 
 import sys
@@ -10,26 +10,37 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
-from startrack import Status, solve_stars
+from startrack import Camera, Status, solve_stars
 from startrack.frames import attitude_error
 from startrack.identify import final_fit
-from startrack.units import ARCSEC
+from startrack.identify.refine import leave_one_out_residuals, refine_pointing
+from startrack.units import ARCSEC, PIXEL
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-from starlists import Conditions, generate_star_lists  # noqa: E402
+from starlists import Conditions, load_sky, make_star_list  # noqa: E402
 
 
 def _benchmark_list(fov_deg: float, index: int):
+    """List ``index`` of ``generate_star_lists(Conditions(fov_deg=fov_deg), n, rng=1)`` for any n > index."""
     conditions = Conditions(fov_deg=fov_deg)
-    return conditions, generate_star_lists(conditions, index + 1, rng=1)[index]
+    child = np.random.default_rng(1).spawn(index + 1)[index]
+    return conditions, make_star_list(load_sky(conditions), conditions, child)
 
 
-@pytest.mark.parametrize(("fov_deg", "index"), [(30.0, 1639), (10.0, 1374)])
-def test_one_wrong_star_of_the_candidate_is_dropped(fov_deg, index):
+CASES = [(30.0, 1639, "range"), (10.0, 1374, "range"), (10.0, 7384, "known"), (10.0, 2951, "known")]
+
+
+def _solve(conditions, stars, mode):
+    fov = {"fov_deg": conditions.fov_deg} if mode == "known" else {"fov_range_deg": (5.0, 35.0)}
+    return solve_stars(stars.x, stars.y, width=conditions.width, height=conditions.height, flux=stars.flux, **fov)
+
+
+@pytest.mark.parametrize(("fov_deg", "index", "mode"), CASES)
+def test_wrong_stars_of_the_candidate_are_dropped(fov_deg, index, mode):
     conditions, stars = _benchmark_list(fov_deg, index)
-    sol = solve_stars(stars.x, stars.y, width=conditions.width, height=conditions.height, flux=stars.flux,
-                      fov_range_deg=(5.0, 35.0))
+    sol = _solve(conditions, stars, mode)
     assert sol.status is Status.OK
     true_hip = stars.hip[sol.matches.det_index]
     assert np.array_equal(sol.matches.hip, true_hip)  # no false star matched, no real star misnamed
@@ -38,10 +49,28 @@ def test_one_wrong_star_of_the_candidate_is_dropped(fov_deg, index):
     assert attitude_error(sol.rot_cam_from_icrs, stars.rot_cam_from_icrs) < 20 * ARCSEC + 3 * pixel_rad
 
 
-def test_without_the_star_by_star_check_the_wrong_star_stays(monkeypatch):
-    """The case above really needs the check (so the test above can fail)."""
-    monkeypatch.setattr(final_fit, "OUTLIER_PX", np.inf)
-    conditions, stars = _benchmark_list(30.0, 1639)
-    sol = solve_stars(stars.x, stars.y, width=conditions.width, height=conditions.height, flux=stars.flux,
-                      fov_range_deg=(5.0, 35.0))
+@pytest.mark.parametrize(("fov_deg", "index", "mode"), [CASES[0], CASES[2]])
+def test_without_the_check_the_wrong_stars_stay(monkeypatch, fov_deg, index, mode):
+    """The cases above really need the check (so the test above can fail)."""
+    monkeypatch.setattr(final_fit, "MAX_LEFT_OUT", 0)
+    conditions, stars = _benchmark_list(fov_deg, index)
+    sol = _solve(conditions, stars, mode)
     assert not np.array_equal(sol.matches.hip, stars.hip[sol.matches.det_index])
+
+
+def test_deleted_residuals_match_refits_without_each_star():
+    rng = np.random.default_rng(3)
+    camera = Camera.from_fov(1024, 768, 12.0)
+    rot = Rotation.random(random_state=4)
+    x, y = rng.uniform(20, 1000, 9), rng.uniform(20, 740, 9)
+    ref = rot.inv().apply(camera.pixel_to_vector(x, y))
+    x, y = x + rng.normal(0, 0.4, 9), y + rng.normal(0, 0.4, 9)
+    x[4] += 6.0  # one wrong association
+    fit_rot, fit_cam, _ = refine_pointing(rot, camera, ref, x, y, fit_focal=True)
+    deleted = leave_one_out_residuals(fit_rot, fit_cam, ref, x, y, fit_focal=True)
+    for k in range(9):
+        keep = np.arange(9) != k
+        r, c, _ = refine_pointing(fit_rot, fit_cam, ref[keep], x[keep], y[keep], fit_focal=True)
+        px, py = c.vector_to_pixel(r.apply(ref[k]))
+        assert deleted[k] == pytest.approx(np.hypot(px - x[k], py - y[k]), abs=0.1 * PIXEL)
+    assert np.argmax(deleted) == 4

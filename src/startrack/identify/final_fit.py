@@ -5,14 +5,14 @@ fits the attitude (and the focal length when it is not known) to the matched sta
 every image star to the catalog stars the fit predicts, and repeats until the matches settle
 (seed 000 §1.23: the identification is confirmed and refined on all stars in the field).
 
-A candidate can carry one wrong association (a false star that happened to fall within the
-verification radius, or a real star paired with a neighbour). With a free focal length and a
+A candidate can carry a wrong association or two (a false star that happened to fall within
+the verification radius, or a real star paired with a neighbour). With a free focal length and a
 handful of stars, the least-squares fit bends to it: the residuals of the right stars grow as
 much as the wrong one's, and the bent solution no longer predicts the rest of the field, so the
-re-match cannot add the stars that would expose it. :func:`settle_matches` therefore checks a
-fit whose worst residual is implausible for centroid noise (:data:`OUTLIER_PX`) by leaving each
-star out in turn, and keeps the fit that explains the most image stars (consensus, as in
-RANSAC: Fischler and Bolles 1981).
+re-match cannot add the stars that would expose it. :func:`settle_matches` therefore asks of
+every matched star where the fit to the *other* stars puts it (its deleted residual,
+:func:`.refine.leave_one_out_residuals`); a star that those would not have matched (farther than
+:data:`REMATCH_RADIUS_PX`) is dropped and the fit settled again, up to :data:`MAX_LEFT_OUT` times.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from scipy.spatial.transform import Rotation
 from ..camera import Camera
 from .candidate import Candidate
 from .field_stars import FieldStars
-from .refine import refine_pointing
+from .refine import leave_one_out_residuals, refine_pointing
 from .verify import match_nearest
 
 MAX_REFINE_ROUNDS = 4
@@ -54,17 +54,9 @@ SETTLED_PX = 0.05
 """Once a re-fit moves no star by more than this, re-matching cannot change the matches (bar a
 star within 0.05 px of the re-match radius) and the loop stops."""
 
-OUTLIER_PX = 1.5
-"""A settled fit whose largest residual exceeds this (pixels) is checked star by star. A right
-star's residual exceeds 1.5 px with probability exp(-1.5**2 / (2 sigma**2)) for centroid noise
-sigma per axis: 4e-6 at 0.3 px, 1 % at 0.5 px. Right solutions are therefore sometimes
-re-checked (about 7 % of the noisiest benchmark lists); a re-check only replaces the fit when it
-matches more stars, so it costs time, never accuracy."""
-
-CHECKED_STARS = 3
-"""The stars with the largest residuals that are left out in turn. A wrong association bends
-the fit towards itself, so its own residual need not be the largest, but it is among the
-largest few (second and first in the two benchmark cases)."""
+MAX_LEFT_OUT = 3
+"""Wrong associations removed one at a time, at most this many (a candidate verified with a false
+match probability below 1e-6 rarely carries more)."""
 
 MIN_STARS_TO_CHECK = 5
 """Leaving one star out needs enough stars left to fit attitude and focal length and to judge."""
@@ -141,25 +133,17 @@ def _settle(field: _Field, rot: Rotation, camera: Camera, img: NDArray, rows: ND
     return FinalFit(rot, camera, img, rows, ref, res)
 
 
-def _best_without_one(field: _Field, fit: FinalFit) -> FinalFit | None:
-    """Leave each matched star out, fit the rest, re-match: the settled fit that matches the most
-    stars if that is more than ``fit`` matched, else None."""
-    best_count, best = fit.image_index.size, None
-    keep = np.ones(fit.image_index.size, dtype=bool)
-    for k in np.argsort(-fit.residual_px)[:CHECKED_STARS]:
-        keep[:] = True
-        keep[k] = False
-        img = fit.image_index[keep]
-        rot, camera, _ = refine_pointing(fit.rot_cam_from_icrs, fit.camera, fit.ref_icrs[keep], field.x[img],
-                                         field.y[img], fit_focal=field.fit_focal)
-        new_img, _ = rematch(field.x, field.y, field.stars, field.near, rot, camera, REMATCH_RADIUS_PX)
-        if new_img.size > best_count:
-            best_count, best = new_img.size, (rot, camera)
-    if best is None:
+def _without_worst(field: _Field, fit: FinalFit) -> FinalFit | None:
+    """The fit settled again without the star the others' fit puts farthest from its match, if
+    that is beyond the re-match radius (the others would not have matched it); else None."""
+    img = fit.image_index
+    deleted = leave_one_out_residuals(fit.rot_cam_from_icrs, fit.camera, fit.ref_icrs, field.x[img], field.y[img],
+                                      fit_focal=field.fit_focal)
+    worst = int(np.argmax(deleted))
+    if not REMATCH_RADIUS_PX < deleted[worst] < np.inf:
         return None
-    new_img, new_rows = rematch(field.x, field.y, field.stars, field.near, *best, REMATCH_RADIUS_PX)
-    settled = _settle(field, *best, new_img, new_rows)
-    return settled if settled.image_index.size > fit.image_index.size else None
+    keep = np.arange(img.size) != worst
+    return _settle(field, fit.rot_cam_from_icrs, fit.camera, img[keep], fit.catalog_rows[keep])
 
 
 def settle_matches(x: NDArray, y: NDArray, stars: FieldStars, cand: Candidate,
@@ -190,8 +174,11 @@ def settle_matches(x: NDArray, y: NDArray, stars: FieldStars, cand: Candidate,
     near = visible_near(stars, rot.as_matrix()[2], radius_rad, camera.fx)
     field = _Field(x, y, stars, near, fit_focal)
     fit = _settle(field, rot, camera, cand.image_index, cand.catalog_rows)
-    if fit.image_index.size >= MIN_STARS_TO_CHECK and float(np.max(fit.residual_px)) > OUTLIER_PX:
-        fit = _best_without_one(field, fit) or fit
+    for _ in range(MAX_LEFT_OUT):
+        better = _without_worst(field, fit) if fit.image_index.size >= MIN_STARS_TO_CHECK else None
+        if better is None:
+            break
+        fit = better
     if fit_k1 and fit.image_index.size >= MIN_STARS_FOR_K1:  # lens distortion last, on the settled matches
         img = fit.image_index
         rot, camera, res = refine_pointing(fit.rot_cam_from_icrs, fit.camera, fit.ref_icrs, x[img], y[img],

@@ -123,3 +123,32 @@ def refine_pointing(rot_cam_from_icrs: Rotation, camera: Camera, ref_icrs: NDArr
             break
     px, py = camera.vector_to_pixel(ref_icrs @ matrix.T)
     return Rotation.from_matrix(matrix), camera, np.hypot(px - x, py - y)
+
+
+def leave_one_out_residuals(rot_cam_from_icrs: Rotation, camera: Camera, ref_icrs: NDArray, x: NDArray,
+                            y: NDArray, *, fit_focal: bool) -> NDArray[np.float64]:
+    """How far (pixels, (K,)) each star lies from where a fit to the other stars puts it.
+
+    At a converged fit with residuals r_i (2,) and Jacobian rows J_i (2, p), leaving star i out
+    moves its residual to ``(I - H_ii)^-1 r_i`` with the leverage block
+    ``H_ii = J_i (J^T J)^-1 J_i^T`` (the linearised deleted residual; Cook and Weisberg 1982,
+    "Residuals and Influence in Regression", §2.2). A wrong association pulls a few-star fit
+    towards itself, so its own residual can be unremarkable while its deleted residual is not.
+    Stars with a leverage block near singular (a fit that needs that star) get inf.
+    """
+    fit_focal = fit_focal and len(x) >= 3
+    n_params = 3 + int(fit_focal)
+    px, py, jac = _jacobian(camera, ref_icrs @ rot_cam_from_icrs.as_matrix().T, n_params)
+    res = np.column_stack([px - x, py - y])
+    blocks = jac.reshape(-1, 2, n_params)
+    try:
+        inv_normal = np.linalg.inv(jac.T @ jac)
+    except np.linalg.LinAlgError:
+        return np.full(len(x), np.inf)
+    leverage = blocks @ inv_normal @ blocks.transpose(0, 2, 1)
+    keep = np.eye(2) - leverage
+    det = keep[:, 0, 0] * keep[:, 1, 1] - keep[:, 0, 1] * keep[:, 1, 0]
+    out = np.full(len(x), np.inf)
+    ok = det > 1e-9
+    out[ok] = np.linalg.norm(np.linalg.solve(keep[ok], res[ok][..., None])[..., 0], axis=1)
+    return out
