@@ -10,8 +10,8 @@ the caller accepts it only if enough stars match with residuals at the centroid-
 
 :class:`WindowMatcher` does this frame after frame: it keeps the catalog stars of a cone a little
 wider than the field (queried again only when the boresight has moved by more than the extra
-width), so that a frame costs a projection of those stars, two small one-to-one matches and two
-3 x 3 attitude fits (:mod:`.quaternions`).
+width), so that a frame costs a projection of the brightest of those stars, two small one-to-one
+matches and two q-method fits on plain arrays (:mod:`.quaternions`).
 """
 
 from __future__ import annotations
@@ -110,7 +110,7 @@ class WindowMatcher:
         self._half_diag = math.radians(camera.fov_diagonal_deg) / 2.0
         self._centre: tuple[float, float, float] | None = None
         self._radius = -1.0
-        self._image_fraction = 1.0  # of the stars of the cached cone, the share expected in the image
+        self._image_fraction = 1.0  # the share of the cached cone's stars expected in the image (roughly)
         self._idx = np.zeros(0, dtype=np.int64)
         self._vectors = np.zeros((3, 0))
 
@@ -176,7 +176,6 @@ class WindowMatcher:
         reference = self.stars.vectors[idx]
         reference_t = reference.T
         observed = camera.pixel_to_vector(x, y)
-        img = cat = np.zeros(0, dtype=np.int64)
         for radius in (window_px, match_px):
             img, cat = one_to_one(x, y, px, py, radius)
             if img.size < min_stars:
