@@ -46,7 +46,7 @@ from startrack.units import ARCSEC  # noqa: E402
 LIS_MATCHERS = [name for name in MATCHERS if name != "overlay"]
 
 RESULTS_DIR = Path(__file__).resolve().parent / "results"
-HEADER = (f"{'method':<22} {'condition':<20} {'trials':>6} {'success':>8} {'false':>7} "
+HEADER = (f"{'method':<22} {'condition':<20} {'trials':>6} {'success':>8} {'false #':>7} "
           f"{'median ms':>10} {'p95 ms':>8} {'x cedar med':>11} {'x cedar p95':>11} {'db MiB':>7}")
 
 
@@ -187,8 +187,8 @@ def add_ratios(rows: list[dict]) -> None:
 def format_row(row: dict) -> str:
     ratio = (f"{row['ratio_median']:>11.2f} {row['ratio_p95']:>11.2f}" if "ratio_median" in row
              else f"{'':>11} {'':>11}")
-    return (f"{row['method']:<22} {row['condition']:<20} {row['n']:>6} {row['success_rate']:>8.1%} "
-            f"{row['false_rate']:>7.1%} {row['median_ms']:>10.2f} {row['p95_ms']:>8.2f} {ratio} "
+    return (f"{row['method']:<22} {row['condition']:<20} {row['n']:>6} {row['success_rate']:>8.2%} "
+            f"{round(row['false_rate'] * row['n']):>7d} {row['median_ms']:>10.2f} {row['p95_ms']:>8.2f} {ratio} "
             f"{row.get('database_mib', 0.0):>7.1f}")
 
 

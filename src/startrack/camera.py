@@ -201,10 +201,14 @@ class Camera:
         if v.shape[-1:] != (3,):
             raise InvalidInputError(f"vectors must have shape (..., 3), got {v.shape}")
         vz = v[..., 2]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            front = vz > 0
-            a = np.where(front, v[..., 0] / np.where(front, vz, 1.0), np.nan)
-            b = np.where(front, v[..., 1] / np.where(front, vz, 1.0), np.nan)
+        if np.all(vz > 0):  # the usual case, without the masking below
+            inv_z = 1.0 / vz
+            a, b = v[..., 0] * inv_z, v[..., 1] * inv_z
+        else:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                front = vz > 0
+                a = np.where(front, v[..., 0] / np.where(front, vz, 1.0), np.nan)
+                b = np.where(front, v[..., 1] / np.where(front, vz, 1.0), np.nan)
         if self.has_distortion:
             a, b = self._distort(a, b)
         return self.cx + self.fx * a, self.cy + self.fy * b

@@ -72,12 +72,11 @@ def match_nearest(img_x: NDArray, img_y: NDArray, cat_x: NDArray, cat_y: NDArray
         return empty, empty
     i, c, d2 = _pairs_within(img_x, img_y, cat_x, cat_y, radius_px)
     order = np.argsort(d2, kind="stable")
-    taken_i = np.zeros(img_x.size, dtype=bool)
-    taken_c = np.zeros(cat_x.size, dtype=bool)
-    keep = []
-    for k in order:
-        if not (taken_i[i[k]] or taken_c[c[k]]):
-            taken_i[i[k]] = taken_c[c[k]] = True
+    taken_i, taken_c, keep = set(), set(), []
+    for k, ik, ck in zip(order.tolist(), i[order].tolist(), c[order].tolist(), strict=True):
+        if ik not in taken_i and ck not in taken_c:  # plain Python: numpy scalar indexing costs more here
+            taken_i.add(ik)
+            taken_c.add(ck)
             keep.append(k)
     keep = np.array(keep, dtype=np.int64)
     return i[keep].astype(np.int64), c[keep].astype(np.int64)
