@@ -63,25 +63,35 @@ def _timed_steps(tracker: Tracker, lists, dt: float, clock: str) -> tuple[list, 
     return steps, times
 
 
-def run(rate_deg_s: float, frames: int, dt: float, seed: int, clock: str = "wall") -> dict:
+def _lis_times(lists, clock: str) -> list[float]:
+    """Time of a lost-in-space solve of each non-empty list (camera known)."""
+    times = []
+    for x, y in lists:
+        if len(x):
+            t0 = CLOCKS[clock]()
+            solve_stars(x, y, camera=CAMERA)
+            times.append(CLOCKS[clock]() - t0)
+    return times
+
+
+def run(rate_deg_s: float, frames: int, dt: float, seed: int, clock: str = "wall", repeats: int = 1) -> dict:
+    """Accuracy and step times of one tumble. With ``repeats`` > 1 the whole sequence (a fresh
+    Tracker each time) and the lost-in-space solves are timed that many times and each frame keeps
+    its fastest time, which removes most of the noise of a shared machine from both alike."""
     rng = np.random.default_rng(seed)
     axis = rng.normal(size=3)
     rate = axis / np.linalg.norm(axis) * rate_deg_s * DEG
     start = random_rotations(None, rng)
     truths = [Rotation.from_rotvec(-rate * dt * k) * start for k in range(frames)]
     lists = star_lists(truths, rng)
-    steps, times = _timed_steps(Tracker(camera=CAMERA), lists, dt, clock)
+    runs = [_timed_steps(Tracker(camera=CAMERA), lists, dt, clock) for _ in range(repeats)]
+    steps, times = runs[0][0], np.min([t for _, t in runs], axis=0)
     tol = 3 * CAMERA.pixel_scale_arcsec * ARCSEC
     scored = [k for k in range(frames) if k not in BLACKOUT]
     good = [k for k in scored if steps[k].status is Status.OK
             and attitude_error(truths[k], steps[k].rot_cam_from_icrs) < tol]
     track_times = [t for s, t in zip(steps, times, strict=True) if s.mode == "tracking"]
-    lis_times = []
-    for x, y in lists[: min(200, frames)]:
-        if len(x):
-            t0 = CLOCKS[clock]()
-            solve_stars(x, y, camera=CAMERA)
-            lis_times.append(CLOCKS[clock]() - t0)
+    lis_times = np.min([_lis_times(lists[: min(200, frames)], clock) for _ in range(repeats)], axis=0)
     after = next((k for k in range(BLACKOUT.stop, frames) if steps[k].status is Status.OK), None)
     return {"rate": rate_deg_s, "within_3px": len(good) / len(scored), "tracking_frames": len(track_times),
             "reacquired_at": after, "track_ms": np.median(track_times) * 1e3, "lis_ms": np.median(lis_times) * 1e3}
@@ -95,16 +105,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--clock", choices=sorted(CLOCKS), default="wall",
                         help="wall: elapsed time; cpu: CPU time of this thread (steadier on a loaded machine)")
+    parser.add_argument("--repeats", type=int, default=1,
+                        help="time everything this many times and keep each frame's fastest (default 1)")
     args = parser.parse_args(argv)
     load_database()
     print(f"{'rate deg/s':>10} {'within 3 px':>12} {'tracked':>8} {'reacquired at':>14} "
           f"{'track ms':>9} {'LIS ms':>8} {'ratio':>6}")
     for rate in args.rates:
-        r = run(rate, args.frames, args.dt, args.seed, args.clock)
+        r = run(rate, args.frames, args.dt, args.seed, args.clock, args.repeats)
         print(f"{r['rate']:>10g} {r['within_3px']:>12.2%} {r['tracking_frames']:>8d} {str(r['reacquired_at']):>14} "
               f"{r['track_ms']:>9.2f} {r['lis_ms']:>8.2f} {r['track_ms'] / r['lis_ms']:>6.2f}", flush=True)
     print(f"frames {args.frames} at {args.dt:g} s, blackout frames {BLACKOUT.start}-{BLACKOUT.stop - 1}; "
-          f"LIS: solve_stars with the camera known, on the first 200 lists; {args.clock} clock", file=sys.stderr)
+          f"LIS: solve_stars with the camera known, on the first 200 lists; {args.clock} clock, "
+          f"fastest of {args.repeats}", file=sys.stderr)
     return 0
 
 

@@ -70,16 +70,23 @@ def match_nearest(img_x: NDArray, img_y: NDArray, cat_x: NDArray, cat_y: NDArray
     empty = np.zeros(0, dtype=np.int64)
     if img_x.size == 0 or cat_x.size == 0:
         return empty, empty
-    i, c, d2 = _pairs_within(img_x, img_y, cat_x, cat_y, radius_px)
+    return closest_pairs_first(*_pairs_within(img_x, img_y, cat_x, cat_y, radius_px))
+
+
+def closest_pairs_first(i: NDArray, c: NDArray, d2: NDArray) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """From candidate pairs (image index i, catalog index c, squared distance d2; (P,) each), keep
+    the closest pairs first, each star used once (greedy). Returns the kept (i, c), closest first."""
     order = np.argsort(d2, kind="stable")
+    i, c = i[order].astype(np.int64), c[order].astype(np.int64)
+    if np.unique(i).size == i.size and np.unique(c).size == c.size:  # no star in two pairs: all kept
+        return i, c
     taken_i, taken_c, keep = set(), set(), []
-    for k, ik, ck in zip(order.tolist(), i[order].tolist(), c[order].tolist(), strict=True):
+    for k, (ik, ck) in enumerate(zip(i.tolist(), c.tolist(), strict=True)):
         if ik not in taken_i and ck not in taken_c:  # plain Python: numpy scalar indexing costs more here
             taken_i.add(ik)
             taken_c.add(ck)
             keep.append(k)
-    keep = np.array(keep, dtype=np.int64)
-    return i[keep].astype(np.int64), c[keep].astype(np.int64)
+    return i[keep], c[keep]
 
 
 DENSE_PAIRS_LIMIT = 200_000

@@ -25,7 +25,7 @@ from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
 from ..identify.field_stars import FieldStars
-from ..identify.verify import match_nearest
+from ..identify.verify import closest_pairs_first, match_nearest
 from .quaternions import fit_quat, quat_matrix
 
 EXTRA_PREDICTED = 2.0
@@ -61,23 +61,15 @@ def one_to_one(x: NDArray, y: NDArray, px: NDArray, py: NDArray,
     """Pairs (detection index, predicted index) within the radius, each star used once, closest first.
 
     The pairs of :func:`startrack.identify.verify.match_nearest` (greedy, closest pair first);
-    for the few dozen stars of a tracked frame, the greedy pass runs over Python lists, which
-    costs a fraction of indexing numpy arrays one element at a time.
+    for the few dozen stars of a tracked frame the candidate pairs come from one dense distance
+    table rather than KD-trees.
     """
     if x.size * px.size > DENSE_PAIRS_LIMIT or x.size == 0 or px.size == 0:
         return match_nearest(x, y, px, py, radius_px)
     d2 = ((x[:, None] - px) ** 2 + (y[:, None] - py) ** 2).ravel()
     flat = np.flatnonzero(d2 <= radius_px * radius_px)  # row-major, as np.nonzero
-    flat = flat[np.argsort(d2[flat], kind="stable")]
-    taken_i, taken_c, img, cat = set(), set(), [], []
     rows, cols = np.divmod(flat, px.size)
-    for a, b in zip(rows.tolist(), cols.tolist(), strict=True):
-        if a not in taken_i and b not in taken_c:
-            taken_i.add(a)
-            taken_c.add(b)
-            img.append(a)
-            cat.append(b)
-    return np.array(img, dtype=np.int64), np.array(cat, dtype=np.int64)
+    return closest_pairs_first(rows, cols, d2[flat])
 
 
 def project(camera: Camera, vectors: NDArray) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
