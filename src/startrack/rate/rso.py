@@ -99,7 +99,8 @@ def spin_axis(vectors_a: ArrayLike, vectors_b: ArrayLike) -> tuple[NDArray[np.fl
     is the direction closest to every bisector plane (normal ``n_i``, module docstring), taken
     first as the pair ``n_i x n_j`` with the least median offset, then refitted (smallest
     eigenvector of ``sum n n^T``) twice on the streaks within :data:`INLIER_Z` robust sigmas of
-    it. Its sign is that of the rotation from the a ends to the b ends of most streaks.
+    it. Its sign is that of the apparent rotation from the a ends to the b ends of most streaks
+    (when the a ends are the starts, the camera's rate is along ``-axis``).
     """
     a, b = _unit(np.asarray(vectors_a, dtype=float)), _unit(np.asarray(vectors_b, dtype=float))
     chords = b - a
