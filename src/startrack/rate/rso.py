@@ -19,9 +19,9 @@ the unit sphere, where the centre of rotation is the spin axis ``a`` (X is its i
 of a star's path are equally far from ``a``, so the plane bisecting them (normal ``n_i``)
 contains ``a``, and every star turns through the same angle about it. This is exact for any
 axis direction and any field: no switch to slopes and lengths, and no false outliers from the
-projection, which in the image plane makes streaks at the edge of a 23-degree field 3 % longer
-and tilts them by up to 2 degrees relative to those at the centre (the cause of most of the
-false flags of the image-plane forms). ``a`` is fitted from the streaks alone (least median of
+projection, which in the image plane makes streaks near the corners of a 23-degree field up to
+5 % longer than at the centre and tilts them by up to 2.4 degrees (the cause of most of the false
+flags of the image-plane forms). ``a`` is fitted from the streaks alone (least median of
 squares over the pairs ``n_i x n_j``, then least squares on the streaks within
 :data:`INLIER_Z` robust sigmas).
 
