@@ -8,7 +8,9 @@ applied per scale; notes ``seed-000.md`` §1.14-1.15):
 
 1. Stars to ``max_mag`` (estimated V), at ``epoch_jyear``; stars with a neighbour closer than
    ``blend_fraction`` of a level's FOV are left out of that level's patterns (their centroids
-   blend in an image).
+   blend in an image), unless the neighbour is more than ``blend_delta_mag`` fainter (it barely
+   moves the centroid; before this rule, a V 3 star with any V 9 star within 6 arcmin was left
+   out, and sparse wide fields of bright stars had no pattern at all).
 2. Levels: fields of view from ``fov_max_deg`` down to ``fov_min_deg`` in steps of
    ``level_ratio``. At each level, sample directions cover the sky (a Fibonacci lattice) at a
    spacing of half the region radius ``region_fraction * FOV``; around each, the
@@ -59,6 +61,7 @@ class DatabaseSettings:
     verify_per_region: int = 24
     max_mag: float = 9.5
     blend_fraction: float = 1.0 / 250.0
+    blend_delta_mag: float = 3.0
     min_edge_fraction: float = 1.0 / 150.0
     epoch_jyear: float = 2000.0
 
@@ -218,7 +221,7 @@ def build_database_arrays(settings: DatabaseSettings,
     verify_bits = np.zeros(len(keep), dtype=np.uint16)
     level_patterns = []
     for k, fov in enumerate(levels):
-        doubles = flag_doubles(sub, settings.blend_fraction * fov)
+        doubles = flag_doubles(sub, settings.blend_fraction * fov, settings.blend_delta_mag)
         patterns, verify = _build_level(vectors, tree, doubles, fov, settings)
         level_patterns.append(patterns)
         stars_used[patterns.ravel()] = True
