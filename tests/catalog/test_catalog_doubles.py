@@ -47,6 +47,12 @@ def test_far_pair_is_kept_apart():
     assert not flag_doubles(cat, 10 * ARCSEC).any()
 
 
+def test_a_much_fainter_neighbour_flags_only_itself():
+    cat = pair_along_equator([8.0, 600.0, 8.0], [3.0, 6.5, 4.0, 5.0])  # gaps of 3.5 and 1.0 mag
+    np.testing.assert_array_equal(flag_doubles(cat, 10 * ARCSEC, max_delta_mag=3.0), [False, True, True, True])
+    np.testing.assert_array_equal(flag_doubles(cat, 10 * ARCSEC), [True, True, True, True])
+
+
 def test_colour_of_merged_pair():
     cat = pair_along_equator([2.0], [3.0, 3.0], b_v=[0.0, 1.0])
     merged = merge_doubles(cat, 10 * ARCSEC)
