@@ -139,8 +139,9 @@ def _without_worst(field: _Field, fit: FinalFit) -> FinalFit | None:
     img = fit.image_index
     deleted = leave_one_out_residuals(fit.rot_cam_from_icrs, fit.camera, fit.ref_icrs, field.x[img], field.y[img],
                                       fit_focal=field.fit_focal)
+    deleted = np.where(np.isfinite(deleted), deleted, 0.0)  # a star the fit cannot do without is kept
     worst = int(np.argmax(deleted))
-    if not REMATCH_RADIUS_PX < deleted[worst] < np.inf:
+    if deleted[worst] <= REMATCH_RADIUS_PX:
         return None
     keep = np.arange(img.size) != worst
     return _settle(field, fit.rot_cam_from_icrs, fit.camera, img[keep], fit.catalog_rows[keep])
