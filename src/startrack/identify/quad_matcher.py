@@ -28,13 +28,14 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
 from ..results import Status
 from .candidate import Candidate, MatchOutcome
 from .confirm import Confirmer, StarSet, match_radius_px
 from .database import PatternDatabase
-from .quad_search import candidate_rows, fit_candidates, focal_trials, trial_geometry
+from .quad_search import SearchSetup, focal_grid, search_batch, warm_up
 
 MAX_RATIO_TOLERANCE = 0.1
 """Patterns whose edge ratios are less certain than this (tiny patterns) are not looked up."""
@@ -109,32 +110,23 @@ class _Search:
         self.x, self.y, self.camera, self.db, self.options = x, y, camera, db, options
         vec = camera.pixel_to_vector(x, y)
         self.u, self.w = vec[:, 0] / vec[:, 2], vec[:, 1] / vec[:, 2]
-        self.scale_range = (camera.fx / focal_range[1], camera.fx / focal_range[0])
-        self.fit_focal = focal_range[1] > focal_range[0]
+        fit_focal = focal_range[1] > focal_range[0]
+        grid = focal_grid((camera.fx / focal_range[1], camera.fx / focal_range[0]), options.focal_step)
+        self.setup = SearchSetup(grid, camera.fx, min(camera.width, camera.height), options.centroid_sigma_px,
+                                 options.focal_step, MAX_RATIO_TOLERANCE, fit_focal)
         self.confirmer = Confirmer(x, y, match_radius_px(camera, options.match_radius_px), options.verify_stars,
-                                   options.max_false_match_prob, self.fit_focal)
+                                   options.max_false_match_prob, fit_focal)
         self.trials = 0
         self.pattern_index = distinct_stars(x, y, options.pattern_stars)
 
     def try_batch(self, quads: NDArray) -> Candidate | None:
         """Look up and verify a batch of patterns (indices into :attr:`pattern_index`); the first
         verified candidate wins."""
-        opt = self.options
-        quads = self.pattern_index[quads]
-        u, w = self.u[quads], self.w[quads]
-        trials = focal_trials(u, w, self.scale_range, opt.focal_step)
-        geom = trial_geometry(u, w, trials, self.camera.fx, opt.centroid_sigma_px, opt.focal_step)
-        short = min(self.camera.width, self.camera.height)
-        cand_trial, row = candidate_rows(self.db, trials, geom, self.camera.fx, short, MAX_RATIO_TOLERANCE)
-        if row.size == 0:
-            return None
-        fits = fit_candidates(self.db, self.u, self.w, quads, trials, geom, cand_trial, row,
-                              focal_nominal=self.camera.fx, fit_focal=self.fit_focal,
-                              sigma_px=opt.centroid_sigma_px, focal_step=opt.focal_step)
+        fits = search_batch(self.db, self.u, self.w, self.pattern_index[quads], self.setup)
         self.trials += fits.n_tried
+        levels = np.searchsorted(self.db.level_offsets, fits.row, side="right") - 1
         for i in range(fits.row.size):
-            level = int(np.searchsorted(self.db.level_offsets, fits.row[i], side="right") - 1)
-            found = self.confirmer.confirm(self._level_stars(level), fits.rotation[i],
+            found = self.confirmer.confirm(self._level_stars(int(levels[i])), Rotation.from_matrix(fits.matrix[i]),
                                            self.camera.with_focal(fits.focal[i]), fits.image_stars[i], self.trials)
             if found is not None:
                 return found
@@ -174,6 +166,7 @@ def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatab
                             f"lost-in-space identification needs at least 4 stars, got {len(x)}", None, 0)
     focal_range = focal_range_px or (camera.fx, camera.fx)
     search = _Search(np.asarray(x, float), np.asarray(y, float), camera, focal_range, db, options)
+    warm_up(db)  # compiling is not searching: before the clock starts
     deadline = time.perf_counter() + options.timeout_s
     for quads in pattern_batches(search.pattern_index.size):
         found = search.try_batch(quads)

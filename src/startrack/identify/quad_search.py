@@ -1,17 +1,27 @@
-"""Batched look-up of four-star patterns: many image patterns and trial focal lengths at once.
+"""Look-up of a batch of four-star image patterns in the pattern database, compiled.
 
-The steps of :mod:`.quad_matcher` for a whole batch of image patterns, as array operations:
+The steps of :mod:`.quad_matcher` for a whole batch of image patterns, in one compiled loop
+(numba): a lost-in-space solve is a few thousand tiny operations, and as numpy calls their
+overhead, not the arithmetic, set its time. For each pattern, in order:
 
-1. :func:`focal_trials` - per pattern, the trial focal lengths (scales f_nominal / f) whose edge
-   ratios differ by more than the tolerance;
-2. :func:`trial_geometry` - edge angles, ratios and tolerances of every (pattern, trial);
-3. :func:`candidate_rows` - the database levels each trial may match, the key range
-   queries per bin of the smallest ratio, and the ratio and scale filters;
-4. :func:`fit_candidates` - the star correspondence from the edges, the rotation (q-method) and
-   the residual test.
+1. Trial focal lengths (scales f_nominal / f): on :func:`focal_grid`, a new trial starts where
+   the pattern's edge ratios have moved by more than the focal step since the last one, so a
+   pattern near the centre of a narrow field needs one, a wide pattern of a wide field several.
+   A known focal length is one trial.
+2. At each trial: the six edge angles, the five ratios (sorted, over the largest) and their
+   tolerances: the focal step plus a 3-sigma centroid error propagated into the ratio of two
+   edges measured in pixels.
+3. The database levels whose scale suits the trial's range of fields of view; in each, one key
+   range per pair of bins of the two smallest ratios (the key of
+   :func:`startrack.identify.database.pattern_key`, binary search on
+   :attr:`PatternDatabase.keys`); then all five ratios, and the focal length the largest edge
+   implies, must fit.
+4. For each candidate row: the star correspondence of the 24 orderings whose edges agree best,
+   the focal length corrected from the edge sums (when it is free), the rotation of the four
+   stars (Wahba's problem, by SVD: the same optimum as the q-method) and the residual test.
 
-Everything is ordered pattern-major, so candidates come out in the order the patterns were
-formed (brightest stars first).
+Candidates come out in the order the patterns were formed (brightest stars first), then by
+trial, level and key.
 """
 
 from __future__ import annotations
@@ -21,15 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
-from ..attitude.qmethod import q_method_quaternions
-from ..frames import angle_between
-from .database import KEY_BINS, RATIO_SCALE, PatternDatabase, ratio_bin
-from .patterns import PERMUTATIONS, PERMUTED_EDGES, edge_ratios, pair_angles
-
-FITTED_FOCAL_STEP_SHARE = 0.25
-"""Share of the focal step kept in the rotation-fit tolerance once the focal length is corrected."""
+from .database import PatternDatabase
 
 FOCAL_GRID = 48
 FOCAL_GRID_SPAN = 7.0
@@ -38,207 +41,124 @@ FOCAL_GRID_STEP = 0.004
 factor FOCAL_GRID_SPAN for a ratio step of FOCAL_GRID_STEP, proportionally more for a finer
 step (48 points from 5 to 35 deg at 0.004; 3 for a FOV known to a few percent)."""
 
-
-def pattern_vectors(u: NDArray, w: NDArray, scale: NDArray) -> NDArray:
-    """Unit vectors (..., 3) of normalised coordinates (u, w) scaled by ``scale`` = f_nominal / f.
-
-    ``u`` and ``w`` broadcast against ``scale[..., None]``.
-    """
-    s = np.asarray(scale)[..., None]
-    us, ws = u * s, w * s
-    v = np.stack([us, ws, np.ones_like(us)], axis=-1)
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
-
-
-@dataclass(frozen=True)
-class Trials:
-    """Trial focal lengths of a batch of patterns, pattern-major.
-
-    Attributes (all shape (T,) unless noted): ``pattern`` index into the batch, ``scale`` and the
-    interval ``[scale_lo, scale_hi]`` it stands for.
-    """
-
-    pattern: NDArray[np.int64]
-    scale: NDArray[np.float64]
-    scale_lo: NDArray[np.float64]
-    scale_hi: NDArray[np.float64]
-
-
-def focal_trials(u: NDArray, w: NDArray, scale_range: tuple[float, float], step: float) -> Trials:
-    """Trial scales per pattern so that its edge ratios change by less than ``step`` within each.
+def focal_grid(scale_range: tuple[float, float], step: float) -> NDArray[np.float64]:
+    """Scales (f_nominal / f) the trials of every pattern are chosen from.
 
     Parameters
     ----------
-    u, w : ndarray, shape (P, 4)
-        Normalised pinhole coordinates of the patterns' stars at the nominal focal length.
     scale_range : (float, float)
-        Smallest and largest f_nominal / f (equal when the focal length is known).
+        Smallest and largest f_nominal / f.
     step : float
-        Largest ratio change a trial may stand for.
-    """
-    n = u.shape[0]
-    lo, hi = scale_range
-    if hi <= lo * (1 + 1e-9):
-        ones = np.ones(n)
-        return Trials(np.arange(n), lo * ones, lo * ones, hi * ones)
-    density = FOCAL_GRID * max(1.0, FOCAL_GRID_STEP / step)  # finer steps need a finer grid
-    size = max(3, math.ceil(density * math.log(hi / lo) / math.log(FOCAL_GRID_SPAN)))
-    grid = np.geomspace(lo, hi, size)
-    ratios, _ = edge_ratios(pair_angles(pattern_vectors(u, w, grid[:, None])))  # (G, P, 5)
-    change = np.max(np.abs(np.diff(ratios, axis=0)), axis=-1)  # (G - 1, P)
-    group = np.floor(np.vstack([np.zeros((1, n)), np.cumsum(change, axis=0)]) / step)
-    starts = np.vstack([np.ones((1, n), bool), group[1:] != group[:-1]]).T  # (P, G), pattern-major
-    pattern, g = np.nonzero(starts)
-    next_g = np.append(g[1:], size - 1)
-    last = np.append(pattern[1:] != pattern[:-1], True)
-    end = np.where(last, size - 1, next_g)
-    return Trials(pattern, grid[g], grid[g], grid[end])
-
-
-@dataclass(frozen=True)
-class TrialGeometry:
-    """Edge angles (T, 6), ratios (T, 5), largest edge (T,), tolerances (T, 5), focal (T,)."""
-
-    angles: NDArray
-    ratios: NDArray
-    largest: NDArray
-    tolerance: NDArray
-    focal: NDArray
-
-
-def trial_geometry(u: NDArray, w: NDArray, trials: Trials, focal_nominal: float, sigma_px: float,
-                   focal_step: float) -> TrialGeometry:
-    """Pattern geometry at each trial focal length, with its ratio tolerances.
-
-    The tolerance of each ratio adds the focal step to a 3-sigma centroid error propagated into
-    the ratio of two edges measured in pixels.
-    """
-    angles = pair_angles(pattern_vectors(u[trials.pattern], w[trials.pattern], trials.scale))
-    ratios, largest = edge_ratios(angles)
-    focal = focal_nominal / trials.scale
-    edges_px = np.sort(angles, axis=1) * focal[:, None]
-    noise = 3.0 * sigma_px * np.sqrt(2.0)
-    tolerance = focal_step + noise * (1.0 / edges_px[:, :5] + ratios / edges_px[:, 5:6])
-    return TrialGeometry(angles, ratios, largest, tolerance, focal)
-
-
-def _levels(db: PatternDatabase, trials: Trials, geom: TrialGeometry, focal_nominal: float,
-            short_px: int) -> tuple[NDArray, NDArray]:
-    """(trial, level) pairs: levels whose scale suits the trial's range of fields of view."""
-    fov_lo = 2.0 * np.arctan(short_px * trials.scale_lo / (2.0 * focal_nominal))
-    fov_hi = 2.0 * np.arctan(short_px * trials.scale_hi / (2.0 * focal_nominal))
-    level_fov = db.level_fov_rad[None, :]
-    ratio = db.settings.level_ratio
-    fits = (level_fov >= fov_lo[:, None] / ratio) & (level_fov <= fov_hi[:, None] * ratio)
-    smallest_largest = geom.largest * trials.scale_lo / trials.scale
-    fits &= 2.0 * db.settings.region_fraction * level_fov >= 0.95 * smallest_largest[:, None]
-    return np.nonzero(fits)
-
-
-def _bins(ratio: NDArray, tol: NDArray) -> tuple[NDArray, NDArray]:
-    lo = np.floor(np.clip(ratio - tol, 0.0, 1.0) * RATIO_SCALE).astype(np.int64)
-    hi = np.floor(np.clip(ratio + tol, 0.0, 1.0) * RATIO_SCALE).astype(np.int64)
-    return ratio_bin(lo), ratio_bin(hi)
-
-
-def _ranges(db: PatternDatabase, geom: TrialGeometry, trial: NDArray, level: NDArray):
-    """Key-range queries, one per (trial, level, bin of r0, bin of r1): row ranges and their trial.
-
-    See :func:`startrack.identify.database.pattern_key` for the key.
-    """
-    r, t = geom.ratios[trial], geom.tolerance[trial]
-    b0_lo, b0_hi = _bins(r[:, 0], t[:, 0])
-    b1_lo, b1_hi = _bins(r[:, 1], t[:, 1])
-    n0, n1 = b0_hi - b0_lo + 1, b1_hi - b1_lo + 1
-    count = n0 * n1
-    k = _ramp(count)
-    q = np.repeat(np.arange(trial.size), count)
-    cell = (b0_lo[q] + k // n1[q]) * KEY_BINS + b1_lo[q] + k % n1[q]
-    r2_lo = np.clip(np.round((r[:, 2] - t[:, 2]) * RATIO_SCALE), 0, RATIO_SCALE).astype(np.int64)[q]
-    r2_hi = np.clip(np.round((r[:, 2] + t[:, 2]) * RATIO_SCALE), 0, RATIO_SCALE).astype(np.int64)[q]
-    start, stop = db.key_ranges(level[q], cell * 65536 + r2_lo, cell * 65536 + r2_hi)
-    return start, stop, trial[q]
-
-
-def _ramp(count: NDArray) -> NDArray[np.int64]:
-    """0, 1, ..., count[0] - 1, 0, 1, ..., count[1] - 1, ... (ragged aranges)."""
-    total = int(count.sum())
-    offsets = np.repeat(np.cumsum(count) - count, count)
-    return np.arange(total) - offsets
-
-
-def candidate_rows(db: PatternDatabase, trials: Trials, geom: TrialGeometry, focal_nominal: float,
-                   short_px: int, max_tolerance: float) -> tuple[NDArray, NDArray]:
-    """Database rows whose ratios and implied focal length fit each trial.
+        Largest edge-ratio change a trial may stand for.
 
     Returns
     -------
-    trial, row : ndarray of int, shape (C,)
-        Each candidate's trial and database pattern row, pattern-major.
+    ndarray, shape (G,)
+        Ascending; a single scale when the range is a point (a known focal length).
     """
-    usable = np.flatnonzero(geom.tolerance.max(axis=1) <= max_tolerance)
-    trial, level = _levels(db, _take(trials, usable), _take_geom(geom, usable), focal_nominal, short_px)
-    trial = usable[trial]
-    start, stop, q_trial = _ranges(db, geom, trial, level)
-    count = stop - start
-    row = np.repeat(start, count) + _ramp(count)
-    cand_trial = np.repeat(q_trial, count)
-    stored = db.pattern_ratios[row]
-    q_lo = np.round((geom.ratios - geom.tolerance) * RATIO_SCALE)[cand_trial]
-    q_hi = np.round((geom.ratios + geom.tolerance) * RATIO_SCALE)[cand_trial]
-    keep = np.all((stored >= q_lo) & (stored <= q_hi), axis=1)
-    row, cand_trial = row[keep], cand_trial[keep]
-    focal = geom.focal[cand_trial] * geom.largest[cand_trial] / db.largest_rad(row)
-    window_lo = focal_nominal / trials.scale_hi[cand_trial] * 0.98
-    window_hi = focal_nominal / trials.scale_lo[cand_trial] * 1.02
-    keep = (focal >= window_lo) & (focal <= window_hi)
-    return cand_trial[keep], row[keep]
+    lo, hi = scale_range
+    if hi <= lo * (1 + 1e-9):
+        return np.array([lo])
+    density = FOCAL_GRID * max(1.0, FOCAL_GRID_STEP / step)  # finer steps need a finer grid
+    size = max(3, math.ceil(density * math.log(hi / lo) / math.log(FOCAL_GRID_SPAN)))
+    return np.geomspace(lo, hi, size)
 
 
-def _take(trials: Trials, idx: NDArray) -> Trials:
-    return Trials(trials.pattern[idx], trials.scale[idx], trials.scale_lo[idx], trials.scale_hi[idx])
+@dataclass(frozen=True)
+class SearchSetup:
+    """What stays fixed over one search: the trial grid and the tolerances.
 
+    Attributes
+    ----------
+    grid : ndarray, shape (G,)
+        From :func:`focal_grid`.
+    focal_nominal : float
+        The nominal focal length (pixels); a scale s stands for focal length focal_nominal / s.
+    short_px : int
+        Shorter image side (pixels): sets the field of view a level must suit.
+    sigma_px : float
+        Assumed 1-sigma centroid error (pixels).
+    focal_step : float
+        Largest edge-ratio change between trials.
+    max_tolerance : float
+        Patterns with a ratio less certain than this are not looked up.
+    fit_focal : bool
+        Correct the focal length of each candidate from its edge sums.
+    """
 
-def _take_geom(geom: TrialGeometry, idx: NDArray) -> TrialGeometry:
-    return TrialGeometry(geom.angles[idx], geom.ratios[idx], geom.largest[idx], geom.tolerance[idx], geom.focal[idx])
+    grid: NDArray[np.float64]
+    focal_nominal: float
+    short_px: int
+    sigma_px: float
+    focal_step: float
+    max_tolerance: float
+    fit_focal: bool
 
 
 @dataclass(frozen=True)
 class Fits:
-    """Candidates whose four stars fit a rotation: attitude, focal length, image stars, row."""
+    """Candidates whose four stars fit a rotation, in search order.
 
-    rotation: Rotation | None
+    Attributes
+    ----------
+    matrix : ndarray, shape (C, 3, 3)
+        Rotation matrices, camera from ICRS.
+    focal : ndarray, shape (C,)
+        Focal length (pixels).
+    image_stars : ndarray of int, shape (C, 4)
+        The image star matching each of the database pattern's four stars.
+    row : ndarray of int, shape (C,)
+        Database pattern row.
+    n_tried : int
+        Candidates whose edges matched (the count the false-match bound multiplies by).
+    """
+
+    matrix: NDArray[np.float64]
     focal: NDArray[np.float64]
     image_stars: NDArray[np.int64]
     row: NDArray[np.int64]
     n_tried: int
 
 
-def fit_candidates(db: PatternDatabase, u: NDArray, w: NDArray, quads: NDArray, trials: Trials,
-                   geom: TrialGeometry, cand_trial: NDArray, row: NDArray, *, focal_nominal: float,
-                   fit_focal: bool, sigma_px: float, focal_step: float) -> Fits:
-    """Correspondence, rotation and residual test for every candidate (see the module docstring)."""
-    cat_vec = db.vectors[db.pattern_stars[row]]  # (C, 4, 3)
-    cat_angles = pair_angles(cat_vec)
-    img_angles = geom.angles[cand_trial]
-    permuted = img_angles[:, PERMUTED_EDGES]  # (C, 24, 6)
-    scale = cat_angles.sum(axis=1) / img_angles.sum(axis=1)
-    misfit = np.max(np.abs(permuted * scale[:, None, None] - cat_angles[:, None, :]), axis=2)
-    best = np.argmin(misfit, axis=1)
-    ok = misfit[np.arange(best.size), best] <= 3.0 * geom.tolerance[cand_trial].max(axis=1) * cat_angles.max(axis=1)
-    cand_trial, row, best, cat_vec, scale = cand_trial[ok], row[ok], best[ok], cat_vec[ok], scale[ok]
-    if row.size == 0:
-        return Fits(None, np.zeros(0), np.zeros((0, 4), np.int64), row, 0)
-    stars = quads[trials.pattern[cand_trial]][np.arange(row.size)[:, None], PERMUTATIONS[best]]
-    scales = trials.scale[cand_trial] * (scale if fit_focal else 1.0)
-    obs = pattern_vectors(u[stars], w[stars], scales)
-    weights = np.full(obs.shape[:2], 0.25)
-    rotation = Rotation.from_quat(q_method_quaternions(obs, cat_vec, weights))
-    predicted = np.einsum("cij,ckj->cki", rotation.as_matrix(), cat_vec)
-    focal = focal_nominal / scales
-    # With the focal length corrected from the edge sums only the centroid noise (and a little of
-    # the projection's non-linearity) is left; with it fixed, the trial's focal step remains.
-    step_share = FITTED_FOCAL_STEP_SHARE if fit_focal else 1.0
-    tol = 6.0 * sigma_px / focal + step_share * focal_step * geom.largest[cand_trial]
-    good = np.flatnonzero(np.max(angle_between(predicted, obs), axis=1) <= tol)
-    return Fits(rotation[good] if good.size else None, focal[good], stars[good], row[good], int(row.size))
+def search_batch(db: PatternDatabase, u: NDArray, w: NDArray, quads: NDArray, setup: SearchSetup) -> Fits:
+    """Look up a batch of image patterns (see the module docstring).
+
+    Parameters
+    ----------
+    db : PatternDatabase
+    u, w : ndarray, shape (N,)
+        Normalised pinhole coordinates (x / z, y / z) of the image stars at the nominal focal length.
+    quads : ndarray of int, shape (P, 4)
+        Image-star indices of the patterns, in the order to try them.
+    setup : SearchSetup
+
+    Returns
+    -------
+    Fits
+    """
+    from .quad_kernel import search  # numba is imported on first use
+
+    s = db.settings
+    matrix, focal, stars, row, n_tried = search(
+        np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(w, dtype=np.float64),
+        np.ascontiguousarray(quads, dtype=np.int64), setup.grid, float(setup.focal_nominal),
+        float(setup.short_px), float(setup.sigma_px), float(setup.focal_step), float(setup.max_tolerance),
+        bool(setup.fit_focal), db.level_fov_rad, float(s.level_ratio), float(s.region_fraction), db.keys,
+        db.pattern_ratios, db.pattern_largest, db.pattern_stars, db.vectors)
+    return Fits(matrix, focal, stars, row, int(n_tried))
+
+
+_WARM: set[tuple[str, ...]] = set()
+
+
+def warm_up(db: PatternDatabase) -> None:
+    """Compile (or load from the disk cache) the search for this database's array types, so
+    that a solve's time and time limit do not include it. Free after the first call."""
+    types = tuple(str(a.dtype) for a in (db.keys, db.pattern_ratios, db.pattern_largest, db.pattern_stars))
+    if types in _WARM:
+        return
+    u = np.array([0.0, 0.01, 0.0, 0.01])
+    w = np.array([0.0, 0.0, 0.01, 0.012])
+    setup = SearchSetup(np.array([1.0]), 1000.0, 1000, 0.5, 0.0015, 0.1, False)
+    search_batch(db, u, w, np.array([[0, 1, 2, 3]]), setup)
+    _WARM.add(types)

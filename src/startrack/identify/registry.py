@@ -34,6 +34,7 @@ from .overlay import OverlayOptions, catalog_star_set, match_overlay
 from .pair_database import PairSettings, load_pair_database
 from .pyramid import PyramidOptions, match_pyramid
 from .quad_matcher import MatcherOptions, match_lost_in_space
+from .quad_search import warm_up
 from .triangles import TriangleOptions, match_triangles
 
 DEFAULT_FOV_RANGE_DEG: tuple[float, float] = (5.0, 35.0)
@@ -79,6 +80,7 @@ def database_settings_for(fov_range_deg: tuple[float, float] = DEFAULT_FOV_RANGE
 
 def _quads(request: MatchRequest) -> tuple[Matcher, FieldStars]:
     db = load_database(database_settings_for(request.fov_range_deg))
+    warm_up(db)
 
     def run(options):
         return match_lost_in_space(request.x, request.y, request.camera, db, request.focal_range, options)

@@ -1,0 +1,260 @@
+"""The compiled loop of :mod:`.quad_search` (numba): steps 1-4 of its docstring, per pattern.
+
+Kept apart so that importing startrack does not import numba; :func:`.quad_search.search_batch`
+loads this module on first use. Compiled functions are cached on disk (``cache=True``), so the
+compilation (a few seconds) happens once per installation, loading the cache once per process.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .database import KEY_BINS, LARGEST_SCALE_RAD, LEVEL_SHIFT, RATIO_SCALE
+from .patterns import EDGE_PAIRS, PERMUTATIONS, PERMUTED_EDGES
+
+FITTED_FOCAL_STEP_SHARE = 0.25
+"""Share of the focal step kept in the rotation-fit tolerance once the focal length is corrected."""
+
+_EDGE_I = np.ascontiguousarray(EDGE_PAIRS[:, 0])
+_EDGE_J = np.ascontiguousarray(EDGE_PAIRS[:, 1])
+_PERMUTATIONS = np.ascontiguousarray(PERMUTATIONS)
+_PERMUTED_EDGES = np.ascontiguousarray(PERMUTED_EDGES)
+
+
+@njit(cache=True)
+def _angle(a, b) -> float:
+    """Angle (radians) between 3-vectors a and b, by the stable atan2 form."""
+    cx = a[1] * b[2] - a[2] * b[1]
+    cy = a[2] * b[0] - a[0] * b[2]
+    cz = a[0] * b[1] - a[1] * b[0]
+    return math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+
+
+@njit(cache=True)
+def _image_vectors(u, w, stars, scale, out) -> None:
+    """Unit vectors (4, 3) of the image stars ``stars`` (4,) at ``scale`` = f_nominal / f."""
+    for i in range(4):
+        a, b = u[stars[i]] * scale, w[stars[i]] * scale
+        norm = math.sqrt(a * a + b * b + 1.0)
+        out[i, 0], out[i, 1], out[i, 2] = a / norm, b / norm, 1.0 / norm
+
+
+@njit(cache=True)
+def _edges(vec, angles) -> None:
+    """The six pair angles (radians, :data:`EDGE_PAIRS` order) of four unit vectors (4, 3)."""
+    for e in range(6):
+        angles[e] = _angle(vec[_EDGE_I[e]], vec[_EDGE_J[e]])
+
+
+@njit(cache=True)
+def _sorted_ratios(angles, ordered, ratios) -> float:
+    """Sort the six angles into ``ordered``, write the five ratios to the largest; return it."""
+    for e in range(6):
+        ordered[e] = angles[e]
+    for i in range(1, 6):
+        value, j = ordered[i], i - 1
+        while j >= 0 and ordered[j] > value:
+            ordered[j + 1] = ordered[j]
+            j -= 1
+        ordered[j + 1] = value
+    for k in range(5):
+        ratios[k] = ordered[k] / ordered[5]
+    return ordered[5]
+
+
+@njit(cache=True)
+def _trial_starts(u, w, quad, grid, step, vec, angles, ordered, ratios):
+    """Grid indices where the pattern's trials start (step 1 of the module docstring)."""
+    size = grid.size
+    starts = np.zeros(size, np.int64)
+    if size == 1:
+        return starts[:1]
+    previous = np.empty(5)
+    total, group, count = 0.0, 0.0, 1
+    for g in range(size):
+        _image_vectors(u, w, quad, grid[g], vec)
+        _edges(vec, angles)
+        _sorted_ratios(angles, ordered, ratios)
+        if g > 0:
+            change = 0.0
+            for k in range(5):
+                change = max(change, abs(ratios[k] - previous[k]))
+            total += change
+            new_group = math.floor(total / step)
+            if new_group != group:
+                starts[count] = g
+                count += 1
+            group = new_group
+        previous[:] = ratios
+    return starts[:count]
+
+
+@njit(cache=True)
+def _bin(quantised: int) -> int:
+    return (quantised * KEY_BINS) >> 16
+
+
+@njit(cache=True)
+def _quantise(value: float) -> int:
+    """Ratio to stored units, rounded half to even as numpy does, clipped to [0, RATIO_SCALE]."""
+    return int(min(max(np.rint(value * RATIO_SCALE), 0.0), RATIO_SCALE))
+
+
+@njit(cache=True)
+def _floor_q(value: float) -> int:
+    """Ratio to stored units, rounded down, clipped to [0, 1] first."""
+    return int(math.floor(min(max(value, 0.0), 1.0) * RATIO_SCALE))
+
+
+@njit(cache=True)
+def _lower_bound(keys, value, side_right: bool) -> int:
+    """numpy.searchsorted of one value (side 'left' or 'right')."""
+    lo, hi = 0, keys.size
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if keys[mid] < value or (side_right and keys[mid] == value):
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True)
+def _level_fits(level_fov, level_ratio, region_fraction, fov_lo, fov_hi, largest) -> bool:
+    """Whether a level serves a trial's range of fields of view and holds patterns this large."""
+    return (level_fov >= fov_lo / level_ratio and level_fov <= fov_hi * level_ratio
+            and 2.0 * region_fraction * level_fov >= 0.95 * largest)
+
+
+@njit(cache=True)
+def _ratios_fit(stored, ratios, tol) -> bool:
+    """Whether all five stored ratios lie within the image ratios' tolerances (rounded to stored units)."""
+    for k in range(5):
+        low, high = np.rint((ratios[k] - tol[k]) * RATIO_SCALE), np.rint((ratios[k] + tol[k]) * RATIO_SCALE)
+        if stored[k] < low or stored[k] > high:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _best_order(img_angles, cat_angles):
+    """(ordering index, misfit (rad), edge-sum scale) of the best of the 24 star orderings."""
+    scale = cat_angles.sum() / img_angles.sum()
+    best, best_misfit = 0, np.inf
+    for p in range(24):
+        misfit = 0.0
+        for e in range(6):
+            misfit = max(misfit, abs(img_angles[_PERMUTED_EDGES[p, e]] * scale - cat_angles[e]))
+        if misfit < best_misfit:
+            best, best_misfit = p, misfit
+    return best, best_misfit, scale
+
+
+@njit(cache=True)
+def _wahba_svd(obs, ref):
+    """Rotation matrix R (3, 3) minimising sum |obs_i - R ref_i|^2 over the rows of (4, 3) arrays."""
+    b = np.zeros((3, 3))
+    for i in range(obs.shape[0]):
+        for j in range(3):
+            for k in range(3):
+                b[j, k] += obs[i, j] * ref[i, k]
+    left, _, right = np.linalg.svd(b)
+    if np.linalg.det(left) * np.linalg.det(right) < 0.0:
+        left[:, 2] = -left[:, 2]
+    return left @ right
+
+
+@njit(cache=True)
+def _worst_residual(rot, obs, ref) -> float:
+    """Largest angle (radians) between the rotated reference vectors and the observed ones (4, 3)."""
+    worst, predicted = 0.0, np.empty(3)
+    for i in range(4):
+        for j in range(3):
+            predicted[j] = rot[j, 0] * ref[i, 0] + rot[j, 1] * ref[i, 1] + rot[j, 2] * ref[i, 2]
+        worst = max(worst, _angle(predicted, obs[i]))
+    return worst
+
+
+@njit(cache=True)
+def _grow(matrix, focal, stars, row, count):
+    """The output arrays with twice the room, the first ``count`` entries kept."""
+    size = 2 * max(count, 8)
+    m2, f2, s2, r2 = np.empty((size, 3, 3)), np.empty(size), np.empty((size, 4), np.int64), np.empty(size, np.int64)
+    m2[:count], f2[:count], s2[:count], r2[:count] = matrix[:count], focal[:count], stars[:count], row[:count]
+    return m2, f2, s2, r2
+
+
+@njit(cache=True)
+def search(u, w, quads, grid, focal_nominal, short_px, sigma_px, step, max_tolerance, fit_focal,
+            level_fovs, level_ratio, region_fraction, keys, pattern_ratios, pattern_largest,
+            pattern_stars, vectors):
+    """The compiled loop of :func:`.quad_search.search_batch` (steps 1-4 of the module docstring)."""
+    vec, cat_vec, obs = np.empty((4, 3)), np.empty((4, 3)), np.empty((4, 3))
+    angles, cat_angles, ordered, ratios, tol = np.empty(6), np.empty(6), np.empty(6), np.empty(5), np.empty(5)
+    quad, stars = np.empty(4, np.int64), np.empty(4, np.int64)
+    matrix, focal, out_stars, out_row = _grow(np.empty((0, 3, 3)), np.empty(0), np.empty((0, 4), np.int64),
+                                              np.empty(0, np.int64), 0)
+    count, n_tried = 0, 0
+    noise = 3.0 * sigma_px * math.sqrt(2.0)
+    step_share = FITTED_FOCAL_STEP_SHARE if fit_focal else 1.0
+    for p in range(quads.shape[0]):
+        quad[:] = quads[p]
+        starts = _trial_starts(u, w, quad, grid, step, vec, angles, ordered, ratios)
+        for t in range(starts.size):
+            scale = grid[starts[t]]
+            scale_lo = scale
+            scale_hi = grid[starts[t + 1]] if t + 1 < starts.size else grid[grid.size - 1]
+            _image_vectors(u, w, quad, scale, vec)
+            _edges(vec, angles)
+            largest = _sorted_ratios(angles, ordered, ratios)
+            trial_focal = focal_nominal / scale
+            worst_tol = 0.0
+            for k in range(5):
+                tol[k] = step + noise * (1.0 / (ordered[k] * trial_focal) + ratios[k] / (ordered[5] * trial_focal))
+                worst_tol = max(worst_tol, tol[k])
+            if worst_tol > max_tolerance:
+                continue
+            fov_lo = 2.0 * math.atan(short_px * scale_lo / (2.0 * focal_nominal))
+            fov_hi = 2.0 * math.atan(short_px * scale_hi / (2.0 * focal_nominal))
+            window_lo, window_hi = focal_nominal / scale_hi * 0.98, focal_nominal / scale_lo * 1.02
+            b0_lo, b0_hi = _bin(_floor_q(ratios[0] - tol[0])), _bin(_floor_q(ratios[0] + tol[0]))
+            b1_lo, b1_hi = _bin(_floor_q(ratios[1] - tol[1])), _bin(_floor_q(ratios[1] + tol[1]))
+            r2_lo, r2_hi = _quantise(ratios[2] - tol[2]), _quantise(ratios[2] + tol[2])
+            for level in range(level_fovs.size):
+                if not _level_fits(level_fovs[level], level_ratio, region_fraction, fov_lo, fov_hi, largest):
+                    continue
+                prefix = level << LEVEL_SHIFT
+                for b0 in range(b0_lo, b0_hi + 1):
+                    for b1 in range(b1_lo, b1_hi + 1):
+                        cell = (b0 * KEY_BINS + b1) * 65536
+                        start = _lower_bound(keys, prefix + cell + r2_lo, False)
+                        stop = _lower_bound(keys, prefix + cell + r2_hi, True)
+                        for r in range(start, stop):
+                            if not _ratios_fit(pattern_ratios[r], ratios, tol):
+                                continue
+                            implied = trial_focal * largest / (pattern_largest[r] * LARGEST_SCALE_RAD)
+                            if implied < window_lo or implied > window_hi:
+                                continue
+                            for i in range(4):
+                                cat_vec[i] = vectors[pattern_stars[r, i]]
+                            _edges(cat_vec, cat_angles)
+                            best, misfit, edge_scale = _best_order(angles, cat_angles)
+                            if misfit > 3.0 * worst_tol * cat_angles.max():
+                                continue
+                            n_tried += 1
+                            for i in range(4):
+                                stars[i] = quad[_PERMUTATIONS[best, i]]
+                            fitted = scale * edge_scale if fit_focal else scale
+                            _image_vectors(u, w, stars, fitted, obs)
+                            rot = _wahba_svd(obs, cat_vec)
+                            f = focal_nominal / fitted
+                            if _worst_residual(rot, obs, cat_vec) > 6.0 * sigma_px / f + step_share * step * largest:
+                                continue
+                            if count == focal.size:
+                                matrix, focal, out_stars, out_row = _grow(matrix, focal, out_stars, out_row, count)
+                            matrix[count], focal[count], out_stars[count], out_row[count] = rot, f, stars, r
+                            count += 1
+    return matrix[:count], focal[:count], out_stars[:count], out_row[:count], n_tried
