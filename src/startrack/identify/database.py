@@ -103,6 +103,12 @@ class PatternDatabase:
         Patterns of level k are rows ``level_offsets[k]:level_offsets[k + 1]``.
     verify_levels : ndarray of uint16, shape (S,)
         Bit k set when the star belongs to level k's verification set.
+    keys : ndarray of int64, shape (P,)
+        ``(level << LEVEL_SHIFT) + pattern_key``, ascending (built at load time).
+    cell_starts : ndarray of int64, shape (L * KEY_BINS**2 + 1,)
+        First row of each (level, bin of r0, bin of r1) cell, index
+        ``(level * KEY_BINS + bin0) * KEY_BINS + bin1``: a look-up searches one cell's rows, not
+        all of :attr:`keys` (fewer cache misses; built at load time).
     """
 
     settings: DatabaseSettings
@@ -117,21 +123,19 @@ class PatternDatabase:
     level_offsets: NDArray[np.int64]
     verify_levels: NDArray[np.uint16]
     keys: NDArray[np.int64] = field(repr=False, default_factory=lambda: np.zeros(0, np.int64))
+    cell_starts: NDArray[np.int64] = field(repr=False, default_factory=lambda: np.zeros(1, np.int64))
     tree: cKDTree | None = field(repr=False, default=None)
+    _verify_sets: dict = field(repr=False, compare=False, default_factory=dict)
 
-    def key_ranges(self, level: NDArray, low: NDArray, high: NDArray) -> tuple[NDArray, NDArray]:
-        """Pattern rows [start, stop) whose :func:`pattern_key` lies in [low, high] within ``level``.
-
-        Parameters
-        ----------
-        level : ndarray of int, shape (Q,)
-        low, high : ndarray, shape (Q,)
-            Integer-valued key bounds.
-        """
-        prefix = np.asarray(level, dtype=np.int64) << LEVEL_SHIFT
-        start = np.searchsorted(self.keys, prefix + np.asarray(low, dtype=np.int64), side="left")
-        stop = np.searchsorted(self.keys, prefix + np.asarray(high, dtype=np.int64), side="right")
-        return start, np.maximum(start, stop)
+    def verification_stars(self, level: int) -> tuple[cKDTree, NDArray[np.float64], NDArray[np.int64]]:
+        """Level ``level``'s verification stars: a KD-tree over their ICRS vectors, the vectors
+        (V, 3) and their catalog rows (V,). Built on first use, then kept: querying them costs a
+        fraction of filtering every database star around the field."""
+        if level not in self._verify_sets:
+            members = np.flatnonzero((self.verify_levels >> np.uint16(level)) & np.uint16(1))
+            vectors = np.ascontiguousarray(self.vectors[members])
+            self._verify_sets[level] = (cKDTree(vectors), vectors, self.cat_index[members])
+        return self._verify_sets[level]
 
     @property
     def n_patterns(self) -> int:
@@ -293,9 +297,14 @@ def _from_arrays(settings: DatabaseSettings, arrays: dict[str, NDArray]) -> Patt
     offsets = arrays["level_offsets"]
     level = np.repeat(np.arange(len(offsets) - 1, dtype=np.int64), np.diff(offsets))
     keys = (level << LEVEL_SHIFT) + pattern_key(arrays["pattern_ratios"])
+    n_levels = len(offsets) - 1
+    cells = np.arange(n_levels * KEY_BINS**2, dtype=np.int64)
+    cell_keys = ((cells // KEY_BINS**2) << LEVEL_SHIFT) + (cells % KEY_BINS**2) * 65536
+    cell_starts = np.append(np.searchsorted(keys, cell_keys, side="left"), keys.size)
     fields = {k: arrays[k] for k in ("cat_index", "hip", "vectors", "mag", "level_fov_rad", "pattern_stars",
                                      "pattern_ratios", "pattern_largest", "level_offsets", "verify_levels")}
-    return PatternDatabase(settings=settings, **fields, keys=keys, tree=cKDTree(arrays["vectors"]))
+    return PatternDatabase(settings=settings, **fields, keys=keys, cell_starts=cell_starts,
+                           tree=cKDTree(arrays["vectors"]))
 
 
 def load_database(settings: DatabaseSettings | None = None,

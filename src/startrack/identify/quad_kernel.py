@@ -110,9 +110,8 @@ def _floor_q(value: float) -> int:
 
 
 @njit(cache=True)
-def _lower_bound(keys, value, side_right: bool) -> int:
-    """numpy.searchsorted of one value (side 'left' or 'right')."""
-    lo, hi = 0, keys.size
+def _lower_bound(keys, lo, hi, value, side_right: bool) -> int:
+    """numpy.searchsorted of one value (side 'left' or 'right') in ``keys[lo:hi]``, as an index into keys."""
     while lo < hi:
         mid = (lo + hi) >> 1
         if keys[mid] < value or (side_right and keys[mid] == value):
@@ -130,11 +129,10 @@ def _level_fits(level_fov, level_ratio, region_fraction, fov_lo, fov_hi, largest
 
 
 @njit(cache=True)
-def _ratios_fit(stored, ratios, tol) -> bool:
-    """Whether all five stored ratios lie within the image ratios' tolerances (rounded to stored units)."""
+def _ratios_fit(stored, low, high) -> bool:
+    """Whether all five stored ratios lie within [low, high] (stored units)."""
     for k in range(5):
-        low, high = np.rint((ratios[k] - tol[k]) * RATIO_SCALE), np.rint((ratios[k] + tol[k]) * RATIO_SCALE)
-        if stored[k] < low or stored[k] > high:
+        if stored[k] < low[k] or stored[k] > high[k]:
             return False
     return True
 
@@ -154,17 +152,34 @@ def _best_order(img_angles, cat_angles):
 
 
 @njit(cache=True)
-def _wahba_svd(obs, ref):
-    """Rotation matrix R (3, 3) minimising sum |obs_i - R ref_i|^2 over the rows of (4, 3) arrays."""
+def _q_method(obs, ref):
+    """Davenport's q-method for equal weights (as :mod:`startrack.attitude.qmethod`): the scalar-last
+    quaternion (4,) of R with R ref_i ~ obs_i (rows of (4, 3) arrays) and R itself (3, 3)."""
     b = np.zeros((3, 3))
     for i in range(obs.shape[0]):
         for j in range(3):
             for k in range(3):
                 b[j, k] += obs[i, j] * ref[i, k]
-    left, _, right = np.linalg.svd(b)
-    if np.linalg.det(left) * np.linalg.det(right) < 0.0:
-        left[:, 2] = -left[:, 2]
-    return left @ right
+    sigma = b[0, 0] + b[1, 1] + b[2, 2]
+    davenport = np.empty((4, 4))
+    for j in range(3):
+        for k in range(3):
+            davenport[j, k] = b[j, k] + b[k, j] - (sigma if j == k else 0.0)
+    davenport[0, 3] = davenport[3, 0] = b[2, 1] - b[1, 2]
+    davenport[1, 3] = davenport[3, 1] = b[0, 2] - b[2, 0]
+    davenport[2, 3] = davenport[3, 2] = b[1, 0] - b[0, 1]
+    davenport[3, 3] = sigma
+    quat = np.ascontiguousarray(np.linalg.eigh(davenport)[1][:, 3])  # largest eigenvalue last
+    return quat, _quat_matrix(quat)
+
+
+@njit(cache=True)
+def _quat_matrix(q):
+    """Rotation matrix (3, 3) of a unit scalar-last quaternion (4,), scipy's convention."""
+    x, y, z, w = q[0], q[1], q[2], q[3]
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
 @njit(cache=True)
@@ -179,24 +194,71 @@ def _worst_residual(rot, obs, ref) -> float:
 
 
 @njit(cache=True)
-def _grow(matrix, focal, stars, row, count):
+def _grow(quats, focal, stars, row, count):
     """The output arrays with twice the room, the first ``count`` entries kept."""
     size = 2 * max(count, 8)
-    m2, f2, s2, r2 = np.empty((size, 3, 3)), np.empty(size), np.empty((size, 4), np.int64), np.empty(size, np.int64)
-    m2[:count], f2[:count], s2[:count], r2[:count] = matrix[:count], focal[:count], stars[:count], row[:count]
-    return m2, f2, s2, r2
+    q2, f2, s2, r2 = np.empty((size, 4)), np.empty(size), np.empty((size, 4), np.int64), np.empty(size, np.int64)
+    q2[:count], f2[:count], s2[:count], r2[:count] = quats[:count], focal[:count], stars[:count], row[:count]
+    return q2, f2, s2, r2
+
+
+@njit(cache=True)
+def _matching_rows(keys, cell_starts, pattern_ratios, pattern_largest, level_fovs, level_ratio, region_fraction,
+                   ratios, tol, largest, trial_focal, fov_lo, fov_hi, window_lo, window_hi, rows):
+    """Database rows whose key, five ratios and implied focal length fit one trial (step 3).
+
+    Writes them to ``rows`` (grown when full) and returns (rows, count).
+    """
+    low, high = np.empty(5), np.empty(5)
+    for k in range(5):
+        low[k], high[k] = np.rint((ratios[k] - tol[k]) * RATIO_SCALE), np.rint((ratios[k] + tol[k]) * RATIO_SCALE)
+    b0_lo, b0_hi = _bin(_floor_q(ratios[0] - tol[0])), _bin(_floor_q(ratios[0] + tol[0]))
+    b1_lo, b1_hi = _bin(_floor_q(ratios[1] - tol[1])), _bin(_floor_q(ratios[1] + tol[1]))
+    r2_lo, r2_hi = _quantise(ratios[2] - tol[2]), _quantise(ratios[2] + tol[2])
+    count = 0
+    for level in range(level_fovs.size):
+        if not _level_fits(level_fovs[level], level_ratio, region_fraction, fov_lo, fov_hi, largest):
+            continue
+        for b0 in range(b0_lo, b0_hi + 1):
+            for b1 in range(b1_lo, b1_hi + 1):
+                cell = (level * KEY_BINS + b0) * KEY_BINS + b1
+                lo, hi = cell_starts[cell], cell_starts[cell + 1]
+                base = (level << LEVEL_SHIFT) + (b0 * KEY_BINS + b1) * 65536
+                start = _lower_bound(keys, lo, hi, base + r2_lo, False)
+                for r in range(start, _lower_bound(keys, start, hi, base + r2_hi, True)):
+                    if not _ratios_fit(pattern_ratios[r], low, high):
+                        continue
+                    implied = trial_focal * largest / (pattern_largest[r] * LARGEST_SCALE_RAD)
+                    if window_lo <= implied <= window_hi:
+                        if count == rows.size:
+                            rows = np.concatenate((rows, np.empty(rows.size, np.int64)))
+                        rows[count] = r
+                        count += 1
+    return rows, count
+
+
+@njit(cache=True)
+def _fit_order(u, w, quad, order, scale, cat_vec, stars, obs):
+    """Rotation (quaternion (4,), matrix (3, 3)) of one candidate under star ordering ``order`` at ``scale`` (step 4).
+
+    Writes the image star of each catalog star to ``stars`` (4,) and their vectors to ``obs`` (4, 3).
+    """
+    for i in range(4):
+        stars[i] = quad[_PERMUTATIONS[order, i]]
+    _image_vectors(u, w, stars, scale, obs)
+    return _q_method(obs, cat_vec)
 
 
 @njit(cache=True)
 def search(u, w, quads, grid, focal_nominal, short_px, sigma_px, step, max_tolerance, fit_focal,
-            level_fovs, level_ratio, region_fraction, keys, pattern_ratios, pattern_largest,
-            pattern_stars, vectors):
+           level_fovs, level_ratio, region_fraction, keys, cell_starts, pattern_ratios, pattern_largest,
+           pattern_stars, vectors):
     """The compiled loop of :func:`.quad_search.search_batch` (steps 1-4 of the module docstring)."""
     vec, cat_vec, obs = np.empty((4, 3)), np.empty((4, 3)), np.empty((4, 3))
     angles, cat_angles, ordered, ratios, tol = np.empty(6), np.empty(6), np.empty(6), np.empty(5), np.empty(5)
-    quad, stars = np.empty(4, np.int64), np.empty(4, np.int64)
-    matrix, focal, out_stars, out_row = _grow(np.empty((0, 3, 3)), np.empty(0), np.empty((0, 4), np.int64),
-                                              np.empty(0, np.int64), 0)
+    quad, stars, rows = np.empty(4, np.int64), np.empty(4, np.int64), np.empty(64, np.int64)
+    quats, focal, out_stars, out_row = _grow(np.empty((0, 4)), np.empty(0), np.empty((0, 4), np.int64),
+                                             np.empty(0, np.int64), 0)
     count, n_tried = 0, 0
     noise = 3.0 * sigma_px * math.sqrt(2.0)
     step_share = FITTED_FOCAL_STEP_SHARE if fit_focal else 1.0
@@ -205,56 +267,37 @@ def search(u, w, quads, grid, focal_nominal, short_px, sigma_px, step, max_toler
         starts = _trial_starts(u, w, quad, grid, step, vec, angles, ordered, ratios)
         for t in range(starts.size):
             scale = grid[starts[t]]
-            scale_lo = scale
             scale_hi = grid[starts[t + 1]] if t + 1 < starts.size else grid[grid.size - 1]
             _image_vectors(u, w, quad, scale, vec)
             _edges(vec, angles)
             largest = _sorted_ratios(angles, ordered, ratios)
             trial_focal = focal_nominal / scale
-            worst_tol = 0.0
             for k in range(5):
                 tol[k] = step + noise * (1.0 / (ordered[k] * trial_focal) + ratios[k] / (ordered[5] * trial_focal))
-                worst_tol = max(worst_tol, tol[k])
+            worst_tol = tol.max()
             if worst_tol > max_tolerance:
                 continue
-            fov_lo = 2.0 * math.atan(short_px * scale_lo / (2.0 * focal_nominal))
+            fov_lo = 2.0 * math.atan(short_px * scale / (2.0 * focal_nominal))
             fov_hi = 2.0 * math.atan(short_px * scale_hi / (2.0 * focal_nominal))
-            window_lo, window_hi = focal_nominal / scale_hi * 0.98, focal_nominal / scale_lo * 1.02
-            b0_lo, b0_hi = _bin(_floor_q(ratios[0] - tol[0])), _bin(_floor_q(ratios[0] + tol[0]))
-            b1_lo, b1_hi = _bin(_floor_q(ratios[1] - tol[1])), _bin(_floor_q(ratios[1] + tol[1]))
-            r2_lo, r2_hi = _quantise(ratios[2] - tol[2]), _quantise(ratios[2] + tol[2])
-            for level in range(level_fovs.size):
-                if not _level_fits(level_fovs[level], level_ratio, region_fraction, fov_lo, fov_hi, largest):
+            rows, n_rows = _matching_rows(keys, cell_starts, pattern_ratios, pattern_largest, level_fovs, level_ratio,
+                                          region_fraction, ratios, tol, largest, trial_focal, fov_lo, fov_hi,
+                                          focal_nominal / scale_hi * 0.98, trial_focal * 1.02, rows)
+            for j in range(n_rows):
+                r = rows[j]
+                for i in range(4):
+                    cat_vec[i] = vectors[pattern_stars[r, i]]
+                _edges(cat_vec, cat_angles)
+                order, misfit, edge_scale = _best_order(angles, cat_angles)
+                if misfit > 3.0 * worst_tol * cat_angles.max():
                     continue
-                prefix = level << LEVEL_SHIFT
-                for b0 in range(b0_lo, b0_hi + 1):
-                    for b1 in range(b1_lo, b1_hi + 1):
-                        cell = (b0 * KEY_BINS + b1) * 65536
-                        start = _lower_bound(keys, prefix + cell + r2_lo, False)
-                        stop = _lower_bound(keys, prefix + cell + r2_hi, True)
-                        for r in range(start, stop):
-                            if not _ratios_fit(pattern_ratios[r], ratios, tol):
-                                continue
-                            implied = trial_focal * largest / (pattern_largest[r] * LARGEST_SCALE_RAD)
-                            if implied < window_lo or implied > window_hi:
-                                continue
-                            for i in range(4):
-                                cat_vec[i] = vectors[pattern_stars[r, i]]
-                            _edges(cat_vec, cat_angles)
-                            best, misfit, edge_scale = _best_order(angles, cat_angles)
-                            if misfit > 3.0 * worst_tol * cat_angles.max():
-                                continue
-                            n_tried += 1
-                            for i in range(4):
-                                stars[i] = quad[_PERMUTATIONS[best, i]]
-                            fitted = scale * edge_scale if fit_focal else scale
-                            _image_vectors(u, w, stars, fitted, obs)
-                            rot = _wahba_svd(obs, cat_vec)
-                            f = focal_nominal / fitted
-                            if _worst_residual(rot, obs, cat_vec) > 6.0 * sigma_px / f + step_share * step * largest:
-                                continue
-                            if count == focal.size:
-                                matrix, focal, out_stars, out_row = _grow(matrix, focal, out_stars, out_row, count)
-                            matrix[count], focal[count], out_stars[count], out_row[count] = rot, f, stars, r
-                            count += 1
-    return matrix[:count], focal[:count], out_stars[:count], out_row[:count], n_tried
+                n_tried += 1
+                fitted = scale * edge_scale if fit_focal else scale
+                quat, rot = _fit_order(u, w, quad, order, fitted, cat_vec, stars, obs)
+                f = focal_nominal / fitted
+                if _worst_residual(rot, obs, cat_vec) > 6.0 * sigma_px / f + step_share * step * largest:
+                    continue
+                if count == focal.size:
+                    quats, focal, out_stars, out_row = _grow(quats, focal, out_stars, out_row, count)
+                quats[count], focal[count], out_stars[count], out_row[count] = quat, f, stars, r
+                count += 1
+    return quats[:count], focal[:count], out_stars[:count], out_row[:count], n_tried

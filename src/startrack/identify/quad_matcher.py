@@ -126,16 +126,14 @@ class _Search:
         self.trials += fits.n_tried
         levels = np.searchsorted(self.db.level_offsets, fits.row, side="right") - 1
         for i in range(fits.row.size):
-            found = self.confirmer.confirm(self._level_stars(int(levels[i])), Rotation.from_matrix(fits.matrix[i]),
+            found = self.confirmer.confirm(self._level_stars(int(levels[i])), Rotation.from_quat(fits.quat[i]),
                                            self.camera.with_focal(fits.focal[i]), fits.image_stars[i], self.trials)
             if found is not None:
                 return found
         return None
 
     def _level_stars(self, level: int) -> StarSet:
-        bit = np.uint16(level)
-        return StarSet(self.db.tree, self.db.vectors, self.db.cat_index,
-                       keep=lambda idx: (self.db.verify_levels[idx] >> bit) & np.uint16(1) == 1)
+        return StarSet(*self.db.verification_stars(level))
 
 
 def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatabase,

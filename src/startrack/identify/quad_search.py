@@ -18,7 +18,7 @@ overhead, not the arithmetic, set its time. For each pattern, in order:
    implies, must fit.
 4. For each candidate row: the star correspondence of the 24 orderings whose edges agree best,
    the focal length corrected from the edge sums (when it is free), the rotation of the four
-   stars (Wahba's problem, by SVD: the same optimum as the q-method) and the residual test.
+   stars (Wahba's problem by Davenport's q-method) and the residual test.
 
 Candidates come out in the order the patterns were formed (brightest stars first), then by
 trial, level and key.
@@ -101,8 +101,8 @@ class Fits:
 
     Attributes
     ----------
-    matrix : ndarray, shape (C, 3, 3)
-        Rotation matrices, camera from ICRS.
+    quat : ndarray, shape (C, 4)
+        Attitudes, camera from ICRS, as scalar-last quaternions (scipy's order).
     focal : ndarray, shape (C,)
         Focal length (pixels).
     image_stars : ndarray of int, shape (C, 4)
@@ -113,7 +113,7 @@ class Fits:
         Candidates whose edges matched (the count the false-match bound multiplies by).
     """
 
-    matrix: NDArray[np.float64]
+    quat: NDArray[np.float64]
     focal: NDArray[np.float64]
     image_stars: NDArray[np.int64]
     row: NDArray[np.int64]
@@ -139,22 +139,22 @@ def search_batch(db: PatternDatabase, u: NDArray, w: NDArray, quads: NDArray, se
     from .quad_kernel import search  # numba is imported on first use
 
     s = db.settings
-    matrix, focal, stars, row, n_tried = search(
+    quat, focal, stars, row, n_tried = search(
         np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(w, dtype=np.float64),
         np.ascontiguousarray(quads, dtype=np.int64), setup.grid, float(setup.focal_nominal),
         float(setup.short_px), float(setup.sigma_px), float(setup.focal_step), float(setup.max_tolerance),
         bool(setup.fit_focal), db.level_fov_rad, float(s.level_ratio), float(s.region_fraction), db.keys,
-        db.pattern_ratios, db.pattern_largest, db.pattern_stars, db.vectors)
-    return Fits(matrix, focal, stars, row, int(n_tried))
+        db.cell_starts, db.pattern_ratios, db.pattern_largest, db.pattern_stars, db.vectors)
+    return Fits(quat, focal, stars, row, int(n_tried))
 
 
-_WARM: set[tuple[str, ...]] = set()
+_WARM: set[tuple[np.dtype, ...]] = set()
 
 
 def warm_up(db: PatternDatabase) -> None:
     """Compile (or load from the disk cache) the search for this database's array types, so
     that a solve's time and time limit do not include it. Free after the first call."""
-    types = tuple(str(a.dtype) for a in (db.keys, db.pattern_ratios, db.pattern_largest, db.pattern_stars))
+    types = (db.keys.dtype, db.pattern_ratios.dtype, db.pattern_largest.dtype, db.pattern_stars.dtype)
     if types in _WARM:
         return
     u = np.array([0.0, 0.01, 0.0, 0.01])

@@ -49,13 +49,13 @@ def project_stars(tree: cKDTree, vectors: NDArray, rot_cam_from_icrs: Rotation, 
         Given the indices of the stars in the field, returns a mask of those to keep.
     """
     half_diag = math.radians(camera.fov_diagonal_deg) / 2.0 * 1.05
-    boresight = rot_cam_from_icrs.inv().apply([0.0, 0.0, 1.0])
-    idx = np.asarray(tree.query_ball_point(boresight, 2.0 * math.sin(min(half_diag, 1.5) / 2.0)), dtype=np.int64)
+    matrix = rot_cam_from_icrs.as_matrix()  # its last row is the boresight in ICRS
+    idx = np.asarray(tree.query_ball_point(matrix[2], 2.0 * math.sin(min(half_diag, 1.5) / 2.0)), dtype=np.int64)
     if keep is not None and idx.size:
         idx = idx[keep(idx)]
     if idx.size == 0:
         return Projection(idx, np.zeros(0), np.zeros(0))
-    x, y = camera.vector_to_pixel(rot_cam_from_icrs.apply(vectors[idx]))
+    x, y = camera.vector_to_pixel(vectors[idx] @ matrix.T)
     inside = camera.in_image(x, y)
     return Projection(idx[inside], x[inside], y[inside])
 
