@@ -1,0 +1,103 @@
+"""The compiled batch look-up of four-star patterns: a catalog pattern seen by a camera is found."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from startrack.identify.database import (
+    KEY_BINS,
+    LEVEL_SHIFT,
+    RATIO_SCALE,
+    DatabaseSettings,
+    _from_arrays,
+    build_database_arrays,
+)
+from startrack.identify.quad_search import SearchSetup, focal_grid, search_batch
+from startrack.units import ARCSEC
+
+SMALL = DatabaseSettings(fov_min_deg=20.0, fov_max_deg=30.0, max_mag=7.0)
+SIZE_PX = 1024
+FOCAL_PX = (SIZE_PX / 2) / math.tan(math.radians(10.0))  # 20 deg across
+IMAGE_ORDER = np.array([2, 0, 3, 1])  # image star i is catalog star IMAGE_ORDER[i]
+
+
+@pytest.fixture(scope="module")
+def db():
+    return _from_arrays(SMALL, build_database_arrays(SMALL))
+
+
+def _seen(db, row: int, mirror: bool = False):
+    """Normalised coordinates (u, w) of a database pattern's stars, in IMAGE_ORDER, and the attitude."""
+    vec = db.vectors[db.pattern_stars[row].astype(np.int64)]
+    centre = vec.mean(axis=0) / np.linalg.norm(vec.mean(axis=0))
+    rot, _ = Rotation.align_vectors([[0.0, 0.0, 1.0]], [centre])
+    rot = Rotation.from_rotvec([0.0, 0.0, 0.7]) * rot  # some roll
+    cam = rot.apply(vec[IMAGE_ORDER])
+    u, w = cam[:, 0] / cam[:, 2], cam[:, 1] / cam[:, 2]
+    return u, (-w if mirror else w), rot
+
+
+def _setup(grid, focal_px, fit_focal):
+    return SearchSetup(grid, focal_px, SIZE_PX, 0.5, 0.0015, 0.1, fit_focal)
+
+
+def _row_in_level0(db, k: int) -> int:
+    """The k-th of every 997th level-0 pattern whose smallest edge is a quarter of its largest or
+    more (patterns of a tiny edge are too uncertain to be looked up at all)."""
+    rows = np.arange(db.level_offsets[0], db.level_offsets[1])
+    rows = rows[db.pattern_ratios[rows, 0] >= 0.25 * RATIO_SCALE]
+    return int(rows[k * 997 % rows.size])
+
+
+@pytest.mark.parametrize("k", [0, 1, 2])
+def test_a_catalog_pattern_is_found_with_its_star_order_and_attitude(db, k):
+    row = _row_in_level0(db, k)
+    u, w, truth = _seen(db, row)
+    fits = search_batch(db, u, w, np.array([[0, 1, 2, 3]]), _setup(focal_grid((1.0, 1.0), 0.0015), FOCAL_PX, False))
+    hit = np.flatnonzero(fits.row == row)
+    assert hit.size == 1
+    i = hit[0]
+    np.testing.assert_array_equal(IMAGE_ORDER[fits.image_stars[i]], [0, 1, 2, 3])
+    error = (Rotation.from_quat(fits.quat[i]) * truth.inv()).magnitude()
+    assert error < 1.0 * ARCSEC
+    assert fits.focal[i] == pytest.approx(FOCAL_PX, rel=1e-12)
+
+
+def test_a_free_focal_length_is_recovered_from_the_edges(db):
+    row = _row_in_level0(db, 3)
+    nominal = FOCAL_PX * 1.06  # the camera is believed 6 % longer than it is
+    u, w, truth = _seen(db, row)
+    u, w = u * FOCAL_PX / nominal, w * FOCAL_PX / nominal  # pixels measured, divided by the nominal focal length
+    grid = focal_grid((nominal / (FOCAL_PX * 1.15), nominal / (FOCAL_PX * 0.85)), 0.0015)
+    fits = search_batch(db, u, w, np.array([[0, 1, 2, 3]]), _setup(grid, nominal, True))
+    i = np.flatnonzero(fits.row == row)[0]
+    assert fits.focal[i] == pytest.approx(FOCAL_PX, rel=2e-3)
+    assert (Rotation.from_quat(fits.quat[i]) * truth.inv()).magnitude() < 20.0 * ARCSEC
+
+
+def test_a_mirrored_pattern_is_not_fitted(db):
+    row = _row_in_level0(db, 4)
+    u, w, _ = _seen(db, row, mirror=True)
+    fits = search_batch(db, u, w, np.array([[0, 1, 2, 3]]), _setup(focal_grid((1.0, 1.0), 0.0015), FOCAL_PX, False))
+    assert row not in fits.row
+    assert fits.n_tried >= 1  # its edges matched: only the rotation fit tells the mirror apart
+
+
+def test_focal_grid_spans_the_range_with_one_point_for_a_known_focal_length():
+    assert focal_grid((1.0, 1.0), 0.0015).tolist() == [1.0]
+    grid = focal_grid((0.5, 3.5), 0.0015)
+    assert grid[0] == pytest.approx(0.5) and grid[-1] == pytest.approx(3.5)
+    assert np.all(np.diff(grid) > 0) and grid.size > 48
+
+
+def test_cell_starts_bound_every_cell_of_the_key_index(db):
+    n_cells = db.cell_starts.size - 1
+    assert n_cells == db.level_fov_rad.size * KEY_BINS**2
+    cells = np.random.default_rng(3).integers(0, n_cells, 200)
+    for cell in cells:
+        rows = slice(db.cell_starts[cell], db.cell_starts[cell + 1])
+        prefix = ((cell // KEY_BINS**2) << LEVEL_SHIFT) + (cell % KEY_BINS**2) * 65536
+        assert np.all((db.keys[rows] >= prefix) & (db.keys[rows] < prefix + 65536))
+    assert np.all(np.diff(db.cell_starts) >= 0) and db.cell_starts[-1] == db.keys.size
