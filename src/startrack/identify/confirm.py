@@ -72,7 +72,7 @@ class Confirmer:
         n = min(len(self.x), self.verify_stars)
         proj = project_stars(stars.tree, stars.vectors, rot, camera, stars.keep)
         img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y, LOOSE_RADIUS_FACTOR * self.radius_px)
-        if np.count_nonzero(~np.isin(img_i, pattern_img)) < MIN_EXTRA_MATCHES:
+        if np.count_nonzero(_not_in(img_i, pattern_img)) < MIN_EXTRA_MATCHES:
             return None
         ref = stars.vectors[proj.star[cat_i]]
         rot, camera, _ = refine_pointing(rot, camera, ref, self.x[img_i], self.y[img_i], fit_focal=self.fit_focal)
@@ -83,12 +83,17 @@ class Confirmer:
         n = min(len(self.x), self.verify_stars)
         proj = project_stars(stars.tree, stars.vectors, rot, camera, stars.keep)
         img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y, self.radius_px)
-        extra = ~np.isin(img_i, pattern_img)
+        extra = _not_in(img_i, pattern_img)
         prob = false_match_probability(int(extra.sum()), n - len(pattern_img), proj.star.size, self.radius_px,
                                        camera.width, camera.height, n_trials)
         if prob > self.max_false_match_prob:
             return None
         return Candidate(rot, camera, img_i, stars.catalog_rows[proj.star[cat_i]], prob)
+
+
+def _not_in(values: NDArray, few: NDArray) -> NDArray[np.bool_]:
+    """Mask of ``values`` (K,) not among ``few`` (a pattern's handful of stars); cheaper than np.isin."""
+    return np.all(values[:, None] != np.asarray(few)[None, :], axis=1)
 
 
 def match_radius_px(camera: Camera, given: float | None) -> float:

@@ -21,9 +21,9 @@ A mirror image has the same edge ratios but no rotation fits it, so step 4 rejec
 
 from __future__ import annotations
 
+import functools
 import itertools
 import time
-from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -79,16 +79,24 @@ FIRST_BATCH_STARS = 6
 """The first batch holds every pattern of the 6 brightest stars (15 patterns)."""
 
 
-def pattern_batches(n: int) -> Iterator[NDArray[np.int64]]:
+def pattern_batches(n: int) -> tuple[NDArray[np.int64], ...]:
     """Four-star combinations of ``n`` stars (brightest first), in batches: the first holds every
     pattern of the brightest :data:`FIRST_BATCH_STARS`, each later one every pattern whose
-    faintest star is the next star; inside a batch, patterns of brighter stars come first."""
+    faintest star is the next star; inside a batch, patterns of brighter stars come first.
+    (Cached per ``n``, read-only.)"""
+    return _pattern_batches(int(n))
+
+
+@functools.cache
+def _pattern_batches(n: int) -> tuple[NDArray[np.int64], ...]:
     first = min(n, FIRST_BATCH_STARS)
-    if first >= 4:
-        yield np.array(list(itertools.combinations(range(first), 4)), dtype=np.int64)
+    batches = [np.array(list(itertools.combinations(range(first), 4)), dtype=np.int64)] if first >= 4 else []
     for last in range(first, n):
         head = np.array(list(itertools.combinations(range(last), 3)), dtype=np.int64)
-        yield np.column_stack([head, np.full(len(head), last)])
+        batches.append(np.column_stack([head, np.full(len(head), last)]))
+    for batch in batches:
+        batch.flags.writeable = False
+    return tuple(batches)
 
 
 MIN_SEPARATION_PX = 1.0

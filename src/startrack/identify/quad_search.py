@@ -26,6 +26,7 @@ trial, level and key.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -41,6 +42,7 @@ FOCAL_GRID_STEP = 0.004
 factor FOCAL_GRID_SPAN for a ratio step of FOCAL_GRID_STEP, proportionally more for a finer
 step (48 points from 5 to 35 deg at 0.004; 3 for a FOV known to a few percent)."""
 
+@functools.lru_cache(maxsize=64)
 def focal_grid(scale_range: tuple[float, float], step: float) -> NDArray[np.float64]:
     """Scales (f_nominal / f) the trials of every pattern are chosen from.
 
@@ -54,14 +56,17 @@ def focal_grid(scale_range: tuple[float, float], step: float) -> NDArray[np.floa
     Returns
     -------
     ndarray, shape (G,)
-        Ascending; a single scale when the range is a point (a known focal length).
+        Ascending, read-only (grids are cached: a camera asks for the same one every solve); a
+        single scale when the range is a point (a known focal length).
     """
     lo, hi = scale_range
     if hi <= lo * (1 + 1e-9):
-        return np.array([lo])
-    density = FOCAL_GRID * max(1.0, FOCAL_GRID_STEP / step)  # finer steps need a finer grid
-    size = max(3, math.ceil(density * math.log(hi / lo) / math.log(FOCAL_GRID_SPAN)))
-    return np.geomspace(lo, hi, size)
+        grid = np.array([lo])
+    else:
+        density = FOCAL_GRID * max(1.0, FOCAL_GRID_STEP / step)  # finer steps need a finer grid
+        grid = np.geomspace(lo, hi, max(3, math.ceil(density * math.log(hi / lo) / math.log(FOCAL_GRID_SPAN))))
+    grid.flags.writeable = False
+    return grid
 
 
 @dataclass(frozen=True)
