@@ -152,18 +152,18 @@ def _solution(problem: _Problem, stars: FieldStars, cand: Candidate, t0: float) 
     fit = settle_matches(problem.x, problem.y, stars, cand, problem.focal_range)
     camera, img, rows, ref, res_px = fit.camera, fit.image_index, fit.catalog_rows, fit.ref_icrs, fit.residual_px
     observed = camera.pixel_to_vector(problem.x[img], problem.y[img])
-    sigma_rad = max(float(np.sqrt(np.mean(res_px**2))), 0.05) / camera.fx
-    weights = np.full((1, len(img)), 1.0 / len(img))
-    rot = Rotation.from_quat(q_method_quaternions(observed[None], ref[None], weights)[0])
-    residuals = angle_between(rot.apply(ref), observed) / ARCSEC
+    n = len(img)
+    sigma_rad = max(math.sqrt(float(res_px @ res_px) / n), 0.05) / camera.fx
+    rot = Rotation.from_quat(q_method_quaternions(observed[None], ref[None], np.full((1, n), 1.0 / n))[0])
+    residuals = angle_between(ref @ rot.as_matrix().T, observed) / ARCSEC
     ra, dec, roll = radec_roll_from_rotation(rot)
     matches = StarMatches(status=Status.OK, det_index=problem.rows[img].astype(np.int64),
                           hip=load_catalog().hip[rows].astype(np.int64), cat_vectors=ref,
                           false_match_prob=cand.false_match_prob)
     return AttitudeSolution(
         status=Status.OK, rot_cam_from_icrs=rot,
-        covariance_rad2=covariance_batch(observed[None], np.full((1, len(img)), sigma_rad))[0],  # >= 3 stars, spread
-        ra_deg=float(np.degrees(ra)), dec_deg=float(np.degrees(dec)), roll_deg=float(np.degrees(roll)),
+        covariance_rad2=covariance_batch(observed[None], np.full((1, n), sigma_rad))[0],  # >= 3 stars, spread
+        ra_deg=math.degrees(ra), dec_deg=math.degrees(dec), roll_deg=math.degrees(roll),
         fov_deg=camera.fov_deg, camera=camera, matches=matches, residuals_arcsec=residuals,
         false_match_prob=cand.false_match_prob, solve_time_s=time.perf_counter() - t0)
 

@@ -98,7 +98,7 @@ def test_deleted_residuals_match_refits_without_each_star():
     x, y = x + rng.normal(0, 0.4, 9), y + rng.normal(0, 0.4, 9)
     x[4] += 6.0  # one wrong association
     fit_rot, fit_cam, _ = refine_pointing(rot, camera, ref, x, y, fit_focal=True)
-    deleted = leave_one_out_residuals(fit_rot, fit_cam, ref, x, y, fit_focal=True)
+    deleted = leave_one_out_residuals(fit_rot.as_matrix(), fit_cam, ref, x, y, fit_focal=True)
     for k in range(9):
         keep = np.arange(9) != k
         r, c, _ = refine_pointing(fit_rot, fit_cam, ref[keep], x[keep], y[keep], fit_focal=True)

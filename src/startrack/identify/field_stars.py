@@ -7,6 +7,7 @@ to the database's magnitude limit, so that each image star gets its nearest cata
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -41,8 +42,9 @@ class FieldStars:
 
     def near(self, boresight: NDArray, radius_rad: float) -> NDArray[np.int64]:
         """Indices (into :attr:`rows`) of the stars within ``radius_rad`` of a unit vector."""
-        chord = 2.0 * np.sin(min(radius_rad, np.pi) / 2.0)
-        return np.asarray(self.tree.query_ball_point(boresight, chord), dtype=np.int64)
+        chord = 2.0 * math.sin(min(radius_rad, math.pi) / 2.0)
+        found = self.tree.query_ball_point(boresight, chord)
+        return np.fromiter(found, dtype=np.int64, count=len(found))
 
 
 NEIGHBOUR_SEARCH_RAD = np.radians(0.05)

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
@@ -27,7 +28,7 @@ from scipy.spatial.transform import Rotation
 from ..camera import Camera
 from .candidate import Candidate
 from .field_stars import FieldStars
-from .refine import leave_one_out_residuals, refine_pointing
+from .refine import fit_pose, leave_one_out_residuals
 from .verify import match_nearest
 
 MAX_REFINE_ROUNDS = 4
@@ -64,15 +65,21 @@ MIN_STARS_TO_CHECK = 5
 
 @dataclass(frozen=True)
 class FinalFit:
-    """The settled fit: attitude, camera, matched image indices (K,), their catalog rows (K,),
-    the rows' ICRS unit vectors (K, 3) at the solve epoch and the pixel residuals (K,)."""
+    """The settled fit: attitude (rotation matrix (3, 3) taking ICRS to camera vectors), camera,
+    matched image indices (K,), their catalog rows (K,), the rows' ICRS unit vectors (K, 3) at the
+    solve epoch and the pixel residuals (K,)."""
 
-    rot_cam_from_icrs: Rotation
+    matrix_cam_from_icrs: NDArray[np.float64]
     camera: Camera
     image_index: NDArray[np.int64]
     catalog_rows: NDArray[np.int64]
     ref_icrs: NDArray[np.float64]
     residual_px: NDArray[np.float64]
+
+    @cached_property
+    def rot_cam_from_icrs(self) -> Rotation:
+        """The attitude as a Rotation."""
+        return Rotation.from_matrix(self.matrix_cam_from_icrs)
 
 
 def visible_near(stars: FieldStars, boresight: NDArray, radius_rad: float, focal_px: float) -> NDArray[np.int64]:
@@ -86,65 +93,117 @@ def visible_near(stars: FieldStars, boresight: NDArray, radius_rad: float, focal
     return near[stars.brighter_neighbour_rad[near] >= BLEND_PX / focal_px]
 
 
-def rematch(x: NDArray, y: NDArray, stars: FieldStars, near: NDArray, rot: Rotation,
-            camera: Camera, radius_px: float) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """Match every image star (x, y: (N,) px) to its nearest predicted catalog star within the
-    radius: (image index (K,), catalog row (K,)). ``near`` (from :func:`visible_near`) are the
-    indices (into ``stars``) of the catalog stars around the field, found once per solve."""
-    px, py = camera.vector_to_pixel(stars.vectors[near] @ rot.as_matrix().T)
-    inside = np.flatnonzero(camera.in_image(px, py))
-    img_i, cat_i = match_nearest(x, y, px[inside], py[inside], radius_px)
-    return img_i, stars.rows[near[inside[cat_i]]]
+CELL_PX = 16.0
+"""Side (pixels) of the image cells with which the re-match skips predicted stars far from every image star."""
 
 
-def _pose_shift_px(rot_a: Rotation, cam_a: Camera, rot_b: Rotation, cam_b: Camera) -> float:
-    """Largest shift (pixels) of an image point between two attitudes and focal lengths."""
-    turn = float(np.linalg.norm((rot_a * rot_b.inv()).as_rotvec()))
-    half_diagonal_px = 0.5 * math.hypot(cam_a.width, cam_a.height)
-    focal_change = abs(cam_a.fx / cam_b.fx - 1.0)
-    return turn * cam_b.fx * (1.0 + (half_diagonal_px / cam_b.fx) ** 2) + focal_change * half_diagonal_px
+@dataclass(frozen=True)
+class _Reach:
+    """The image cells (squares of side ``cell_px`` from the image corner) holding a point within
+    ``radius_px`` of an image star, marked (rows, cols) once per solve.
+
+    A predicted catalog star in an unmarked cell is farther than the radius from every image
+    star, so it cannot be matched: leaving it out before :func:`.verify.match_nearest` changes
+    no match and keeps the distance table small (a wide field predicts thousands of stars).
+    """
+
+    marked: NDArray[np.bool_]
+    cell_px: float
+    radius_px: float
+
+    @classmethod
+    def around(cls, x: NDArray, y: NDArray, width: int, height: int, radius_px: float) -> _Reach:
+        """The cells within ``radius_px`` of the image stars (x, y: (N,) px) of a width x height image."""
+        reach = radius_px + 1e-6  # a hair more, against rounding
+        cell = max(CELL_PX, 2.0 * reach)  # so that a star reaches at most two cells along each axis
+        shape = (int(height // cell) + 1, int(width // cell) + 1)
+        sides = np.array([0.5 - reach, 0.5 + reach])[:, None, None]  # from the image corner, either side
+        cells = ((np.array([x, y]) + sides) / cell).astype(np.intp)  # (2 sides, 2 axes, N); clipped below
+        sides = np.minimum(np.maximum(cells, 0), np.array([[shape[1] - 1], [shape[0] - 1]]))
+        marked = np.zeros(shape, dtype=bool)
+        marked[sides[:, None, 1], sides[None, :, 0]] = True  # each star's cells, from every pair of sides
+        return cls(marked, cell, radius_px)
+
+    def holds(self, px: NDArray, py: NDArray) -> NDArray[np.bool_]:
+        """Whether each position (px, py: (M,) px, inside the image) lies in a marked cell."""
+        return self.marked[((py + 0.5) / self.cell_px).astype(np.intp), ((px + 0.5) / self.cell_px).astype(np.intp)]
 
 
 @dataclass(frozen=True)
 class _Field:
-    """What stays fixed while a candidate settles: image stars (N,) px, the field's catalog stars
-    and whether the focal length is free."""
+    """What stays fixed while a candidate settles: image stars (N,) px and the cells they reach,
+    the field's catalog stars (those of :func:`visible_near`: rows (S,) and ICRS unit vectors
+    (S, 3)) and whether the focal length is free."""
 
     x: NDArray[np.float64]
     y: NDArray[np.float64]
+    reach: _Reach
     stars: FieldStars
-    near: NDArray[np.int64]
+    near_rows: NDArray[np.int64]
+    near_vectors: NDArray[np.float64]
     fit_focal: bool
 
 
-def _settle(field: _Field, rot: Rotation, camera: Camera, img: NDArray, rows: NDArray) -> FinalFit:
-    """Fit, re-match all stars, and repeat until the matches (or the pose) stop changing."""
+def rematch(field: _Field, matrix_cam_from_icrs: NDArray,
+            camera: Camera) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
+    """Match every image star to its nearest predicted catalog star of the field within the
+    radius of ``field.reach``, for an attitude matrix (3, 3) taking ICRS to camera vectors:
+    image index (K,), catalog row (K,) and the row's ICRS unit vector (K, 3)."""
+    px, py = camera.vector_to_pixel(field.near_vectors @ matrix_cam_from_icrs.T)
+    inside = np.flatnonzero(camera.in_image(px, py))
+    near_i = inside[field.reach.holds(px[inside], py[inside])]  # the few that can match
+    img_i, cat_i = match_nearest(field.x, field.y, px[near_i], py[near_i], field.reach.radius_px)
+    near_i = near_i[cat_i]
+    return img_i, field.near_rows[near_i], field.near_vectors[near_i]
+
+
+def _turn_rad(matrix_a: NDArray, matrix_b: NDArray) -> float:
+    """Angle (radians) of the rotation between two attitude matrices (3, 3): atan2 of the sine
+    (from the antisymmetric part of ``A B^T``) and the cosine (from its trace), precise at any angle."""
+    (d00, d01, d02), (d10, d11, d12), (d20, d21, d22) = (matrix_a @ matrix_b.T).tolist()
+    return math.atan2(0.5 * math.hypot(d21 - d12, d02 - d20, d10 - d01), 0.5 * (d00 + d11 + d22 - 1.0))
+
+
+def _pose_shift_px(matrix_a: NDArray, cam_a: Camera, matrix_b: NDArray, cam_b: Camera) -> float:
+    """Largest shift (pixels) of an image point between two attitudes (matrices (3, 3)) and focal lengths."""
+    half_diagonal_px = 0.5 * math.hypot(cam_a.width, cam_a.height)
+    focal_change = abs(cam_a.fx / cam_b.fx - 1.0)
+    turn = _turn_rad(matrix_a, matrix_b)
+    return turn * cam_b.fx * (1.0 + (half_diagonal_px / cam_b.fx) ** 2) + focal_change * half_diagonal_px
+
+
+def _same(a: NDArray, b: NDArray) -> bool:
+    """Whether two index arrays of the same length are equal."""
+    return bool((a == b).all())
+
+
+def _settle(field: _Field, matrix: NDArray, camera: Camera, img: NDArray, rows: NDArray, ref: NDArray) -> FinalFit:
+    """Fit, re-match all stars, and repeat until the matches (or the pose) stop changing.
+    ``ref`` (K, 3) are the ICRS unit vectors of the catalog rows (K,) matched to the image stars (K,)."""
     for round_ in range(MAX_REFINE_ROUNDS):
-        ref = field.stars.vectors_of(rows)
-        before = (rot, camera)
-        rot, camera, res = refine_pointing(rot, camera, ref, field.x[img], field.y[img], fit_focal=field.fit_focal)
-        if round_ == MAX_REFINE_ROUNDS - 1 or (round_ > 0 and _pose_shift_px(*before, rot, camera) < SETTLED_PX):
+        before = (matrix, camera)
+        matrix, camera, res = fit_pose(matrix, camera, ref, field.x[img], field.y[img], fit_focal=field.fit_focal)
+        if round_ == MAX_REFINE_ROUNDS - 1 or (round_ > 0 and _pose_shift_px(*before, matrix, camera) < SETTLED_PX):
             break
-        new_img, new_rows = rematch(field.x, field.y, field.stars, field.near, rot, camera, REMATCH_RADIUS_PX)
-        unchanged = np.array_equal(new_img, img) and np.array_equal(new_rows, rows)
-        if unchanged or new_img.size < img.size:
+        new_img, new_rows, new_ref = rematch(field, matrix, camera)
+        if new_img.size < img.size or (new_img.size == img.size and _same(new_img, img) and _same(new_rows, rows)):
             break
-        img, rows = new_img, new_rows
-    return FinalFit(rot, camera, img, rows, ref, res)
+        img, rows, ref = new_img, new_rows, new_ref
+    return FinalFit(matrix, camera, img, rows, ref, res)
 
 
 def _without_worst(field: _Field, fit: FinalFit) -> FinalFit | None:
     """The fit settled again without the star the others' fit puts farthest from its match, if
     that is beyond the re-match radius (the others would not have matched it); else None."""
     img = fit.image_index
-    deleted = leave_one_out_residuals(fit.rot_cam_from_icrs, fit.camera, fit.ref_icrs, field.x[img], field.y[img],
-                                      fit_focal=field.fit_focal)
+    deleted = leave_one_out_residuals(fit.matrix_cam_from_icrs, fit.camera, fit.ref_icrs, field.x[img],
+                                      field.y[img], fit_focal=field.fit_focal)
     deleted = np.where(np.isfinite(deleted), deleted, 0.0)  # a star the fit cannot do without is kept
     worst = int(np.argmax(deleted))
     if deleted[worst] <= REMATCH_RADIUS_PX:
         return None
     keep = np.arange(img.size) != worst
-    return _settle(field, fit.rot_cam_from_icrs, fit.camera, img[keep], fit.catalog_rows[keep])
+    return _settle(field, fit.matrix_cam_from_icrs, fit.camera, img[keep], fit.catalog_rows[keep], fit.ref_icrs[keep])
 
 
 def settle_matches(x: NDArray, y: NDArray, stars: FieldStars, cand: Candidate,
@@ -170,11 +229,13 @@ def settle_matches(x: NDArray, y: NDArray, stars: FieldStars, cand: Candidate,
     """
     fit_focal = focal_range is not None
     fit_k1 = fit_focal and focal_range[1] > focal_range[0] * (1 + K1_FOCAL_SPAN)
-    rot, camera = cand.rot_cam_from_icrs, cand.camera
+    matrix, camera = cand.rot_cam_from_icrs.as_matrix(), cand.camera
     radius_rad = FIELD_MARGIN * math.radians(camera.fov_diagonal_deg) / 2.0
-    near = visible_near(stars, rot.as_matrix()[2], radius_rad, camera.fx)
-    field = _Field(x, y, stars, near, fit_focal)
-    fit = _settle(field, rot, camera, cand.image_index, cand.catalog_rows)
+    near = visible_near(stars, matrix[2], radius_rad, camera.fx)
+    reach = _Reach.around(x, y, camera.width, camera.height, REMATCH_RADIUS_PX)
+    field = _Field(x, y, reach, stars, stars.rows[near], stars.vectors[near], fit_focal)
+    rows = cand.catalog_rows
+    fit = _settle(field, matrix, camera, cand.image_index, rows, stars.vectors_of(rows))
     for _ in range(MAX_LEFT_OUT):
         better = _without_worst(field, fit) if fit.image_index.size >= MIN_STARS_TO_CHECK else None
         if better is None:
@@ -182,7 +243,7 @@ def settle_matches(x: NDArray, y: NDArray, stars: FieldStars, cand: Candidate,
         fit = better
     if fit_k1 and fit.image_index.size >= MIN_STARS_FOR_K1:  # lens distortion last, on the settled matches
         img = fit.image_index
-        rot, camera, res = refine_pointing(fit.rot_cam_from_icrs, fit.camera, fit.ref_icrs, x[img], y[img],
-                                           fit_focal=True, fit_k1=True)
-        fit = FinalFit(rot, camera, img, fit.catalog_rows, fit.ref_icrs, res)
+        matrix, camera, res = fit_pose(fit.matrix_cam_from_icrs, fit.camera, fit.ref_icrs, x[img], y[img],
+                                       fit_focal=True, fit_k1=True)
+        fit = FinalFit(matrix, camera, img, fit.catalog_rows, fit.ref_icrs, res)
     return fit

@@ -2,8 +2,13 @@
 
 Minimises the pixel residuals between detected stars and their catalog stars projected through
 the camera, over a small rotation of the camera frame and, when it is free, the logarithm of the
-focal length (fx and fy scale together). Gauss-Newton with the analytic Jacobian of
-:meth:`startrack.camera.Camera.project_with_jacobian`; a few iterations suffice.
+focal length (fx and fy scale together). Gauss-Newton with the analytic Jacobian of the
+projection; a few iterations suffice.
+
+The fits run on rotation matrices (``matrix_cam_from_icrs``, (3, 3), mapping ICRS vectors to
+camera vectors): a solve calls them a dozen times on a few dozen stars, where building scipy
+Rotation objects would cost more than the arithmetic. :func:`refine_pointing` is the same fit
+for a Rotation.
 """
 
 from __future__ import annotations
@@ -12,6 +17,7 @@ import math
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.linalg import lapack
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
@@ -21,78 +27,114 @@ _CONVERGED_PX = 1e-4
 """Stop when the step moves no image point by more than this (pixels)."""
 
 
-def _rodrigues(rotvec: NDArray) -> NDArray:
-    """Rotation matrix of a rotation vector (radians)."""
-    angle = math.sqrt(float(rotvec @ rotvec))
+def _rodrigues(x: float, y: float, z: float) -> NDArray:
+    """Rotation matrix (3, 3) of the rotation vector (x, y, z) (radians):
+    ``cos t I + sin t [k]_x + (1 - cos t) k k^T`` with angle t and unit axis k."""
+    angle = math.sqrt(x * x + y * y + z * z)
     if angle < 1e-15:
         return np.eye(3)
-    kx, ky, kz = rotvec / angle
-    k = np.array([[0.0, -kz, ky], [kz, 0.0, -kx], [-ky, kx, 0.0]])
-    return np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * (k @ k)
+    x, y, z = x / angle, y / angle, z / angle
+    s, c = math.sin(angle), math.cos(angle)
+    t = 2.0 * math.sin(0.5 * angle) ** 2  # 1 - cos, without the cancellation
+    return np.array([[c + t * x * x, t * x * y - s * z, t * x * z + s * y],
+                     [t * x * y + s * z, c + t * y * y, t * y * z - s * x],
+                     [t * x * z - s * y, t * y * z + s * x, c + t * z * z]])
 
 
-def _jacobian(camera: Camera, cam_vec: NDArray, n_params: int) -> tuple[NDArray, NDArray, NDArray]:
-    """Pixels (x, y) of camera vectors (N, 3) and the Jacobian (2N, n_params) of (x0, y0, x1, ...)
-    with respect to (small rotation of the camera frame, [ln f], [k1]).
+_PERP_SIGN = np.array([[-1.0], [1.0]])
+"""(-b, a) = (b, a) * _PERP_SIGN."""
 
-    A rotation d moves a camera vector v to v + d x v; for the pinhole coordinates a = v_x / v_z,
-    b = v_y / v_z that is da/dd = (-a b, 1 + a^2, -b) and db/dd = (-(1 + b^2), a b, a), then
-    through the distortion's 2 x 2 Jacobian and the focal lengths.
-    """
-    inv_z = 1.0 / cam_vec[:, 2]
-    a, b = cam_vec[:, 0] * inv_z, cam_vec[:, 1] * inv_z
-    da = np.column_stack([-a * b, 1.0 + a * a, -b])
-    db = np.column_stack([-(1.0 + b * b), a * b, a])
+_UNIT_TURN = np.array([[[0.0], [-1.0]], [[1.0], [0.0]]])
+"""The constant parts (0, -1) and (1, 0) of du/dd_x and du/dd_y (see :func:`_system`), shape (2, 2, 1)."""
+
+
+def _image_coords(camera: Camera, cam_vec: NDArray) -> tuple[NDArray, NDArray]:
+    """Pinhole coordinates u = (a, b) = (v_x, v_y) / v_z of camera vectors (3, N) and the same
+    through the camera's distortion, both (2, N)."""
+    pinhole = cam_vec[:2] / cam_vec[2]
     if camera.has_distortion:
-        daa, dab, dba, dbb = camera._distort_jacobian(a, b)
-        da, db = daa[:, None] * da + dab[:, None] * db, dba[:, None] * da + dbb[:, None] * db
-        ad, bd = camera._distort(a, b)
-    else:
-        ad, bd = a, b
-    x, y = camera.cx + camera.fx * ad, camera.cy + camera.fy * bd
-    jac = np.empty((a.size, 2, n_params))
-    jac[:, 0, :3], jac[:, 1, :3] = camera.fx * da, camera.fy * db
+        return pinhole, np.array(camera._distort(*pinhole))
+    return pinhole, pinhole
+
+
+def _system(camera: Camera, focal: NDArray, cam_vec: NDArray, offset: NDArray, n_params: int) -> NDArray:
+    """The least-squares system of a fit: rows (n_params + 1, 2N) holding the transposed
+    Jacobian of the predicted pixels (x_0, ..., x_N-1, y_0, ..., y_N-1) of camera vectors
+    (3, N) with respect to (small rotation of the camera frame, [ln f], [k1]) and, last, the
+    residuals (detected minus predicted pixels). The camera gives the principal point and the
+    distortion, ``focal`` (2, 1) the focal lengths (fx, fy) and ``offset`` (2, N) the detected
+    positions minus the principal point. The product of the rows with their transpose holds
+    the normal equations ``[[J^T J, J^T r], [r^T J, r^T r]]``.
+
+    A rotation d moves a camera vector v to v + d x v; for the pinhole coordinates u = (a, b)
+    that is du/dd_x = -b u - (0, 1), du/dd_y = a u + (1, 0) and du/dd_z = (-b, a), then
+    through the distortion's 2 x 2 Jacobian and the focal lengths, which scale every x row by
+    fx and every y row by fy (the residuals too, which are first computed in focal lengths).
+    """
+    pinhole, distorted = _image_coords(camera, cam_vec)
+    perp = pinhole[::-1] * _PERP_SIGN  # (-b, a)
+    rows = [perp[:, None] * pinhole + _UNIT_TURN, perp[None]]  # du / d rotation, (2, 2, N) and (1, 2, N)
+    if distorted is not pinhole:
+        daa, dab, dba, dbb = camera._distort_jacobian(*pinhole)
+        d_rot = np.concatenate(rows)
+        da, db = d_rot[:, 0], d_rot[:, 1]
+        rows = [np.stack([daa * da + dab * db, dba * da + dbb * db], axis=1)]
     if n_params > 3:  # d / d ln f: fx and fy scale together
-        jac[:, 0, 3], jac[:, 1, 3] = x - camera.cx, y - camera.cy
+        rows.append(distorted[None])
     if n_params > 4:  # d / d k1 of x = cx + fx a (1 + k1 r^2 + ...)
-        r2 = a * a + b * b
-        jac[:, 0, 4], jac[:, 1, 4] = camera.fx * a * r2, camera.fy * b * r2
-    return x, y, jac.reshape(-1, n_params)
+        rows.append((pinhole * np.sum(pinhole * pinhole, axis=0))[None])
+    rows.append((offset / focal - distorted)[None])
+    system = np.concatenate(rows)
+    system *= focal
+    return system.reshape(n_params + 1, -1)
 
 
-def _step(matrix: NDArray, camera: Camera, ref_icrs: NDArray, x: NDArray, y: NDArray, n_params: int) -> NDArray:
-    """One Gauss-Newton step for the parameters (rotation vector, [ln f], [k1])."""
-    px, py, jac = _jacobian(camera, ref_icrs @ matrix.T, n_params)
-    res = np.column_stack([px - x, py - y]).reshape(-1)
-    try:
-        return np.linalg.solve(jac.T @ jac, -(jac.T @ res))
-    except np.linalg.LinAlgError:
-        return np.linalg.lstsq(jac, -res, rcond=None)[0]
+def _offset(camera: Camera, x: NDArray, y: NDArray) -> NDArray:
+    """Detected positions (pixels, (N,) each) minus the principal point, shape (2, N)."""
+    return np.array([x - camera.cx, y - camera.cy])
 
 
-def _moved_px(delta: NDArray, camera: Camera) -> float:
-    """Largest image motion (pixels) a step causes, roughly: rotation times focal length, plus
-    the focal and k1 changes at the image corner."""
+def _step(system: NDArray) -> list[float]:
+    """The Gauss-Newton step (p floats) of a least-squares system (p + 1, M) from :func:`_system`:
+    the normal equations by Cholesky, least squares if they are singular."""
+    normal = system @ system.T
+    _, step, info = lapack.dposv(normal[:-1, :-1], normal[:-1, -1])
+    if info != 0:
+        step = np.linalg.lstsq(system[:-1].T, system[-1], rcond=None)[0]
+    return step.tolist()
+
+
+def _moved_px(delta: list[float], camera: Camera, fx: float) -> float:
+    """Largest image motion (pixels) a step causes, roughly: rotation times focal length ``fx``,
+    plus the focal and k1 changes at the image corner."""
     corner = 0.5 * math.hypot(camera.width, camera.height)
-    moved = float(np.max(np.abs(delta[:3]))) * camera.fx * 2.0
-    if delta.size > 3:
-        moved += abs(float(delta[3])) * corner
-    if delta.size > 4:
-        moved += abs(float(delta[4])) * corner * (corner / camera.fx) ** 2
+    moved = max(abs(d) for d in delta[:3]) * fx * 2.0
+    if len(delta) > 3:
+        moved += abs(delta[3]) * corner
+    if len(delta) > 4:
+        moved += abs(delta[4]) * corner * (corner / fx) ** 2
     return moved
 
 
-def refine_pointing(rot_cam_from_icrs: Rotation, camera: Camera, ref_icrs: NDArray, x: NDArray,
-                    y: NDArray, *, fit_focal: bool,
-                    fit_k1: bool = False) -> tuple[Rotation, Camera, NDArray[np.float64]]:
-    """Refine the attitude (and focal length) to matched stars.
+def _stepped(camera: Camera, focal: NDArray, delta: list[float]) -> tuple[Camera, NDArray]:
+    """The camera and focal lengths (2, 1) after a step's ln f and k1 changes (those the step has)."""
+    if len(delta) > 3:
+        focal = focal * math.exp(delta[3])
+    if len(delta) > 4:
+        camera = camera.with_distortion(k1=camera.k1 + delta[4])
+    return camera, focal
+
+
+def fit_pose(matrix_cam_from_icrs: NDArray, camera: Camera, ref_icrs: NDArray, x: NDArray, y: NDArray, *,
+             fit_focal: bool, fit_k1: bool = False) -> tuple[NDArray[np.float64], Camera, NDArray[np.float64]]:
+    """Refine an attitude matrix (and focal length) to matched stars.
 
     Parameters
     ----------
-    rot_cam_from_icrs : Rotation
-        Starting attitude.
+    matrix_cam_from_icrs : ndarray, shape (3, 3)
+        Starting attitude, the rotation matrix taking ICRS vectors to camera vectors.
     camera : Camera
-        Starting camera; only its focal length changes when ``fit_focal``.
+        Starting camera; only its focal length (and k1) change when they are fitted.
     ref_icrs : ndarray, shape (K, 3)
         ICRS unit vectors of the matched catalog stars.
     x, y : ndarray, shape (K,)
@@ -105,50 +147,60 @@ def refine_pointing(rot_cam_from_icrs: Rotation, camera: Camera, ref_icrs: NDArr
 
     Returns
     -------
-    rotation, camera, residual_px
-        The refined attitude and camera and each star's pixel residual distance, shape (K,).
+    matrix, camera, residual_px
+        The refined attitude matrix (3, 3) and camera and each star's pixel residual distance, shape (K,).
     """
     fit_focal = fit_focal and len(x) >= 3
     fit_k1 = fit_k1 and fit_focal and len(x) >= 8
-    matrix = rot_cam_from_icrs.as_matrix()
     n_params = 3 + int(fit_focal) + int(fit_k1)
-    for _ in range(_MAX_ITER):
-        delta = _step(matrix, camera, ref_icrs, x, y, n_params)
-        matrix = _rodrigues(delta[:3]) @ matrix
-        if fit_focal:
-            camera = camera.with_focal(camera.fx * math.exp(delta[3]))
-        if fit_k1:
-            camera = camera.with_distortion(k1=camera.k1 + delta[4])
-        if _moved_px(delta, camera) < _CONVERGED_PX:
+    ref_t, offset, focal = ref_icrs.T, _offset(camera, x, y), np.array([[camera.fx], [camera.fy]])
+    matrix = matrix_cam_from_icrs
+    for _ in range(_MAX_ITER):  # the focal lengths live in ``focal``; the camera gets them at the end
+        delta = _step(_system(camera, focal, matrix @ ref_t, offset, n_params))
+        matrix = _rodrigues(*delta[:3]) @ matrix
+        camera, focal = _stepped(camera, focal, delta)
+        if _moved_px(delta, camera, focal[0, 0]) < _CONVERGED_PX:
             break
-    px, py = camera.vector_to_pixel(ref_icrs @ matrix.T)
-    return Rotation.from_matrix(matrix), camera, np.hypot(px - x, py - y)
+    if fit_focal:
+        camera = camera.with_focal(focal[0, 0], focal[1, 0])
+    residual = offset - focal * _image_coords(camera, matrix @ ref_t)[1]
+    return matrix, camera, np.hypot(*residual)
 
 
-def leave_one_out_residuals(rot_cam_from_icrs: Rotation, camera: Camera, ref_icrs: NDArray, x: NDArray,
+def refine_pointing(rot_cam_from_icrs: Rotation, camera: Camera, ref_icrs: NDArray, x: NDArray,
+                    y: NDArray, *, fit_focal: bool,
+                    fit_k1: bool = False) -> tuple[Rotation, Camera, NDArray[np.float64]]:
+    """:func:`fit_pose` for an attitude given as a Rotation: (rotation, camera, residual_px (K,))."""
+    matrix, camera, residual_px = fit_pose(rot_cam_from_icrs.as_matrix(), camera, ref_icrs, x, y,
+                                           fit_focal=fit_focal, fit_k1=fit_k1)
+    return Rotation.from_matrix(matrix), camera, residual_px
+
+
+def leave_one_out_residuals(matrix_cam_from_icrs: NDArray, camera: Camera, ref_icrs: NDArray, x: NDArray,
                             y: NDArray, *, fit_focal: bool) -> NDArray[np.float64]:
     """How far (pixels, (K,)) each star lies from where a fit to the other stars puts it.
 
-    At a converged fit with residuals r_i (2,) and Jacobian rows J_i (2, p), leaving star i out
-    moves its residual to ``(I - H_ii)^-1 r_i`` with the leverage block
-    ``H_ii = J_i (J^T J)^-1 J_i^T`` (the linearised deleted residual; Cook and Weisberg 1982,
-    "Residuals and Influence in Regression", §2.2). A wrong association pulls a few-star fit
-    towards itself, so its own residual can be unremarkable while its deleted residual is not.
-    Stars with a leverage block near singular (a fit that needs that star) get inf.
+    At a converged fit (attitude matrix (3, 3) as in :func:`fit_pose`) with residuals r_i (2,)
+    and Jacobian rows J_i (2, p), leaving star i out moves its residual to ``(I - H_ii)^-1 r_i``
+    with the leverage block ``H_ii = J_i (J^T J)^-1 J_i^T`` (the linearised deleted residual;
+    Cook and Weisberg 1982, "Residuals and Influence in Regression", §2.2). A wrong association
+    pulls a few-star fit towards itself, so its own residual can be unremarkable while its
+    deleted residual is not. Stars with a leverage block near singular (a fit that needs that
+    star) get inf.
     """
-    fit_focal = fit_focal and len(x) >= 3
-    n_params = 3 + int(fit_focal)
-    px, py, jac = _jacobian(camera, ref_icrs @ rot_cam_from_icrs.as_matrix().T, n_params)
-    res = np.column_stack([px - x, py - y])
-    blocks = jac.reshape(-1, 2, n_params)
-    try:
-        inv_normal = np.linalg.inv(jac.T @ jac)
-    except np.linalg.LinAlgError:
+    n_params = 3 + int(fit_focal and len(x) >= 3)
+    focal = np.array([[camera.fx], [camera.fy]])
+    system = _system(camera, focal, matrix_cam_from_icrs @ ref_icrs.T, _offset(camera, x, y), n_params)
+    jac = system[:-1]
+    _, spread, info = lapack.dposv(jac @ jac.T, jac)  # (J^T J)^-1 J^T, (p, 2K)
+    if info != 0:
         return np.full(len(x), np.inf)
-    leverage = blocks @ inv_normal @ blocks.transpose(0, 2, 1)
-    keep = np.eye(2) - leverage
-    det = keep[:, 0, 0] * keep[:, 1, 1] - keep[:, 0, 1] * keep[:, 1, 0]
+    keep_xx, keep_yy = 1.0 - np.sum((jac * spread).reshape(n_params, 2, -1), axis=0)  # I - H_ii, symmetric
+    keep_xy = -np.sum(jac.reshape(n_params, 2, -1)[:, 0] * spread.reshape(n_params, 2, -1)[:, 1], axis=0)
+    det = keep_xx * keep_yy - keep_xy * keep_xy
+    rx, ry = system[-1].reshape(2, -1)
     out = np.full(len(x), np.inf)
     ok = det > 1e-9
-    out[ok] = np.linalg.norm(np.linalg.solve(keep[ok], res[ok][..., None])[..., 0], axis=1)
+    dx, dy = keep_yy * rx - keep_xy * ry, keep_xx * ry - keep_xy * rx
+    out[ok] = np.hypot(dx[ok], dy[ok]) / det[ok]
     return out
