@@ -14,7 +14,7 @@ from startrack.identify.database import (
     _from_arrays,
     build_database_arrays,
 )
-from startrack.identify.quad_search import SearchSetup, focal_grid, search_batch
+from startrack.identify.quad_search import SearchSetup, focal_grid, search_batch, warm_up
 from startrack.units import ARCSEC
 
 SMALL = DatabaseSettings(fov_min_deg=20.0, fov_max_deg=30.0, max_mag=7.0)
@@ -101,3 +101,14 @@ def test_cell_starts_bound_every_cell_of_the_key_index(db):
         prefix = ((cell // KEY_BINS**2) << LEVEL_SHIFT) + (cell % KEY_BINS**2) * 65536
         assert np.all((db.keys[rows] >= prefix) & (db.keys[rows] < prefix + 65536))
     assert np.all(np.diff(db.cell_starts) >= 0) and db.cell_starts[-1] == db.keys.size
+
+
+def test_warm_up_compiles_the_signature_a_search_uses(db):
+    from startrack.identify.quad_kernel import search
+
+    warm_up(db)
+    before = len(search.signatures)
+    row = _row_in_level0(db, 5)
+    u, w, _ = _seen(db, row)
+    search_batch(db, u, w, np.array([[0, 1, 2, 3]]), _setup(focal_grid((0.9, 1.1), 0.0015), FOCAL_PX, True))
+    assert len(search.signatures) == before  # no compilation inside a timed solve

@@ -164,6 +164,6 @@ def warm_up(db: PatternDatabase) -> None:
         return
     u = np.array([0.0, 0.01, 0.0, 0.01])
     w = np.array([0.0, 0.0, 0.01, 0.012])
-    setup = SearchSetup(np.array([1.0]), 1000.0, 1000, 0.5, 0.0015, 0.1, False)
+    setup = SearchSetup(focal_grid((1.0, 1.0), 0.0015), 1000.0, 1000, 0.5, 0.0015, 0.1, False)  # read-only, as in use
     search_batch(db, u, w, np.array([[0, 1, 2, 3]]), setup)
     _WARM.add(types)
