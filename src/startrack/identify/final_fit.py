@@ -172,11 +172,6 @@ def _pose_shift_px(matrix_a: NDArray, cam_a: Camera, matrix_b: NDArray, cam_b: C
     return turn * cam_b.fx * (1.0 + (half_diagonal_px / cam_b.fx) ** 2) + focal_change * half_diagonal_px
 
 
-def _same(a: NDArray, b: NDArray) -> bool:
-    """Whether two index arrays of the same length are equal."""
-    return bool((a == b).all())
-
-
 def _settle(field: _Field, matrix: NDArray, camera: Camera, img: NDArray, rows: NDArray, ref: NDArray) -> FinalFit:
     """Fit, re-match all stars, and repeat until the matches (or the pose) stop changing.
     ``ref`` (K, 3) are the ICRS unit vectors of the catalog rows (K,) matched to the image stars (K,)."""
@@ -186,7 +181,8 @@ def _settle(field: _Field, matrix: NDArray, camera: Camera, img: NDArray, rows: 
         if round_ == MAX_REFINE_ROUNDS - 1 or (round_ > 0 and _pose_shift_px(*before, matrix, camera) < SETTLED_PX):
             break
         new_img, new_rows, new_ref = rematch(field, matrix, camera)
-        if new_img.size < img.size or (new_img.size == img.size and _same(new_img, img) and _same(new_rows, rows)):
+        unchanged = np.array_equal(new_img, img) and np.array_equal(new_rows, rows)
+        if unchanged or new_img.size < img.size:
             break
         img, rows, ref = new_img, new_rows, new_ref
     return FinalFit(matrix, camera, img, rows, ref, res)
