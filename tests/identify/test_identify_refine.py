@@ -123,7 +123,7 @@ def test_rematch_through_the_cells_equals_a_match_over_every_predicted_star():
     px, py = camera.vector_to_pixel(vectors)  # the positions the re-match predicts
     reach = final_fit._Reach.around(x, y, camera.width, camera.height, radius)
     rows = np.arange(px.size) + 1000
-    field = final_fit._Field(x, y, reach, None, rows, vectors, True)
+    field = final_fit._Field(x, y, reach, rows, vectors, True)
     img, got_rows, ref = final_fit.rematch(field, np.eye(3), camera)
     inside = np.flatnonzero(camera.in_image(px, py))
     want_img, want_cat = match_nearest(x, y, px[inside], py[inside], radius)

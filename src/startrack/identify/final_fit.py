@@ -13,6 +13,10 @@ re-match cannot add the stars that would expose it. :func:`settle_matches` there
 every matched star where the fit to the *other* stars puts it (its deleted residual,
 :func:`.refine.leave_one_out_residuals`); a star that those would not have matched (farther than
 :data:`REMATCH_RADIUS_PX`) is dropped and the fit settled again, up to :data:`MAX_LEFT_OUT` times.
+
+A solve runs this stage once, on a few dozen stars, so its cost is numpy's per-call overhead: the
+fits work on rotation matrices (:func:`.refine.fit_pose`) and the re-match only hands the
+nearest-star match the predicted stars in image cells that an image star reaches (:class:`_Reach`).
 """
 
 from __future__ import annotations
@@ -118,10 +122,10 @@ class _Reach:
         cell = max(CELL_PX, 2.0 * reach)  # so that a star reaches at most two cells along each axis
         shape = (int(height // cell) + 1, int(width // cell) + 1)
         sides = np.array([0.5 - reach, 0.5 + reach])[:, None, None]  # from the image corner, either side
-        cells = ((np.array([x, y]) + sides) / cell).astype(np.intp)  # (2 sides, 2 axes, N); clipped below
-        sides = np.minimum(np.maximum(cells, 0), np.array([[shape[1] - 1], [shape[0] - 1]]))
+        cells = ((np.array([x, y]) + sides) / cell).astype(np.intp)  # (2 sides, 2 axes, N)
+        cells = np.minimum(np.maximum(cells, 0), np.array([[shape[1] - 1], [shape[0] - 1]]))
         marked = np.zeros(shape, dtype=bool)
-        marked[sides[:, None, 1], sides[None, :, 0]] = True  # each star's cells, from every pair of sides
+        marked[cells[:, None, 1], cells[None, :, 0]] = True  # each star's cells, from every pair of sides
         return cls(marked, cell, radius_px)
 
     def holds(self, px: NDArray, py: NDArray) -> NDArray[np.bool_]:
@@ -138,7 +142,6 @@ class _Field:
     x: NDArray[np.float64]
     y: NDArray[np.float64]
     reach: _Reach
-    stars: FieldStars
     near_rows: NDArray[np.int64]
     near_vectors: NDArray[np.float64]
     fit_focal: bool
@@ -229,7 +232,7 @@ def settle_matches(x: NDArray, y: NDArray, stars: FieldStars, cand: Candidate,
     radius_rad = FIELD_MARGIN * math.radians(camera.fov_diagonal_deg) / 2.0
     near = visible_near(stars, matrix[2], radius_rad, camera.fx)
     reach = _Reach.around(x, y, camera.width, camera.height, REMATCH_RADIUS_PX)
-    field = _Field(x, y, reach, stars, stars.rows[near], stars.vectors[near], fit_focal)
+    field = _Field(x, y, reach, stars.rows[near], stars.vectors[near], fit_focal)
     rows = cand.catalog_rows
     fit = _settle(field, matrix, camera, cand.image_index, rows, stars.vectors_of(rows))
     for _ in range(MAX_LEFT_OUT):

@@ -6,9 +6,10 @@ focal length (fx and fy scale together). Gauss-Newton with the analytic Jacobian
 projection; a few iterations suffice.
 
 The fits run on rotation matrices (``matrix_cam_from_icrs``, (3, 3), mapping ICRS vectors to
-camera vectors): a solve calls them a dozen times on a few dozen stars, where building scipy
-Rotation objects would cost more than the arithmetic. :func:`refine_pointing` is the same fit
-for a Rotation.
+camera vectors) with the Jacobian and residuals of all stars built by a few whole-array numpy
+operations per step: on the few dozen stars of a solve, per-call overhead (scipy Rotation
+objects, small linear-algebra calls) would cost more than the arithmetic. :func:`refine_pointing`
+is the same fit for a Rotation.
 """
 
 from __future__ import annotations
@@ -26,6 +27,12 @@ _MAX_ITER = 6
 _CONVERGED_PX = 1e-4
 """Stop when the step moves no image point by more than this (pixels)."""
 
+_PERP_SIGN = np.array([[-1.0], [1.0]])
+"""(-b, a) = (b, a) * _PERP_SIGN."""
+
+_UNIT_TURN = np.array([[[0.0], [-1.0]], [[1.0], [0.0]]])
+"""The constant parts (0, -1) and (1, 0) of du/dd_x and du/dd_y (see :func:`_system`), shape (2, 2, 1)."""
+
 
 def _rodrigues(x: float, y: float, z: float) -> NDArray:
     """Rotation matrix (3, 3) of the rotation vector (x, y, z) (radians):
@@ -39,13 +46,6 @@ def _rodrigues(x: float, y: float, z: float) -> NDArray:
     return np.array([[c + t * x * x, t * x * y - s * z, t * x * z + s * y],
                      [t * x * y + s * z, c + t * y * y, t * y * z - s * x],
                      [t * x * z - s * y, t * y * z + s * x, c + t * z * z]])
-
-
-_PERP_SIGN = np.array([[-1.0], [1.0]])
-"""(-b, a) = (b, a) * _PERP_SIGN."""
-
-_UNIT_TURN = np.array([[[0.0], [-1.0]], [[1.0], [0.0]]])
-"""The constant parts (0, -1) and (1, 0) of du/dd_x and du/dd_y (see :func:`_system`), shape (2, 2, 1)."""
 
 
 def _image_coords(camera: Camera, cam_vec: NDArray) -> tuple[NDArray, NDArray]:
