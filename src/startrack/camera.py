@@ -163,7 +163,7 @@ class Camera:
 
     @property
     def has_distortion(self) -> bool:
-        return any(getattr(self, k) != 0.0 for k in ("k1", "k2", "k3", "p1", "p2"))
+        return (self.k1, self.k2, self.k3, self.p1, self.p2) != (0.0, 0.0, 0.0, 0.0, 0.0)
 
     # --- projection --------------------------------------------------------------------------
     def _distort(self, a: NDArray, b: NDArray) -> tuple[NDArray, NDArray]:

@@ -105,3 +105,40 @@ def test_deleted_residuals_match_refits_without_each_star():
         px, py = c.vector_to_pixel(r.apply(ref[k]))
         assert deleted[k] == pytest.approx(np.hypot(px - x[k], py - y[k]), abs=0.1 * PIXEL)
     assert np.argmax(deleted) == 4
+
+
+def _full_catalog(stars, matrix, camera):
+    """Every catalog star of the field (within the image's half-diagonal and a margin of the
+    boresight) that is not blended into a brighter one: what the re-match would see without a choice."""
+    near = np.sort(stars.near(matrix[2], 0.6 * np.radians(camera.fov_diagonal_deg)))
+    near = near[stars.brighter_neighbour_rad[near] >= final_fit.BLEND_PX / camera.fx]
+    return final_fit._Catalog(matrix, camera, stars.rows[near], stars.vectors[near])
+
+
+@pytest.mark.parametrize("fov_deg", [8.0, 30.0])
+def test_rematch_over_the_chosen_stars_equals_a_rematch_over_the_whole_field(fov_deg):
+    """Catalog stars chosen at poses up to the margin away from the true one (rotations about
+    random axes, focal length changes): at the true pose they give every match the whole field
+    gives; a pose beyond the margin is not served."""
+    conditions, image = _benchmark_list(fov_deg, 3)
+    stars = field_stars(9.5, 2000.0)
+    camera, matrix = conditions.camera, image.rot_cam_from_icrs.as_matrix()
+    field = final_fit._Field(image.x, image.y, stars, True)
+    want = final_fit.rematch(field, _full_catalog(stars, matrix, camera), matrix, camera)
+    assert want[0].size >= 0.9 * np.count_nonzero(image.is_real)
+    rng = np.random.default_rng(4)
+    compared = 0
+    for _ in range(40):
+        axis = rng.normal(size=3)
+        turn = Rotation.from_rotvec(axis / np.linalg.norm(axis) * rng.uniform(0, 8.0) / camera.fx)
+        chosen = final_fit._Catalog.chosen(field, turn.as_matrix() @ matrix,
+                                           camera.with_focal(camera.fx * (1 + rng.uniform(-2e-3, 2e-3))))
+        if not chosen.serves(matrix, camera):
+            continue
+        compared += 1
+        got = final_fit.rematch(field, chosen, matrix, camera)
+        for g, w in zip(got, want, strict=True):
+            assert np.array_equal(g, w)
+    assert compared >= 10
+    far = Rotation.from_rotvec([0.0, 1.5 * final_fit.SELECT_MARGIN_PX / camera.fx, 0.0]).as_matrix() @ matrix
+    assert not final_fit._Catalog.chosen(field, matrix, camera).serves(far, camera)

@@ -6,14 +6,17 @@ pin them to what they replace: finite differences, scipy's rotations and a match
 predicted star.
 """
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
+from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from startrack import Camera
 from startrack.frames import attitude_error
 from startrack.identify import final_fit, refine
-from startrack.identify.verify import match_nearest
 from startrack.units import ARCSEC, PIXEL
 
 DISTORTED = Camera(width=1600, height=1200, fx=1400.0, fy=1390.0, cx=810.0, cy=590.0,
@@ -91,43 +94,106 @@ def test_turn_between_matrices_matches_scipy(angle):
     assert final_fit._turn_rad(a.as_matrix(), b.as_matrix()) == pytest.approx(expected, rel=1e-9, abs=1e-15)
 
 
-def _across_cell_borders(rng, radius):
-    """Image stars, each with one predicted star just inside the radius along +x, -x, +y or -y,
-    placed so that a cell border falls between the two: (x, y, px, py), (N,) each."""
-    cell = final_fit.CELL_PX
-    k = np.arange(2, 29, 2)  # every other cell border of a 1000 x 700 image, so stars stay apart
-    col, row = np.meshgrid(k * cell - 0.5, k[k * cell < 690] * cell - 0.5)
-    col, row = col.ravel(), row.ravel()
-    jitter = rng.uniform(0, 0.1, col.size)
-    direction = np.arange(col.size) % 4
-    along = np.where(direction % 2 == 0, 1.0, -1.0) * (0.999 * radius)  # +, -, +, -
-    start = np.where(along > 0, -along + jitter, -along - jitter)  # the border lies between star and prediction
-    on_x = direction < 2
-    x, y = np.where(on_x, col + start, col + 5.0), np.where(on_x, row + 5.0, row + start)
-    return x, y, np.where(on_x, x + along, x), np.where(on_x, y, y + along)
+def _scipy_fit(start, camera, ref, x, y, fit_focal, fit_k1):
+    """The same least-squares problem solved by scipy (Levenberg-Marquardt on finite differences
+    of the camera's own projection): (matrix (3, 3), camera)."""
+    def fitted(params):
+        moved = camera
+        if fit_focal:
+            moved = moved.with_focal(camera.fx * np.exp(params[3]), camera.fy * np.exp(params[3]))
+        if fit_k1:
+            moved = moved.with_distortion(k1=params[4])
+        return Rotation.from_rotvec(params[:3]).as_matrix() @ start, moved
+
+    def residuals(params):
+        return np.concatenate(_pixels(*fitted(params), ref)) - np.concatenate([x, y])
+
+    guess = np.zeros(3 + int(fit_focal) + int(fit_k1))
+    if fit_k1:
+        guess[4] = camera.k1
+    solution = least_squares(residuals, guess, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15, x_scale="jac")
+    return fitted(solution.x)
 
 
-def test_rematch_through_the_cells_equals_a_match_over_every_predicted_star():
-    """Predicted stars just inside the radius across a cell border from their image star, others
-    at up to twice the radius, some outside the image: the cell filter must not change a pair."""
-    camera = Camera.from_fov(1000, 700, 15.0)
-    radius = final_fit.REMATCH_RADIUS_PX
-    rng = np.random.default_rng(6)
-    x, y, px, py = _across_cell_borders(rng, radius)
-    ox, oy = rng.uniform(-0.5, 999.5, 60), rng.uniform(-0.5, 699.5, 60)
-    ox[:4], oy[:4] = [-0.5, 999.5, 3.0, 500.0], [10.0, 699.5, -0.5, 699.5]  # on the image border
-    turn, dist = rng.uniform(0, 2 * np.pi, 60), rng.uniform(0, 2 * radius, 60)
-    x, y = np.concatenate([x, ox]), np.concatenate([y, oy])
-    px, py = np.concatenate([px, ox + dist * np.cos(turn)]), np.concatenate([py, oy + dist * np.sin(turn)])
-    vectors = camera.pixel_to_vector(px, py)  # attitude: identity
-    px, py = camera.vector_to_pixel(vectors)  # the positions the re-match predicts
-    reach = final_fit._Reach.around(x, y, camera.width, camera.height, radius)
-    rows = np.arange(px.size) + 1000
-    field = final_fit._Field(x, y, reach, rows, vectors, True)
-    img, got_rows, ref = final_fit.rematch(field, np.eye(3), camera)
-    inside = np.flatnonzero(camera.in_image(px, py))
-    want_img, want_cat = match_nearest(x, y, px[inside], py[inside], radius)
-    assert img.size > 100
-    assert np.array_equal(img, want_img)
-    assert np.array_equal(got_rows, rows[inside[want_cat]])
-    assert np.array_equal(ref, vectors[inside[want_cat]])
+@pytest.mark.parametrize(("fit_focal", "fit_k1"), [(False, False), (True, False), (True, True)])
+def test_fit_equals_scipy_least_squares_on_a_distorted_camera(fit_focal, fit_k1):
+    """Noisy stars (the optimum has residuals), a start 0.2 deg and 2 % off: same optimum as scipy."""
+    rot, ref, x, y = _field(DISTORTED, 30, seed=7)
+    noise = np.random.default_rng(8).normal(0, 0.4, (2, 30))
+    x, y = x + noise[0], y + noise[1]
+    start = (Rotation.from_rotvec([2e-3, -3e-3, 1e-3]) * rot).as_matrix()
+    guess = DISTORTED.with_focal(1.02 * DISTORTED.fx, 1.02 * DISTORTED.fy) if fit_focal else DISTORTED
+    guess = guess.with_distortion(k1=-0.1) if fit_k1 else guess
+    matrix, camera, residual = refine.fit_pose(start, guess, ref, x, y, fit_focal=fit_focal, fit_k1=fit_k1)
+    want_matrix, want_camera = _scipy_fit(start, guess, ref, x, y, fit_focal, fit_k1)
+    assert attitude_error(Rotation.from_matrix(matrix), Rotation.from_matrix(want_matrix)) < 0.01 * ARCSEC
+    px, py = _pixels(matrix, camera, ref)
+    want_px, want_py = _pixels(want_matrix, want_camera, ref)
+    assert np.max(np.hypot(px - want_px, py - want_py)) < 1e-6 * PIXEL
+    assert np.allclose(residual, np.hypot(want_px - x, want_py - y), atol=1e-6 * PIXEL)
+    assert camera.fx == pytest.approx(want_camera.fx, rel=1e-9)
+    assert camera.fy / camera.fx == pytest.approx(guess.fy / guess.fx, rel=1e-12)  # fx and fy scale together
+    assert camera.k1 == pytest.approx(want_camera.k1, abs=1e-9)
+    assert (camera.k2, camera.p1, camera.p2, camera.cx) == (guess.k2, guess.p1, guess.p2, guess.cx)
+
+
+def test_deleted_residuals_of_a_distorted_camera_match_refits_without_each_star():
+    rot, ref, x, y = _field(DISTORTED, 10, seed=9)
+    noise = np.random.default_rng(10).normal(0, 0.3, (2, 10))
+    x, y = x + noise[0], y + noise[1]
+    x[3] += 5.0  # one wrong association
+    matrix, camera, _ = refine.fit_pose(rot.as_matrix(), DISTORTED, ref, x, y, fit_focal=True)
+    deleted = refine.leave_one_out_residuals(matrix, camera, ref, x, y, fit_focal=True)
+    for k in range(10):
+        keep = np.arange(10) != k
+        m, c, _ = refine.fit_pose(matrix, camera, ref[keep], x[keep], y[keep], fit_focal=True)
+        px, py = _pixels(m, c, ref[k:k + 1])
+        assert deleted[k] == pytest.approx(np.hypot(px[0] - x[k], py[0] - y[k]), abs=0.05 * PIXEL)
+    assert np.argmax(deleted) == 3
+
+
+SINGULAR = {  # pixel positions (x, y) and whether the focal length is free
+    "no stars": ([], [], False),
+    "one star": ([300.0], [400.0], False),
+    "one star at the principal point": ([511.5], [511.5], False),
+    "two stars, focal free": ([300.0, 700.0], [400.0, 650.0], True),
+    "three stars on one pixel, focal free": ([300.0] * 3, [400.0] * 3, True),
+    "collinear through the principal point, focal free": ([100.0, 511.5, 900.0], [511.5] * 3, True),
+}
+
+
+@pytest.mark.parametrize("case", SINGULAR.values(), ids=SINGULAR.keys())
+def test_too_few_stars_give_a_finite_fit_near_the_start(case):
+    """Normal equations singular (or nearly): the least-squares step, not one along the null space."""
+    camera = Camera.from_fov(1024, 1024, 10.0)
+    x, y = np.array(case[0]), np.array(case[1])
+    rot = Rotation.random(random_state=11)
+    ref = rot.inv().apply(camera.pixel_to_vector(x, y)).reshape(-1, 3)
+    start = Rotation.from_rotvec([1e-3, -2e-3, 3e-3]) * rot
+    matrix, fitted, residual = refine.fit_pose(start.as_matrix(), camera, ref, x + 0.3, y - 0.2, fit_focal=case[2])
+    assert np.allclose(matrix @ matrix.T, np.eye(3), atol=1e-12)
+    assert attitude_error(Rotation.from_matrix(matrix), rot) <= attitude_error(start, rot) + 1 * ARCSEC
+    assert abs(fitted.fx / camera.fx - 1.0) < 1e-3
+    assert residual.shape == x.shape and np.all(residual < 0.5 * PIXEL)
+    deleted = refine.leave_one_out_residuals(matrix, fitted, ref, x, y, fit_focal=case[2])
+    assert deleted.shape == x.shape and not np.any(np.isnan(deleted))
+
+
+def test_every_input_layout_runs_the_one_compiled_signature():
+    """Read-only, Fortran-ordered, float32 and integer inputs are converted, not compiled again."""
+    refine.warm_up_pose()
+    kernels = (refine._kernel().fit, refine._kernel().fill_system, refine._kernel().deleted_residuals)
+    compiled = [len(f.signatures) for f in kernels]
+    camera = Camera(width=1024, height=1024, fx=5000, cx=512, cy=511)  # integers
+    rot, ref, x, y = _field(camera, 12, seed=12)
+    ref.setflags(write=False)
+    matrix = np.asfortranarray(rot.as_matrix())
+    matrix, fitted, _ = refine.fit_pose(matrix, camera, ref, x.astype(np.float32), np.round(y).astype(int),
+                                        fit_focal=True)
+    refine.leave_one_out_residuals(np.asfortranarray(matrix), fitted, ref, x, y.astype(np.float32), fit_focal=True)
+    assert [len(f.signatures) for f in kernels] == compiled == [1, 1, 1]
+
+
+def test_importing_startrack_does_not_import_numba():
+    code = "import sys, startrack, startrack.identify.refine; print('numba' in sys.modules)"
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout == "False\n"

@@ -36,7 +36,7 @@ def covariance_batch(
     inv_var = 1.0 / sigma_rad**2
     sigma_tot2 = 1.0 / inv_var.sum(axis=-1)
     a = inv_var * sigma_tot2[:, None]
-    info = np.eye(3) - np.einsum("mn,mni,mnj->mij", a, observed, observed)
+    info = np.eye(3) - np.swapaxes(observed * a[..., None], -1, -2) @ observed
     return sigma_tot2[:, None, None] * np.linalg.inv(info)
 
 

@@ -112,7 +112,11 @@ def attitude_profile_matrix(
     Inputs are ``observed`` and ``reference`` (..., N, 3) and ``weights`` (..., N) (seed 000
     §6.1.4 eq. 6.38). Wahba's problem is equivalent to maximising ``tr(R B^T)``.
     """
-    return np.einsum("...n,...ni,...nj->...ij", weights, observed, reference)
+    return np.swapaxes(observed * weights[..., None], -1, -2) @ reference
+
+
+_Z_ROWS, _Z_COLS = np.array([2, 0, 1]), np.array([1, 2, 0])
+_DIAGONAL = np.arange(3)
 
 
 def davenport_parts(
@@ -123,16 +127,10 @@ def davenport_parts(
     z is the active-convention vector ``sum_i w_i (r_i x b_i)``, i.e.
     ``(B32 - B23, B13 - B31, B21 - B12)`` (see the module docstring for the sign).
     """
-    sigma = np.trace(profile, axis1=-2, axis2=-1)
+    sigma = profile[..., 0, 0] + profile[..., 1, 1] + profile[..., 2, 2]
     s = profile + np.swapaxes(profile, -1, -2)
-    z = np.stack(
-        [
-            profile[..., 2, 1] - profile[..., 1, 2],
-            profile[..., 0, 2] - profile[..., 2, 0],
-            profile[..., 1, 0] - profile[..., 0, 1],
-        ],
-        axis=-1,
-    )
+    antisymmetric = profile - np.swapaxes(profile, -1, -2)
+    z = antisymmetric[..., _Z_ROWS, _Z_COLS]  # (B32 - B23, B13 - B31, B21 - B12)
     return sigma, s, z
 
 
@@ -145,8 +143,9 @@ def davenport_matrix(profile: NDArray[np.float64]) -> NDArray[np.float64]:
     that eigenvalue is ``sum(w) - loss``.
     """
     sigma, s, z = davenport_parts(profile)
-    k = np.zeros(profile.shape[:-2] + (4, 4))
-    k[..., :3, :3] = s - sigma[..., None, None] * np.eye(3)
+    k = np.empty(profile.shape[:-2] + (4, 4))
+    k[..., :3, :3] = s
+    k[..., _DIAGONAL, _DIAGONAL] -= sigma[..., None]
     k[..., :3, 3] = z
     k[..., 3, :3] = z
     k[..., 3, 3] = sigma

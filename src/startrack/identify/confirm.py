@@ -19,7 +19,7 @@ from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
 from .candidate import Candidate
-from .refine import refine_pointing
+from .refine import refine_pointing, warm_up_pose
 from .verify import false_match_probability, match_nearest, project_stars
 
 LOOSE_RADIUS_FACTOR = 2.5
@@ -62,6 +62,9 @@ class Confirmer:
     verify_stars: int
     max_false_match_prob: float
     fit_focal: bool
+
+    def __post_init__(self) -> None:
+        warm_up_pose()  # the loose pass refits poses: compile (or load) that before a matcher's clock starts
 
     def confirm(self, stars: StarSet, rot: Rotation, camera: Camera, pattern_img: NDArray,
                 n_trials: int) -> Candidate | None:

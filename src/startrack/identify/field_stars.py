@@ -46,6 +46,25 @@ class FieldStars:
         found = self.tree.query_ball_point(boresight, chord)
         return np.fromiter(found, dtype=np.int64, count=len(found))
 
+    def around(self, directions: NDArray, radius_rad: float) -> NDArray[np.int64]:
+        """Indices (into :attr:`rows`, sorted: brightest first) of the stars within ``radius_rad``
+        of any of the unit vectors ``directions`` (N, 3).
+
+        Each direction's nearest :data:`AROUND_FIRST_K` stars come from one vectorised tree query;
+        only a direction with that many stars in reach (a dense field) is searched again for all.
+        """
+        chord = 2.0 * math.sin(min(radius_rad, math.pi) / 2.0)
+        k = min(AROUND_FIRST_K, len(self.rows))
+        dist, index = self.tree.query(directions, k=k, distance_upper_bound=chord)
+        dist, index = dist.reshape(len(directions), k), index.reshape(len(directions), k)  # k = 1 gives (N,)
+        found = [index[np.isfinite(dist)]]
+        for crowded in np.flatnonzero(np.isfinite(dist[:, -1])):
+            found.append(np.asarray(self.tree.query_ball_point(directions[crowded], chord), dtype=np.int64))
+        return np.unique(np.concatenate(found))
+
+
+AROUND_FIRST_K = 8
+"""Stars fetched per direction by :meth:`FieldStars.around` before it falls back to a full search."""
 
 NEIGHBOUR_SEARCH_RAD = np.radians(0.05)
 """Close pairs are looked for out to 0.05 deg: half a pixel of any camera with pixels under 0.1 deg."""

@@ -15,8 +15,8 @@ every matched star where the fit to the *other* stars puts it (its deleted resid
 :data:`REMATCH_RADIUS_PX`) is dropped and the fit settled again, up to :data:`MAX_LEFT_OUT` times.
 
 A solve runs this stage once, on a few dozen stars, so its cost is numpy's per-call overhead: the
-fits work on rotation matrices (:func:`.refine.fit_pose`) and the re-match only hands the
-nearest-star match the predicted stars in image cells that an image star reaches (:class:`_Reach`).
+fits work on rotation matrices (:func:`.refine.fit_pose`) and the re-match only predicts the
+catalog stars near some image star (:class:`_Catalog`), not the thousand or more of a wide field.
 """
 
 from __future__ import annotations
@@ -51,10 +51,6 @@ length only."""
 BLEND_PX = 0.5
 """Catalog stars closer than this (pixels) to a brighter catalog star are not matched separately."""
 
-FIELD_MARGIN = 1.1
-"""Catalog stars within this many half-diagonals of the candidate's boresight take part in the
-re-match (the refinement moves the boresight and focal length by far less than the margin)."""
-
 SETTLED_PX = 0.05
 """Once a re-fit moves no star by more than this, re-matching cannot change the matches (bar a
 star within 0.05 px of the re-match radius) and the loop stops."""
@@ -86,78 +82,68 @@ class FinalFit:
         return Rotation.from_matrix(self.matrix_cam_from_icrs)
 
 
-def visible_near(stars: FieldStars, boresight: NDArray, radius_rad: float, focal_px: float) -> NDArray[np.int64]:
-    """Indices (into ``stars``, brightest first) of the catalog stars within ``radius_rad`` of the
-    boresight (ICRS unit vector (3,)) that the image shows as their own spot.
+SELECT_MARGIN_PX = 8.0
+"""The re-match looks at the catalog stars within REMATCH_RADIUS_PX + SELECT_MARGIN_PX of an image
+star at the pose they were chosen for; once a fit moves some image point farther than the margin
+from that pose, they are chosen again (:class:`_Catalog`)."""
 
-    A catalog star closer than :data:`BLEND_PX` (at the focal length ``focal_px``, pixels) to a
-    brighter one is left out: in the image the pair is one spot, named after its brighter star.
-    """
-    near = np.sort(stars.near(boresight, radius_rad))  # field stars are stored brightest first
-    return near[stars.brighter_neighbour_rad[near] >= BLEND_PX / focal_px]
-
-
-CELL_PX = 16.0
-"""Side (pixels) of the image cells with which the re-match skips predicted stars far from every image star."""
-
-
-@dataclass(frozen=True)
-class _Reach:
-    """The image cells (squares of side ``cell_px`` from the image corner) holding a point within
-    ``radius_px`` of an image star, marked (rows, cols) once per solve.
-
-    A predicted catalog star in an unmarked cell is farther than the radius from every image
-    star, so it cannot be matched: leaving it out before :func:`.verify.match_nearest` changes
-    no match and keeps the distance table small (a wide field predicts thousands of stars).
-    """
-
-    marked: NDArray[np.bool_]
-    cell_px: float
-    radius_px: float
-
-    @classmethod
-    def around(cls, x: NDArray, y: NDArray, width: int, height: int, radius_px: float) -> _Reach:
-        """The cells within ``radius_px`` of the image stars (x, y: (N,) px) of a width x height image."""
-        reach = radius_px + 1e-6  # a hair more, against rounding
-        cell = max(CELL_PX, 2.0 * reach)  # so that a star reaches at most two cells along each axis
-        shape = (int(height // cell) + 1, int(width // cell) + 1)
-        sides = np.array([0.5 - reach, 0.5 + reach])[:, None, None]  # from the image corner, either side
-        cells = ((np.array([x, y]) + sides) / cell).astype(np.intp)  # (2 sides, 2 axes, N)
-        cells = np.minimum(np.maximum(cells, 0), np.array([[shape[1] - 1], [shape[0] - 1]]))
-        marked = np.zeros(shape, dtype=bool)
-        marked[cells[:, None, 1], cells[None, :, 0]] = True  # each star's cells, from every pair of sides
-        return cls(marked, cell, radius_px)
-
-    def holds(self, px: NDArray, py: NDArray) -> NDArray[np.bool_]:
-        """Whether each position (px, py: (M,) px, inside the image) lies in a marked cell."""
-        return self.marked[((py + 0.5) / self.cell_px).astype(np.intp), ((px + 0.5) / self.cell_px).astype(np.intp)]
+ANGLE_PER_PIXEL_SAFETY = 1.25
+"""A pixel spans at most 1 / f radians of a pinhole camera anywhere in its image (the gnomonic
+projection only magnifies off axis); the choice of catalog stars allows a local scale up to 1.25
+times that, for the distortion of an uncalibrated lens."""
 
 
 @dataclass(frozen=True)
 class _Field:
-    """What stays fixed while a candidate settles: image stars (N,) px and the cells they reach,
-    the field's catalog stars (those of :func:`visible_near`: rows (S,) and ICRS unit vectors
-    (S, 3)) and whether the focal length is free."""
+    """What stays fixed while a candidate settles: image stars (N,) px, the catalog stars at the
+    solve epoch and whether the focal length is free."""
 
     x: NDArray[np.float64]
     y: NDArray[np.float64]
-    reach: _Reach
-    near_rows: NDArray[np.int64]
-    near_vectors: NDArray[np.float64]
+    stars: FieldStars
     fit_focal: bool
 
 
-def rematch(field: _Field, matrix_cam_from_icrs: NDArray,
+@dataclass(frozen=True)
+class _Catalog:
+    """The catalog stars a re-match considers: rows (S,) and ICRS unit vectors (S, 3) of those
+    within reach of an image star at the pose (attitude matrix (3, 3), camera) they were chosen for.
+
+    A catalog star that some pose within :data:`SELECT_MARGIN_PX` of that one matches (within
+    :data:`REMATCH_RADIUS_PX`) is among them, so a re-match over them equals a re-match over the
+    whole catalog. Stars that the image shows blended into a brighter one (closer than
+    :data:`BLEND_PX`) are left out: the spot is named after the brighter star.
+    """
+
+    matrix: NDArray[np.float64]
+    camera: Camera
+    rows: NDArray[np.int64]
+    vectors: NDArray[np.float64]
+
+    @classmethod
+    def chosen(cls, field: _Field, matrix: NDArray, camera: Camera) -> _Catalog:
+        """The catalog stars within reach of the image stars at this pose."""
+        directions = camera.pixel_to_vector(field.x, field.y) @ matrix  # ICRS unit vectors (N, 3)
+        reach_px = REMATCH_RADIUS_PX + SELECT_MARGIN_PX
+        near = field.stars.around(directions, ANGLE_PER_PIXEL_SAFETY * reach_px / min(camera.fx, camera.fy))
+        near = near[field.stars.brighter_neighbour_rad[near] >= BLEND_PX / camera.fx]
+        return cls(matrix, camera, field.stars.rows[near], field.stars.vectors[near])
+
+    def serves(self, matrix: NDArray, camera: Camera) -> bool:
+        """Whether no image point moves more than the margin between the chosen pose and this one."""
+        return _pose_shift_px(self.matrix, self.camera, matrix, camera) <= SELECT_MARGIN_PX
+
+
+def rematch(field: _Field, catalog: _Catalog, matrix_cam_from_icrs: NDArray,
             camera: Camera) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
-    """Match every image star to its nearest predicted catalog star of the field within the
-    radius of ``field.reach``, for an attitude matrix (3, 3) taking ICRS to camera vectors:
+    """Match every image star to its nearest predicted catalog star (of ``catalog``) within
+    :data:`REMATCH_RADIUS_PX`, for an attitude matrix (3, 3) taking ICRS to camera vectors:
     image index (K,), catalog row (K,) and the row's ICRS unit vector (K, 3)."""
-    px, py = camera.vector_to_pixel(field.near_vectors @ matrix_cam_from_icrs.T)
+    px, py = camera.vector_to_pixel(catalog.vectors @ matrix_cam_from_icrs.T)
     inside = np.flatnonzero(camera.in_image(px, py))
-    near_i = inside[field.reach.holds(px[inside], py[inside])]  # the few that can match
-    img_i, cat_i = match_nearest(field.x, field.y, px[near_i], py[near_i], field.reach.radius_px)
-    near_i = near_i[cat_i]
-    return img_i, field.near_rows[near_i], field.near_vectors[near_i]
+    img_i, cat_i = match_nearest(field.x, field.y, px[inside], py[inside], REMATCH_RADIUS_PX)
+    near_i = inside[cat_i]
+    return img_i, catalog.rows[near_i], catalog.vectors[near_i]
 
 
 def _turn_rad(matrix_a: NDArray, matrix_b: NDArray) -> float:
@@ -175,25 +161,31 @@ def _pose_shift_px(matrix_a: NDArray, cam_a: Camera, matrix_b: NDArray, cam_b: C
     return turn * cam_b.fx * (1.0 + (half_diagonal_px / cam_b.fx) ** 2) + focal_change * half_diagonal_px
 
 
-def _settle(field: _Field, matrix: NDArray, camera: Camera, img: NDArray, rows: NDArray, ref: NDArray) -> FinalFit:
+def _settle(field: _Field, matrix: NDArray, camera: Camera, img: NDArray, rows: NDArray, ref: NDArray,
+            catalog: _Catalog | None) -> tuple[FinalFit, _Catalog | None]:
     """Fit, re-match all stars, and repeat until the matches (or the pose) stop changing.
-    ``ref`` (K, 3) are the ICRS unit vectors of the catalog rows (K,) matched to the image stars (K,)."""
+    ``ref`` (K, 3) are the ICRS unit vectors of the catalog rows (K,) matched to the image stars (K,).
+    Returns the fit and the catalog stars of the last re-match (chosen anew when the pose has
+    moved beyond the margin of ``catalog``, or when it is None)."""
     for round_ in range(MAX_REFINE_ROUNDS):
         before = (matrix, camera)
         matrix, camera, res = fit_pose(matrix, camera, ref, field.x[img], field.y[img], fit_focal=field.fit_focal)
         if round_ == MAX_REFINE_ROUNDS - 1 or (round_ > 0 and _pose_shift_px(*before, matrix, camera) < SETTLED_PX):
             break
-        new_img, new_rows, new_ref = rematch(field, matrix, camera)
+        if catalog is None or not catalog.serves(matrix, camera):
+            catalog = _Catalog.chosen(field, matrix, camera)
+        new_img, new_rows, new_ref = rematch(field, catalog, matrix, camera)
         unchanged = np.array_equal(new_img, img) and np.array_equal(new_rows, rows)
         if unchanged or new_img.size < img.size:
             break
         img, rows, ref = new_img, new_rows, new_ref
-    return FinalFit(matrix, camera, img, rows, ref, res)
+    return FinalFit(matrix, camera, img, rows, ref, res), catalog
 
 
-def _without_worst(field: _Field, fit: FinalFit) -> FinalFit | None:
-    """The fit settled again without the star the others' fit puts farthest from its match, if
-    that is beyond the re-match radius (the others would not have matched it); else None."""
+def _without_worst(field: _Field, fit: FinalFit, catalog: _Catalog | None) -> tuple[FinalFit, _Catalog | None] | None:
+    """The fit settled again (as :func:`_settle`) without the star the others' fit puts farthest
+    from its match, if that is beyond the re-match radius (the others would not have matched it);
+    else None."""
     img = fit.image_index
     deleted = leave_one_out_residuals(fit.matrix_cam_from_icrs, fit.camera, fit.ref_icrs, field.x[img],
                                       field.y[img], fit_focal=field.fit_focal)
@@ -202,7 +194,8 @@ def _without_worst(field: _Field, fit: FinalFit) -> FinalFit | None:
     if deleted[worst] <= REMATCH_RADIUS_PX:
         return None
     keep = np.arange(img.size) != worst
-    return _settle(field, fit.matrix_cam_from_icrs, fit.camera, img[keep], fit.catalog_rows[keep], fit.ref_icrs[keep])
+    return _settle(field, fit.matrix_cam_from_icrs, fit.camera, img[keep], fit.catalog_rows[keep],
+                   fit.ref_icrs[keep], catalog)
 
 
 def settle_matches(x: NDArray, y: NDArray, stars: FieldStars, cand: Candidate,
@@ -228,18 +221,15 @@ def settle_matches(x: NDArray, y: NDArray, stars: FieldStars, cand: Candidate,
     """
     fit_focal = focal_range is not None
     fit_k1 = fit_focal and focal_range[1] > focal_range[0] * (1 + K1_FOCAL_SPAN)
-    matrix, camera = cand.rot_cam_from_icrs.as_matrix(), cand.camera
-    radius_rad = FIELD_MARGIN * math.radians(camera.fov_diagonal_deg) / 2.0
-    near = visible_near(stars, matrix[2], radius_rad, camera.fx)
-    reach = _Reach.around(x, y, camera.width, camera.height, REMATCH_RADIUS_PX)
-    field = _Field(x, y, reach, stars.rows[near], stars.vectors[near], fit_focal)
+    field = _Field(x, y, stars, fit_focal)
     rows = cand.catalog_rows
-    fit = _settle(field, matrix, camera, cand.image_index, rows, stars.vectors_of(rows))
+    fit, catalog = _settle(field, cand.rot_cam_from_icrs.as_matrix(), cand.camera, cand.image_index, rows,
+                           stars.vectors_of(rows), None)
     for _ in range(MAX_LEFT_OUT):
-        better = _without_worst(field, fit) if fit.image_index.size >= MIN_STARS_TO_CHECK else None
+        better = _without_worst(field, fit, catalog) if fit.image_index.size >= MIN_STARS_TO_CHECK else None
         if better is None:
             break
-        fit = better
+        fit, catalog = better
     if fit_k1 and fit.image_index.size >= MIN_STARS_FOR_K1:  # lens distortion last, on the settled matches
         img = fit.image_index
         matrix, camera, res = fit_pose(fit.matrix_cam_from_icrs, fit.camera, fit.ref_icrs, x[img], y[img],

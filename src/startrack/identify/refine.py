@@ -6,19 +6,20 @@ focal length (fx and fy scale together). Gauss-Newton with the analytic Jacobian
 projection; a few iterations suffice.
 
 The fits run on rotation matrices (``matrix_cam_from_icrs``, (3, 3), mapping ICRS vectors to
-camera vectors) with the Jacobian and residuals of all stars built by a few whole-array numpy
-operations per step: on the few dozen stars of a solve, per-call overhead (scipy Rotation
-objects, small linear-algebra calls) would cost more than the arithmetic. :func:`refine_pointing`
-is the same fit for a Rotation.
+camera vectors) in compiled loops (:mod:`.pose_kernel`, numba, loaded on first use): on the few
+dozen stars of a solve, per-call overhead of numpy and scipy would cost more than the arithmetic.
+:func:`warm_up_pose` compiles them before any timed work. :func:`refine_pointing` is the same fit
+for a Rotation.
 """
 
 from __future__ import annotations
 
+import functools
 import math
+from types import ModuleType
 
 import numpy as np
-from numpy.typing import NDArray
-from scipy.linalg import lapack
+from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
@@ -27,107 +28,55 @@ _MAX_ITER = 6
 _CONVERGED_PX = 1e-4
 """Stop when the step moves no image point by more than this (pixels)."""
 
-_PERP_SIGN = np.array([[-1.0], [1.0]])
-"""(-b, a) = (b, a) * _PERP_SIGN."""
 
-_UNIT_TURN = np.array([[[0.0], [-1.0]], [[1.0], [0.0]]])
-"""The constant parts (0, -1) and (1, 0) of du/dd_x and du/dd_y (see :func:`_system`), shape (2, 2, 1)."""
+@functools.cache
+def _kernel() -> ModuleType:
+    """The compiled functions, :mod:`.pose_kernel` (numba is imported on first use)."""
+    from . import pose_kernel
 
-
-def _rodrigues(x: float, y: float, z: float) -> NDArray:
-    """Rotation matrix (3, 3) of the rotation vector (x, y, z) (radians):
-    ``cos t I + sin t [k]_x + (1 - cos t) k k^T`` with angle t and unit axis k."""
-    angle = math.sqrt(x * x + y * y + z * z)
-    if angle < 1e-15:
-        return np.eye(3)
-    x, y, z = x / angle, y / angle, z / angle
-    s, c = math.sin(angle), math.cos(angle)
-    t = 2.0 * math.sin(0.5 * angle) ** 2  # 1 - cos, without the cancellation
-    return np.array([[c + t * x * x, t * x * y - s * z, t * x * z + s * y],
-                     [t * x * y + s * z, c + t * y * y, t * y * z - s * x],
-                     [t * x * z - s * y, t * y * z + s * x, c + t * z * z]])
+    return pose_kernel
 
 
-def _image_coords(camera: Camera, cam_vec: NDArray) -> tuple[NDArray, NDArray]:
-    """Pinhole coordinates u = (a, b) = (v_x, v_y) / v_z of camera vectors (3, N) and the same
-    through the camera's distortion, both (2, N)."""
-    pinhole = cam_vec[:2] / cam_vec[2]
-    if camera.has_distortion:
-        return pinhole, np.array(camera._distort(*pinhole))
-    return pinhole, pinhole
+def _plain(values: ArrayLike) -> NDArray[np.float64]:
+    """``values`` as the one array type the kernels are compiled for: float64, C-contiguous,
+    writeable (numba compiles another signature for each other layout or a read-only array)."""
+    out = np.ascontiguousarray(values, dtype=np.float64)
+    return out if out.flags.writeable else out.copy()
+
+
+def _distortion(camera: Camera) -> NDArray[np.float64]:
+    """The camera's distortion coefficients (k1, k2, k3, p1, p2), shape (5,)."""
+    return np.array([camera.k1, camera.k2, camera.k3, camera.p1, camera.p2], dtype=np.float64)
+
+
+def _offset(camera: Camera, x: NDArray, y: NDArray) -> NDArray[np.float64]:
+    """Detected positions (pixels, (N,) each) minus the principal point, shape (2, N)."""
+    return np.array([x - camera.cx, y - camera.cy], dtype=np.float64)
 
 
 def _system(camera: Camera, focal: NDArray, cam_vec: NDArray, offset: NDArray, n_params: int) -> NDArray:
-    """The least-squares system of a fit: rows (n_params + 1, 2N) holding the transposed
-    Jacobian of the predicted pixels (x_0, ..., x_N-1, y_0, ..., y_N-1) of camera vectors
-    (3, N) with respect to (small rotation of the camera frame, [ln f], [k1]) and, last, the
-    residuals (detected minus predicted pixels). The camera gives the principal point and the
-    distortion, ``focal`` (2, 1) the focal lengths (fx, fy) and ``offset`` (2, N) the detected
-    positions minus the principal point. The product of the rows with their transpose holds
-    the normal equations ``[[J^T J, J^T r], [r^T J, r^T r]]``.
+    """The least-squares system of a fit (:func:`.pose_kernel.fill_system`), shape (n_params + 1, 2N).
 
-    A rotation d moves a camera vector v to v + d x v; for the pinhole coordinates u = (a, b)
-    that is du/dd_x = -b u - (0, 1), du/dd_y = a u + (1, 0) and du/dd_z = (-b, a), then
-    through the distortion's 2 x 2 Jacobian and the focal lengths, which scale every x row by
-    fx and every y row by fy (the residuals too, which are first computed in focal lengths).
+    Rows: the transposed Jacobian of the predicted pixels (x_0, ..., x_N-1, y_0, ..., y_N-1) of
+    camera vectors ``cam_vec`` (3, N) with respect to (small rotation of the camera frame (rad),
+    [ln f], [k1]) and, last, the residuals (detected minus predicted pixels). The camera gives
+    the distortion, ``focal`` (2, 1) the focal lengths (fx, fy) in pixels and ``offset`` (2, N)
+    the detected positions minus the principal point (pixels). The product of the rows with
+    their transpose holds the normal equations ``[[J^T J, J^T r], [r^T J, r^T r]]``.
     """
-    pinhole, distorted = _image_coords(camera, cam_vec)
-    perp = pinhole[::-1] * _PERP_SIGN  # (-b, a)
-    rows = [perp[:, None] * pinhole + _UNIT_TURN, perp[None]]  # du / d rotation, (2, 2, N) and (1, 2, N)
-    if distorted is not pinhole:
-        daa, dab, dba, dbb = camera._distort_jacobian(*pinhole)
-        d_rot = np.concatenate(rows)
-        da, db = d_rot[:, 0], d_rot[:, 1]
-        rows = [np.stack([daa * da + dab * db, dba * da + dbb * db], axis=1)]
-    if n_params > 3:  # d / d ln f: fx and fy scale together
-        rows.append(distorted[None])
-    if n_params > 4:  # d / d k1 of x = cx + fx a (1 + k1 r^2 + ...)
-        rows.append((pinhole * np.sum(pinhole * pinhole, axis=0))[None])
-    rows.append((offset / focal - distorted)[None])
-    system = np.concatenate(rows)
-    system *= focal
-    return system.reshape(n_params + 1, -1)
-
-
-def _offset(camera: Camera, x: NDArray, y: NDArray) -> NDArray:
-    """Detected positions (pixels, (N,) each) minus the principal point, shape (2, N)."""
-    return np.array([x - camera.cx, y - camera.cy])
-
-
-def _step(system: NDArray) -> list[float]:
-    """The Gauss-Newton step (p floats) of a least-squares system (p + 1, M) from :func:`_system`:
-    the normal equations by Cholesky, least squares if they are singular."""
-    normal = system @ system.T
-    _, step, info = lapack.dposv(normal[:-1, :-1], normal[:-1, -1])
-    if info != 0:
-        step = np.linalg.lstsq(system[:-1].T, system[-1], rcond=None)[0]
-    return step.tolist()
-
-
-def _moved_px(delta: list[float], camera: Camera, fx: float) -> float:
-    """Largest image motion (pixels) a step causes, roughly: rotation times focal length ``fx``,
-    plus the focal and k1 changes at the image corner."""
-    corner = 0.5 * math.hypot(camera.width, camera.height)
-    moved = max(abs(d) for d in delta[:3]) * fx * 2.0
-    if len(delta) > 3:
-        moved += abs(delta[3]) * corner
-    if len(delta) > 4:
-        moved += abs(delta[4]) * corner * (corner / fx) ** 2
-    return moved
-
-
-def _stepped(camera: Camera, focal: NDArray, delta: list[float]) -> tuple[Camera, NDArray]:
-    """The camera and focal lengths (2, 1) after a step's ln f and k1 changes (those the step has)."""
-    if len(delta) > 3:
-        focal = focal * math.exp(delta[3])
-    if len(delta) > 4:
-        camera = camera.with_distortion(k1=camera.k1 + delta[4])
-    return camera, focal
+    system = np.empty((n_params + 1, 2 * cam_vec.shape[1]))
+    _kernel().fill_system(_plain(cam_vec), _plain(offset), float(focal[0, 0]), float(focal[1, 0]),
+                          _distortion(camera), int(n_params), system)
+    return system
 
 
 def fit_pose(matrix_cam_from_icrs: NDArray, camera: Camera, ref_icrs: NDArray, x: NDArray, y: NDArray, *,
              fit_focal: bool, fit_k1: bool = False) -> tuple[NDArray[np.float64], Camera, NDArray[np.float64]]:
     """Refine an attitude matrix (and focal length) to matched stars.
+
+    Gauss-Newton (:func:`.pose_kernel.fit`): at most ``_MAX_ITER`` steps, until a step moves no
+    image point by more than ``_CONVERGED_PX``; a step whose normal equations are singular is the
+    minimum-norm least-squares one.
 
     Parameters
     ----------
@@ -153,18 +102,15 @@ def fit_pose(matrix_cam_from_icrs: NDArray, camera: Camera, ref_icrs: NDArray, x
     fit_focal = fit_focal and len(x) >= 3
     fit_k1 = fit_k1 and fit_focal and len(x) >= 8
     n_params = 3 + int(fit_focal) + int(fit_k1)
-    ref_t, offset, focal = ref_icrs.T, _offset(camera, x, y), np.array([[camera.fx], [camera.fy]])
-    matrix = matrix_cam_from_icrs
-    for _ in range(_MAX_ITER):  # the focal lengths live in ``focal``; the camera gets them at the end
-        delta = _step(_system(camera, focal, matrix @ ref_t, offset, n_params))
-        matrix = _rodrigues(*delta[:3]) @ matrix
-        camera, focal = _stepped(camera, focal, delta)
-        if _moved_px(delta, camera, focal[0, 0]) < _CONVERGED_PX:
-            break
+    corner = 0.5 * math.hypot(camera.width, camera.height)
+    matrix, fx, fy, k1, residual = _kernel().fit(
+        _plain(matrix_cam_from_icrs), _plain(ref_icrs), _plain(x), _plain(y), float(camera.fx), float(camera.fy),
+        float(camera.cx), float(camera.cy), _distortion(camera), n_params, corner, _MAX_ITER, _CONVERGED_PX)
+    if fit_k1:
+        camera = camera.with_distortion(k1=k1)
     if fit_focal:
-        camera = camera.with_focal(focal[0, 0], focal[1, 0])
-    residual = offset - focal * _image_coords(camera, matrix @ ref_t)[1]
-    return matrix, camera, np.hypot(*residual)
+        camera = camera.with_focal(fx, fy)
+    return matrix, camera, residual
 
 
 def refine_pointing(rot_cam_from_icrs: Rotation, camera: Camera, ref_icrs: NDArray, x: NDArray,
@@ -180,27 +126,28 @@ def leave_one_out_residuals(matrix_cam_from_icrs: NDArray, camera: Camera, ref_i
                             y: NDArray, *, fit_focal: bool) -> NDArray[np.float64]:
     """How far (pixels, (K,)) each star lies from where a fit to the other stars puts it.
 
-    At a converged fit (attitude matrix (3, 3) as in :func:`fit_pose`) with residuals r_i (2,)
-    and Jacobian rows J_i (2, p), leaving star i out moves its residual to ``(I - H_ii)^-1 r_i``
-    with the leverage block ``H_ii = J_i (J^T J)^-1 J_i^T`` (the linearised deleted residual;
-    Cook and Weisberg 1982, "Residuals and Influence in Regression", §2.2). A wrong association
-    pulls a few-star fit towards itself, so its own residual can be unremarkable while its
-    deleted residual is not. Stars with a leverage block near singular (a fit that needs that
-    star) get inf.
+    At a converged fit (attitude matrix (3, 3) as in :func:`fit_pose`, ICRS unit vectors
+    ``ref_icrs`` (K, 3), detected pixels ``x``, ``y`` (K,)) with residuals r_i (2,) and Jacobian
+    rows J_i (2, p), leaving star i out moves its residual to ``(I - H_ii)^-1 r_i`` with the
+    leverage block ``H_ii = J_i (J^T J)^-1 J_i^T`` (the linearised deleted residual; Cook and
+    Weisberg 1982, "Residuals and Influence in Regression", §2.2). A wrong association pulls a
+    few-star fit towards itself, so its own residual can be unremarkable while its deleted
+    residual is not. Stars with a leverage block near singular (a fit that needs that star) get
+    inf; all do when J^T J is singular.
     """
     n_params = 3 + int(fit_focal and len(x) >= 3)
     focal = np.array([[camera.fx], [camera.fy]])
-    system = _system(camera, focal, matrix_cam_from_icrs @ ref_icrs.T, _offset(camera, x, y), n_params)
-    jac = system[:-1]
-    _, spread, info = lapack.dposv(jac @ jac.T, jac)  # (J^T J)^-1 J^T, (p, 2K)
-    if info != 0:
-        return np.full(len(x), np.inf)
-    keep_xx, keep_yy = 1.0 - np.sum((jac * spread).reshape(n_params, 2, -1), axis=0)  # I - H_ii, symmetric
-    keep_xy = -np.sum(jac.reshape(n_params, 2, -1)[:, 0] * spread.reshape(n_params, 2, -1)[:, 1], axis=0)
-    det = keep_xx * keep_yy - keep_xy * keep_xy
-    rx, ry = system[-1].reshape(2, -1)
-    out = np.full(len(x), np.inf)
-    ok = det > 1e-9
-    dx, dy = keep_yy * rx - keep_xy * ry, keep_xx * ry - keep_xy * rx
-    out[ok] = np.hypot(dx[ok], dy[ok]) / det[ok]
-    return out
+    cam_vec = _plain(matrix_cam_from_icrs) @ _plain(ref_icrs).T
+    return _kernel().deleted_residuals(_system(camera, focal, cam_vec, _offset(camera, x, y), n_params))
+
+
+@functools.cache
+def warm_up_pose() -> None:
+    """Compile (or load from the disk cache) the kernels of :func:`fit_pose` and
+    :func:`leave_one_out_residuals`, so that a solve's time does not include it. Free after the
+    first call."""
+    camera = Camera(width=64, height=64, fx=100.0, k1=1e-3)
+    x, y = np.array([10.0, 50.0, 30.0, 20.0]), np.array([10.0, 20.0, 50.0, 40.0])
+    ref = camera.pixel_to_vector(x, y)  # attitude: identity
+    matrix, camera, _ = fit_pose(np.eye(3), camera, ref, x, y, fit_focal=True)
+    leave_one_out_residuals(matrix, camera, ref, x, y, fit_focal=True)

@@ -78,7 +78,7 @@ def closest_pairs_first(i: NDArray, c: NDArray, d2: NDArray) -> tuple[NDArray[np
     the closest pairs first, each star used once (greedy). Returns the kept (i, c), closest first."""
     order = np.argsort(d2, kind="stable")
     i, c = i[order].astype(np.int64), c[order].astype(np.int64)
-    if np.unique(i).size == i.size and np.unique(c).size == c.size:  # no star in two pairs: all kept
+    if i.size == 0 or (np.bincount(i).max() == 1 and np.bincount(c).max() == 1):  # no star in two pairs
         return i, c
     taken_i, taken_c, keep = set(), set(), []
     for k, (ik, ck) in enumerate(zip(i.tolist(), c.tolist(), strict=True)):

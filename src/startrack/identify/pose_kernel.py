@@ -1,0 +1,273 @@
+"""The compiled loops of :mod:`.refine` (numba): the pose fit's least-squares system, its
+Gauss-Newton iterations and the deleted residuals of its stars.
+
+One projection model covers the whole camera: Brown-Conrady distortion with coefficients
+``dist`` = (k1, k2, k3, p1, p2) as in :class:`startrack.camera.Camera` (all zero: pinhole).
+Camera parameters come in as plain floats and that array, so the functions know nothing of
+:class:`~startrack.camera.Camera`.
+
+Kept apart so that importing startrack does not import numba; :mod:`.refine` loads this module
+on first use. Compiled functions are cached on disk (``cache=True``); all arrays are float64 and
+C-contiguous (the one signature :func:`.refine.warm_up_pose` compiles).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+_EPS = float(np.finfo(np.float64).eps)
+SINGULAR_PIVOT = 1e-12
+"""A Cholesky pivot at most this share of its diagonal element counts as zero: the column is a
+combination of the earlier ones up to rounding (1 - R^2 of that regression)."""
+
+
+@njit(cache=True)
+def _project(vx, vy, vz, dist):
+    """Pinhole coordinates (a, b) = (v_x, v_y) / v_z of a camera vector, the same through the
+    distortion (a_d, b_d), and the distortion's Jacobian d(a_d, b_d) / d(a, b) as
+    (daa, dab, dba, dbb): eight floats (the equations of :mod:`startrack.camera`)."""
+    k1, k2, k3, p1, p2 = dist[0], dist[1], dist[2], dist[3], dist[4]
+    a, b = vx / vz, vy / vz
+    r2 = a * a + b * b
+    radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+    ad = a * radial + 2.0 * p1 * a * b + p2 * (r2 + 2.0 * a * a)
+    bd = b * radial + p1 * (r2 + 2.0 * b * b) + 2.0 * p2 * a * b
+    dradial = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2)  # d radial / d r2
+    daa = radial + a * dradial * 2.0 * a + 2.0 * p1 * b + p2 * 6.0 * a
+    dab = a * dradial * 2.0 * b + 2.0 * p1 * a + p2 * 2.0 * b
+    dba = b * dradial * 2.0 * a + p1 * 2.0 * a + 2.0 * p2 * b
+    dbb = radial + b * dradial * 2.0 * b + p1 * 6.0 * b + 2.0 * p2 * a
+    return a, b, ad, bd, daa, dab, dba, dbb
+
+
+@njit(cache=True)
+def fill_system(cam_vec, offset, fx, fy, dist, n_params, out):
+    """Write the least-squares system of a fit to ``out`` (n_params + 1, 2N).
+
+    Rows: the transposed Jacobian of the predicted pixels (x_0, ..., x_N-1, y_0, ..., y_N-1)
+    of camera vectors ``cam_vec`` (3, N) with respect to (small rotation of the camera frame,
+    [ln f], [k1]) and, last, the residuals (detected minus predicted pixels). ``offset`` (2, N)
+    holds the detected positions minus the principal point (pixels), ``fx``, ``fy`` the focal
+    lengths (pixels, scaling together under ln f).
+
+    A rotation d moves a camera vector v to v + d x v; for the pinhole coordinates u = (a, b)
+    that is du/dd_x = (-b a, -b b - 1), du/dd_y = (a a + 1, a b) and du/dd_z = (-b, a), then
+    through the distortion's 2 x 2 Jacobian and the focal lengths. d/d ln f is the distorted
+    point itself, d/d k1 is u r^2.
+    """
+    n = cam_vec.shape[1]
+    for i in range(n):
+        a, b, ad, bd, daa, dab, dba, dbb = _project(cam_vec[0, i], cam_vec[1, i], cam_vec[2, i], dist)
+        turn_a = (-b * a, a * a + 1.0, -b)
+        turn_b = (-b * b - 1.0, a * b, a)
+        for k in range(3):
+            out[k, i] = fx * (daa * turn_a[k] + dab * turn_b[k])
+            out[k, n + i] = fy * (dba * turn_a[k] + dbb * turn_b[k])
+        if n_params > 3:
+            out[3, i], out[3, n + i] = fx * ad, fy * bd
+        if n_params > 4:
+            r2 = a * a + b * b
+            out[4, i], out[4, n + i] = fx * (a * r2), fy * (b * r2)
+        out[n_params, i] = fx * (offset[0, i] / fx - ad)
+        out[n_params, n + i] = fy * (offset[1, i] / fy - bd)
+
+
+@njit(cache=True)
+def _gram(rows):
+    """``rows @ rows.T`` of a (p, M) array, shape (p, p)."""
+    p, m = rows.shape
+    gram = np.empty((p, p))
+    for i in range(p):
+        for j in range(i + 1):
+            total = 0.0
+            for k in range(m):
+                total += rows[i, k] * rows[j, k]
+            gram[i, j] = total
+            gram[j, i] = total
+    return gram
+
+
+@njit(cache=True)
+def _cholesky(normal, p):
+    """Lower Cholesky factor (p, p) of ``normal[:p, :p]``, or None when the matrix is singular:
+    a pivot is not positive (as LAPACK's dpotrf reports it), NaN, or no more than rounding
+    (:data:`SINGULAR_PIVOT`), which would otherwise give an arbitrary step along the null space."""
+    low = np.zeros((p, p))
+    for j in range(p):
+        pivot = normal[j, j]
+        for k in range(j):
+            pivot -= low[j, k] * low[j, k]
+        if not pivot > SINGULAR_PIVOT * normal[j, j]:
+            return None
+        low[j, j] = math.sqrt(pivot)
+        for i in range(j + 1, p):
+            total = normal[i, j]
+            for k in range(j):
+                total -= low[i, k] * low[j, k]
+            low[i, j] = total / low[j, j]
+    return low
+
+
+@njit(cache=True)
+def _cho_solve(low, rows, col, out):
+    """Solve ``low @ low.T @ out = rows[:p, col]`` for the Cholesky factor ``low`` (p, p): the
+    right-hand side is column ``col`` of ``rows`` (at least p rows)."""
+    p = low.shape[0]
+    for i in range(p):
+        total = rows[i, col]
+        for k in range(i):
+            total -= low[i, k] * out[k]
+        out[i] = total / low[i, i]
+    for i in range(p - 1, -1, -1):
+        total = out[i]
+        for k in range(i + 1, p):
+            total -= low[k, i] * out[k]
+        out[i] = total / low[i, i]
+
+
+@njit(cache=True)
+def _step(system, delta):
+    """The Gauss-Newton step of a system (p + 1, M) from :func:`fill_system`, written to
+    ``delta`` (p,): the normal equations by Cholesky, least squares if they are singular."""
+    p = system.shape[0] - 1
+    normal = _gram(system)
+    low = _cholesky(normal, p)
+    if low is not None:
+        _cho_solve(low, normal, p, delta)
+        return
+    if system.shape[1] == 0:  # no stars: no step
+        delta[:] = 0.0
+        return
+    jac_t = np.ascontiguousarray(system[:p].T)
+    rcond = _EPS * max(system.shape[1], p)  # numpy's default (rcond=None)
+    delta[:] = np.linalg.lstsq(jac_t, system[p].copy(), rcond)[0]
+
+
+@njit(cache=True)
+def _turn(delta, matrix):
+    """Rotate ``matrix`` (3, 3) in place by the rotation vector ``delta[:3]`` (radians), on the
+    left: ``R @ matrix`` with R = cos t I + sin t [k]_x + (1 - cos t) k k^T."""
+    x, y, z = delta[0], delta[1], delta[2]
+    angle = math.sqrt(x * x + y * y + z * z)
+    if angle < 1e-15:
+        return
+    x, y, z = x / angle, y / angle, z / angle
+    s, c = math.sin(angle), math.cos(angle)
+    t = 2.0 * math.sin(0.5 * angle) ** 2  # 1 - cos, without the cancellation
+    rot = ((c + t * x * x, t * x * y - s * z, t * x * z + s * y),
+           (t * x * y + s * z, c + t * y * y, t * y * z - s * x),
+           (t * x * z - s * y, t * y * z + s * x, c + t * z * z))
+    old = matrix.copy()
+    for i in range(3):
+        for j in range(3):
+            row = rot[i]
+            matrix[i, j] = row[0] * old[0, j] + row[1] * old[1, j] + row[2] * old[2, j]
+
+
+@njit(cache=True)
+def _rotate(matrix, ref, cam_vec):
+    """Camera vectors ``cam_vec`` (3, K) = ``matrix`` (3, 3) @ ``ref.T`` for ICRS vectors ``ref`` (K, 3)."""
+    for i in range(ref.shape[0]):
+        for r in range(3):
+            cam_vec[r, i] = matrix[r, 0] * ref[i, 0] + matrix[r, 1] * ref[i, 1] + matrix[r, 2] * ref[i, 2]
+
+
+@njit(cache=True)
+def _moved_px(delta, fx, corner):
+    """Largest image motion (pixels) a step ``delta`` (p,) causes, roughly: rotation times focal
+    length ``fx``, plus the focal and k1 changes at the image corner (``corner`` pixels from
+    the centre)."""
+    moved = max(abs(delta[0]), abs(delta[1]), abs(delta[2])) * fx * 2.0
+    if delta.size > 3:
+        moved += abs(delta[3]) * corner
+    if delta.size > 4:
+        moved += abs(delta[4]) * corner * (corner / fx) ** 2
+    return moved
+
+
+@njit(cache=True)
+def _residual_px(cam_vec, offset, fx, fy, dist):
+    """Pixel distance (K,) between the detected positions (``offset`` (2, K), from the principal
+    point) and the projections of camera vectors ``cam_vec`` (3, K)."""
+    out = np.empty(cam_vec.shape[1])
+    for i in range(out.size):
+        _, _, ad, bd, _, _, _, _ = _project(cam_vec[0, i], cam_vec[1, i], cam_vec[2, i], dist)
+        out[i] = math.hypot(offset[0, i] - fx * ad, offset[1, i] - fy * bd)
+    return out
+
+
+@njit(cache=True)
+def fit(matrix, ref, x, y, fx, fy, cx, cy, dist, n_params, corner, max_iter, converged_px):
+    """Gauss-Newton fit of an attitude (and ln f, and k1, per ``n_params`` = 3, 4 or 5).
+
+    ``matrix`` (3, 3) is the starting ICRS-to-camera rotation matrix, ``ref`` (K, 3) the ICRS unit
+    vectors of the stars, ``x``, ``y`` (K,) their detected positions (pixels); the camera has
+    focal lengths ``fx``, ``fy`` and principal point ``cx``, ``cy`` (pixels) and distortion
+    coefficients ``dist`` (5,) (k1 is the one fitted). Iterates at most ``max_iter`` times,
+    stopping when :func:`_moved_px` of a step is below ``converged_px``.
+    Returns (matrix (3, 3), fx, fy, k1, residual distance (K,) in pixels).
+    """
+    matrix, dist = matrix.copy(), dist.copy()
+    offset = np.empty((2, ref.shape[0]))
+    for i in range(ref.shape[0]):
+        offset[0, i], offset[1, i] = x[i] - cx, y[i] - cy
+    cam_vec = np.empty((3, ref.shape[0]))
+    system = np.empty((n_params + 1, 2 * ref.shape[0]))
+    delta = np.empty(n_params)
+    for _ in range(max_iter):
+        _rotate(matrix, ref, cam_vec)
+        fill_system(cam_vec, offset, fx, fy, dist, n_params, system)
+        _step(system, delta)
+        _turn(delta, matrix)
+        if n_params > 3:
+            scale = math.exp(delta[3])
+            fx, fy = fx * scale, fy * scale
+        if n_params > 4:
+            dist[0] += delta[4]
+        if _moved_px(delta, fx, corner) < converged_px:
+            break
+    _rotate(matrix, ref, cam_vec)
+    return matrix, fx, fy, dist[0], _residual_px(cam_vec, offset, fx, fy, dist)
+
+
+@njit(cache=True)
+def _leverage(inverse, system, i, j):
+    """``J_i^T (J^T J)^-1 J_j`` for columns i and j of the Jacobian rows ``system[:p]`` and the
+    inverse normal matrix ``inverse`` (p, p)."""
+    p, total = inverse.shape[0], 0.0
+    for a in range(p):
+        spread = 0.0
+        for b in range(p):
+            spread += inverse[a, b] * system[b, j]
+        total += system[a, i] * spread
+    return total
+
+
+@njit(cache=True)
+def deleted_residuals(system):
+    """Deleted residuals (pixels, (N,)) of the stars of a system (p + 1, 2N) from :func:`fill_system`.
+
+    For star i with residual r_i (2,) and Jacobian rows J_i (2, p): ``|(I - H_ii)^-1 r_i|`` with
+    ``H_ii = J_i (J^T J)^-1 J_i^T``. All inf if J^T J is singular; inf for a star whose
+    ``det(I - H_ii)`` is below 1e-9.
+    """
+    p, n = system.shape[0] - 1, system.shape[1] // 2
+    out = np.full(n, np.inf)
+    low = _cholesky(_gram(system[:p]), p)
+    if low is None:
+        return out
+    unit, inverse = np.eye(p), np.empty((p, p))
+    for j in range(p):
+        _cho_solve(low, unit, j, inverse[j])  # symmetric: row j is column j
+    for i in range(n):
+        keep_xx = 1.0 - _leverage(inverse, system, i, i)  # I - H_ii, symmetric
+        keep_yy = 1.0 - _leverage(inverse, system, n + i, n + i)
+        keep_xy = -_leverage(inverse, system, i, n + i)
+        det = keep_xx * keep_yy - keep_xy * keep_xy
+        if det > 1e-9:
+            rx, ry = system[p, i], system[p, n + i]
+            out[i] = math.hypot(keep_yy * rx - keep_xy * ry, keep_xx * ry - keep_xy * rx) / det
+    return out
