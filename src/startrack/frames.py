@@ -102,12 +102,12 @@ def radec_roll_from_rotation(
     The inverse of :func:`rotation_from_radec_roll`.
     """
     matrix = rot_cam_from_icrs.as_matrix()
-    y, z = matrix[..., 1, :], matrix[..., 2, :]
-    ra, dec = vector_to_radec(z)
-    north, east = _north_east(ra, dec)
-    up = -y
-    position_angle = np.arctan2(np.sum(up * east, axis=-1), np.sum(up * north, axis=-1))
-    roll = _wrap_2pi(-position_angle)
+    ra, dec = vector_to_radec(matrix[..., 2, :])
+    y0, y1, y2 = matrix[..., 1, 0], matrix[..., 1, 1], matrix[..., 1, 2]  # camera +y in ICRS; up is -y
+    sr, cr, sd, cd = np.sin(ra), np.cos(ra), np.sin(dec), np.cos(dec)
+    up_east = y0 * sr - y1 * cr  # up . (-sin ra, cos ra, 0), east as in _north_east
+    up_north = y0 * sd * cr + y1 * sd * sr - y2 * cd  # up . (-sin dec cos ra, -sin dec sin ra, cos dec)
+    roll = _wrap_2pi(-np.arctan2(up_east, up_north))
     return ra, dec, roll
 
 

@@ -17,7 +17,6 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from .attitude.covariance import covariance_batch
-from .attitude.qmethod import q_method_quaternions
 from .camera import Camera, focal_px_from_fov
 from .catalog import load_catalog
 from .errors import InvalidInputError
@@ -25,6 +24,7 @@ from .frames import angle_between, radec_roll_from_rotation
 from .identify.candidate import Candidate
 from .identify.field_stars import FieldStars
 from .identify.final_fit import settle_matches
+from .identify.refine import wahba_equal_weights
 from .identify.registry import DEFAULT_FOV_RANGE_DEG, MATCHERS, prepare_matcher
 from .results import AttitudeSolution, StarMatches, Status
 from .units import ARCSEC
@@ -146,16 +146,17 @@ def _problem(x, y, width, height, fov_deg, fov_range_deg, camera, flux, epoch) -
 
 def _solution(problem: _Problem, stars: FieldStars, cand: Candidate, t0: float) -> AttitudeSolution:
     """The solution from a verified candidate: refined fit, then the Wahba attitude of all matched
-    stars (Davenport's q-method: the same optimum as QUEST, and one 4 x 4 eigen-decomposition is
-    faster in numpy than QUEST's Newton iteration; both are in :mod:`startrack.attitude`) with the
+    stars (Davenport's q-method: the same optimum as QUEST; one compiled 4 x 4 eigen-decomposition,
+    :func:`.identify.refine.wahba_equal_weights`; both solvers are in :mod:`startrack.attitude`) with the
     QUEST measurement-model covariance (seed 000 §6.1.3)."""
     fit = settle_matches(problem.x, problem.y, stars, cand, problem.focal_range)
     camera, img, rows, ref, res_px = fit.camera, fit.image_index, fit.catalog_rows, fit.ref_icrs, fit.residual_px
     observed = camera.pixel_to_vector(problem.x[img], problem.y[img])
     n = len(img)
     sigma_rad = max(math.sqrt(float(res_px @ res_px) / n), 0.05) / camera.fx
-    rot = Rotation.from_quat(q_method_quaternions(observed[None], ref[None], np.full((1, n), 1.0 / n))[0])
-    residuals = angle_between(ref @ rot.as_matrix().T, observed) / ARCSEC
+    quat, matrix = wahba_equal_weights(observed, ref)
+    rot = Rotation.from_quat(quat)
+    residuals = angle_between(ref @ matrix.T, observed) / ARCSEC
     ra, dec, roll = radec_roll_from_rotation(rot)
     matches = StarMatches(status=Status.OK, det_index=problem.rows[img].astype(np.int64),
                           hip=load_catalog().hip[rows].astype(np.int64), cat_vectors=ref,

@@ -1,5 +1,6 @@
 """The compiled loops of :mod:`.refine` (numba): the pose fit's least-squares system, its
-Gauss-Newton iterations and the deleted residuals of its stars.
+Gauss-Newton iterations and the deleted residuals of its stars; and the equal-weight q-method
+that both the pattern search (:mod:`.quad_kernel`) and a solve's final attitude use.
 
 One projection model covers the whole camera: Brown-Conrady distortion with coefficients
 ``dist`` = (k1, k2, k3, p1, p2) as in :class:`startrack.camera.Camera` (all zero: pinhole).
@@ -271,3 +272,36 @@ def deleted_residuals(system):
             rx, ry = system[p, i], system[p, n + i]
             out[i] = math.hypot(keep_yy * rx - keep_xy * ry, keep_xx * ry - keep_xy * rx) / det
     return out
+
+
+@njit(cache=True)
+def q_method(obs, ref):
+    """Davenport's q-method for equal weights (as :mod:`startrack.attitude.qmethod`; seed 000
+    §6.1.3): the scalar-last quaternion (4,) of R with R ref_i ~ obs_i (rows of (N, 3) arrays of
+    unit vectors) and R itself (3, 3). The four-star fits of the pattern search and the final
+    attitude of a solve."""
+    b = np.zeros((3, 3))
+    for i in range(obs.shape[0]):
+        for j in range(3):
+            for k in range(3):
+                b[j, k] += obs[i, j] * ref[i, k]
+    sigma = b[0, 0] + b[1, 1] + b[2, 2]
+    davenport = np.empty((4, 4))
+    for j in range(3):
+        for k in range(3):
+            davenport[j, k] = b[j, k] + b[k, j] - (sigma if j == k else 0.0)
+    davenport[0, 3] = davenport[3, 0] = b[2, 1] - b[1, 2]
+    davenport[1, 3] = davenport[3, 1] = b[0, 2] - b[2, 0]
+    davenport[2, 3] = davenport[3, 2] = b[1, 0] - b[0, 1]
+    davenport[3, 3] = sigma
+    quat = np.ascontiguousarray(np.linalg.eigh(davenport)[1][:, 3])  # largest eigenvalue last
+    return quat, _quat_matrix(quat)
+
+
+@njit(cache=True)
+def _quat_matrix(q):
+    """Rotation matrix (3, 3) of a unit scalar-last quaternion (4,), scipy's convention."""
+    x, y, z, w = q[0], q[1], q[2], q[3]
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])

@@ -14,6 +14,7 @@ from numba import njit
 
 from .database import KEY_BINS, LARGEST_SCALE_RAD, LEVEL_SHIFT, RATIO_SCALE
 from .patterns import EDGE_PAIRS, PERMUTATIONS, PERMUTED_EDGES
+from .pose_kernel import q_method
 
 FITTED_FOCAL_STEP_SHARE = 0.25
 """Share of the focal step kept in the rotation-fit tolerance once the focal length is corrected."""
@@ -152,37 +153,6 @@ def _best_order(img_angles, cat_angles):
 
 
 @njit(cache=True)
-def _q_method(obs, ref):
-    """Davenport's q-method for equal weights (as :mod:`startrack.attitude.qmethod`): the scalar-last
-    quaternion (4,) of R with R ref_i ~ obs_i (rows of (4, 3) arrays) and R itself (3, 3)."""
-    b = np.zeros((3, 3))
-    for i in range(obs.shape[0]):
-        for j in range(3):
-            for k in range(3):
-                b[j, k] += obs[i, j] * ref[i, k]
-    sigma = b[0, 0] + b[1, 1] + b[2, 2]
-    davenport = np.empty((4, 4))
-    for j in range(3):
-        for k in range(3):
-            davenport[j, k] = b[j, k] + b[k, j] - (sigma if j == k else 0.0)
-    davenport[0, 3] = davenport[3, 0] = b[2, 1] - b[1, 2]
-    davenport[1, 3] = davenport[3, 1] = b[0, 2] - b[2, 0]
-    davenport[2, 3] = davenport[3, 2] = b[1, 0] - b[0, 1]
-    davenport[3, 3] = sigma
-    quat = np.ascontiguousarray(np.linalg.eigh(davenport)[1][:, 3])  # largest eigenvalue last
-    return quat, _quat_matrix(quat)
-
-
-@njit(cache=True)
-def _quat_matrix(q):
-    """Rotation matrix (3, 3) of a unit scalar-last quaternion (4,), scipy's convention."""
-    x, y, z, w = q[0], q[1], q[2], q[3]
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-
-
-@njit(cache=True)
 def _worst_residual(rot, obs, ref) -> float:
     """Largest angle (radians) between the rotated reference vectors and the observed ones (4, 3)."""
     worst, predicted = 0.0, np.empty(3)
@@ -246,7 +216,7 @@ def _fit_order(u, w, quad, order, scale, cat_vec, stars, obs):
     for i in range(4):
         stars[i] = quad[_PERMUTATIONS[order, i]]
     _image_vectors(u, w, stars, scale, obs)
-    return _q_method(obs, cat_vec)
+    return q_method(obs, cat_vec)
 
 
 @njit(cache=True)

@@ -141,13 +141,32 @@ def leave_one_out_residuals(matrix_cam_from_icrs: NDArray, camera: Camera, ref_i
     return _kernel().deleted_residuals(_system(camera, focal, cam_vec, _offset(camera, x, y), n_params))
 
 
+def wahba_equal_weights(observed: NDArray, reference: NDArray) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Attitude of equally weighted vector pairs by Davenport's q-method (seed 000 §6.1.3;
+    :func:`.pose_kernel.q_method`, the single-problem, compiled form of
+    :func:`startrack.attitude.qmethod.q_method_quaternions`).
+
+    Parameters
+    ----------
+    observed, reference : ndarray, shape (N, 3)
+        Unit vectors, camera frame and ICRS.
+
+    Returns
+    -------
+    quat, matrix : ndarray, shapes (4,) and (3, 3)
+        The rotation R with ``R reference_i ~ observed_i`` as a scalar-last quaternion and a matrix.
+    """
+    return _kernel().q_method(_plain(observed), _plain(reference))
+
+
 @functools.cache
 def warm_up_pose() -> None:
-    """Compile (or load from the disk cache) the kernels of :func:`fit_pose` and
-    :func:`leave_one_out_residuals`, so that a solve's time does not include it. Free after the
-    first call."""
+    """Compile (or load from the disk cache) the kernels of :func:`fit_pose`,
+    :func:`leave_one_out_residuals` and :func:`wahba_equal_weights`, so that a solve's time does
+    not include it. Free after the first call."""
     camera = Camera(width=64, height=64, fx=100.0, k1=1e-3)
     x, y = np.array([10.0, 50.0, 30.0, 20.0]), np.array([10.0, 20.0, 50.0, 40.0])
     ref = camera.pixel_to_vector(x, y)  # attitude: identity
     matrix, camera, _ = fit_pose(np.eye(3), camera, ref, x, y, fit_focal=True)
     leave_one_out_residuals(matrix, camera, ref, x, y, fit_focal=True)
+    wahba_equal_weights(camera.pixel_to_vector(x, y), ref)
