@@ -112,3 +112,37 @@ def test_warm_up_compiles_the_signature_a_search_uses(db):
     u, w, _ = _seen(db, row)
     search_batch(db, u, w, np.array([[0, 1, 2, 3]]), _setup(focal_grid((0.9, 1.1), 0.0015), FOCAL_PX, True))
     assert len(search.signatures) == before  # no compilation inside a timed solve
+
+
+def _ratios_at(u, w, scale):
+    """The five sorted edge ratios of the four stars (u, w) seen at ``scale`` = f_nominal / f."""
+    vec = np.column_stack([u * scale, w * scale, np.ones(4)])
+    vec /= np.linalg.norm(vec, axis=1, keepdims=True)
+    i, j = np.triu_indices(4, k=1)
+    angles = np.sort(np.arccos(np.clip(np.sum(vec[i] * vec[j], axis=1), -1.0, 1.0)))
+    return angles[:5] / angles[5]
+
+
+@pytest.mark.parametrize("corner", [0.02, 0.17])
+def test_trials_of_a_focal_range_each_span_about_one_focal_step(corner):
+    """A pattern near the centre and one reaching the corner of a 20 deg field (5-35 deg range): the trials chosen
+    from every eighth grid point cover the grid, and the ratios move by at most 1.25 focal steps
+    within each trial's span (measured at every grid point)."""
+    from startrack.identify.quad_kernel import _trial_starts
+
+    step = 0.0015
+    nominal = (SIZE_PX / 2) / math.tan(math.radians(10.0))
+    lo, hi = (SIZE_PX / 2) / math.tan(math.radians(17.5)), (SIZE_PX / 2) / math.tan(math.radians(2.5))
+    grid = focal_grid((nominal / hi, nominal / lo), step)
+    u = np.array([corner, -0.8 * corner, 0.1 * corner, 0.5 * corner])
+    w = np.array([0.2 * corner, corner, -0.9 * corner, 0.4 * corner])
+    scratch = (np.empty((4, 3)), np.empty(6), np.empty(6), np.empty(5))
+    starts = _trial_starts(u, w, np.arange(4), grid, step, *scratch)
+    assert starts[0] == 0 and np.all(np.diff(starts) > 0)
+    ratios = np.array([_ratios_at(u, w, s) for s in grid])
+    ends = np.append(starts[1:], grid.size)
+    for first, end in zip(starts, ends, strict=True):
+        moved = np.abs(np.diff(ratios[first:end], axis=0)).max(axis=1).sum() if end - first > 1 else 0.0
+        assert moved <= 1.25 * step
+    total = np.abs(np.diff(ratios, axis=0)).max(axis=1).sum()
+    assert starts.size >= total / step * 0.8  # as many trials as the ratios need, roughly

@@ -48,11 +48,12 @@ class FieldStars:
 
     def around(self, directions: NDArray, radius_rad: float) -> NDArray[np.int64]:
         """Indices (into :attr:`rows`, sorted: brightest first) of the stars within ``radius_rad``
-        of any of the unit vectors ``directions`` (N, 3).
+        of any of the unit vectors ``directions`` (N, 3; rows with NaN are skipped).
 
         Each direction's nearest :data:`AROUND_FIRST_K` stars come from one vectorised tree query;
         only a direction with that many stars in reach (a dense field) is searched again for all.
         """
+        directions = directions[np.isfinite(directions).all(axis=1)]  # NaN: a pixel the lens model cannot invert
         chord = 2.0 * math.sin(min(radius_rad, math.pi) / 2.0)
         k = min(AROUND_FIRST_K, len(self.rows))
         dist, index = self.tree.query(directions, k=k, distance_upper_bound=chord)

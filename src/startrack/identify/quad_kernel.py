@@ -16,6 +16,9 @@ from .database import KEY_BINS, LARGEST_SCALE_RAD, LEVEL_SHIFT, RATIO_SCALE
 from .patterns import EDGE_PAIRS, PERMUTATIONS, PERMUTED_EDGES
 from .pose_kernel import q_method
 
+COARSE_STRIDE = 8
+"""Grid points between the evaluations of a pattern's ratios when its trials are chosen."""
+
 FITTED_FOCAL_STEP_SHARE = 0.25
 """Share of the focal step kept in the rotation-fit tolerance once the focal length is corrected."""
 
@@ -67,29 +70,44 @@ def _sorted_ratios(angles, ordered, ratios) -> float:
 
 
 @njit(cache=True)
+def _ratio_change(u, w, quad, scale, vec, angles, ordered, ratios, previous) -> float:
+    """Largest change of the five edge ratios from ``previous`` to their values at ``scale``
+    (which then replace ``previous``)."""
+    _image_vectors(u, w, quad, scale, vec)
+    _edges(vec, angles)
+    _sorted_ratios(angles, ordered, ratios)
+    change = 0.0
+    for k in range(5):
+        change = max(change, abs(ratios[k] - previous[k]))
+        previous[k] = ratios[k]
+    return change
+
+
+@njit(cache=True)
 def _trial_starts(u, w, quad, grid, step, vec, angles, ordered, ratios):
-    """Grid indices where the pattern's trials start (step 1 of the module docstring)."""
+    """Grid indices where the pattern's trials start (step 1 of the module docstring).
+
+    The ratios are evaluated at every :data:`COARSE_STRIDE`-th grid point and their change is
+    spread evenly over the points between (the ratios are smooth in the scale); a trial starts
+    wherever the accumulated change passes a multiple of the focal step."""
     size = grid.size
     starts = np.zeros(size, np.int64)
     if size == 1:
         return starts[:1]
-    previous = np.empty(5)
-    total, group, count = 0.0, 0.0, 1
-    for g in range(size):
-        _image_vectors(u, w, quad, grid[g], vec)
-        _edges(vec, angles)
-        _sorted_ratios(angles, ordered, ratios)
-        if g > 0:
-            change = 0.0
-            for k in range(5):
-                change = max(change, abs(ratios[k] - previous[k]))
-            total += change
-            new_group = math.floor(total / step)
+    previous = np.zeros(5)
+    _ratio_change(u, w, quad, grid[0], vec, angles, ordered, ratios, previous)
+    total, group, count, g0 = 0.0, 0, 1, 0
+    while g0 < size - 1:
+        g1 = min(g0 + COARSE_STRIDE, size - 1)
+        change = _ratio_change(u, w, quad, grid[g1], vec, angles, ordered, ratios, previous)
+        for g in range(g0 + 1, g1 + 1):
+            new_group = math.floor((total + change * (g - g0) / (g1 - g0)) / step)
             if new_group != group:
                 starts[count] = g
                 count += 1
-            group = new_group
-        previous[:] = ratios
+                group = new_group
+        total += change
+        g0 = g1
     return starts[:count]
 
 
@@ -111,11 +129,11 @@ def _floor_q(value: float) -> int:
 
 
 @njit(cache=True)
-def _lower_bound(keys, lo, hi, value, side_right: bool) -> int:
-    """numpy.searchsorted of one value (side 'left' or 'right') in ``keys[lo:hi]``, as an index into keys."""
+def _lower_bound(keys, lo, hi, value) -> int:
+    """numpy.searchsorted of one value (side 'left') in ``keys[lo:hi]``, as an index into keys."""
     while lo < hi:
         mid = (lo + hi) >> 1
-        if keys[mid] < value or (side_right and keys[mid] == value):
+        if keys[mid] < value:
             lo = mid + 1
         else:
             hi = mid
@@ -194,8 +212,10 @@ def _matching_rows(keys, cell_starts, pattern_ratios, pattern_largest, level_fov
                 cell = (level * KEY_BINS + b0) * KEY_BINS + b1
                 lo, hi = cell_starts[cell], cell_starts[cell + 1]
                 base = (level << LEVEL_SHIFT) + (b0 * KEY_BINS + b1) * 65536
-                start = _lower_bound(keys, lo, hi, base + r2_lo, False)
-                for r in range(start, _lower_bound(keys, start, hi, base + r2_hi, True)):
+                top = base + r2_hi
+                for r in range(_lower_bound(keys, lo, hi, base + r2_lo), hi):  # keys ascend in a cell
+                    if keys[r] > top:
+                        break
                     if not _ratios_fit(pattern_ratios[r], low, high):
                         continue
                     implied = trial_focal * largest / (pattern_largest[r] * LARGEST_SCALE_RAD)

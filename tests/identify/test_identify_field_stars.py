@@ -1,0 +1,24 @@
+"""FieldStars.around: the catalog stars near a set of directions, as a brute-force search finds them."""
+
+import numpy as np
+import pytest
+
+from startrack.identify.field_stars import AROUND_FIRST_K, field_stars
+from startrack.units import DEG
+
+
+@pytest.mark.parametrize(("radius_deg", "centre"), [(0.05, (1.0, 0.2, 0.1)), (0.6, (0.0, 0.0, 1.0)),
+                                                    (1.5, (-0.06, -0.87, -0.49))])  # the last in the Milky Way
+def test_around_equals_a_brute_force_search(radius_deg, centre):
+    stars = field_stars(9.5, 2000.0)
+    rng = np.random.default_rng(2)
+    directions = np.asarray(centre) / np.linalg.norm(centre) + rng.normal(scale=0.05, size=(40, 3))
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    directions[3] = np.nan  # an image star the lens model could not invert
+    got = stars.around(directions, radius_deg * DEG)
+    cos_angle = stars.vectors @ directions[np.isfinite(directions[:, 0])].T
+    want = np.flatnonzero((cos_angle >= np.cos(radius_deg * DEG)).any(axis=1))
+    assert np.array_equal(got, want)
+    if radius_deg > 1:  # some directions had more stars in reach than the first query fetches
+        counts = (cos_angle >= np.cos(radius_deg * DEG)).sum(axis=0)
+        assert counts.max() > AROUND_FIRST_K
