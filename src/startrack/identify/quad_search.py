@@ -8,8 +8,8 @@ overhead, not the arithmetic, set its time. For each pattern, in order:
    the pattern's edge ratios have moved by more than the focal step since the last one, so a
    pattern near the centre of a narrow field needs one, a wide pattern of a wide field several.
    The ratios are evaluated at every eighth grid point and their change spread evenly between
-   (they are smooth in the scale; evaluating all 131 points of a 5-35 deg range at FOV 20 cost more than
-   the look-ups).
+   (they are smooth in the scale; evaluating all 131 points of a 5-35 deg range took nearly half
+   of a batch's time at FOV 20).
    A known focal length is one trial.
 2. At each trial: the six edge angles, the five ratios (sorted, over the largest) and their
    tolerances: the focal step plus a 3-sigma centroid error propagated into the ratio of two
