@@ -112,6 +112,20 @@ def _trial_starts(u, w, quad, grid, step, vec, angles, ordered, ratios):
 
 
 @njit(cache=True)
+def ratio_tolerances(ordered, ratios, step, noise_px, focal_px, tol) -> float:
+    """Tolerance of each of the five edge ratios (step 2); writes ``tol`` (5,), returns the largest.
+
+    ``ordered`` (6,) are the sorted edge angles (radians), ``ratios`` (5,) the first five over the
+    largest, ``noise_px`` the error bound of one edge length (pixels), ``focal_px`` the trial's
+    focal length. A ratio r = a / b of edges a <= b measured with errors da, db moves by
+    da / b - r db / b, so its bound is step + noise (1 + r) / b, with b in pixels."""
+    largest_px = ordered[5] * focal_px
+    for k in range(5):
+        tol[k] = step + noise_px * (1.0 + ratios[k]) / largest_px
+    return tol.max()
+
+
+@njit(cache=True)
 def _bin(quantised: int) -> int:
     return (quantised * KEY_BINS) >> 16
 
@@ -262,9 +276,7 @@ def search(u, w, quads, grid, focal_nominal, short_px, sigma_px, step, max_toler
             _edges(vec, angles)
             largest = _sorted_ratios(angles, ordered, ratios)
             trial_focal = focal_nominal / scale
-            for k in range(5):
-                tol[k] = step + noise * (1.0 / (ordered[k] * trial_focal) + ratios[k] / (ordered[5] * trial_focal))
-            worst_tol = tol.max()
+            worst_tol = ratio_tolerances(ordered, ratios, step, noise, trial_focal, tol)
             if worst_tol > max_tolerance:
                 continue
             fov_lo = 2.0 * math.atan(short_px * scale / (2.0 * focal_nominal))
