@@ -20,7 +20,7 @@ from scipy.spatial.transform import Rotation
 from ..camera import Camera
 from .candidate import Candidate
 from .refine import refine_pointing, warm_up_pose
-from .verify import false_match_probability, match_nearest, project_stars
+from .verify import false_match_bound, match_nearest, project_stars
 
 LOOSE_RADIUS_FACTOR = 2.5
 """First verification pass: match radius as a multiple of the final one."""
@@ -87,8 +87,9 @@ class Confirmer:
         proj = project_stars(stars.tree, stars.vectors, rot, camera, stars.keep)
         img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y, self.radius_px)
         extra = _not_in(img_i, pattern_img)
-        prob = false_match_probability(int(extra.sum()), n - len(pattern_img), proj.star.size, self.radius_px,
-                                       camera.width, camera.height, n_trials)
+        d2 = (self.x[img_i[extra]] - proj.x[cat_i[extra]]) ** 2 + (self.y[img_i[extra]] - proj.y[cat_i[extra]]) ** 2
+        prob = false_match_bound(d2, n - len(pattern_img), proj.star.size, self.radius_px,
+                                 camera.width, camera.height, n_trials)
         if prob > self.max_false_match_prob:
             return None
         return Candidate(rot, camera, img_i, stars.catalog_rows[proj.star[cat_i]], prob)

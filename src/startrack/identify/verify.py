@@ -6,7 +6,12 @@ If the candidate were wrong, a star would find a neighbour by chance with probab
 p = m * pi * r^2 / (W * H) for m predicted stars in a W x H image, independently, so k or more
 chance matches among n stars have the binomial tail probability P(X >= k; n, p). Over the T
 candidates tried, the probability that any wrong one did this well is at most T times that
-(Bonferroni). A match is accepted when that bound is below the caller's threshold.
+(Bonferroni). The test is made at two radii fixed in advance, r and r / 2
+(:data:`TEST_RADIUS_FRACTIONS`), and the smaller bound, times two, is reported
+(:func:`false_match_bound`): chance matches at half the radius are four times less likely, so a
+sparse field whose few extra stars sit where predicted is confirmed, while a real lens whose
+stars land up to r off keeps the wide test. A match is accepted when that bound is below the
+caller's threshold.
 This is the reasoning tetra3 uses for its mismatch probability; the test here counts only the
 stars that were not used to form the candidate.
 """
@@ -134,3 +139,33 @@ def false_match_probability(n_matched: int, n_tested: int, n_predicted: int, rad
     p = min(1.0, n_predicted * math.pi * radius_px**2 / (width * height))
     tail = float(bdtrc(n_matched - 1, n_tested, p))
     return min(1.0, max(1, n_trials) * tail)
+
+
+TEST_RADIUS_FRACTIONS = (1.0, 0.5)
+"""Radii of the false-match test as fractions of the match radius; the bound pays a Bonferroni
+factor of their number."""
+
+
+def false_match_bound(extra_d2_px2: NDArray, n_tested: int, n_predicted: int, radius_px: float,
+                      width: int, height: int, n_trials: int) -> float:
+    """The false-match bound of :func:`false_match_probability`, tested at every radius of
+    :data:`TEST_RADIUS_FRACTIONS` and corrected for testing that many (module docstring).
+
+    Parameters
+    ----------
+    extra_d2_px2 : ndarray, shape (K,)
+        Squared distances (pixels^2) of the matched image stars beyond those that formed the
+        candidate to their predicted stars, all within ``radius_px``.
+    n_tested, n_predicted, radius_px, width, height, n_trials
+        As for :func:`false_match_probability`.
+
+    Returns
+    -------
+    float
+        ``min(1, len(TEST_RADIUS_FRACTIONS) * min over radii of the bound at that radius)``.
+    """
+    d2 = np.asarray(extra_d2_px2, dtype=float)
+    best = min(false_match_probability(int(np.count_nonzero(d2 <= (f * radius_px) ** 2)), n_tested, n_predicted,
+                                       f * radius_px, width, height, n_trials)
+               for f in TEST_RADIUS_FRACTIONS)
+    return min(1.0, len(TEST_RADIUS_FRACTIONS) * best)
