@@ -4,13 +4,16 @@ For each field of view, ``--trials`` star lists are generated (:mod:`starlists`:
 attitudes, centroid noise 0.1-0.5 px, 0-20 % missing stars, 0-6 false stars, magnitude noise) and
 solved by both methods in the same run, first with the FOV known, then with only a FOV range
 (``--fov-range``). Printed per method and condition: success rate, false-solve rate, median and
-95th-percentile solve time, and for startrack the ratio of its times to cedar-solve's.
+95th-percentile solve time, and for startrack the ratio of its times to cedar-solve's. The
+methods take turns on chunks of ``--interleave`` lists, so a drift of the machine's speed during
+a long run (seen on shared VMs) does not favour whichever ran first.
 Results (the table and per-trial arrays) are saved as JSON under ``benchmarks/results/``.
 
 Usage::
 
     python benchmarks/lis_benchmark.py [--trials 300] [--seed 1] [--fov-deg 10 15 20]
                                        [--fov-range 5 35] [--no-range] [--no-peer]
+                                       [--interleave 1000]
 """
 
 from __future__ import annotations
@@ -29,7 +32,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from methods import FovKnowledge, MethodRun, solve_cedar, solve_ours  # noqa: E402
+from methods import FovKnowledge, MethodRun, concatenate_runs, solve_cedar, solve_ours  # noqa: E402
 from scoring import (  # noqa: E402
     TOLERANCE_PIXELS,
     attitude_errors_rad,
@@ -67,6 +70,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--cedar-timeout-ms", type=float, default=5000.0)
     parser.add_argument("--timeout-s", type=float, default=None,
                         help="time limit of startrack's matchers (default: each matcher's own, 5 s)")
+    parser.add_argument("--interleave", type=int, default=1000,
+                        help="methods take turns on chunks of this many lists (default 1000)")
     parser.add_argument("--progress", type=int, default=100, help="progress line every N trials")
     parser.add_argument("--out", type=Path, default=None,
                         help="JSON file (default: results/lis-*.json)")
@@ -81,14 +86,25 @@ def knowledge_list(fov_deg: float, args: argparse.Namespace) -> list[FovKnowledg
 
 
 def run_methods(lists, conditions, knowledge, args, skip_ours: str | None) -> list[MethodRun]:
+    """Every method on the lists, taking turns on chunks of ``args.interleave`` lists (so that a
+    drift of the machine's speed during the run touches every method alike)."""
+    size = max(1, args.interleave)
+    chunks = [lists[i:i + size] for i in range(0, len(lists), size)]
+    per_chunk = []
+    for k, chunk in enumerate(chunks):
+        print(f"{conditions.name}, {knowledge.label}: lists {k * size}-{k * size + len(chunk) - 1} "
+              f"of {len(lists)}", file=sys.stderr, flush=True)
+        per_chunk.append(_run_chunk(chunk, conditions, knowledge, args, skip_ours))
+    return [concatenate_runs(list(runs)) for runs in zip(*per_chunk, strict=True)]
+
+
+def _run_chunk(lists, conditions, knowledge, args, skip_ours: str | None) -> list[MethodRun]:
     runs = []
     for matcher in ([] if skip_ours else args.matchers):
         if matcher != "quads" and knowledge.fov_deg is None:
             continue  # the pair-directory matchers need a known field of view
-        print(f"startrack ({matcher}) on {conditions.name}, {knowledge.label}", file=sys.stderr, flush=True)
         runs.append(solve_ours_measured(lists, conditions, knowledge, args, matcher))
     if not args.no_peer:
-        print(f"cedar-solve on {conditions.name}, {knowledge.label}", file=sys.stderr, flush=True)
         runs.append(solve_cedar(lists, conditions, knowledge, timeout_ms=args.cedar_timeout_ms,
                                 progress=args.progress))
     return runs

@@ -80,6 +80,16 @@ class MethodRun:
     extra: dict = field(default_factory=dict)
 
 
+def concatenate_runs(runs: list[MethodRun]) -> MethodRun:
+    """One method's runs on consecutive chunks of lists as one run: per-list arrays of ``extra``
+    are joined, anything else (a database description) is taken from the first chunk."""
+    first = runs[0]
+    extra = {key: (np.concatenate([r.extra[key] for r in runs]) if isinstance(value, np.ndarray) else value)
+             for key, value in first.extra.items()}
+    return MethodRun(first.method, np.concatenate([r.solved for r in runs]),
+                     [e for r in runs for e in r.estimates], np.concatenate([r.time_s for r in runs]), extra)
+
+
 def solve_ours(lists: list[StarList], conditions: Conditions, knowledge: FovKnowledge,
                *, matcher: str = "quads", warmup: bool = True, progress: int = 0,
                timeout_s: float | None = None) -> MethodRun:
