@@ -25,7 +25,8 @@ NAMES = _names()
 
 IMPROVED = {"crappy.jpg", "orion_trees.jpg", "pleiades.jpg"}
 """Images whose lens distortion is significant against their centroid noise (measured 15-40 %
-lower RMS); on the others every distortion term is pruned and the model is the pinhole's."""
+lower RMS); on the others every distortion term is pruned, by the 3-sigma rule or by the joint
+F-test against the pinhole (img3.png: 12 stars of a 6 deg field), and the model is the pinhole's."""
 
 
 def wcs_difference_px(ours, truth, width, height, pixel_arcsec, n=25):
@@ -35,17 +36,7 @@ def wcs_difference_px(ours, truth, width, height, pixel_arcsec, n=25):
     return float(np.sqrt(np.mean(sep**2))), float(np.max(sep))
 
 
-OVERFITTED = {"img3.png": "a 6 deg field calibrated on 12 stars keeps a principal point 315 +- 87 px, 385 +- 73 px "
-                          "off centre and k2 = -35 +- 4 (found 2026-11-22: the re-solve with the calibrated camera now "
-                          "matches 12 stars, not 10; the old re-match looked only within 1.1 half-diagonals of the "
-                          "boresight, which a moved principal point shifts off the image centre; on 10 stars every "
-                          "term was pruned)"}
-"""Known weakness of the 3-sigma pruning on few stars of a narrow field (strict: the test fails
-once the calibration prunes these terms again, so the mark must then go)."""
-
-
-@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=OVERFITTED[n]))
-                                  if n in OVERFITTED else n for n in NAMES])
+@pytest.mark.parametrize("name", NAMES)
 def test_self_calibration_on_real_images(name, truth_table, realdata_dir):
     row = next(r for r in truth_table if r["file"] == name)
     result = self_calibrate(realdata_dir / row["set"] / name, fov_range_deg=(5.0, 35.0))
