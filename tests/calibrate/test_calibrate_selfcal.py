@@ -1,7 +1,5 @@
 """The self-calibration's joint test of the calibrated terms against the pinhole (F-test)."""
 
-import numpy as np
-
 from startrack.calibrate.selfcal import justified
 from startrack.calibrate.stars import CalibrationFrame, calibrate_from_stars
 from startrack.camera import Camera, get_preset
