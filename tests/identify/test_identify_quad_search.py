@@ -85,6 +85,21 @@ def test_a_mirrored_pattern_is_not_fitted(db):
     assert fits.n_tried >= 1  # its edges matched: only the rotation fit tells the mirror apart
 
 
+def test_a_batch_stops_at_each_pattern_that_yields_candidates_and_resumes_after_it(db):
+    """Patterns: a mirrored one (no candidate), a real one, another mirrored one, another real one."""
+    rows = [_row_in_level0(db, k) for k in (4, 0, 5, 1)]
+    seen = [_seen(db, row, mirror=k in (0, 2)) for k, row in enumerate(rows)]
+    u, w = np.concatenate([s[0] for s in seen]), np.concatenate([s[1] for s in seen])
+    quads = np.arange(16).reshape(4, 4)
+    setup = _setup(focal_grid((1.0, 1.0), 0.0015), FOCAL_PX, False)
+    first = search_batch(db, u, w, quads, setup)
+    assert first.next_pattern == 2 and rows[1] in first.row and first.n_tried >= 2  # the mirror's edges matched too
+    second = search_batch(db, u, w, quads, setup, first.next_pattern)
+    assert second.next_pattern == 4 and rows[3] in second.row and rows[1] not in second.row
+    whole = [search_batch(db, u, w, quads[k:k + 1], setup) for k in range(4)]
+    assert sorted(np.concatenate([first.row, second.row])) == sorted(np.concatenate([f.row for f in whole]))
+
+
 def test_focal_grid_spans_the_range_with_one_point_for_a_known_focal_length():
     assert focal_grid((1.0, 1.0), 0.0015).tolist() == [1.0]
     grid = focal_grid((0.5, 3.5), 0.0015)
@@ -136,7 +151,7 @@ def test_trials_of_a_focal_range_each_span_about_one_focal_step(corner):
     grid = focal_grid((nominal / hi, nominal / lo), step)
     u = np.array([corner, -0.8 * corner, 0.1 * corner, 0.5 * corner])
     w = np.array([0.2 * corner, corner, -0.9 * corner, 0.4 * corner])
-    scratch = (np.empty((4, 3)), np.empty(6), np.empty(6), np.empty(5))
+    scratch = (np.empty((4, 3)), np.empty(6), np.empty(6), np.empty(5), np.empty(grid.size, np.int64))
     starts = _trial_starts(u, w, np.arange(4), grid, step, *scratch)
     assert starts[0] == 0 and np.all(np.diff(starts) > 0)
     ratios = np.array([_ratios_at(u, w, s) for s in grid])

@@ -84,14 +84,14 @@ def _ratio_change(u, w, quad, scale, vec, angles, ordered, ratios, previous) -> 
 
 
 @njit(cache=True)
-def _trial_starts(u, w, quad, grid, step, vec, angles, ordered, ratios):
+def _trial_starts(u, w, quad, grid, step, vec, angles, ordered, ratios, starts):
     """Grid indices where the pattern's trials start (step 1 of the module docstring).
 
     The ratios are evaluated at every :data:`COARSE_STRIDE`-th grid point and their change is
     spread evenly over the points between (the ratios are smooth in the scale); a trial starts
     wherever the accumulated change passes a multiple of the focal step."""
     size = grid.size
-    starts = np.zeros(size, np.int64)
+    starts[0] = 0
     if size == 1:
         return starts[:1]
     previous = np.zeros(5)
@@ -206,12 +206,12 @@ def _grow(quats, focal, stars, row, count):
 
 @njit(cache=True)
 def _matching_rows(keys, cell_starts, pattern_ratios, pattern_largest, level_fovs, level_ratio, region_fraction,
-                   ratios, tol, largest, trial_focal, fov_lo, fov_hi, window_lo, window_hi, rows):
+                   ratios, tol, largest, trial_focal, fov_lo, fov_hi, window_lo, window_hi, rows, low, high):
     """Database rows whose key, five ratios and implied focal length fit one trial (step 3).
 
-    Writes them to ``rows`` (grown when full) and returns (rows, count).
+    Writes them to ``rows`` (grown when full) and returns (rows, count); ``low``, ``high`` (5,)
+    are work space for the ratio bounds.
     """
-    low, high = np.empty(5), np.empty(5)
     for k in range(5):
         low[k], high[k] = np.rint((ratios[k] - tol[k]) * RATIO_SCALE), np.rint((ratios[k] + tol[k]) * RATIO_SCALE)
     b0_lo, b0_hi = _bin(_floor_q(ratios[0] - tol[0])), _bin(_floor_q(ratios[0] + tol[0]))
@@ -256,19 +256,22 @@ def _fit_order(u, w, quad, order, scale, cat_vec, stars, obs):
 @njit(cache=True)
 def search(u, w, quads, grid, focal_nominal, short_px, sigma_px, step, max_tolerance, fit_focal,
            level_fovs, level_ratio, region_fraction, keys, cell_starts, pattern_ratios, pattern_largest,
-           pattern_stars, vectors):
-    """The compiled loop of :func:`.quad_search.search_batch` (steps 1-4 of the module docstring)."""
+           pattern_stars, vectors, first):
+    """The compiled loop of :func:`.quad_search.search_batch` (steps 1-4 of the module docstring),
+    from pattern ``first`` up to and including the first pattern that yields a candidate; also
+    returns the index of the pattern after the last one searched."""
     vec, cat_vec, obs = np.empty((4, 3)), np.empty((4, 3)), np.empty((4, 3))
     angles, cat_angles, ordered, ratios, tol = np.empty(6), np.empty(6), np.empty(6), np.empty(5), np.empty(5)
     quad, stars, rows = np.empty(4, np.int64), np.empty(4, np.int64), np.empty(64, np.int64)
+    low, high, starts_buffer = np.empty(5), np.empty(5), np.empty(grid.size, np.int64)
     quats, focal, out_stars, out_row = _grow(np.empty((0, 4)), np.empty(0), np.empty((0, 4), np.int64),
                                              np.empty(0, np.int64), 0)
     count, n_tried = 0, 0
     noise = 3.0 * sigma_px * math.sqrt(2.0)
     step_share = FITTED_FOCAL_STEP_SHARE if fit_focal else 1.0
-    for p in range(quads.shape[0]):
+    for p in range(first, quads.shape[0]):
         quad[:] = quads[p]
-        starts = _trial_starts(u, w, quad, grid, step, vec, angles, ordered, ratios)
+        starts = _trial_starts(u, w, quad, grid, step, vec, angles, ordered, ratios, starts_buffer)
         for t in range(starts.size):
             scale = grid[starts[t]]
             scale_hi = grid[starts[t + 1]] if t + 1 < starts.size else grid[grid.size - 1]
@@ -283,7 +286,7 @@ def search(u, w, quads, grid, focal_nominal, short_px, sigma_px, step, max_toler
             fov_hi = 2.0 * math.atan(short_px * scale_hi / (2.0 * focal_nominal))
             rows, n_rows = _matching_rows(keys, cell_starts, pattern_ratios, pattern_largest, level_fovs, level_ratio,
                                           region_fraction, ratios, tol, largest, trial_focal, fov_lo, fov_hi,
-                                          focal_nominal / scale_hi * 0.98, trial_focal * 1.02, rows)
+                                          focal_nominal / scale_hi * 0.98, trial_focal * 1.02, rows, low, high)
             for j in range(n_rows):
                 r = rows[j]
                 for i in range(4):
@@ -302,4 +305,6 @@ def search(u, w, quads, grid, focal_nominal, short_px, sigma_px, step, max_toler
                     quats, focal, out_stars, out_row = _grow(quats, focal, out_stars, out_row, count)
                 quats[count], focal[count], out_stars[count], out_row[count] = quat, f, stars, r
                 count += 1
-    return quats[:count], focal[:count], out_stars[:count], out_row[:count], n_tried
+        if count > 0:
+            return quats[:count], focal[:count], out_stars[:count], out_row[:count], n_tried, p + 1
+    return quats[:count], focal[:count], out_stars[:count], out_row[:count], n_tried, quads.shape[0]

@@ -35,7 +35,7 @@ from ..results import Status
 from .candidate import Candidate, MatchOutcome
 from .confirm import Confirmer, StarSet, match_radius_px
 from .database import PatternDatabase
-from .quad_search import SearchSetup, focal_grid, search_batch, warm_up
+from .quad_search import Fits, SearchSetup, focal_grid, search_batch, warm_up
 
 MAX_RATIO_TOLERANCE = 0.1
 """Patterns whose edge ratios are less certain than this (tiny patterns) are not looked up."""
@@ -129,9 +129,19 @@ class _Search:
 
     def try_batch(self, quads: NDArray) -> Candidate | None:
         """Look up and verify a batch of patterns (indices into :attr:`pattern_index`); the first
-        verified candidate wins."""
-        fits = search_batch(self.db, self.u, self.w, self.pattern_index[quads], self.setup)
-        self.trials += fits.n_tried
+        verified candidate wins. The look-up stops at each pattern that yields candidates, to
+        confirm them before searching the rest."""
+        patterns, next_pattern = self.pattern_index[quads], 0
+        while next_pattern < len(patterns):
+            fits = search_batch(self.db, self.u, self.w, patterns, self.setup, next_pattern)
+            self.trials += fits.n_tried
+            next_pattern = fits.next_pattern
+            found = self._confirmed(fits)
+            if found is not None:
+                return found
+        return None
+
+    def _confirmed(self, fits: Fits) -> Candidate | None:
         levels = np.searchsorted(self.db.level_offsets, fits.row, side="right") - 1
         for i in range(fits.row.size):
             found = self.confirmer.confirm(self._level_stars(int(levels[i])), Rotation.from_quat(fits.quat[i]),

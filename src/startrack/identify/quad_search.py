@@ -24,7 +24,10 @@ overhead, not the arithmetic, set its time. For each pattern, in order:
    stars (Wahba's problem by Davenport's q-method) and the residual test.
 
 Candidates come out in the order the patterns were formed (brightest stars first), then by
-trial, level and key.
+trial, level and key. A call stops after the first pattern that yields candidates, so that they
+are confirmed before the rest of the batch is searched (a correct pattern is often among the
+first of a batch; searching all 15 patterns of the first batch before confirming cost about a
+quarter of a FOV-range solve at FOV 20: 2.22 -> 1.70 ms median on 1,000 lists).
 """
 
 from __future__ import annotations
@@ -119,6 +122,8 @@ class Fits:
         Database pattern row.
     n_tried : int
         Candidates whose edges matched (the count the false-match bound multiplies by).
+    next_pattern : int
+        The pattern after the last one searched: the batch's size when every pattern was searched.
     """
 
     quat: NDArray[np.float64]
@@ -126,10 +131,14 @@ class Fits:
     image_stars: NDArray[np.int64]
     row: NDArray[np.int64]
     n_tried: int
+    next_pattern: int
 
 
-def search_batch(db: PatternDatabase, u: NDArray, w: NDArray, quads: NDArray, setup: SearchSetup) -> Fits:
-    """Look up a batch of image patterns (see the module docstring).
+def search_batch(db: PatternDatabase, u: NDArray, w: NDArray, quads: NDArray, setup: SearchSetup,
+                 first: int = 0) -> Fits:
+    """Look up the image patterns of a batch, from pattern ``first`` up to and including the first
+    that yields candidates (see the module docstring): the caller confirms those before paying for
+    the rest of the batch, and continues from :attr:`Fits.next_pattern` if none holds.
 
     Parameters
     ----------
@@ -139,6 +148,8 @@ def search_batch(db: PatternDatabase, u: NDArray, w: NDArray, quads: NDArray, se
     quads : ndarray of int, shape (P, 4)
         Image-star indices of the patterns, in the order to try them.
     setup : SearchSetup
+    first : int
+        Index (into ``quads``) of the first pattern to search.
 
     Returns
     -------
@@ -147,13 +158,13 @@ def search_batch(db: PatternDatabase, u: NDArray, w: NDArray, quads: NDArray, se
     from .quad_kernel import search  # numba is imported on first use
 
     s = db.settings
-    quat, focal, stars, row, n_tried = search(
+    quat, focal, stars, row, n_tried, next_pattern = search(
         np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(w, dtype=np.float64),
         np.ascontiguousarray(quads, dtype=np.int64), setup.grid, float(setup.focal_nominal),
         float(setup.short_px), float(setup.sigma_px), float(setup.focal_step), float(setup.max_tolerance),
         bool(setup.fit_focal), db.level_fov_rad, float(s.level_ratio), float(s.region_fraction), db.keys,
-        db.cell_starts, db.pattern_ratios, db.pattern_largest, db.pattern_stars, db.vectors)
-    return Fits(quat, focal, stars, row, int(n_tried))
+        db.cell_starts, db.pattern_ratios, db.pattern_largest, db.pattern_stars, db.vectors, int(first))
+    return Fits(quat, focal, stars, row, int(n_tried), int(next_pattern))
 
 
 _WARM: set[tuple[np.dtype, ...]] = set()
