@@ -25,6 +25,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "calibrate": ("startrack.cli.calibrate_cmd", "calibrate a camera from star or checkerboard images"),
     "availability": ("startrack.cli.availability_cmd", "stars in the field over random pointings (histogram)"),
     "demo": ("startrack.cli.demo_cmd", "simulate a random sky image, solve it, compare with the truth"),
+    "campaign": ("startrack.cli.campaign_cmd", "Monte Carlo campaigns from a TOML spec: run, report, rerun, list"),
+    "web": ("startrack.cli.web_cmd", "the browser tool: a local server with pages and a JSON API"),
 }
 
 USAGE = "usage: startrack {" + ",".join(SUBCOMMANDS) + "} [options]\n\n" + "\n".join(
