@@ -26,6 +26,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "availability": ("startrack.cli.availability_cmd", "stars in the field over random pointings (histogram)"),
     "demo": ("startrack.cli.demo_cmd", "simulate a random sky image, solve it, compare with the truth"),
     "campaign": ("startrack.cli.campaign_cmd", "Monte Carlo campaigns from a TOML spec: run, report, rerun, list"),
+    "analyse": ("startrack.cli.analyse_cmd", "post-processing analyses over result sets (figures + CSV)"),
     "web": ("startrack.cli.web_cmd", "the browser tool: a local server with pages and a JSON API"),
 }
 
