@@ -97,8 +97,8 @@ def report_database(fov_range_deg: tuple[float, float] = (5.0, 35.0)) -> dict:
 def report_cedar_database() -> dict:
     """cedar-solve's shipped database: properties, file size, load time, RSS growth."""
     sys.path.insert(0, str(HERE))
+    from methods import save_for_peer
     from peers.cedar_env import run_cedar
-    from starlists import save_for_peer
 
     with tempfile.TemporaryDirectory() as tmp:
         lists = save_for_peer([], Path(tmp) / "none.npz", width=2, height=2,

@@ -33,7 +33,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from methods import FovKnowledge, MethodRun, concatenate_runs, solve_cedar, solve_ours  # noqa: E402
-from scoring import (  # noqa: E402
+
+from startrack.analysis.scoring import (  # noqa: E402
     TOLERANCE_PIXELS,
     attitude_errors_rad,
     boresight_and_roll_errors,
@@ -41,8 +42,7 @@ from scoring import (  # noqa: E402
     summarize,
     tolerance_rad,
 )
-from starlists import Conditions, generate_star_lists, load_sky  # noqa: E402
-
+from startrack.analysis.starlists import Conditions, generate_star_lists, load_sky  # noqa: E402
 from startrack.identify.registry import MATCHERS  # noqa: E402
 from startrack.units import ARCSEC  # noqa: E402
 

@@ -25,10 +25,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
-from scoring import rotations_from_radec_roll_deg
-from starlists import Conditions, StarList, save_for_peer
 
 from startrack import solve_stars
+from startrack.analysis.scoring import rotations_from_radec_roll_deg
+from startrack.analysis.starlists import Conditions, StarList
 
 try:
     from startrack.solve import FOV_DEG_TOLERANCE as KNOWN_FOV_TOLERANCE
@@ -134,3 +134,21 @@ def solve_cedar(lists: list[StarList], conditions: Conditions, knowledge: FovKno
     extra = {k: out[k] for k in ("ra_deg", "dec_deg", "roll_deg", "fov_deg", "status")}
     extra["database"] = out["database"]
     return MethodRun("cedar-solve", out["solved"].astype(bool), estimates, out["time_s"], extra)
+
+
+def save_for_peer(lists: list[StarList], path: Path, *, width: int, height: int,
+                  fov_estimate_deg: float | None, fov_max_error_deg: float | None) -> Path:
+    """Write the lists as the ``.npz`` that ``peers/cedar_runner.py`` reads (x, y back to back)."""
+    n = len(lists)
+    offsets = np.concatenate([[0], np.cumsum([len(s) for s in lists])]).astype(np.int64)
+    np.savez(
+        path,
+        x=np.concatenate([s.x for s in lists]) if n else np.zeros(0),
+        y=np.concatenate([s.y for s in lists]) if n else np.zeros(0),
+        offsets=offsets,
+        width=np.full(n, width, dtype=np.int64),
+        height=np.full(n, height, dtype=np.int64),
+        fov_estimate_deg=np.full(n, np.nan if fov_estimate_deg is None else fov_estimate_deg),
+        fov_max_error_deg=np.full(n, np.nan if fov_max_error_deg is None else fov_max_error_deg),
+    )
+    return Path(path)

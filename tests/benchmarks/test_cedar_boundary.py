@@ -21,9 +21,10 @@ sys.path.insert(0, str(BENCH))
 sys.path.insert(0, str(BENCH / "peers"))
 
 import cedar_runner  # noqa: E402
-import scoring  # noqa: E402
-import starlists  # noqa: E402
+import methods  # noqa: E402
 from methods import KNOWN_FOV_TOLERANCE, FovKnowledge  # noqa: E402
+
+from startrack.analysis import scoring, starlists  # noqa: E402
 
 
 class RecordingSolver:
@@ -47,7 +48,7 @@ def _round_trip(tmp_path, knowledge):
     rng = np.random.default_rng(0)
     lists = [_fake_list(rng, 7), _fake_list(rng, 5)]
     est, err = knowledge.cedar_estimate()
-    path = starlists.save_for_peer(lists, tmp_path / "lists.npz", width=640, height=480,
+    path = methods.save_for_peer(lists, tmp_path / "lists.npz", width=640, height=480,
                                    fov_estimate_deg=est, fov_max_error_deg=err)
     with np.load(path) as npz:
         data = {k: npz[k] for k in npz.files}

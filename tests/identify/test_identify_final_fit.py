@@ -6,14 +6,13 @@ fit so that the rest of the field was never matched. The database has changed si
 lists may now be solved from other patterns; the candidates themselves are rebuilt below.
 """
 
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
 from startrack import Camera, Status, solve_stars
+from startrack.analysis.starlists import Conditions, load_sky, make_star_list
 from startrack.catalog import load_catalog
 from startrack.frames import attitude_error
 from startrack.identify import final_fit
@@ -21,9 +20,6 @@ from startrack.identify.candidate import Candidate
 from startrack.identify.field_stars import field_stars
 from startrack.identify.refine import leave_one_out_residuals, refine_pointing
 from startrack.units import ARCSEC, PIXEL
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-from starlists import Conditions, load_sky, make_star_list  # noqa: E402
 
 
 def _benchmark_list(fov_deg: float, index: int):

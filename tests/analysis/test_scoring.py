@@ -1,17 +1,13 @@
 """The benchmark's judge: roll is weighted by the image's half-diagonal over the focal length."""
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from startrack import Camera
+from startrack.analysis import scoring
 from startrack.units import ARCSEC
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-import scoring  # noqa: E402
 
 
 def test_pure_roll_counts_as_the_motion_it_causes_at_the_corner():

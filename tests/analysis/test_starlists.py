@@ -2,19 +2,14 @@
 
 from __future__ import annotations
 
-import sys
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
 
+from startrack.analysis import starlists
 from startrack.catalog import load_catalog
 from startrack.units import PIXEL
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-
-import starlists  # noqa: E402
 
 BASE = starlists.Conditions(fov_deg=15.0, max_stars=1000)
 

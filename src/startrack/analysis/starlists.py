@@ -1,4 +1,4 @@
-"""Seeded random star lists for lost-in-space benchmarks.
+"""Seeded random star lists for lost-in-space benchmarks and campaigns (level "stars").
 
 A star list is what a star tracker's detector hands to its identifier: centroids (x, y) in our
 pixel convention (0-based pixel centres, x = column) and fluxes, brightest first. Each list is made
@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
@@ -220,9 +219,11 @@ def _false_stars(conditions: Conditions, max_mag: float, rng: np.random.Generato
     return x, y, mag
 
 
-def make_star_list(sky: Sky, conditions: Conditions, rng: np.random.Generator) -> StarList:
-    """One star list with a uniformly random attitude (see the module docstring)."""
-    rot = random_rotations(rng=rng)
+def make_star_list(sky: Sky, conditions: Conditions, rng: np.random.Generator,
+                   rot: Rotation | None = None) -> StarList:
+    """One star list (see the module docstring) at attitude ``rot`` (``rot_cam_from_icrs``;
+    uniformly random, drawn from ``rng``, when None)."""
+    rot = random_rotations(rng=rng) if rot is None else rot
     x, y, tx, ty, mag, hip, sigma_px = _visible(sky, rot, conditions, rng)
     keep, fraction = _drop_missing(x.size, conditions, rng)
     fx, fy, fmag = _false_stars(conditions, sky.max_mag, rng)
@@ -263,21 +264,3 @@ def generate_star_lists(conditions: Conditions, n: int,
     sky = load_sky(conditions, catalog) if sky is None else sky
     children = np.random.default_rng(rng).spawn(n)
     return [make_star_list(sky, conditions, child) for child in children]
-
-
-def save_for_peer(lists: list[StarList], path: Path, *, width: int, height: int,
-                  fov_estimate_deg: float | None, fov_max_error_deg: float | None) -> Path:
-    """Write the lists as the ``.npz`` that ``peers/cedar_runner.py`` reads (x, y back to back)."""
-    n = len(lists)
-    offsets = np.concatenate([[0], np.cumsum([len(s) for s in lists])]).astype(np.int64)
-    np.savez(
-        path,
-        x=np.concatenate([s.x for s in lists]) if n else np.zeros(0),
-        y=np.concatenate([s.y for s in lists]) if n else np.zeros(0),
-        offsets=offsets,
-        width=np.full(n, width, dtype=np.int64),
-        height=np.full(n, height, dtype=np.int64),
-        fov_estimate_deg=np.full(n, np.nan if fov_estimate_deg is None else fov_estimate_deg),
-        fov_max_error_deg=np.full(n, np.nan if fov_max_error_deg is None else fov_max_error_deg),
-    )
-    return Path(path)
