@@ -1,0 +1,107 @@
+"""Where the chunks run: a Dask distributed cluster (local by default, or a scheduler's), or this
+process (synchronous mode, for debugging).
+
+On Dask, every worker is warmed before its first chunk (a ``WarmUp`` worker plugin runs one
+throwaway trial of every cell, so the catalog, the pattern databases and the compiled kernels are
+loaded once per worker, including workers that join later; :mod:`.warm_plugin`), the spec is sent once
+(``scatter(broadcast=True)``) and chunks are gathered as they finish, each handed to ``on_chunk``
+(which writes its part). A chunk whose worker dies is split into single trials and sent again;
+a single trial whose worker dies becomes a ``LOST`` row with the error, never a lost campaign.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import traceback
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import pyarrow as pa
+
+from ...errors import InvalidInputError
+from .levels import warm
+from .spec import CampaignSpec
+from .trials import Chunk, lost_table, run_chunk
+
+ChunkDone = Callable[[Chunk, pa.Table], None]
+Progress = Callable[[int, int], None]
+
+
+def warm_cells(spec: CampaignSpec) -> None:
+    """Run one throwaway trial of each distinct cell in this process (see :mod:`.levels`)."""
+    seen: list[dict[str, Any]] = []
+    for cell in spec.cells():
+        if cell.params not in seen:
+            seen.append(cell.params)
+            with contextlib.suppress(Exception):  # a cell that raises will say so in its own rows
+                warm(spec.level_def, cell.params)
+
+
+def run_sync(spec: CampaignSpec, chunks: list[Chunk], on_chunk: ChunkDone, progress: Progress | None = None) -> None:
+    """Run the chunks one after the other in this process."""
+    warm_cells(spec)
+    for done, chunk in enumerate(chunks, 1):
+        on_chunk(chunk, run_chunk(spec, chunk))
+        if progress is not None:
+            progress(done, len(chunks))
+
+
+@contextlib.contextmanager
+def dask_client(workers: int | None = None, scheduler: str | None = None) -> Iterator[Any]:
+    """A Dask client: on ``scheduler`` (``tcp://HOST:PORT``) or on a new local cluster of
+    ``workers`` single-threaded worker processes (default: one per core), closed afterwards."""
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise InvalidInputError("campaigns need Dask: pip install 'startrack[campaign]'") from None
+    if scheduler is not None:
+        with Client(scheduler, timeout="20s") as client:
+            yield client
+        return
+    n = workers if workers is not None else (os.cpu_count() or 1)
+    if n < 1:
+        raise InvalidInputError(f"--workers must be at least 1, got {n}")
+    with (LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                       silence_logs=logging.ERROR) as cluster, Client(cluster) as client):
+        yield client
+
+
+def run_dask(client: Any, spec: CampaignSpec, chunks: list[Chunk], on_chunk: ChunkDone,
+             progress: Progress | None = None) -> None:
+    """Run the chunks on ``client``'s workers (see the module docstring)."""
+    from distributed import as_completed
+
+    from .warm_plugin import WarmUp
+
+    client.register_plugin(WarmUp(spec), name=f"startrack-warm-{spec.name}")
+    shared = client.scatter(spec, broadcast=True)
+    pending = {client.submit(run_chunk, shared, chunk, pure=False): chunk for chunk in chunks}
+    total, done = sum(c.size for c in chunks), 0
+    queue = as_completed(list(pending))
+    for future in queue:
+        chunk = pending.pop(future)
+        try:
+            table = future.result()
+        except Exception:  # the worker died (or the chunk could not be sent): retry trial by trial
+            if chunk.size > 1:
+                for k in range(chunk.start, chunk.stop):
+                    single = Chunk(chunk.cell, k, k + 1)
+                    retry = client.submit(run_chunk, shared, single, pure=False)
+                    pending[retry] = single
+                    queue.add(retry)
+                continue
+            table = lost_table(spec, chunk, traceback.format_exc())
+        future.release()
+        on_chunk(chunk, table)
+        done += chunk.size
+        if progress is not None:
+            progress(done, total)
+
+
+def workers_info(client: Any) -> dict[str, Any]:
+    """Hosts and number of the client's workers (for the manifest)."""
+    info = client.scheduler_info(n_workers=-1).get("workers", {})
+    hosts = sorted({w.get("host", addr) for addr, w in info.items()})
+    return {"workers": len(info), "hosts": hosts, "scheduler": client.scheduler.address}

@@ -1,0 +1,54 @@
+"""The specs shipped with the package (``startrack/analysis/campaign/specs/*.toml``), by name.
+
+``startrack campaign list`` lists them; ``startrack campaign run NAME`` runs one. Each seed
+table's spec reproduces one reference result of the seeds and prints ours beside the seed's.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from ...errors import InvalidInputError
+
+SPECS_DIR = Path(__file__).resolve().parent / "specs"
+
+
+@dataclass(frozen=True)
+class ShippedSpec:
+    """A spec file with its name (the file's stem), level and one-line description."""
+
+    name: str
+    path: Path
+    level: str
+    description: str
+
+
+def list_specs() -> list[ShippedSpec]:
+    """The shipped specs, sorted by name."""
+    out = []
+    for path in sorted(SPECS_DIR.glob("*.toml")):
+        head = tomllib.loads(path.read_text(encoding="utf-8")).get("campaign", {})
+        text = " ".join(str(head.get("description", "")).split())
+        out.append(ShippedSpec(path.stem, path, str(head.get("level", "stars")), text))
+    return out
+
+
+def find_spec(name_or_path: str | Path) -> Path:
+    """The spec file for a path, or for the name of a shipped spec.
+
+    Raises
+    ------
+    InvalidInputError
+        When it is neither an existing file nor a shipped spec's name.
+    """
+    path = Path(name_or_path)
+    if path.is_file():
+        return path
+    shipped = SPECS_DIR / f"{name_or_path}.toml"
+    if shipped.is_file():
+        return shipped
+    names = ", ".join(s.name for s in list_specs()) or "none"
+    raise InvalidInputError(f"no spec file {str(name_or_path)!r} and no shipped spec of that name "
+                            f"(shipped: {names}; see 'startrack campaign list')")
