@@ -81,6 +81,8 @@ class CampaignSpec:
         The ``[[reference]]`` tables as given.
     text : str
         The TOML text the spec was read from.
+    level_obj : Level or None
+        The level object (see :attr:`level_def`).
     """
 
     name: str
@@ -96,10 +98,13 @@ class CampaignSpec:
     budget: dict[str, Any] = field(default_factory=dict)
     reference: tuple[dict[str, Any], ...] = ()
     text: str = ""
+    level_obj: Level | None = field(default=None, repr=False, compare=False)
 
     @property
     def level_def(self) -> Level:
-        return get_level(self.level)
+        """The level; the spec carries it, so that a worker process unpickling the spec imports
+        the module that defines it (a level registered outside this package works on Dask too)."""
+        return self.level_obj if self.level_obj is not None else get_level(self.level)
 
     @property
     def swept(self) -> list[str]:
@@ -214,7 +219,7 @@ def parse_spec(text: str, source: str = "<spec>") -> CampaignSpec:
     level = get_level(head["level"])
     spec = CampaignSpec(**head, base=_checked(level.params, _table(data, "base"), "[base]"),
                         sweep=_sweep(level.params, _table(data, "sweep")), budget=_table(data, "budget"),
-                        reference=_references(data), text=text)
+                        reference=_references(data), text=text, level_obj=level)
     _check_cells(spec)
     return spec
 
