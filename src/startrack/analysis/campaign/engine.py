@@ -3,10 +3,11 @@ process (synchronous mode, for debugging).
 
 On Dask, every worker is warmed before its first chunk (a ``WarmUp`` worker plugin runs one
 throwaway trial of every cell, so the catalog, the pattern databases and the compiled kernels are
-loaded once per worker, including workers that join later; :mod:`.warm_plugin`), the spec is sent once
-(``scatter(broadcast=True)``) and chunks are gathered as they finish, each handed to ``on_chunk``
-(which writes its part). A chunk whose worker dies is split into single trials and sent again;
-a single trial whose worker dies becomes a ``LOST`` row with the error, never a lost campaign.
+loaded once per worker, including workers that join later; :mod:`.warm_plugin`). The spec (a few
+kilobytes) goes with every chunk: a scattered copy would be lost with the worker holding it.
+Chunks are gathered as they finish, each handed to ``on_chunk`` (which writes its part). A chunk
+whose worker dies is split into single trials and sent again; a single trial whose worker dies
+becomes a ``LOST`` row with the error, never a lost campaign.
 """
 
 from __future__ import annotations
@@ -63,7 +64,12 @@ def dask_client(workers: int | None = None, scheduler: str | None = None) -> Ite
     n = workers if workers is not None else (os.cpu_count() or 1)
     if n < 1:
         raise InvalidInputError(f"--workers must be at least 1, got {n}")
-    with (LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+    import dask
+
+    # A local worker that dies was killed by its trial: no blind retries, the chunk is split
+    # into single trials instead (run_dask).
+    with (dask.config.set({"distributed.scheduler.allowed-failures": 0}),
+          LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
                        silence_logs=logging.ERROR) as cluster, Client(cluster) as client):
         yield client
 
@@ -76,8 +82,7 @@ def run_dask(client: Any, spec: CampaignSpec, chunks: list[Chunk], on_chunk: Chu
     from .warm_plugin import WarmUp
 
     client.register_plugin(WarmUp(spec), name=f"startrack-warm-{spec.name}")
-    shared = client.scatter(spec, broadcast=True)
-    pending = {client.submit(run_chunk, shared, chunk, pure=False): chunk for chunk in chunks}
+    pending = {client.submit(run_chunk, spec, chunk, pure=False): chunk for chunk in chunks}
     total, done = sum(c.size for c in chunks), 0
     queue = as_completed(list(pending))
     for future in queue:
@@ -88,7 +93,7 @@ def run_dask(client: Any, spec: CampaignSpec, chunks: list[Chunk], on_chunk: Chu
             if chunk.size > 1:
                 for k in range(chunk.start, chunk.stop):
                     single = Chunk(chunk.cell, k, k + 1)
-                    retry = client.submit(run_chunk, shared, single, pure=False)
+                    retry = client.submit(run_chunk, spec, single, pure=False)
                     pending[retry] = single
                     queue.add(retry)
                 continue
