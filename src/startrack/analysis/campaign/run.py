@@ -37,10 +37,10 @@ def as_spec(spec: CampaignSpec | str | Path) -> CampaignSpec:
 
 
 def default_chunk_size(spec: CampaignSpec, workers: int) -> int:
-    """The level's chunk size, made smaller when that would leave workers idle (at least four
-    chunks per worker when there are enough trials)."""
+    """The level's chunk size, made smaller when that would leave workers idle (at least eight
+    chunks per worker when there are enough trials, so the last ones finish close together)."""
     total = spec.trials * len(spec.cells())
-    spread = max(1, math.ceil(total / (4 * max(workers, 1))))
+    spread = max(1, math.ceil(total / (8 * max(workers, 1))))
     return max(1, min(spec.level_def.chunk_trials, spread, spec.trials))
 
 
@@ -145,11 +145,12 @@ def _execute(spec: CampaignSpec, store: CampaignStore, manifest: dict[str, Any],
     run = {"started_utc": utc_now(), "chunks": len(chunks)}
     if sync:
         run.update(mode="synchronous", workers=1)
-        run_sync(spec, chunks, on_chunk, progress)
+        timings = run_sync(spec, chunks, on_chunk, progress)
     else:
         with dask_client(workers, scheduler) as client:
             run.update(mode="dask", **workers_info(client))
-            run_dask(client, spec, chunks, on_chunk, progress)
+            timings = run_dask(client, spec, chunks, on_chunk, progress)
+    run.update({k: round(v, 3) for k, v in timings.items()})
     run.update(finished_utc=utc_now(), wall_s=round(time.perf_counter() - t0, 3))
     manifest["runs"] = [*manifest.get("runs", []), run]
     manifest["finished_utc"] = run["finished_utc"]
