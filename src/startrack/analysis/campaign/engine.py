@@ -33,9 +33,8 @@ LOCAL_CLUSTER_CONFIG = {
     # a local worker that dies was killed by its trial: no blind retries, the chunk is split into
     # single trials instead (run_dask)
     "distributed.scheduler.allowed-failures": 0,
-    # one thread per library in each single-threaded worker, but not Dask's MALLOC_TRIM_THRESHOLD_:
-    # it fixes glibc's mmap threshold, so every large array is mapped and zeroed afresh (it made an
-    # image-level trial 1.5x slower: 39 -> 60 ms, measured)
+    # one thread per library in each single-threaded worker, but not Dask's MALLOC_TRIM_THRESHOLD_
+    # (see warm_plugin.undo_malloc_trim, which repairs it on workers started by others)
     "distributed.nanny.pre-spawn-environ": {"OMP_NUM_THREADS": 1, "MKL_NUM_THREADS": 1, "OPENBLAS_NUM_THREADS": 1},
 }
 """Dask settings of the local clusters this module starts."""
