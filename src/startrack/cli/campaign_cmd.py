@@ -22,6 +22,14 @@ from typing import Any
 from ..errors import InvalidInputError
 
 DEFAULT_OUT = Path("startrack-campaigns")
+EPILOG = """\
+SPEC is a TOML file (docs/campaigns.md) or the name of a shipped spec ('startrack campaign list').
+'run' writes OUT/manifest.json, OUT/trials/*.parquet (one row per trial), OUT/cells.csv and
+OUT/report.html, and prints a table per cell (and the seed's numbers beside ours where the spec
+has them). 'rerun --json' prints {"row": {...}, "same_as_stored": true|false|null, "files": [...]}.
+
+Exit status: 0 the campaign ran (whatever its trials did), 2 a bad spec, folder or option (one
+line on stderr, before any work)."""
 
 
 def _needs_extra() -> None:
@@ -34,7 +42,8 @@ def _needs_extra() -> None:
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="startrack campaign", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="startrack campaign", description=__doc__.split("\n\n")[0],
+                                     epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="action", required=True, metavar="{run,report,rerun,list}")
     run = sub.add_parser("run", help="run a campaign spec")
     run.add_argument("spec", help="a TOML spec file, or the name of a shipped spec")
