@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -18,7 +19,10 @@ from ..results import AttitudeSolution
 
 if TYPE_CHECKING:
     from astropy.time import Time
+    from scipy.spatial.transform import Rotation
 
+    from ..calibrate.sites import Site
+    from ..camera import Camera
     from ..simulate.truth import Truth
 
 
@@ -42,6 +46,19 @@ class ImageRecord:
     settings : mapping
         The options the image was processed with (detection settings, camera, corrections), as
         plain JSON-able values, so that tables can show what differed between result sets.
+        The keys :func:`startrack.analysis.postprocess.records_from_images` writes and the
+        re-running analyses read are listed in ``docs/analysis.md``.
+    path : pathlib.Path, optional
+        The file the image was read from, so that its pixels can be read again when ``image``
+        was not kept.
+    camera : startrack.camera.Camera, optional
+        The calibrated camera given to the solve (None when the field of view was searched);
+        the lens model of the correction analysis and of re-runs.
+    site : startrack.calibrate.sites.Site, optional
+        Where a photo from the ground was taken (refraction, fixed-mount repeatability).
+    true_rot_cam_from_icrs : scipy.spatial.transform.Rotation, optional
+        The true attitude when it is known without a full ``truth`` (read from the header or
+        the ``.truth.json`` sidecar of a file written by ``startrack simulate``).
     """
 
     name: str
@@ -50,3 +67,7 @@ class ImageRecord:
     truth: Truth | None = None
     time: Time | None = None
     settings: Mapping[str, Any] = field(default_factory=dict)
+    path: Path | None = None
+    camera: Camera | None = None
+    site: Site | None = None
+    true_rot_cam_from_icrs: Rotation | None = None

@@ -18,6 +18,7 @@ from ..errors import StartrackError
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "solve": ("startrack.cli.solve_cmd", "solve an image lost-in-space (FITS, PNG, JPEG, TIFF)"),
     "solve-stars": ("startrack.cli.solve_stars_cmd", "solve a CSV star list (x, y in 0-based pixels)"),
+    "solve-rig": ("startrack.cli.solve_rig_cmd", "one attitude from the images or star lists of several camera heads"),
     "detect": ("startrack.cli.detect_cmd", "detect and centroid the stars of an image"),
     "simulate": ("startrack.cli.simulate_cmd", "simulate a star image with its truth"),
     "track": ("startrack.cli.track_cmd", "follow the attitude over a sequence of images, write a CSV"),
@@ -27,6 +28,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("startrack.cli.demo_cmd", "simulate a random sky image, solve it, compare with the truth"),
     "campaign": ("startrack.cli.campaign_cmd", "Monte Carlo campaigns from a TOML spec: run, report, rerun, list"),
     "analyse": ("startrack.cli.analyse_cmd", "post-processing analyses over result sets (figures + CSV)"),
+    "adcs-demo": ("startrack.cli.adcs_cmd", "closed-loop attitude control with the star tracker in the loop"),
     "web": ("startrack.cli.web_cmd", "the browser tool: a local server with pages and a JSON API"),
 }
 
