@@ -82,4 +82,7 @@ def shared_bins(values: Sequence[NDArray], bins: int, *, log: bool = False, inte
     if integer and not log and hi - lo + 1 <= bins:
         return np.arange(np.floor(lo), np.floor(hi) + 2) - 0.5
     edges = np.linspace(lo, hi, bins + 1)
-    return 10.0**edges if log else edges
+    if log:  # 10**log10(v) may round below v: put the outer edges on the extreme values themselves
+        edges = 10.0**edges
+        edges[0], edges[-1] = joined.min(), max(joined.max(), edges[-1])
+    return edges
