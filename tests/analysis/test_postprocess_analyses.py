@@ -57,7 +57,7 @@ def sim_set() -> ResultSet:
 
 def test_spot_histograms_count_every_star_and_noise_spot_on_shared_bins(sim_set):
     result = run_analysis("histograms", [sim_set], {"bins": 12})
-    hist = result.tables["histograms"]
+    hist = result.tables["spot_histograms"]
     for quantity in ("flux", "area_px", "elongation"):
         for kind in ("star", "noise"):
             values = np.concatenate([_spot_values(r.solution, quantity, kind) for r in sim_set.records])

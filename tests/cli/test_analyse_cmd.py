@@ -87,7 +87,7 @@ def test_the_default_output_folder_is_named_for_the_analysis(folders, tmp_path, 
     code, _, err = run("histograms", folders[0], "--fov-deg", 12, "--param", "image=false")
     assert code == 0, err
     assert sorted(p.name for p in (tmp_path / "startrack-analysis" / "histograms").iterdir()) == [
-        "histograms.png", "histograms_counts.csv", "histograms_histograms.csv", "histograms_spots.csv"]
+        "histograms.png", "histograms_counts.csv", "histograms_spot_histograms.csv", "histograms_spots.csv"]
 
 
 def test_a_real_photo(realdata_dir, tmp_path):

@@ -102,8 +102,9 @@ def _solve(path: str, name: str, options: dict):
 def _summary_text(result, sets, written) -> str:
     solved = ", ".join(f"{s.name}: {sum(r.solution.solved for r in s.records)} of {len(s.records)} solved"
                        for s in sets)
-    lines = [result.title, f"{'images':<44}{solved}"]
-    lines += [f"{key:<44}{_format(value)}" for key, value in result.summary.items()]
+    width = max([len("images"), *map(len, result.summary)]) + 2
+    lines = [result.title, f"{'images':<{width}}{solved}"]
+    lines += [f"{key:<{width}}{_format(value)}" for key, value in result.summary.items()]
     lines.append("wrote " + ", ".join(str(p) for p in written))
     return "\n".join(lines)
 

@@ -81,12 +81,18 @@ def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
     override = get_preset(params["camera"]) if params["camera"] else None
     site = site_from_params(INFO.name, params, [r for s in sets for r in s.records])
     table: dict[str, list] = {k: [] for k in COLUMNS}
+    models: dict[str, bool] = {}
     for s in sets:
         for record in s.records:
             if record.solution.solved and record.solution.detections is not None:
-                _add_rows(table, s.name, record, lens_model(record, override), site)
+                camera = lens_model(record, override)
+                models[camera.name or "camera"] = camera.has_distortion
+                _add_rows(table, s.name, record, camera, site)
     fig = _draw(table)
-    return AnalysisResult(INFO.name, INFO.title, fig, {"errors": table}, _summary(table, site))
+    summary = _summary(table, site)
+    summary["lens model"] = ", ".join(f"{name}{'' if distorted else ' (no distortion: lens on = off)'}"
+                                      for name, distorted in models.items()) or "none"
+    return AnalysisResult(INFO.name, INFO.title, fig, {"errors": table}, summary)
 
 
 def _add_rows(table: dict[str, list], set_name: str, record: ImageRecord, camera: Camera, site) -> None:

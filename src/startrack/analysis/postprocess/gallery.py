@@ -51,7 +51,8 @@ def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
             pixels = cache.setdefault(id(record), np.asarray(record_pixels(record), float))
             stamp = _stamp(pixels, record.solution.detections.x[i], record.solution.detections.y[i], half)
             hip = _hip(record, i)
-            stamps[kind].append((stamp, f"HIP {hip}" if hip is not None else "noise"))
+            area = int(record.solution.detections.area_px[i])
+            stamps[kind].append((stamp, f"{f'HIP {hip}' if hip is not None else 'noise'}, {area} px"))
             _row(table, set_name, record, i, kind, hip, stamp)
     fig = _draw(stamps, params["count"])
     summary = {"star spots shown": len(picks["star"]), "noise spots shown": len(picks["noise"]),

@@ -39,7 +39,7 @@ QUANTITIES = (("flux", "volume (flux), counts", True, False), ("area_px", "area,
 def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
     spots = detection_table(sets)
     fig, axes = new_figure(2, 3, title=INFO.title)
-    tables = {"spots": spots, "histograms": _spot_histograms(sets, spots, params["bins"], axes.ravel()[1:5]),
+    tables = {"spots": spots, "spot_histograms": _spot_histograms(sets, spots, params["bins"], axes.ravel()[1:5]),
               "counts": counts_table(sets)}
     ax_image = axes[0, 0]
     if params["image"]:
