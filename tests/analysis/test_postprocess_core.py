@@ -231,5 +231,7 @@ def test_a_failed_record_takes_part_as_unsolved(image_set):
     counts = result.tables["counts"]
     assert counts["solved"] == [True, True, False] and counts["n_detected"][2] == 0
     assert "image_histogram" not in result.tables
+    rerun = run_analysis("thresholds", [ResultSet("all", records)], {"sigmas": [6.0]}).tables["images"]
+    assert rerun["record"] == ["a.fits", "b.png"]  # nothing to detect again in the unreadable file
     bare = ImageRecord("x", AttitudeSolution(status=Status.NO_MATCH, reason="no pattern"))
     assert run_analysis("radial", [ResultSet("none", (bare,))]).summary["none: stars"] == 0

@@ -73,6 +73,7 @@ def _set_names(paths: list[str]) -> list[str]:
 
 
 def main(argv: list[str]) -> int:
+    """``startrack analyse``: list, or run one analysis over the PATHs (exit 0; misuse raises and exits 2)."""
     args = _parser().parse_args(argv)
     if args.name == "list":
         print(list_text())

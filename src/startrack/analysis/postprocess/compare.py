@@ -30,6 +30,8 @@ COLUMNS = ("record", "in_a", "in_b", "solved_a", "solved_b", "pointing_diff_arcs
 
 
 def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
+    """The analysis of this module over result sets and parameters already checked by
+    :func:`~.registry.run_analysis` (see :data:`INFO` and the module docstring)."""
     a, b = ({r.name: r for r in s.records} for s in sets)
     names = list(a) + [n for n in b if n not in a]
     table: dict[str, list] = {k: [] for k in COLUMNS}

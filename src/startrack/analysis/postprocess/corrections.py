@@ -78,6 +78,8 @@ def lens_model(record: ImageRecord, override: Camera | None) -> Camera:
 
 
 def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
+    """The analysis of this module over result sets and parameters already checked by
+    :func:`~.registry.run_analysis` (see :data:`INFO` and the module docstring)."""
     override = get_preset(params["camera"]) if params["camera"] else None
     site = site_from_params(INFO.name, params, [r for s in sets for r in s.records])
     table: dict[str, list] = {k: [] for k in COLUMNS}

@@ -37,6 +37,8 @@ COLUMNS = 8
 
 
 def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
+    """The analysis of this module over result sets and parameters already checked by
+    :func:`~.registry.run_analysis` (see :data:`INFO` and the module docstring)."""
     if params["stamp_px"] % 2 == 0:
         raise InvalidInputError(f"gallery: parameter 'stamp_px' must be odd, got {params['stamp_px']}")
     rng = np.random.default_rng(params["seed"])

@@ -37,6 +37,8 @@ QUANTITIES = (("flux", "volume (flux), counts", True, False), ("area_px", "area,
 
 
 def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
+    """The analysis of this module over result sets and parameters already checked by
+    :func:`~.registry.run_analysis` (see :data:`INFO` and the module docstring)."""
     spots = detection_table(sets)
     fig, axes = new_figure(2, 3, title=INFO.title)
     tables = {"spots": spots, "spot_histograms": _spot_histograms(sets, spots, params["bins"], axes.ravel()[1:5]),

@@ -34,6 +34,8 @@ PROPERTIES = (("flux", "volume (flux), counts", True), ("area_px", "area, px", F
 
 
 def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
+    """The analysis of this module over result sets and parameters already checked by
+    :func:`~.registry.run_analysis` (see :data:`INFO` and the module docstring)."""
     stars = star_table(sets)
     fig, axes = new_figure(2, 4, width_in=3.6, title=INFO.title)
     summary: dict[str, float | int | str] = {}

@@ -44,6 +44,8 @@ def quadratic_fit(radius: NDArray, value: NDArray) -> tuple[NDArray, NDArray]:
 
 
 def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
+    """The analysis of this module over result sets and parameters already checked by
+    :func:`~.registry.run_analysis` (see :data:`INFO` and the module docstring)."""
     stars = star_table(sets)
     fig, axes = new_figure(1, 1, width_in=7.0, height_in=4.5, title=INFO.title)
     ax = axes[0, 0]

@@ -37,6 +37,8 @@ INFO = AnalysisInfo(
 
 
 def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
+    """The analysis of this module over result sets and parameters already checked by
+    :func:`~.registry.run_analysis` (see :data:`INFO` and the module docstring)."""
     records = sets[0].records
     site = site_from_params(INFO.name, params, records)
     if site is None:

@@ -36,6 +36,8 @@ INFO = AnalysisInfo(
 
 
 def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
+    """The analysis of this module over result sets and parameters already checked by
+    :func:`~.registry.run_analysis` (see :data:`INFO` and the module docstring)."""
     setting, values = params["setting"], list(params["values"])
     if len(set(map(repr, values))) != len(values):
         raise InvalidInputError(f"sweep: parameter 'values' holds a value twice: {values!r}")

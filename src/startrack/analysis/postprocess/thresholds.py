@@ -28,6 +28,8 @@ INFO = AnalysisInfo(
 
 
 def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
+    """The analysis of this module over result sets and parameters already checked by
+    :func:`~.registry.run_analysis` (see :data:`INFO` and the module docstring)."""
     sigmas = [_sigma(v) for v in params["sigmas"]]
     images = rerun(INFO.name, "sigmas", sets, "sigma", sigmas)
     summary_table = per_value(images, sigmas)
