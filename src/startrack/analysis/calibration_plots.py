@@ -8,22 +8,19 @@ from __future__ import annotations
 
 import os
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..calibrate.lens_models import distortion_field_px  # noqa: E402
-from ..calibrate.repeatability import Repeatability  # noqa: E402
-from ..camera import Camera  # noqa: E402
-from ..units import ARCMIN  # noqa: E402
+from ..calibrate.lens_models import distortion_field_px
+from ..calibrate.repeatability import Repeatability
+from ..camera import Camera
+from ..units import ARCMIN
+from .postprocess.figures import draw_radial_fit, draw_repeatability
 
 
-def _save(fig, path: str | os.PathLike) -> None:
+def _save(fig: Figure, path: str | os.PathLike) -> None:
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
 
 
 def plot_residuals(x: np.ndarray, y: np.ndarray, residuals_px: np.ndarray, camera: Camera,
@@ -31,7 +28,8 @@ def plot_residuals(x: np.ndarray, y: np.ndarray, residuals_px: np.ndarray, camer
     """Residual vectors on the image (magnified ``scale`` times) and residual distance against the
     distance from the principal point with a 2nd-order fit (seed 003 §VIII.C: an even-order trend
     means radial distortion is left)."""
-    fig, (ax_map, ax_rad) = plt.subplots(1, 2, figsize=(12, 5), dpi=100)
+    fig = Figure(figsize=(12, 5), dpi=100)
+    ax_map, ax_rad = fig.subplots(1, 2)
     ax_map.quiver(x, y, residuals_px[:, 0] * scale, residuals_px[:, 1] * scale, angles="xy", scale_units="xy",
                   scale=1.0, width=0.003)
     ax_map.set_xlim(-0.5, camera.width - 0.5)
@@ -40,12 +38,7 @@ def plot_residuals(x: np.ndarray, y: np.ndarray, residuals_px: np.ndarray, camer
     ax_map.set_title(f"residuals x {scale:g}" + (f" - {title}" if title else ""))
     radius = np.hypot(x - camera.cx, y - camera.cy)
     dist = np.hypot(residuals_px[:, 0], residuals_px[:, 1])
-    ax_rad.scatter(radius, dist, s=6)
-    if radius.size >= 3:
-        coef = np.polyfit(radius, dist, 2)
-        r = np.linspace(0, radius.max(), 100)
-        ax_rad.plot(r, np.polyval(coef, r), color="tab:red", label="2nd-order fit")
-        ax_rad.legend()
+    draw_radial_fit(ax_rad, radius, dist, np.polyfit(radius, dist, 2) if radius.size >= 3 else None)
     ax_rad.set_xlabel("distance from the principal point, px")
     ax_rad.set_ylabel("residual, px")
     _save(fig, path)
@@ -54,7 +47,8 @@ def plot_residuals(x: np.ndarray, y: np.ndarray, residuals_px: np.ndarray, camer
 def plot_distortion(camera: Camera, path: str | os.PathLike, *, n: int = 21, title: str = "") -> None:
     """The lens displacement (measured minus pinhole) over the image, arrows and magnitude."""
     x, y, d = distortion_field_px(camera, n)
-    fig, ax = plt.subplots(figsize=(7, 7 * camera.height / camera.width), dpi=100)
+    fig = Figure(figsize=(7, 7 * camera.height / camera.width), dpi=100)
+    ax = fig.subplots()
     mag = np.hypot(d[:, 0], d[:, 1]).reshape(n, n)
     im = ax.imshow(mag, extent=(-0.5, camera.width - 0.5, camera.height - 0.5, -0.5), cmap="viridis")
     ax.quiver(x, y, d[:, 0], d[:, 1], angles="xy", color="white", width=0.003)
@@ -65,12 +59,8 @@ def plot_distortion(camera: Camera, path: str | os.PathLike, *, n: int = 21, tit
 
 def plot_repeatability(result: Repeatability, path: str | os.PathLike, *, title: str = "") -> None:
     """Total, pointing and roll error of each image against the mean mount, arcmin, over time."""
-    minutes = (result.times - result.times[0]).to_value("min")
-    fig, ax = plt.subplots(figsize=(9, 4), dpi=100)
-    for name, values in (("total", result.total_rad), ("pointing", result.pointing_rad), ("roll", result.roll_rad)):
-        ax.plot(minutes, values / ARCMIN, marker=".", label=name)
-    ax.set_xlabel("minutes from the first image")
-    ax.set_ylabel("error, arcmin")
+    fig = Figure(figsize=(9, 4), dpi=100)
+    ax = fig.subplots()
+    draw_repeatability(ax, result)
     ax.set_title(title or f"fixed-mount repeatability (mount s.e. {result.mount_standard_error_rad / ARCMIN:.3f}')")
-    ax.legend()
     _save(fig, path)

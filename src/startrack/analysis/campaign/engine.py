@@ -85,7 +85,7 @@ def dask_client(workers: int | None = None, scheduler: str | None = None) -> Ite
     import dask
 
     with (dask.config.set(LOCAL_CLUSTER_CONFIG),
-          LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+          LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
                        silence_logs=logging.ERROR) as cluster, Client(cluster) as client):
         yield client
 
