@@ -1,0 +1,27 @@
+"""Star trackers with several heads or a split field of view: one attitude from all cameras, star
+by star (issue 18; seed 004 §2.5, notes ``seed-001-004.md``).
+
+The rig itself (:class:`startrack.CameraRig`, :class:`startrack.RigHead`) lives in
+:mod:`startrack.rig`. This package holds what works on it:
+
+solve        :func:`solve_rig`: lost-in-space on the head that can be solved, the others through
+             their mountings as in tracking mode, or a joint pattern across heads
+pattern      identification on the combined star set when no head can be identified alone
+predict      stars predicted through a mounting and matched in windows
+joint        one weighted Wahba fit in the body frame, per-head own solutions, consistency
+split_fov    the field of each spot of a split-FOV frame from its intensity-weighted second moments
+images       :func:`solve_rig_images`: detect, classify split fields, solve
+tracking     :class:`RigTracker`, the rig mode of :class:`startrack.track.Tracker`
+mounting     in-flight mounting calibration against a reference head, and drift detection
+exclusion    Sun, Earth-limb and Moon exclusion of each head
+availability fraction of pointings where a head, and the joint solution, has enough stars
+
+``docs/rig.md`` describes them, with measured figures.
+"""
+
+from __future__ import annotations
+
+from .solution import IDENTIFIED_BY_HEAD, IDENTIFIED_JOINTLY, RigOptions, RigSolution
+from .solve import consistency_chi2, solve_rig
+
+__all__ = ["IDENTIFIED_BY_HEAD", "IDENTIFIED_JOINTLY", "RigOptions", "RigSolution", "consistency_chi2", "solve_rig"]
