@@ -9,12 +9,21 @@ from ..camera import Camera
 
 
 class ProgressBar:
-    """Call with (done, total); draws ``label [#####     ] done/total`` on one line of stderr."""
+    """Call with (done, total); on a terminal draws ``label [#####     ] done/total`` on one line
+    of stderr, elsewhere (a log, a pipe) writes a plain ``label: done/total`` line at each tenth."""
 
     def __init__(self, label: str, width: int = 30):
         self.label, self.width = label, width
+        self.tty = sys.stderr.isatty()
+        self._tenth = -1
 
     def __call__(self, done: int, total: int) -> None:
+        if not self.tty:
+            tenth = 10 * done // max(total, 1)
+            if tenth > self._tenth:
+                self._tenth = tenth
+                sys.stderr.write(f"{self.label.strip()}: {done}/{total}\n")
+            return
         filled = int(self.width * done / max(total, 1))
         sys.stderr.write(f"\r{self.label} [{'#' * filled}{' ' * (self.width - filled)}] {done}/{total}")
         if done >= total:
