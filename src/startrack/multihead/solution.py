@@ -123,6 +123,10 @@ class RigSolution:
         The head identified first.
     false_match_prob : float
     solve_time_s : float
+    detections : dict of str to Detections
+        For a solve from images: each detector's detections (``det_index`` indexes them).
+    fields : dict of str to FieldClassification
+        For a solve from images: the field classification of each split detector's spots.
     """
 
     status: Status
@@ -142,6 +146,8 @@ class RigSolution:
     seed_head: str = ""
     false_match_prob: float = 1.0
     solve_time_s: float = 0.0
+    detections: dict = field(default_factory=dict)
+    fields: dict = field(default_factory=dict)
 
     @property
     def solved(self) -> bool:

@@ -116,10 +116,15 @@ def solve_rig(stars: Mapping[str, tuple], rig: CameraRig, *, epoch=None, method:
         A star list for a head that is not in the rig, a malformed list (naming the head), an
         unknown ``method``.
     """
+    check_method(method)
+    return solve_head_stars(rig_stars(stars, rig), rig, epoch_jyear(epoch), method, options or RigOptions())
+
+
+def check_method(method: str) -> None:
+    """Refuse a matcher a single head cannot run lost-in-space ("overlay" needs a prior)."""
     if method not in MATCHERS or method == "overlay":
         raise InvalidInputError(f"method must be one of {', '.join(m for m in MATCHERS if m != 'overlay')}, "
                                 f"got {method!r}")
-    return solve_head_stars(rig_stars(stars, rig), rig, epoch_jyear(epoch), method, options or RigOptions())
 
 
 def solve_head_stars(stars: dict[str, HeadStars], rig: CameraRig, epoch: float, method: str,
@@ -328,4 +333,4 @@ def consistency_chi2(solution: RigSolution, rig: CameraRig, name: str) -> float:
     return chi2_against_joint(rot, cov, joint, name in solution.heads_used)
 
 
-__all__ = ["consistency_chi2", "solve_head_stars", "solve_rig"]
+__all__ = ["check_method", "consistency_chi2", "solve_head_stars", "solve_rig"]

@@ -11,6 +11,11 @@ logic, seed 004 §2.2 predictive loop, seed 002 §4 tracking).
 A lost-in-space solve with an unknown FOV fixes the camera (its fitted focal length) for the
 frames after it.
 
+Given a :class:`startrack.CameraRig` (``Tracker(rig=...)``), the tracker follows the rig's body
+attitude with :meth:`Tracker.update_rig` (:class:`startrack.multihead.tracking.RigTracker`): every
+head's windows predicted from the joint attitude and rate, tracking while at least one head sees
+``min_stars`` stars, and each step says which heads contributed.
+
 A tracking step keeps its attitude as a quaternion and predicts, fits and differences attitudes
 with :mod:`.quaternions` (the same kinematics as :func:`startrack.attitude.propagation.propagate`
 and :func:`startrack.rate.from_attitudes.rate_between`, without scipy's per-call overhead); the
@@ -112,12 +117,22 @@ class Tracker:
     epoch : float or astropy Time, optional
         Catalog epoch (Julian year); default J2000.0.
     options : TrackerOptions, optional
+    rig : CameraRig, optional
+        Follow a rig of camera heads instead of one camera (give no camera, size or FOV); frames go
+        to :meth:`update_rig`.
     """
 
     def __init__(self, *, camera: Camera | None = None, width: int | None = None, height: int | None = None,
                  fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None, epoch=None,
-                 options: TrackerOptions | None = None):
-        if camera is None and (width is None or height is None):
+                 options: TrackerOptions | None = None, rig=None):
+        self._rig = None
+        if rig is not None:
+            if any(v is not None for v in (camera, width, height, fov_deg, fov_range_deg)):
+                raise InvalidInputError("a rig has its cameras: give rig, or a camera (or size and FOV), not both")
+            from ..multihead.tracking import RigTracker  # the rig mode builds on this module
+
+            self._rig = RigTracker(rig, epoch=epoch, options=options)
+        elif camera is None and (width is None or height is None):
             raise InvalidInputError("give a camera, or the image width and height (and a FOV or FOV range)")
         self.options = options or TrackerOptions()
         self._lis_kwargs = {"width": width, "height": height, "fov_deg": fov_deg, "fov_range_deg": fov_range_deg,
@@ -134,6 +149,8 @@ class Tracker:
     def update(self, x: ArrayLike, y: ArrayLike, t_s: float, *, flux: ArrayLike | None = None,
                gyro_rate_rad_s: ArrayLike | None = None) -> TrackStep:
         """Process one frame's star list (our pixel convention) taken at time ``t_s`` (seconds)."""
+        if self._rig is not None:
+            raise InvalidInputError("this Tracker follows a rig: give each head's stars to update_rig")
         t0 = time.perf_counter()
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
         if flux is not None:
@@ -185,9 +202,19 @@ class Tracker:
                             prior_omega_rad_s=prior)
         return found.rate.omega_rad_s if found.rate.ok and found.time_order_known else gyro_rate_rad_s
 
+    def update_rig(self, stars, t_s: float, *, gyro_rate_rad_s: ArrayLike | None = None):
+        """Process one frame of a rig: head name to ``(x, y)`` or ``(x, y, flux)`` star arrays, taken
+        at ``t_s`` (s); ``gyro_rate_rad_s`` in the body frame. Returns a
+        :class:`startrack.multihead.tracking.RigTrackStep` (``heads``: those that contributed)."""
+        if self._rig is None:
+            raise InvalidInputError("this Tracker follows one camera: build it with Tracker(rig=...) for a rig")
+        return self._rig.update(stars, t_s, gyro_rate_rad_s=gyro_rate_rad_s)
+
     def reset(self) -> None:
         """Forget the attitude and rate (the next frame is solved lost-in-space)."""
         self._rot, self._quat, self._t, self._rate = None, None, None, None
+        if self._rig is not None:
+            self._rig.reset()
 
     # --- modes ----------------------------------------------------------------------------------
     def _window_px(self, dt: float) -> float:
