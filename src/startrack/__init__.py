@@ -8,7 +8,9 @@ conventions every function keeps.
 from __future__ import annotations
 
 from .camera import Camera, get_preset
+from .multihead import RigSolution, solve_rig
 from .results import AttitudeSolution, Detections, StarMatches, Status
+from .rig import CameraRig, RigHead
 from .solve import solve_image, solve_stars
 
 __version__ = "0.1.0"
@@ -16,11 +18,15 @@ __version__ = "0.1.0"
 __all__ = [
     "AttitudeSolution",
     "Camera",
+    "CameraRig",
     "Detections",
+    "RigHead",
+    "RigSolution",
     "StarMatches",
     "Status",
     "__version__",
     "get_preset",
     "solve_image",
+    "solve_rig",
     "solve_stars",
 ]

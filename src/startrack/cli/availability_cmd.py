@@ -1,6 +1,11 @@
 """startrack availability: how many catalog stars a camera sees over random pointings (seed 002
 Fig. 5-1 / Table 5-1; seed 000 Table 5.1), with a histogram plot; and the size of a uniform
-reduced onboard catalog (seed 000 §5.5.4: the N brightest stars at every pointing)."""
+reduced onboard catalog (seed 000 §5.5.4: the N brightest stars at every pointing).
+
+With --rig RIG.json (a startrack.CameraRig): the fraction of random body attitudes where at least
+one head, and the joint solution, has enough stars (docs/rig.md), each head excluded when the Sun,
+the Earth's limb or the Moon enters its exclusion cone (angles per head in the rig file; the bodies
+seen from a dawn-dusk orbit at --altitude-km at --time; --no-exclusion leaves them out)."""
 
 from __future__ import annotations
 
@@ -28,6 +33,9 @@ def main(argv: list[str]) -> int:
         prog="startrack availability", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog="--json keys: camera, fov_deg, fov_height_deg, max_mag, catalog_stars, pointings, mean, min, max, "
                "p_below_3, p_below_4, probability (pointing fraction by star count), reduced_catalog_stars.\n"
+               "With --rig: rig, max_mag, pointings, time_utc (null without exclusion), altitude_km, min_stars, "
+               "min_joint_stars, any_head, joint (fractions of pointings), heads: {name: {enough, blinded, "
+               "mean_stars}}.\n"
                "Exit status: 0 done, 2 on bad input.")
     parser.add_argument("--camera", help="camera preset")
     parser.add_argument("--fov-deg", type=float, help="pinhole camera: horizontal FOV")
@@ -40,7 +48,17 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--reduced-per-fov", type=int, metavar="N",
                         help="also build the uniform reduced catalog: N brightest stars per field")
     parser.add_argument("--json", action="store_true")
+    rig = parser.add_argument_group("camera rig")
+    rig.add_argument("--rig", metavar="RIG.json", help="availability of this rig of camera heads")
+    rig.add_argument("--min-stars", type=int, default=4, help="stars a head needs alone (default 4)")
+    rig.add_argument("--min-joint-stars", type=int, default=6, help="stars the joint pattern needs (default 6)")
+    rig.add_argument("--time", default="2025-03-20T12:00:00", metavar="UTC",
+                     help="time of the Sun / Moon positions (ISO, default 2025-03-20T12:00:00)")
+    rig.add_argument("--altitude-km", type=float, default=500.0, help="dawn-dusk orbit altitude (default 500)")
+    rig.add_argument("--no-exclusion", action="store_true", help="ignore the Sun, the Earth and the Moon")
     args = parser.parse_args(argv)
+    if args.rig is not None:
+        return _rig(args)
     from ..analysis.availability import star_counts
 
     camera = _camera(args)
@@ -74,3 +92,34 @@ def _print_table(report: dict) -> None:
         print(f"  P({n}) = {report['probability'].get(str(n), 0.0) * 1e3:.3f} x 1e-3")
     if "reduced_catalog_stars" in report:
         print(f"uniform reduced catalog: {report['reduced_catalog_stars']} stars")
+
+
+def _rig(args) -> int:
+    """--rig: the rig's availability (module docstring)."""
+    from ..multihead.availability import rig_availability
+    from ..multihead.exclusion import dawn_dusk_bodies
+    from ..rig import CameraRig
+
+    given = [o for o, v in (("--camera", args.camera), ("--fov-deg", args.fov_deg), ("--plot", args.plot),
+                            ("--reduced-per-fov", args.reduced_per_fov)) if v is not None]
+    if given:
+        raise InvalidInputError(f"--rig has its cameras; leave out {', '.join(given)}")
+    rig = CameraRig.load(args.rig)
+    bodies = None if args.no_exclusion else dawn_dusk_bodies(args.time, args.altitude_km)
+    result = rig_availability(rig, args.max_mag, args.pointings, rng=args.seed, bodies=bodies,
+                              min_stars=args.min_stars, min_joint_stars=args.min_joint_stars,
+                              progress=ProgressBar("  pointings"))
+    report = {"rig": str(args.rig), "max_mag": args.max_mag, "pointings": args.pointings,
+              "time_utc": None if bodies is None else args.time, "altitude_km": args.altitude_km,
+              "min_stars": args.min_stars, "min_joint_stars": args.min_joint_stars, **result.summary()}
+    if args.json:
+        print_json(report)
+        return 0
+    print(f"{args.rig}: {len(rig)} heads, V <= {args.max_mag:g}, {args.pointings} random body attitudes"
+          + ("" if bodies is None else f", exclusion at {args.time} UTC from {args.altitude_km:g} km"))
+    print(f"at least one head with {args.min_stars}+ stars: {report['any_head']:.4f}")
+    print(f"joint solution (or a triangle and {args.min_joint_stars} stars in all): {report['joint']:.4f}")
+    for name, head in report["heads"].items():
+        print(f"  {name}: enough {head['enough']:.4f}, blinded {head['blinded']:.4f}, "
+              f"mean {head['mean_stars']:.2f} stars")
+    return 0

@@ -7,19 +7,31 @@ Several frames go to the --out folder (created if missing) as frame_00000.fits, 
 standard error. The attitude (--ra-deg --dec-deg --roll-deg, or random from --seed) is that of
 the middle of frame 0; the camera turns at --rate-deg-s (camera frame), or follows a recorded
 --profile (CSV of t_s, qx, qy, qz, qw). Files are written atomically.
+
+With --rig RIG.json (a startrack.CameraRig) one scene is rendered through every detector of the
+rig into the --out folder: the attitude options give the body attitude, --rate-deg-s the body
+rate (body frame), and the camera options are not used (the rig has the cameras). With --time the
+Sun, the Moon and the Earth (seen from a dawn-dusk orbit at --altitude-km) blind the heads whose
+exclusion cones they enter.
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
+import json
 import math
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InvalidInputError
+from ..frames import radec_roll_from_rotation
+from ..io import write_fits, write_png, write_tiff
+from ..io.atomic import atomic_path
 from ..io.truth_files import check_frame_path, index_row, truth_to_dict, write_frame, write_index
 from ..simulate import ConstantRate, FrameTiming, load_profile, simulate_sequence
+from ..simulate.split_fov import SplitFieldFrame
 from .common import print_json
 from .progress import ProgressBar
 from .scene_options import (
@@ -52,6 +64,14 @@ output (--json)
   A sequence: seed, folder, frames, index (frames.csv: frame, file, t_mid_s, time_mid, ra_deg,
   dec_deg, roll_deg, qx, qy, qz, qw, rate_x_deg_s, rate_y_deg_s, rate_z_deg_s, n_stars).
 
+output with --rig (files in the --out folder, default startrack-rig-sim)
+  DETECTOR.fits (or --format png / tif) for every detector, with its truth as for one frame; a
+  split detector's sidecar DETECTOR.truth.json lists its stars {hip, x, y, mag, electrons, field}.
+  HEAD.stars.csv: each head's true star positions (x, y, mag), ready for solve-rig HEAD=CSV.
+  rig_truth.json (and --json): seed, files, qx, qy, qz, qw (rot_body_from_icrs, scalar last),
+  ra_deg, dec_deg, roll_deg (body +z axis), rate_deg_s (body frame), epoch_jyear, time_utc, heads:
+  {name: {detector, file, stars_csv, blinded_by, n_stars, qx, qy, qz, qw (its rot_cam_from_icrs)}}.
+
 exit status
   0 written; 2 misuse (bad option or output path), with one line
   'startrack simulate: error: ...' on standard error.
@@ -75,7 +95,15 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--out", help="output .fits, .png or .tif path for one frame (default startrack-sim.fits), "
                                       "a folder for several (default startrack-sim)")
     parser.add_argument("--json", action="store_true", help="print the truth as JSON")
+    rig = parser.add_argument_group("camera rig")
+    rig.add_argument("--rig", metavar="RIG.json", help="render every head of this rig (files in the --out folder)")
+    rig.add_argument("--time", metavar="UTC", help="with --rig: time of the frame (ISO), for Sun / Moon / Earth "
+                                                   "exclusion")
+    rig.add_argument("--altitude-km", type=float, default=500.0, help="with --time: dawn-dusk orbit altitude "
+                                                                     "(default 500)")
     args = parser.parse_args(argv)
+    if args.rig is not None:
+        return _rig_frame(args)
     if args.frames < 1:
         raise InvalidInputError(f"--frames must be a whole number >= 1, got {args.frames}")
     if args.frames == 1 and args.profile is None:
@@ -142,3 +170,97 @@ def _profile(args: argparse.Namespace, rng: np.random.Generator, frame_span_s: f
     rot = scene_attitude(args, rng)
     rate = scene_rate(args)
     return ConstantRate(rot, np.zeros(3) if rate is None else rate, t_ref_s=0.5 * frame_span_s), rot
+
+
+def _rig_frame(args: argparse.Namespace) -> int:
+    """--rig: one scene through every detector of the rig (see the epilog)."""
+    from astropy.time import Time
+
+    from ..multihead.exclusion import dawn_dusk_bodies
+    from ..rig import CameraRig
+    from ..simulate.rig import simulate_rig
+
+    given = [o for o, v in (("--camera", args.camera), ("--fov-deg", args.fov_deg), ("--width", args.width),
+                            ("--height", args.height), ("--profile", args.profile)) if v is not None]
+    if given or args.frames != 1:
+        leave_out = ", ".join(given) or "--frames"
+        raise InvalidInputError(f"--rig has its cameras and renders one frame; leave out {leave_out}")
+    rig = CameraRig.load(args.rig)
+    folder = Path(args.out or "startrack-rig-sim")
+    if folder.suffix.lower() in SEQUENCE_FORMATS.values() or folder.is_file():
+        raise InvalidInputError(f"--out {folder}: --rig writes a folder, not a file")
+    seed = scene_seed(args)
+    rng = np.random.default_rng(seed)
+    rot, rate = scene_attitude(args, rng), scene_rate(args)
+    bodies = None if args.time is None else dawn_dusk_bodies(args.time, args.altitude_km)
+    time = None if args.time is None else Time(args.time, scale="utc")
+    frame = simulate_rig(rig, rot, rate_body_rad_s=rate, sensor=render_sensor(args), max_mag=args.max_mag,
+                         epoch_jyear=scene_epoch(args), rng=rng, noise=noise_model(args), time=time, bodies=bodies)
+    folder.mkdir(parents=True, exist_ok=True)
+    report = _write_rig(folder, rig, frame, args.format, seed, rate, scene_epoch(args), time)
+    if args.json:
+        print_json(report)
+    else:
+        blinded = [f"{h} by the {b}" for h, b in frame.blinded_by.items() if b]
+        print(f"wrote {len(report['files'])} files to {folder}; seed {seed}; body RA {report['ra_deg']:.5f} deg, "
+              f"Dec {report['dec_deg']:+.5f} deg, roll {report['roll_deg']:.4f} deg"
+              + (f"; blinded: {', '.join(blinded)}" if blinded else ""))
+    return 0
+
+
+def _quat(rot) -> dict[str, float]:
+    return dict(zip(("qx", "qy", "qz", "qw"), (float(v) for v in rot.as_quat(canonical=True)), strict=True))
+
+
+def _write_rig(folder: Path, rig, frame, fmt: str, seed: int, rate, epoch: float, time) -> dict:
+    """Every detector's image and truth, each head's star CSV and rig_truth.json; the report."""
+    files, heads = [], {}
+    for det, sim in frame.frames.items():
+        path = folder / f"{det}{SEQUENCE_FORMATS[fmt]}"
+        files += _write_detector(path, sim)
+        for head in rig.detectors[det]:
+            csv_path = folder / f"{head.name}.stars.csv"
+            n = _write_stars_csv(csv_path, sim, head.name)
+            files.append(csv_path)
+            heads[head.name] = {"detector": det, "file": path.name, "stars_csv": csv_path.name,
+                                "blinded_by": frame.blinded_by[head.name], "n_stars": n,
+                                **_quat(head.rot_cam_from_icrs(frame.rot_body_from_icrs))}
+    ra, dec, roll = (math.degrees(float(a)) for a in radec_roll_from_rotation(frame.rot_body_from_icrs))
+    report = {"seed": seed, **_quat(frame.rot_body_from_icrs), "ra_deg": ra, "dec_deg": dec, "roll_deg": roll,
+              "rate_deg_s": [0.0, 0.0, 0.0] if rate is None else [math.degrees(v) for v in rate],
+              "epoch_jyear": epoch, "time_utc": None if time is None else time.utc.isot, "heads": heads}
+    truth_path = folder / "rig_truth.json"
+    with atomic_path(truth_path) as tmp:
+        tmp.write_text(json.dumps(report, indent=1, allow_nan=False))
+    return {**report, "files": [str(p) for p in [*files, truth_path]]}
+
+
+def _write_detector(path: Path, sim) -> list[Path]:
+    """One detector's image with its truth (a split detector's truth as a JSON sidecar)."""
+    if not isinstance(sim, SplitFieldFrame):
+        return write_frame(path, sim.image, sim.truth)
+    writer = {".fits": write_fits, ".png": write_png, ".tif": write_tiff}[path.suffix]
+    image = sim.image if path.suffix == ".fits" else np.clip(np.round(sim.image), 0, 65535).astype(np.uint16)
+    written = [writer(path, image)]
+    t = sim.truth
+    stars = [{"hip": int(t.ids[i]), "x": float(t.x[i]), "y": float(t.y[i]), "mag": float(t.mag[i]),
+              "electrons": float(t.electrons[i]), "field": str(t.field[i])} for i in range(len(t))]
+    sidecar = path.with_name(path.stem + ".truth.json")
+    with atomic_path(sidecar) as tmp:
+        tmp.write_text(json.dumps({"detector": t.detector, "stars": stars}, indent=1))
+    return [*written, sidecar]
+
+
+def _write_stars_csv(path: Path, sim, head: str) -> int:
+    """The head's stars inside its image (x, y, mag) as CSV; how many."""
+    t = sim.truth
+    if isinstance(sim, SplitFieldFrame):
+        height, width = sim.image.shape
+        keep = (t.field == head) & (t.x >= -0.5) & (t.y >= -0.5) & (t.x <= width - 0.5) & (t.y <= height - 0.5)
+    else:
+        keep = t.inside()
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(["x", "y", "mag"])
+        writer.writerows(zip(t.x[keep].tolist(), t.y[keep].tolist(), t.mag[keep].tolist(), strict=True))
+    return int(np.count_nonzero(keep))

@@ -76,6 +76,21 @@ class BrightBodies:
         return cls.from_positions(np.asarray(snapshot.observer_r, dtype=float), snapshot.sun, snapshot.moon)
 
 
+def dawn_dusk_bodies(time_utc: str | Time, altitude_km: float = 500.0) -> BrightBodies:
+    """:meth:`BrightBodies.dawn_dusk` from an ISO UTC time (text, as the command line gives it)."""
+    if isinstance(time_utc, Time):
+        time = time_utc
+    else:
+        try:
+            time = Time(time_utc, scale="utc")
+        except ValueError:
+            raise InvalidInputError(f"time {time_utc!r} is not an ISO time such as 2025-03-20T12:00:00") from None
+    altitude = float(altitude_km)
+    if not (math.isfinite(altitude) and altitude > 0):
+        raise InvalidInputError(f"the orbit altitude must be a positive number of km, got {altitude_km!r}")
+    return BrightBodies.dawn_dusk(time, altitude)
+
+
 def edge_angles_rad(bodies: BrightBodies, boresights_icrs: ArrayLike) -> dict[str, NDArray[np.float64]]:
     """Angle (rad) from each boresight (..., 3) to the nearest edge of each body (negative: on it)."""
     b = np.asarray(boresights_icrs, dtype=float)
