@@ -134,7 +134,11 @@ def test_time_tables(campaign):
     hist, summary = time_tables(trials)
     times = np.concatenate([c["time_s"][3:] for c in per_cell])
     assert int(hist["time_s"].to_numpy().sum()) == times.size
-    assert hist.column_names == ["left_ms", "right_ms", "time_s", "time_detect_s", "time_identify_s"]
+    assert hist.column_names == ["left_ms", "right_ms", "time_s", "time_s_solved", "time_s_unsolved", "time_detect_s",
+                                 "time_identify_s"]
+    solved = np.concatenate([c["solved"][3:] for c in per_cell])
+    assert int(hist["time_s_solved"].to_numpy().sum()) == solved.sum()
+    assert int(hist["time_s_unsolved"].to_numpy().sum()) == (~solved).sum()
     edges = np.append(hist["left_ms"].to_numpy(), hist["right_ms"].to_numpy()[-1])
     assert edges[0] <= times.min() * 1e3 and edges[-1] >= times.max() * 1e3
     first = summary.to_pylist()[0]

@@ -10,7 +10,7 @@ import shlex
 
 import numpy as np
 import pytest
-from synthetic_campaign import BAD, GOOD, synthetic_campaign
+from synthetic_campaign import BAD, GOOD, cell_rows, make_manifest, synthetic_campaign, write_campaign
 
 from startrack.analysis.campaign import report as report_module
 from startrack.analysis.campaign.aggregate import read_campaign
@@ -111,10 +111,11 @@ def test_budget_mode_and_an_unfinished_campaign(tmp_path, monkeypatch):
     manifest, _ = synthetic_campaign(tmp_path, {}, trials=20, mode="budget", sources=["baseline", "all", "shot_noise"],
                                      finished=False)
     _, trials = read_campaign(tmp_path)
-    figures = report_figures(trials, manifest)  # built, not drawn: the drawing is tested above
+    figures, notes = report_figures(trials, manifest)  # built, not drawn: the drawing is tested above
+    assert notes == []
     assert [f.name for f in figures][:2] == ["rates_by_cell", "accuracy_by_cell"]
     assert figures[0].data[""]["label"].to_pylist() == ["baseline", "all", "shot_noise"]
-    monkeypatch.setattr(report_module, "report_figures", lambda trials, manifest: [])
+    monkeypatch.setattr(report_module, "report_figures", lambda trials, manifest: ([], []))
     page = write_report(tmp_path).read_text(encoding="utf-8")
     assert "has not finished" in page and "shot_noise" in page
     with open(tmp_path / "cells.csv", newline="") as handle:
@@ -133,6 +134,26 @@ def test_an_interrupted_report_leaves_the_previous_page(written, monkeypatch):
         write_report(out)
     assert path.read_text(encoding="utf-8") == first
     assert not list(out.rglob(".*.tmp"))
+
+
+def test_a_level_without_attitude_errors_and_stale_files(tmp_path):
+    # levels such as starcount mark trials solved and correct but record no attitude error
+    manifest = make_manifest({"fov_deg": [10.0, 20.0]}, 8)
+    rng = np.random.default_rng(2)
+    per_cell = [cell_rows(c, ["fov_deg"], 8, rng, p_correct=1.0, p_false=0.0) for c in manifest["cells"]]
+    for cols in per_cell:
+        for name in ("err_x_arcsec", "err_y_arcsec", "err_roll_arcsec", "err_cross_arcsec", "err_total_arcsec"):
+            cols[name] = np.full(8, np.nan)
+    write_campaign(tmp_path, manifest, per_cell)
+    for stale in ("figures/accuracy_by_fov_deg.png", "data/reference-3.csv", "figures/budget.png"):
+        (tmp_path / stale).parent.mkdir(exist_ok=True)
+        (tmp_path / stale).write_bytes(b"old")
+    page = write_report(tmp_path).read_text(encoding="utf-8")
+    assert "No correct trial has an attitude error" in page
+    assert sorted(p.name for p in (tmp_path / "figures").glob("*.png")) == ["budget.png", "rates_by_fov_deg.png",
+                                                                            "sky.png", "time.png"]
+    assert not (tmp_path / "data" / "reference-3.csv").exists()  # the report's own stale file goes
+    assert (tmp_path / "figures" / "budget.png").read_bytes() == b"old"  # another module's file stays
 
 
 REAL = """

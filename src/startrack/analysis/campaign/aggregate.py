@@ -297,13 +297,18 @@ def time_tables(trials: pa.Table, bins: int = 40) -> tuple[pa.Table, pa.Table]:
     Returns
     -------
     histogram : pyarrow.Table
-        ``left_ms``, ``right_ms``, then one count column per time column (``time_s``, ``time_<stage>_s``).
+        ``left_ms``, ``right_ms``, then counts: ``time_s`` (every trial that ran), ``time_s_solved``,
+        ``time_s_unsolved`` and one column per stage (``time_<stage>_s``, the image level).
     summary : pyarrow.Table
-        Per time column: ``n``, ``p50_ms``, ``p95_ms``, ``p99_ms``, ``max_ms``.
+        The same rows as columns: ``time``, ``n``, ``p50_ms``, ``p95_ms``, ``p99_ms``, ``max_ms``.
     """
     ran = ~np.isin(trials["status"].to_numpy(zero_copy_only=False), FAILED)
-    names = ["time_s", *stage_columns(trials.column_names)]
-    data = {n: finite_ms(trials[n].to_numpy(zero_copy_only=False)[ran]) for n in names}
+    solved = trials["solved"].to_numpy(zero_copy_only=False).astype(bool)
+    time_s = trials["time_s"].to_numpy(zero_copy_only=False)
+    data = {"time_s": finite_ms(time_s[ran]), "time_s_solved": finite_ms(time_s[ran & solved]),
+            "time_s_unsolved": finite_ms(time_s[ran & ~solved])}
+    for name in stage_columns(trials.column_names):
+        data[name] = finite_ms(trials[name].to_numpy(zero_copy_only=False)[ran])
     every = np.concatenate([*data.values(), np.zeros(0)])
     positive = every[every > 0]
     lo, hi = (positive.min(), positive.max()) if positive.size else (1.0, 1.0)

@@ -192,11 +192,17 @@ def _log_if_positive(ax: Axes, which: str, columns: Sequence[Any]) -> None:
         plain_log_labels(ax.yaxis if which == "y" else ax.xaxis)
 
 
+class PlainLogFormatter(LogFormatter):
+    """matplotlib's choice of which log ticks to label, written as plain numbers (0.01, 2, 300)."""
+
+    def __call__(self, x: float, pos: int | None = None) -> str:
+        return f"{x:g}" if super().__call__(x, pos) else ""
+
+
 def plain_log_labels(axis: Any) -> None:
-    """Label a log axis with plain numbers (0.5, 2, 20), some minor ticks too when it spans
-    under two decades, instead of 2 x 10^0."""
-    axis.set_major_formatter(LogFormatter(labelOnlyBase=False))
-    axis.set_minor_formatter(LogFormatter(labelOnlyBase=False, minor_thresholds=(2, 0.5)))
+    """Label a log axis with plain numbers, a few minor ticks too when it spans under two decades."""
+    axis.set_major_formatter(PlainLogFormatter(labelOnlyBase=False))
+    axis.set_minor_formatter(PlainLogFormatter(labelOnlyBase=False, minor_thresholds=(2, 0.5)))
 
 
 def error_cdf_figure(table: pa.Table, split: str, title: str = "") -> Figure:
@@ -226,7 +232,8 @@ def error_cdf_figure(table: pa.Table, split: str, title: str = "") -> Figure:
     panels[0].set_ylim(0, 1.01)
     handles = [panels[1].plot([], [], m, color="0.3", ls="")[0] for m in MARKERS.values()]
     panels[1].legend(handles, [f"{q:g} %" for q in MARKERS], title="percentiles", fontsize=8, loc="lower right")
-    panels[0].legend(fontsize=7, loc="upper left")
+    if curves:
+        panels[0].legend(fontsize=7, loc="upper left")
     _title(fig, title or "Error distributions", f"curves per {split}")
     return fig
 
@@ -237,10 +244,14 @@ def time_figure(histogram: pa.Table, summary: pa.Table, title: str = "") -> Figu
     fig = Figure(figsize=(9, 4.3), dpi=DPI, layout="constrained")
     ax = fig.subplots()
     edges = np.append(histogram["left_ms"].to_numpy(), histogram["right_ms"].to_numpy()[-1:])
-    for i, name in enumerate(c for c in histogram.column_names if c.startswith("time")):
-        label = "solve time (time_s)" if name == "time_s" else name.removeprefix("time_").removesuffix("_s")
-        ax.stairs(histogram[name].to_numpy(), edges, color=f"C{i}", fill=name == "time_s",
-                  alpha=0.35 if name == "time_s" else 1.0, label=label, lw=1.5)
+    ax.stairs(histogram["time_s"].to_numpy(), edges, color="C0", fill=True, alpha=0.3, label="solve time (time_s)")
+    for name, label, style in (("time_s_solved", "solved", "-"), ("time_s_unsolved", "not solved", "--")):
+        if histogram[name].to_numpy().any():
+            ax.stairs(histogram[name].to_numpy(), edges, color="C0", ls=style, lw=1.2, label=label)
+    stages = [c for c in histogram.column_names if c.startswith("time_") and c.endswith("_s") and c != "time_s"]
+    for i, name in enumerate(stages):
+        ax.stairs(histogram[name].to_numpy(), edges, color=f"C{i + 1}", lw=1.5,
+                  label=name.removeprefix("time_").removesuffix("_s") + " stage")
     stats = {r["time"]: r for r in summary.to_pylist()}.get("time_s")
     for key, style in (("p50", "-"), ("p95", "--"), ("p99", "-."), ("max", ":")) if stats else ():
         ax.axvline(stats[f"{key}_ms"], color="k", ls=style, lw=1, label=f"{key} {stats[f'{key}_ms']:.3g} ms")
@@ -263,16 +274,19 @@ def sky_figure(sky: pa.Table, title: str = "") -> Figure:
     sub = max(1, math.ceil(96 / n_ra))  # sub-cells per bin, so that bin edges follow the projection's curves
     lon = np.linspace(-np.pi, np.pi, n_ra * sub + 1)
     lat = np.arcsin(np.linspace(-1.0, 1.0, n_dec * sub + 1))
-    fig = Figure(figsize=(13, 4.4), dpi=DPI, layout="constrained")
-    for i, (column, label, cmap) in enumerate((("success_rate", "success rate", "RdYlGn"),
-                                               ("err_cross_p50_arcsec", "median cross-boresight error (arcsec)",
-                                                "viridis"))):
-        ax = fig.add_subplot(1, 2, i + 1, projection="mollweide")
+    panels = [("success_rate", "success rate", "RdYlGn")]
+    if np.isfinite(sky["err_cross_p50_arcsec"].to_numpy(zero_copy_only=False)).any():
+        panels.append(("err_cross_p50_arcsec", "median cross-boresight error (arcsec)", "viridis"))
+    fig = Figure(figsize=(6.5 * len(panels), 4.4), dpi=DPI, layout="constrained")
+    for i, (column, label, cmap) in enumerate(panels):
+        ax = fig.add_subplot(1, len(panels), i + 1, projection="mollweide")
         grid = sky[column].to_numpy(zero_copy_only=False).astype(float).reshape(n_dec, n_ra)[:, ::-1]
         grid = np.repeat(np.repeat(grid, sub, axis=0), sub, axis=1)
         mesh = ax.pcolormesh(lon, lat, np.ma.masked_invalid(grid), cmap=colormaps[cmap].with_extremes(bad="0.85"),
                              norm=_norm(column, grid))
-        fig.colorbar(mesh, ax=ax, orientation="horizontal", shrink=0.6, pad=0.03, label=label)
+        bar = fig.colorbar(mesh, ax=ax, orientation="horizontal", shrink=0.6, pad=0.03, label=label)
+        if isinstance(mesh.norm, LogNorm):
+            plain_log_labels(bar.ax.xaxis)
         ticks = np.array([-120, -60, 0, 60, 120])
         ax.set_xticks(np.radians(ticks), [f"{(180 - t) // 15}h" for t in ticks], fontsize=8)
         ax.tick_params(axis="y", labelsize=8)
@@ -306,30 +320,59 @@ SKY_CAPTION = ("Success rate and median cross-boresight error (correct trials) a
                "uniform in RA and sin(Dec) (equal area).")
 
 
-def _axis_figures(trials: pa.Table, manifest: Mapping[str, Any], axis: str | None) -> list[ReportFigure]:
+def _axis_figures(trials: pa.Table, manifest: Mapping[str, Any], axis: str | None,
+                  errors: bool) -> list[ReportFigure]:
     table, line, note = axis_table(trials, manifest, axis)
     stem, what = (f"by_{axis}", axis_label(axis)) if axis else ("by_cell", "cell")
     name = manifest.get("name", "campaign")
     pooled = f" Trials {note}." if note else ""
-    return [ReportFigure(f"rates_{stem}", f"Success and false-solve rates against {what}", RATES_CAPTION + pooled,
-                         rates_figure(table, axis, line, note, f"{name}: rates against {what}"), {"": table}, stem),
-            ReportFigure(f"accuracy_{stem}", f"Accuracy against {what}", ACCURACY_CAPTION + pooled,
-                         accuracy_figure(table, axis, line, note, f"{name}: accuracy against {what}"), {"": table},
-                         stem)]
-
-
-def report_figures(trials: pa.Table, manifest: Mapping[str, Any]) -> list[ReportFigure]:
-    """Every figure of the report with its tables, in report order: rates and accuracy against each
-    swept axis (per cell when nothing is swept), error distributions, solve time, sky maps."""
-    name = manifest.get("name", "campaign")
-    out = [f for axis in list(manifest.get("swept", [])) or [None] for f in _axis_figures(trials, manifest, axis)]
-    quantiles, split = quantile_table(trials, manifest)
-    out.append(ReportFigure("error_cdf", "Error distributions", CDF_CAPTION.format(split=split),
-                            error_cdf_figure(quantiles, split, f"{name}: error distributions"), {"": quantiles}))
-    histogram, summary = time_tables(trials)
-    out.append(ReportFigure("time", "Solve time", TIME_CAPTION,
-                            time_figure(histogram, summary, f"{name}: time per trial"),
-                            {"histogram": histogram, "summary": summary}))
-    sky = sky_table(trials)
-    out.append(ReportFigure("sky", "Over the sky", SKY_CAPTION, sky_figure(sky, f"{name}: over the sky"), {"": sky}))
+    out = [ReportFigure(f"rates_{stem}", f"Success and false-solve rates against {what}", RATES_CAPTION + pooled,
+                        rates_figure(table, axis, line, note, f"{name}: rates against {what}"), {"": table}, stem)]
+    if errors:
+        out.append(ReportFigure(f"accuracy_{stem}", f"Accuracy against {what}", ACCURACY_CAPTION + pooled,
+                                accuracy_figure(table, axis, line, note, f"{name}: accuracy against {what}"),
+                                {"": table}, stem))
     return out
+
+
+def _any_finite(trials: pa.Table, column: str, rows: np.ndarray | None = None) -> bool:
+    values = np.asarray(trials[column].to_numpy(zero_copy_only=False), dtype=float)
+    return bool(np.isfinite(values if rows is None else values[rows]).any())
+
+
+def report_figures(trials: pa.Table, manifest: Mapping[str, Any]) -> tuple[list[ReportFigure], list[str]]:
+    """Every figure of the report with its tables, in report order: rates and accuracy against each
+    swept axis (per cell when nothing is swept), error distributions, solve time, sky maps.
+
+    Returns
+    -------
+    figures : list of ReportFigure
+    notes : list of str
+        The figures left out for want of data (a level that records no attitude error, no time or
+        no true boresight), and why.
+    """
+    name, notes = manifest.get("name", "campaign"), []
+    errors = _any_finite(trials, "err_cross_arcsec", trials["correct"].to_numpy(zero_copy_only=False).astype(bool))
+    if not errors:
+        notes.append("No correct trial has an attitude error (this level may not solve for attitude): the accuracy "
+                     "and error-distribution figures are left out.")
+    axes = list(manifest.get("swept", [])) or [None]
+    out = [f for axis in axes for f in _axis_figures(trials, manifest, axis, errors)]
+    if errors:
+        quantiles, split = quantile_table(trials, manifest)
+        out.append(ReportFigure("error_cdf", "Error distributions", CDF_CAPTION.format(split=split),
+                                error_cdf_figure(quantiles, split, f"{name}: error distributions"), {"": quantiles}))
+    if _any_finite(trials, "time_s"):
+        histogram, summary = time_tables(trials)
+        out.append(ReportFigure("time", "Solve time", TIME_CAPTION,
+                                time_figure(histogram, summary, f"{name}: time per trial"),
+                                {"histogram": histogram, "summary": summary}))
+    else:
+        notes.append("No trial has a time: the time histogram is left out.")
+    if _any_finite(trials, "ra_deg") and _any_finite(trials, "dec_deg"):
+        sky = sky_table(trials)
+        out.append(ReportFigure("sky", "Over the sky", SKY_CAPTION, sky_figure(sky, f"{name}: over the sky"),
+                                {"": sky}))
+    else:
+        notes.append("No trial has a true boresight: the sky maps are left out.")
+    return out, notes

@@ -207,11 +207,46 @@ def _extra_sections(manifest: dict[str, Any], trials: pa.Table, out: Path) -> li
     return [part for fn in list(SECTIONS) if (part := fn(manifest, trials, out))]
 
 
+OWN_FILES = ("figures/rates_by_*.png", "figures/accuracy_by_*.png", "figures/error_cdf.png", "figures/time.png",
+             "figures/sky.png", "data/by_*.csv", "data/error_cdf.csv", "data/time-*.csv", "data/sky.csv",
+             "data/status.csv", "data/reference-*.csv")
+"""The report's own files: those a new report did not write again (an axis or a reference gone,
+a figure without data) are removed once the new page is in place."""
+
+
+def _remove_stale(out: Path, written: set[str]) -> None:
+    for pattern in OWN_FILES:
+        for path in out.glob(pattern):
+            if path.relative_to(out).as_posix() not in written:
+                path.unlink(missing_ok=True)
+
+
+def _figures(out: Path, trials: pa.Table, manifest: Mapping[str, Any], written: set[str]) -> str:
+    drawn, notes = report_figures(trials, manifest)
+    parts = ["<h2>Figures</h2>", *(f"<p>{esc(note)}</p>" for note in notes)]
+    for fig in drawn:
+        png, csvs = save_figure(fig, out)
+        written.update([png, *csvs])
+        parts.append(_figure(fig, png, csvs))
+    return "".join(parts)
+
+
+def _reference_section(out: Path, trials: pa.Table, manifest: Mapping[str, Any], written: set[str]) -> str:
+    refs = reference_tables(trials, manifest, strict=False)
+    csvs = [None if r.error else f"data/reference-{i}.csv" for i, r in enumerate(refs)]
+    for ref, csv in zip(refs, csvs, strict=True):
+        if csv is not None:
+            write_csv(ref.table, out / csv)
+            written.add(csv)
+    return _references(refs, csvs) if refs else ""
+
+
 def write_report(out: str | Path) -> Path:
     """Write the report of the campaign in folder ``out`` and return the path of ``report.html``.
 
     Writes ``cells.csv``, ``figures/*.png``, ``data/*.csv`` (the numbers behind every figure and
-    table) and ``report.html`` (module docstring), each atomically, the page last.
+    table) and ``report.html`` (module docstring), each atomically, the page last; then removes
+    the files of an earlier report that this one no longer has (:data:`OWN_FILES`).
 
     Raises
     ------
@@ -222,20 +257,17 @@ def write_report(out: str | Path) -> Path:
     manifest, trials = read_campaign(out)
     for sub in ("figures", "data"):
         (out / sub).mkdir(exist_ok=True)
-    cells = cell_table(trials, manifest)
+    cells, status = cell_table(trials, manifest), status_table(trials, manifest)
     write_csv(cells, out / "cells.csv")
-    status = status_table(trials, manifest)
     write_csv(status, out / "data" / "status.csv")
-    figures = "".join(_figure(f, *save_figure(f, out)) for f in report_figures(trials, manifest))
-    refs = reference_tables(trials, manifest, strict=False)
-    ref_csvs = [None if r.error else str(write_csv(r.table, out / f"data/reference-{i}.csv").relative_to(out))
-                for i, r in enumerate(refs)]
-    body = [_head(manifest, trials), _cells(cells), _status(status), "<h2>Figures</h2>" + figures,
-            _references(refs, ref_csvs) if refs else "", *_extra_sections(manifest, trials, out),
+    written = {"cells.csv", "data/status.csv"}
+    body = [_head(manifest, trials), _cells(cells), _status(status), _figures(out, trials, manifest, written),
+            _reference_section(out, trials, manifest, written), *_extra_sections(manifest, trials, out),
             _worst(trials, manifest, out), _provenance(manifest)]
     page = (f"<!DOCTYPE html><html lang=en><head><meta charset=utf-8><title>{esc(manifest.get('name', ''))}: "
             f"campaign report</title><style>{CSS}</style></head><body>{''.join(body)}</body></html>\n")
     path = out / "report.html"
     with atomic_path(path) as tmp:
         tmp.write_text(page, encoding="utf-8")
+    _remove_stale(out, written)
     return path
