@@ -1,0 +1,32 @@
+"""Closed-loop attitude control with the star tracker in the loop: seed 001 chapter 5 as a
+runnable demonstration (notes ``seed-001-004.md`` §1.24, §3.4; ``docs/adcs.md``).
+
+A consumer of the library: the core never imports this package (DESIGN.md §2).
+
+Modules
+-------
+cubesat         the KnightCube's inertia, torque coil and test-bed field
+field           uniform (Helmholtz) and centred-dipole fields
+plant           single-axis and three-axis plants, integrated with scipy
+lgl             Legendre-Gauss-Lobatto nodes, weights, differentiation matrix
+planner         minimum coil energy by virtual motion camouflage, SLSQP
+guidance        receding-horizon replanning
+control         error quaternion, input-output linearisation, LQR, the PD baseline
+actuation       wanted acceleration -> coil currents
+estimate        measurements, estimates, propagation with the commanded accelerations
+feedback        truth and IMU feedback
+star_tracker_feedback  startrack in the loop (images -> detection -> Tracker), and a fitted model
+scenario        the seed's 700 s run of seven +0.1 steps in q2
+loop            the closed loop at 40 Hz
+metrics         rise, overshoot, settling, steady-state error, power
+plots           the figures of a run
+"""
+
+from __future__ import annotations
+
+from .cubesat import CubeSat
+from .loop import LoopConfig, RunRecord, run_loop
+from .metrics import StepMetrics, run_metrics
+from .scenario import Scenario
+
+__all__ = ["CubeSat", "LoopConfig", "RunRecord", "Scenario", "StepMetrics", "run_loop", "run_metrics"]
