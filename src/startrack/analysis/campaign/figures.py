@@ -131,10 +131,10 @@ def rates_figure(table: pa.Table, axis: str | None, line: str | None, note: str 
         x = _dodge(ax_s, np.array([pos[_key(v)] for v in s[x_name]]), i - (len(series) - 1) / 2)
         rate, low, high = (s[k].astype(float) for k in ("success_rate", "success_low", "success_high"))
         ax_s.errorbar(x, rate, yerr=np.clip([rate - low, high - rate], 0.0, None), marker="o", capsize=3,
-                      label=name or None, color=f"C{i}")
+                      label=name or None, color=f"C{i}", ls=_joined(pos, "-"))
         false, upper = s["false_rate"].astype(float), s["false_upper"].astype(float)
         ax_f.vlines(x, false, upper, color=f"C{i}", alpha=0.6)
-        ax_f.plot(x, false, "o-", color=f"C{i}", label=name or None)
+        ax_f.plot(x, false, "o", ls=_joined(pos, "-"), color=f"C{i}", label=name or None)
         ax_f.plot(x, upper, "v", color=f"C{i}", markersize=7)
     lows = table["success_low"].to_numpy(zero_copy_only=False)
     ax_s.set_ylim(max(0.0, np.nanmin(lows, initial=1.0) - 0.05) if np.isfinite(lows).any() else 0.0, 1.01)
@@ -150,6 +150,11 @@ def rates_figure(table: pa.Table, axis: str | None, line: str | None, note: str 
         ax_s.legend(fontsize=8, loc="lower left")
     _title(fig, title or "Success and false-solve rates", note)
     return fig
+
+
+def _joined(pos: dict[Any, float], style: str) -> str:
+    """``style`` for points of a numeric axis (joined by lines), "none" for categories (not joined)."""
+    return style if _numeric(list(pos)) else "none"
 
 
 def _dodge(ax: Axes, x: np.ndarray, shift: float, step: float = 0.012) -> np.ndarray:
@@ -172,12 +177,13 @@ def accuracy_figure(table: pa.Table, axis: str | None, line: str | None, note: s
         pos = _x_axis(ax, table[x_name].to_pylist(), axis_label(axis) if axis else "cell")
         for i, (name, s) in enumerate(_lines(table, x_name, line)):
             x = np.array([pos[_key(v)] for v in s[x_name]])
-            ax.plot(x, s[f"{err}_p50_arcsec"].astype(float), "o-", color=f"C{i}", label=name or "median")
-            ax.plot(x, s[f"{err}_p95_arcsec"].astype(float), "s--", color=f"C{i}", alpha=0.7,
+            ax.plot(x, s[f"{err}_p50_arcsec"].astype(float), "o", ls=_joined(pos, "-"), color=f"C{i}",
+                    label=name or "median")
+            ax.plot(x, s[f"{err}_p95_arcsec"].astype(float), "s", ls=_joined(pos, "--"), color=f"C{i}", alpha=0.7,
                     label=None if name else "95th percentile")
         _log_if_positive(ax, "y", [table[f"{err}_p50_arcsec"], table[f"{err}_p95_arcsec"]])
         ax.set_ylabel(f"{label} error of correct trials (arcsec)")
-        ax.set_title(f"{label} error: median (solid), 95th percentile (dashed)", fontsize=10)
+        ax.set_title(f"{label} error: median (o, solid), 95th percentile (■, dashed)", fontsize=10)
         ax.grid(True, which="both", alpha=0.3)
     panels[0].legend(fontsize=8)
     _title(fig, title or "Accuracy", note)
