@@ -4,6 +4,7 @@ aggregates computed here with numpy from the same columns."""
 from __future__ import annotations
 
 import csv
+import json
 import math
 
 import numpy as np
@@ -91,7 +92,11 @@ def test_write_cells_csv(campaign):
 def test_read_campaign_refuses_a_folder_without_a_campaign(tmp_path):
     with pytest.raises(InvalidInputError, match="no readable manifest.json"):
         read_campaign(tmp_path)
-    synthetic_campaign(tmp_path, {"fov_deg": [10.0]}, trials=4)
+    manifest, _ = synthetic_campaign(tmp_path, {"fov_deg": [10.0]}, trials=4)
+    (tmp_path / "manifest.json").write_text(json.dumps({**manifest, "format": "startrack-campaign/9"}))
+    with pytest.raises(InvalidInputError, match="format 'startrack-campaign/9', expected 'startrack-campaign/1'"):
+        read_campaign(tmp_path)
+    (tmp_path / "manifest.json").write_text(json.dumps(manifest))
     for part in (tmp_path / "trials").glob("*.parquet"):
         part.unlink()
     with pytest.raises(InvalidInputError, match="no finished trials"):

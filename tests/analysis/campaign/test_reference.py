@@ -11,11 +11,13 @@ from synthetic_campaign import BAD, GOOD, synthetic_campaign
 
 from startrack.analysis.campaign.aggregate import read_campaign
 from startrack.analysis.campaign.reference import (
+    check_references,
     evaluate_reference,
     match_cells,
     reference_tables,
     reference_text,
 )
+from startrack.analysis.campaign.spec import parse_spec
 from startrack.errors import InvalidInputError
 
 SWEEP = {"fov_deg": [10.0, 20.0], "centroid_sigma_px": [0.1, 0.5]}
@@ -108,3 +110,33 @@ def test_reference_text(campaign):
 def test_reference_text_is_empty_without_references(tmp_path):
     synthetic_campaign(tmp_path, {"fov_deg": [10.0]}, trials=4)
     assert reference_text(tmp_path) == ""
+
+
+def test_check_references_before_any_work(campaign):
+    _, manifest, _, _ = campaign
+    check_references([GOOD], manifest["cells"])
+    with pytest.raises(InvalidInputError, match="'broken': metric 'average:err_cross_arcsec': unknown aggregate"):
+        check_references([GOOD, BAD], manifest["cells"])
+    bad_row_metric = {**GOOD, "rows": [{"where": {}, "seed": 1, "metric": "p95"}]}
+    with pytest.raises(InvalidInputError, match="metric 'p95': write AGG:COLUMN"):
+        check_references([bad_row_metric], manifest["cells"])
+    with pytest.raises(InvalidInputError, match="scale must be a finite number"):
+        check_references([{**GOOD, "scale": "1/60"}], manifest["cells"])
+    with pytest.raises(InvalidInputError, match="selects no cell"):
+        check_references([{**GOOD, "rows": [{"where": {"fov_deg": 30.0}}]}], manifest["cells"])
+    spec = parse_spec(SPEC_WITH_REFERENCE)
+    check_references(spec.reference, spec.cells())  # spec.Cell objects
+    with pytest.raises(InvalidInputError, match="where max_mag: not a parameter"):
+        check_references([{**GOOD, "rows": [{"where": {"max_mag": 6.0}}]}], spec.cells()[:0])
+
+
+SPEC_WITH_REFERENCE = """
+[campaign]
+name = "check"
+[sweep]
+fov_deg = [10.0, 20.0]
+[[reference]]
+title = "t"
+metric = "rate:correct"
+rows = [ { where = { fov_deg = 20.0 }, seed = 1 } ]
+"""

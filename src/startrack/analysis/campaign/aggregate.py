@@ -25,6 +25,8 @@ from ...errors import InvalidInputError
 from ...io.atomic import atomic_path
 from .stats import PERCENTILES, percentiles, rate_upper_bound, wilson_interval
 
+FORMAT = "startrack-campaign/1"
+"""The output-folder format this module reads (docs/campaigns.md)."""
 FAILED = ("ERROR", "LOST")
 """Statuses of trials that did not run to an answer (the trial raised; its worker died)."""
 SIGNED = ("err_x", "err_y", "err_roll")
@@ -48,6 +50,9 @@ def read_campaign(out: str | Path) -> tuple[dict[str, Any], pa.Table]:
         manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:
         raise InvalidInputError(f"{out} is not a campaign output folder (no readable manifest.json: {exc})") from None
+    if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
+        found = manifest.get("format") if isinstance(manifest, dict) else type(manifest).__name__
+        raise InvalidInputError(f"{out / 'manifest.json'}: format {found!r}, expected {FORMAT!r}")
     if not any((out / "trials").glob("part-*.parquet")):
         raise InvalidInputError(f"{out}: no finished trials yet (trials/ holds no part-*.parquet)")
     trials = pq.read_table(out / "trials")

@@ -114,15 +114,23 @@ def _seed_value(seed: Any) -> tuple[str, float]:
     return (str(seed), math.nan)
 
 
-def _row(row: Mapping[str, Any], i: int, metric: str, scale: float, cols: Mapping[str, np.ndarray],
-         manifest: Mapping[str, Any]) -> dict[str, Any]:
+def _selection(row: Any, i: int, manifest: Mapping[str, Any]) -> tuple[str, list[int]]:
+    """The label of reference row ``i`` and the cells it selects."""
     if not isinstance(row, Mapping):
         raise InvalidInputError(f"row {i}: must be a table {{ where = {{...}}, seed = ..., label = ... }}, got {row!r}")
     where = row.get("where", {})
+    if not isinstance(where, Mapping):
+        raise InvalidInputError(f"row {i}: where must be a table of parameter = value, got {where!r}")
     label = str(row.get("label") or ", ".join(f"{k}={format_value(v)}" for k, v in where.items()) or "all cells")
     cells = match_cells(manifest, where)
     if not cells:
         raise InvalidInputError(f"row {i} ({label}): where {dict(where)} selects no cell of this campaign")
+    return label, cells
+
+
+def _row(row: Mapping[str, Any], i: int, metric: str, scale: float, cols: Mapping[str, np.ndarray],
+         manifest: Mapping[str, Any]) -> dict[str, Any]:
+    label, cells = _selection(row, i, manifest)
     rows = np.isin(cols["cell"], cells)
     ours, n_used = parse_metric(row.get("metric", metric)).evaluate(select(cols, rows))
     ours *= scale
@@ -130,6 +138,52 @@ def _row(row: Mapping[str, Any], i: int, metric: str, scale: float, cols: Mappin
     return {"label": label, "ours": ours, "seed": seed_text, "seed_value": seed, "difference": ours - seed,
             "ratio": ours / seed if seed != 0 else math.nan, "n_trials": int(rows.sum()), "n_used": n_used,
             "cells": ",".join(map(str, cells)), "note": str(row.get("note", ""))}
+
+
+def _checked_rows(reference: Mapping[str, Any], manifest: Mapping[str, Any]) -> tuple[str, float, list]:
+    """The reference's metric (parsed to check it), scale and rows, each row's selection and metric checked."""
+    metric = reference.get("metric", "")
+    parse_metric(metric)
+    scale = reference.get("scale", 1.0)
+    if isinstance(scale, bool) or not isinstance(scale, int | float) or not math.isfinite(scale):
+        raise InvalidInputError(f"scale must be a finite number, got {scale!r}")
+    rows = reference.get("rows", [])
+    if not isinstance(rows, Sequence) or isinstance(rows, str):
+        raise InvalidInputError(f"rows must be a list of tables, got {rows!r}")
+    for i, row in enumerate(rows):
+        _selection(row, i, manifest)
+        if "metric" in row:
+            parse_metric(row["metric"])
+    return metric, float(scale), list(rows)
+
+
+def check_references(references: Sequence[Mapping[str, Any]], cells: Sequence[Any]) -> None:
+    """Check a spec's ``[[reference]]`` tables before any work: every metric parses, every row is a
+    table whose ``where`` names known keys and selects at least one cell, ``scale`` is a number.
+    (That each metric's column exists is known only once the level has written its trials.)
+
+    Parameters
+    ----------
+    references : sequence of dict
+        The ``[[reference]]`` tables as read from the TOML.
+    cells : sequence
+        The campaign's cells: manifest dicts (``cell``, ``label``, ``params``, optional ``source``)
+        or objects with ``index``, ``label``, ``params`` and ``source`` attributes (``spec.Cell``).
+
+    Raises
+    ------
+    InvalidInputError
+        Naming the reference and the problem.
+    """
+    manifest = {"cells": [c if isinstance(c, Mapping) else
+                          {"cell": c.index, "label": c.label, "params": c.params,
+                           **({"source": c.source} if getattr(c, "source", None) is not None else {})}
+                          for c in cells]}
+    for ref in references:
+        try:
+            _checked_rows(ref, manifest)
+        except (InvalidInputError, ValueError, TypeError) as exc:
+            raise InvalidInputError(f"[[reference]] {str(ref.get('title', '(untitled)'))!r}: {exc}") from None
 
 
 def evaluate_reference(reference: Mapping[str, Any], trials: pa.Table, manifest: Mapping[str, Any]) -> ReferenceTable:
@@ -142,19 +196,15 @@ def evaluate_reference(reference: Mapping[str, Any], trials: pa.Table, manifest:
         naming the reference and the problem.
     """
     title = str(reference.get("title", "(untitled)"))
-    metric = reference.get("metric", "")
     try:
-        parse_metric(metric)
-        scale = float(reference.get("scale", 1.0))
-        rows = reference.get("rows", [])
-        if not isinstance(rows, Sequence) or isinstance(rows, str):
-            raise InvalidInputError(f"rows must be a list of tables, got {rows!r}")
+        metric, scale, rows = _checked_rows(reference, manifest)
         cols = as_columns(trials)
         table = pa.Table.from_pylist([_row(r, i, metric, scale, cols, manifest) for i, r in enumerate(rows)],
                                      schema=SCHEMA)
     except (InvalidInputError, ValueError, TypeError) as exc:
         raise InvalidInputError(f"[[reference]] {title!r}: {exc}") from None
-    return ReferenceTable(title, str(reference.get("source", "")), str(metric), str(reference.get("unit", "")), table)
+    return ReferenceTable(title, str(reference.get("source", "")), str(reference.get("metric", "")),
+                          str(reference.get("unit", "")), table)
 
 
 def reference_tables(trials: pa.Table, manifest: Mapping[str, Any], *, strict: bool = True) -> list[ReferenceTable]:
