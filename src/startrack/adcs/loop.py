@@ -180,7 +180,7 @@ def run_loop(config: LoopConfig, progress=None) -> RunRecord:
         for tt, (rot, rate) in zip(times, plant.step(delivered, dt, times), strict=True):
             feedback.observe(tt, rot, rate)
         if progress is not None and (j + 1) % round(1 / dt) == 0:
-            progress(j + 1, n)
+            progress(round((j + 1) * dt), round(n * dt))
     return RunRecord(config, t_s, rec, list(getattr(feedback, "frames", [])), controller.guidance.events,
                      time.perf_counter() - wall)
 
