@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ..attitude import covariance_to_body, roll_cross_boresight, solve_wahba
+from ..attitude import attitude_covariance, covariance_to_body, roll_cross_boresight, solve_wahba
 from ..catalog import load_catalog
 from ..frames import angle_between, radec_roll_from_rotation
 from ..results import AttitudeSolution, StarMatches, Status
@@ -123,26 +123,32 @@ def head_split_arcsec(covariance_body: NDArray, head: RigHead) -> tuple[float, f
     return float(cross) / ARCSEC, float(roll) / ARCSEC
 
 
-def own_solution(match: HeadMatch, sigma_px: float, min_stars: int, false_match_prob: float = 1.0,
+def own_solution(match: HeadMatch, floor_px: float, min_stars: int, false_match_prob: float = 1.0,
                  solve_time_s: float = 0.0) -> AttitudeSolution:
-    """The head's attitude (camera frame) from its own matched stars only, or why there is none."""
+    """The head's attitude (camera frame) from its own matched stars only, or why there is none.
+
+    The covariance uses the head's centroid noise measured by its residuals about this fit
+    (:func:`measured_sigma_px`, at least ``floor_px``), not about the joint one: a head whose
+    mounting is off fits its own stars well and disagrees with the others by more than its
+    covariance allows."""
     k = len(match)
     if k < max(3, min_stars):
         return AttitudeSolution(status=Status.TOO_FEW_STARS,
                                 reason=f"head {match.name!r}: {k} star(s) matched, its own solution needs "
                                        f"{max(3, min_stars)}")
     camera = match.stars.head.camera
-    result = solve_wahba(match.observed_cam, match.ref_icrs, method="qmethod",
-                         sigma_rad=np.full(k, sigma_px / camera.fx))
+    result = solve_wahba(match.observed_cam, match.ref_icrs, method="qmethod")
     if not result.ok:
         return AttitudeSolution(status=Status.DEGENERATE, reason=f"head {match.name!r}: {result.reason}")
     rot = result.rotation
+    sigma_px = measured_sigma_px(match, rot, floor_px)
+    covariance = attitude_covariance(match.observed_cam, np.full(k, sigma_px / camera.fx))
     ra, dec, roll = radec_roll_from_rotation(rot)
     matches = StarMatches(status=Status.OK, det_index=match.stars.index[match.image_index],
                           hip=load_catalog().hip[match.catalog_rows].astype(np.int64),
                           cat_vectors=match.ref_icrs, false_match_prob=false_match_prob)
     return AttitudeSolution(
-        status=Status.OK, rot_cam_from_icrs=rot, covariance_rad2=result.covariance_rad2,
+        status=Status.OK, rot_cam_from_icrs=rot, covariance_rad2=covariance,
         ra_deg=math.degrees(ra), dec_deg=math.degrees(dec), roll_deg=math.degrees(roll), fov_deg=camera.fov_deg,
         camera=camera, matches=matches, false_match_prob=false_match_prob, solve_time_s=solve_time_s,
         residuals_arcsec=angle_between(rot.apply(match.ref_icrs).reshape(-1, 3), match.observed_cam) / ARCSEC)

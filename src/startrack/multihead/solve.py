@@ -230,14 +230,12 @@ def _without_shared(matches: dict[str, HeadMatch], rot: Rotation) -> dict[str, H
 
 
 # --- own solutions and consistency ------------------------------------------------------------
-def _own_solutions(work: _Work, matches: dict[str, HeadMatch], sigma: dict[str, float],
-                   false_match_prob: float) -> dict[str, AttitudeSolution]:
+def _own_solutions(work: _Work, matches: dict[str, HeadMatch], false_match_prob: float) -> dict[str, AttitudeSolution]:
     """Each head's own solution: from its matched stars, else from lost-in-space on it alone."""
     own = {}
     for name, stars in work.stars.items():
         match = matches.get(name, HeadMatch.empty(stars))
-        sol = own_solution(match, sigma.get(name, stars.head.centroid_sigma_px), work.options.min_head_stars,
-                           false_match_prob)
+        sol = own_solution(match, work.options.min_sigma_px, work.options.min_head_stars, false_match_prob)
         if not sol.solved:
             alone = _lost_in_space(work, stars)
             sol = alone if alone.solved else sol
@@ -273,7 +271,7 @@ def _settled(work: _Work, rig: CameraRig, seed: _Seed) -> RigSolution:
     rot, cov = seed.rot_body, seed.cov_body
     for _ in range(len(rig)):
         matches, fit, sigma = _refined(work, rot, cov, [n for n in work.stars if n not in excluded])
-        own = _own_solutions(work, matches, sigma, seed.false_match_prob)
+        own = _own_solutions(work, matches, seed.false_match_prob)
         anchor = _anchor(rig, own)
         new = set() if anchor is None else _disagreeing(rig, own, anchor, work.options.consistency_chi2) - excluded
         if not new:
@@ -282,7 +280,7 @@ def _settled(work: _Work, rig: CameraRig, seed: _Seed) -> RigSolution:
         rot, cov = own_body(own[anchor], rig.head(anchor))
     else:  # the last round excluded a head: fit once more without it
         matches, fit, sigma = _refined(work, rot, cov, [n for n in work.stars if n not in excluded])
-        own = _own_solutions(work, matches, sigma, seed.false_match_prob)
+        own = _own_solutions(work, matches, seed.false_match_prob)
     if fit is None:
         return RigSolution(status=Status.NO_MATCH, reason="the matched stars of the heads do not fix an attitude",
                            heads=own)
