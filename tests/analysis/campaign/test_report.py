@@ -33,12 +33,17 @@ def written(tmp_path_factory):
         seen.append((manifest_arg["name"], trials_arg.num_rows, out_arg))
         return "<h2>Extra section</h2><p>from a registered function</p>"
 
+    def broken(manifest_arg, trials_arg, out_arg):
+        raise RuntimeError("a broken section")
+
     register_section(budget_like)
     register_section(budget_like)  # registering twice adds it once
+    register_section(broken)
     try:
         path = write_report(out)
     finally:
         SECTIONS.remove(budget_like)
+        SECTIONS.remove(broken)
     return out, path, path.read_text(encoding="utf-8"), per_cell, seen
 
 
@@ -84,6 +89,7 @@ def test_registered_sections_are_called_with_the_campaign(written):
     out, _, page, _, seen = written
     assert seen == [("report-test", 200, out)]
     assert "<h2>Extra section</h2>" in page
+    assert "broken failed: RuntimeError: a broken section" in page  # and the rest of the report is there
     assert page.index("Extra section") > page.index("Ours beside the seed")
 
 

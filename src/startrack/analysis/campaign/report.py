@@ -198,13 +198,27 @@ def _worst(trials: pa.Table, manifest: Mapping[str, Any], out: Path) -> str:
 
 
 def _extra_sections(manifest: dict[str, Any], trials: pa.Table, out: Path) -> list[str]:
+    """The registered sections' fragments. A section module that does not import, or a section that
+    raises, becomes a paragraph naming it and the exception: the rest of the report is still written."""
+    failed = []
     for module in SECTION_MODULES.get(manifest.get("mode", ""), ()):
         try:
             importlib.import_module(module)
         except ModuleNotFoundError as exc:
             if exc.name != module:
-                raise
-    return [part for fn in list(SECTIONS) if (part := fn(manifest, trials, out))]
+                failed.append(f"{module} could not be imported: {type(exc).__name__}: {exc}")
+        except Exception as exc:  # any failure of another module's import is reported
+            failed.append(f"{module} could not be imported: {type(exc).__name__}: {exc}")
+    parts = []
+    for fn in list(SECTIONS):
+        try:
+            part = fn(manifest, trials, out)
+        except Exception as exc:  # a broken section must not cost the whole report
+            failed.append(f"section {fn.__module__}.{fn.__qualname__} failed: {type(exc).__name__}: {exc}")
+            continue
+        if part:
+            parts.append(part)
+    return [*(f"<p class=err>{esc(text)}</p>" for text in failed), *parts]
 
 
 OWN_FILES = ("figures/rates_by_*.png", "figures/accuracy_by_*.png", "figures/error_cdf.png", "figures/time.png",
