@@ -1,7 +1,8 @@
 """Scenario parameters of a rendered frame, and the simulator and detector objects they make.
 
 Besides the few named here (camera and sensor presets, exposure, magnitude limit, rate, rolling
-shutter, the true lens's distortion, sky background), every field of the simulator's ``Optics``
+shutter, the true lens's distortion, sky background, the stellar aberration the rendered stars
+show), every field of the simulator's ``Optics``
 and ``Detector`` is a parameter under its own name (default "auto": the sensor preset's value),
 every switch of ``NoiseModel`` is ``noise_<field>``, and every setting of ``StarDetector`` is
 ``detect_<field>`` (default: the detector's own), generated from the dataclasses so that a new
@@ -17,11 +18,13 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
+from astropy.time import Time
 
+from ....calibrate.apparent import aberrate, earth_state
 from ....camera import PRESETS, Camera, get_preset
 from ....detect import StarDetector
 from ....errors import InvalidInputError
-from ....simulate import NoiseModel, SkyBackground, get_sensor_preset
+from ....simulate import NoiseModel, SkyBackground, SkyModel, get_sensor_preset
 from ....simulate.radiometry import SENSOR_PRESETS, Detector, Optics, Sensor
 from ..params import Param, SpecError
 
@@ -73,6 +76,17 @@ FRAME_PARAMS = (
     Param("sky_mag_arcsec2", "float", None, "sky background (V mag per arcsec^2); auto: none", lo=0.0, hi=40.0,
           optional=True),
 )
+
+APPARENT_PARAMS = (
+    Param("aberration_annual", "bool", False,
+          "render the stars where the annual aberration of the Earth's barycentric velocity at epoch_jyear "
+          "puts them (erfa.epv00; up to 20.5 arcsec); the solver's catalog has mean places"),
+    Param("aberration_velocity_km_s", "floats", (0.0, 0.0, 0.0),
+          "observer velocity about the geocentre (GCRS axes, km/s) whose aberration the rendered stars show "
+          "(a 7.5 km/s low orbit: up to 5.2 arcsec)", lo=-1000.0, hi=1000.0, length=3),
+)
+"""Apparent-place effects of the rendered sky (the image level's; a frame without them shows the
+catalog's mean places at ``epoch_jyear``)."""
 
 SENSOR_FIELD_PARAMS = (dataclass_params(Optics, "", "Optics", auto=True)
                        + dataclass_params(Detector, "", "Detector", auto=True))
@@ -127,6 +141,34 @@ def frame_rate_rad_s(params: Mapping[str, Any]) -> np.ndarray | None:
 def frame_sky(params: Mapping[str, Any]) -> SkyBackground | None:
     mu = params["sky_mag_arcsec2"]
     return None if mu is None else SkyBackground(mag_arcsec2=mu)
+
+
+def observer_velocity_m_s(params: Mapping[str, Any]) -> np.ndarray | None:
+    """The observer's barycentric velocity (m/s, ICRS axes) whose aberration the frame shows, or
+    None without aberration: the Earth's at ``epoch_jyear`` when ``aberration_annual``, plus
+    ``aberration_velocity_km_s``."""
+    velocity = np.asarray(params.get("aberration_velocity_km_s", (0.0, 0.0, 0.0)), dtype=float) * 1e3
+    if params.get("aberration_annual", False):
+        velocity = velocity + earth_state(Time(params["epoch_jyear"], format="jyear", scale="tdb")).velocity_m_s
+    return velocity if np.any(velocity) else None
+
+
+@functools.lru_cache(maxsize=8)
+def _aberrated_sky(max_mag: float, epoch_jyear: float, velocity_m_s: tuple[float, float, float]) -> SkyModel:
+    sky = SkyModel.from_catalog(max_mag=max_mag, epoch_jyear=epoch_jyear)
+    return SkyModel(vectors_icrs=aberrate(sky.vectors_icrs, velocity_m_s), mags=sky.mags, ids=sky.ids,
+                    epoch_jyear=sky.epoch_jyear, b_v=sky.b_v)
+
+
+def frame_sky_model(params: Mapping[str, Any]) -> SkyModel | None:
+    """The stars to render: None (the simulator's own Hipparcos sky at ``epoch_jyear``) without
+    aberration, else that sky with every star moved by :func:`startrack.calibrate.apparent.aberrate`
+    (exact Lorentz form) for :func:`observer_velocity_m_s`; kept per (magnitude limit, epoch,
+    velocity), so a cell builds it once per process."""
+    velocity = observer_velocity_m_s(params)
+    if velocity is None:
+        return None
+    return _aberrated_sky(float(params["max_mag"]), float(params["epoch_jyear"]), tuple(float(v) for v in velocity))
 
 
 def check_scene(params: Mapping[str, Any]) -> None:
