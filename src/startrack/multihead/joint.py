@@ -23,7 +23,10 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ..attitude import attitude_covariance, covariance_to_body, roll_cross_boresight, solve_wahba
+from ..attitude import covariance_to_body, roll_cross_boresight
+from ..attitude._inputs import degenerate_mask
+from ..attitude.covariance import covariance_batch
+from ..attitude.qmethod import q_method_quaternions
 from ..catalog import load_catalog
 from ..frames import angle_between, radec_roll_from_rotation
 from ..results import AttitudeSolution, StarMatches, Status
@@ -74,6 +77,18 @@ class JointFit:
     covariance_rad2: NDArray[np.float64]
 
 
+def weighted_fit(observed: NDArray, reference: NDArray, sigma_rad: NDArray) -> tuple[Rotation, NDArray] | None:
+    """Davenport's q-method with weights ``1 / sigma^2`` and the QUEST covariance (rad^2, frame of
+    ``observed``), on unit vectors (K, 3) already checked; None when degenerate (fewer than two
+    non-parallel vectors). The cores of :func:`startrack.attitude.solve_wahba` without its input
+    checks, which cost more than the fit on the few dozen stars of a rig frame."""
+    if len(observed) < 2 or degenerate_mask(observed[None], reference[None], np.ones((1, len(observed))))[0]:
+        return None
+    inv_var = 1.0 / sigma_rad**2
+    quat = q_method_quaternions(observed[None], reference[None], (inv_var / inv_var.sum())[None])[0]
+    return Rotation.from_quat(quat), covariance_batch(observed[None], sigma_rad[None])[0]
+
+
 def fit_joint(matches: list[HeadMatch], sigma_px: dict[str, float]) -> JointFit | None:
     """Weighted Wahba fit of every matched star of ``matches`` in the body frame (module
     docstring); None when they do not fix an attitude (fewer than two non-parallel stars)."""
@@ -83,10 +98,8 @@ def fit_joint(matches: list[HeadMatch], sigma_px: dict[str, float]) -> JointFit 
     observed = np.concatenate([m.observed_body for m in used])
     reference = np.concatenate([m.ref_icrs for m in used])
     sigma = np.concatenate([np.full(len(m), sigma_px[m.name] / m.stars.head.camera.fx) for m in used])
-    result = solve_wahba(observed, reference, method="qmethod", sigma_rad=sigma)
-    if not result.ok:
-        return None
-    return JointFit(result.rotation, result.covariance_rad2)
+    found = weighted_fit(observed, reference, sigma)
+    return None if found is None else JointFit(*found)
 
 
 def residuals_px(match: HeadMatch, rot_cam_from_icrs: Rotation) -> NDArray[np.float64]:
@@ -137,12 +150,12 @@ def own_solution(match: HeadMatch, floor_px: float, min_stars: int, false_match_
                                 reason=f"head {match.name!r}: {k} star(s) matched, its own solution needs "
                                        f"{max(3, min_stars)}")
     camera = match.stars.head.camera
-    result = solve_wahba(match.observed_cam, match.ref_icrs, method="qmethod")
-    if not result.ok:
-        return AttitudeSolution(status=Status.DEGENERATE, reason=f"head {match.name!r}: {result.reason}")
-    rot = result.rotation
-    sigma_px = measured_sigma_px(match, rot, floor_px)
-    covariance = attitude_covariance(match.observed_cam, np.full(k, sigma_px / camera.fx))
+    found = weighted_fit(match.observed_cam, match.ref_icrs, np.full(k, 1.0 / camera.fx))
+    if found is None:
+        return AttitudeSolution(status=Status.DEGENERATE, reason=f"head {match.name!r}: its matched stars are "
+                                "all in one direction")
+    rot, covariance = found
+    covariance = covariance * measured_sigma_px(match, rot, floor_px) ** 2  # computed for 1 px: scale
     ra, dec, roll = radec_roll_from_rotation(rot)
     matches = StarMatches(status=Status.OK, det_index=match.stars.index[match.image_index],
                           hip=load_catalog().hip[match.catalog_rows].astype(np.int64),

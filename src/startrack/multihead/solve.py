@@ -194,9 +194,12 @@ def _refined(work: _Work, rot: Rotation, cov: np.ndarray, used: list[str]
     sigma = {n: work.stars[n].head.centroid_sigma_px for n in used}
     radius = {n: max(opt.window_px, opt.window_sigmas * predicted_sigma_px(cov, work.stars[n].head)) for n in used}
     matches, fit = {}, None
-    for _ in range(opt.refine_rounds):
+    for round_ in range(opt.refine_rounds):
+        before = matches
         matches = {n: match_predicted(work.stars[n], work.matchers[n], rot, radius[n])[0] for n in used}
         matches = _without_shared(matches, rot)
+        if round_ > 0 and _same(before, matches):
+            break
         fit = fit_joint(list(matches.values()), sigma)
         if fit is None:
             return matches, None, sigma
@@ -206,6 +209,12 @@ def _refined(work: _Work, rot: Rotation, cov: np.ndarray, used: list[str]
             sigma[n] = measured_sigma_px(matches[n], head.rot_cam_from_icrs(rot), opt.min_sigma_px)
             radius[n] = math.hypot(opt.match_px, 3.0 * predicted_sigma_px(cov, head))
     return matches, fit_joint(list(matches.values()), sigma), sigma
+
+
+def _same(a: dict[str, HeadMatch], b: dict[str, HeadMatch]) -> bool:
+    """Whether two rounds matched the same stars to the same catalog stars."""
+    return a.keys() == b.keys() and all(np.array_equal(a[n].image_index, b[n].image_index)
+                                        and np.array_equal(a[n].catalog_rows, b[n].catalog_rows) for n in a)
 
 
 def _without_shared(matches: dict[str, HeadMatch], rot: Rotation) -> dict[str, HeadMatch]:
