@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ...errors import InvalidInputError
 from .levels import Level, get_level
 from .params import Param, SpecError
 
@@ -228,6 +229,12 @@ def _check_cells(spec: CampaignSpec) -> None:
     if spec.mode == "sweep" and spec.budget:
         raise SpecError("[budget] is only read with [campaign] mode = \"budget\"")
     cells = spec.cells()
+    from .reference import check_references  # reference reads the spec's cells: imported late
+
+    try:
+        check_references(spec.reference, cells)
+    except InvalidInputError as exc:
+        raise SpecError(f"[[reference]] {exc}") from None
     check = spec.level_def.check
     for cell in cells if check is not None else ():
         try:
