@@ -17,18 +17,22 @@ on the same inputs (shot, dark, read noise, gain, bias, quantisation, full well;
 out the fixed pattern); the table prints the ratio, and the largest difference of the loop's
 noise-free star image from the simulator's, relative to the brightest pixel.
 
-Seed reproductions (documented in docs/simulation.md):
+Seed reproductions, run as campaigns of their shipped specs (``seed_campaign.py``; conditions
+and results in docs/seed_tables_000_002.md), each printing ours beside the seed's:
 
-- seed 004 Table 1: the largest rate for negligible smear (0.1 px) with StarNav I;
-- seed 000 Table 5.1: the magnitude limit that guarantees 4 or 6 stars in every field (1 deg sky
-  grid), cone and square fields, with Hipparcos-2;
-- seed 000 Table 5.3: magnitude error of thresholded (5 sigma), weighted-sum photometry of stars
-  of V 0-4 (Table 5.2's camera: a = pi 0.01^2 m^2, gain 10, t = 0.1 s, PSF width 10 px, dark
-  41 e-, read 40 e-), with the seed's literal eq. 3.4 signal scale and with our physical one.
+- seed 004 Table 1 (``seed004-table1-smear-rate``): the largest rate for negligible smear
+  (0.1 px) with StarNav I, and the smear the simulator renders at it;
+- seed 000 Table 5.1 (``seed000-table5.1-star-availability``): the magnitude limit that
+  guarantees 4 or 6 stars in every field (a 1 deg Fibonacci lattice of boresights), cone and
+  square fields, with Hipparcos-2;
+- seed 000 Table 5.3 (``seed000-table5.3-magnitude-error``): magnitude error of thresholded
+  (5 sigma), weighted-sum photometry of stars of V 0-4 (Table 5.2's camera), with the seed's
+  literal eq. 3.4 signal scale and with our physical one.
 
 Usage::
 
-    python benchmarks/simulate_benchmark.py [--repeats 15] [--quick] [--no-save]
+    python benchmarks/simulate_benchmark.py [--repeats 15] [--quick] [--no-save] [--no-seed-tables]
+        [--workers 2 | --sync] [--out DIR]
 """
 
 from __future__ import annotations
@@ -42,23 +46,22 @@ import time
 from pathlib import Path
 
 import numpy as np
-from scipy import ndimage
 from scipy.spatial.transform import Rotation
 
-from startrack import get_preset
-from startrack.camera import Camera
-from startrack.simulate import (
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from seed_campaign import add_run_arguments, out_for, print_references, run_spec, spec_text  # noqa: E402
+
+from startrack.camera import Camera  # noqa: E402
+from startrack.simulate import (  # noqa: E402
     SkyBackground,
     get_sensor_preset,
-    magnitude_from_electrons,
-    max_rate_rad_s,
     random_attitude,
     render_stars,
     simulate_frame,
 )
-from startrack.simulate.noise import NoiseModel
-from startrack.simulate.starcount import limiting_mag_for_min_stars
-from startrack.units import DEG
+from startrack.simulate.noise import NoiseModel  # noqa: E402
+from startrack.units import DEG  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 CAMERA = Camera.from_fov(1024, 1024, 15.0)
@@ -68,12 +71,6 @@ PATTERN = {"prnu_rms": 0.01, "dsnu_rms": 0.2}
 ALL = NoiseModel()
 SIGNAL_ONLY = NoiseModel(shot=False, dark=False, read=False, bias=False, quantize=False, saturate=False,
                          background=False, prnu=False, dsnu=False, hot_pixels=False, dead_pixels=False)
-SEED_NOISE = NoiseModel(saturate=False, quantize=False)
-"""Seed 000's images are Matlab doubles: no full well, no ADC range (a V = 0 star would saturate)."""
-TABLE_1 = {10: 0.156, 20: 0.078, 30: 0.052, 50: 0.0313}
-TABLE_5_1 = {25: (3.9, 4.3), 30: (3.6, 3.9), 35: (3.4, 3.6), 40: (3.3, 3.4), 45: (3.1, 3.3)}
-TABLE_5_3 = {0: (0.0309, 0.0427), 1: (0.0311, 0.0324), 2: (0.0353, 0.0419), 3: (0.0552, 0.0414),
-             4: (0.1362, 0.0685)}
 
 
 def sensor_with(exposure_s: float, **detector):
@@ -176,80 +173,21 @@ def _loop_row(frame, sensor, ms: float) -> dict:
 
 
 # ---------------------------------------------------------------- seed reproductions
-def table_1() -> list[dict]:
-    camera = get_preset("starnav-i")
-    return [{"exposure_ms": t, "seed_deg_s": v, "ours_deg_s": max_rate_rad_s(camera, t * 1e-3, 0.1) / DEG}
-            for t, v in TABLE_1.items()]
+SEED_SPECS = ("seed004-table1-smear-rate", "seed000-table5.1-star-availability", "seed000-table5.3-magnitude-error")
+QUICK_TRIALS = {"seed004-table1-smear-rate": 2, "seed000-table5.1-star-availability": 4000,
+                "seed000-table5.3-magnitude-error": 20}
+"""Trials per cell with --quick (a 3.2 deg lattice for Table 5.1: its limits come out lower)."""
 
 
-def table_5_1(step_deg: float) -> list[dict]:
-    """Seed 000 Table 5.1 by the seed's method (the worst pointing of a sky grid), and the mean
-    reading: the limit at which the *average* field holds n stars."""
-    from startrack.catalog import load_catalog
-
-    cat = load_catalog().brighter_than(6.5)
-    vectors, mags = cat.vectors(2000.0), np.sort(np.asarray(cat.v_mag, dtype=float))
-    rows = []
-    for fov, seed in TABLE_5_1.items():
-        row = {"fov_deg": fov, "seed_min4": seed[0], "seed_min6": seed[1]}
-        cone_fraction = (1.0 - math.cos(math.radians(fov) / 2.0)) / 2.0
-        for n in (4, 6):
-            for shape in ("circle", "square"):
-                row[f"{shape}_min{n}"] = limiting_mag_for_min_stars(vectors, np.asarray(cat.v_mag, float), fov, n,
-                                                                    shape, step_deg)
-            row[f"circle_mean{n}"] = float(mags[math.ceil(n / cone_fraction) - 1])
-        rows.append(row)
-    return rows
-
-
-def table_5_3(stars_per_mag: int, scale: str) -> list[dict]:
-    """Seed 000 Table 5.2 / 5.3: 20 stars a frame, 5 sigma threshold, weighted-sum brightness."""
-    preset = "far-mst-seed-eq34" if scale == "seed" else "far-mst"
-    base = get_sensor_preset(preset)
-    sensor = dataclasses.replace(base, optics=dataclasses.replace(base.optics, aperture_area_m2=math.pi * 0.01**2),
-                                 detector=dataclasses.replace(base.detector, read_noise_e=40.0,
-                                                              dark_current_e_s=410.0))
-    camera = get_preset("far-mst")
-    det = sensor.detector
-    threshold_adu = 5.0 * math.sqrt(sensor.dark_e + det.read_noise_e**2) / det.gain_e_per_adu
-    rng = np.random.default_rng(53)
-    rows = []
-    for mag in TABLE_5_3:
-        diffs, found, runs = [], 0, 0
-        while len(diffs) < stars_per_mag and runs < 4 * stars_per_mag // 20 + 4:
-            runs += 1
-            rot = random_attitude(rng)
-            x, y = rng.uniform(20, camera.width - 20, 20), rng.uniform(20, camera.height - 20, 20)
-            sim = render_stars(camera, rot, rot.inv().apply(camera.pixel_to_vector(x, y)), np.full(20, float(mag)),
-                               np.arange(20), sensor=sensor, rng=rng, noise=SEED_NOISE)
-            est = _weighted_sum_mags(sim, sensor, threshold_adu)
-            found += int(np.isfinite(est).sum())
-            if np.all(np.isfinite(est)):  # the seed kept only runs where all 20 were centroided
-                diffs.extend(est - mag)
-        diffs = np.array(diffs)
-        rows.append({"mag": mag, "seed_mean": TABLE_5_3[mag][0], "seed_std": TABLE_5_3[mag][1],
-                     "mean_diff": float(diffs.mean()) if diffs.size else math.nan,
-                     "median_diff": float(np.median(diffs)) if diffs.size else math.nan,
-                     "std_diff": float(diffs.std(ddof=1)) if diffs.size > 1 else math.nan,
-                     "kept_stars": int(diffs.size), "detected_fraction": found / (20 * runs)})
-    return rows
-
-
-def _weighted_sum_mags(sim, sensor, threshold_adu: float) -> np.ndarray:
-    """Magnitude of each true star from the sum of its 8-connected above-threshold cluster (NaN when
-    the star is not detected or shares its cluster with another star: the seed's centroider then
-    finds fewer than 20 stars and the run is left out)."""
-    det = sensor.detector
-    dark_subtracted = sim.image.astype(float) - (det.bias_adu + sensor.dark_e / det.gain_e_per_adu)
-    labels, _ = ndimage.label(dark_subtracted > threshold_adu, structure=np.ones((3, 3)))
-    sums = ndimage.sum_labels(dark_subtracted, labels, index=np.arange(labels.max() + 1))
-    rows = np.clip(np.round(sim.truth.y).astype(int), 0, labels.shape[0] - 1)
-    cols = np.clip(np.round(sim.truth.x).astype(int), 0, labels.shape[1] - 1)
-    lab = labels[rows, cols]
-    shared = np.bincount(lab, minlength=labels.max() + 1)[lab] > 1  # two stars in one cluster: one centroid
-    electrons = np.where((lab > 0) & ~shared, sums[lab] * det.gain_e_per_adu, np.nan)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(electrons > 0, magnitude_from_electrons(electrons, sensor), np.nan)
+def seed_tables(args: argparse.Namespace) -> dict[str, str]:
+    """Run the seed-table specs and print their reference tables; returns name -> the tables' text."""
+    out = {}
+    for name in SEED_SPECS:
+        text = spec_text(name, trials=QUICK_TRIALS[name] if args.quick else None)
+        _, folder, _ = run_spec(text, out_for(args, name), args.workers, args.sync)
+        out[name] = print_references(folder)
+        print()
+    return out
 
 
 # ---------------------------------------------------------------- output
@@ -261,36 +199,21 @@ def print_results(results: dict) -> None:
         ratio = f"{r['ratio']:.0f}x" if "ratio" in r else "-"
         diff = f"{r['loop_max_diff_rel']:.1e}" if "loop_max_diff_rel" in r else "-"
         print(f"{r['frame']:<34}{r['stars']:>6}{r['median_ms']:>10.1f}{loop:>12}{ratio:>8}{diff:>12}")
-    print("\nseed 004 Table 1: max rate for 0.1 px of smear (StarNav I, 512 px, 8 deg)")
-    for r in results["table_1"]:
-        print(f"  t = {r['exposure_ms']:>2} ms   seed {r['seed_deg_s']:.4f}   ours {r['ours_deg_s']:.4f} deg/s")
-    print("\nseed 000 Table 5.1: V limit for at least 4 / 6 stars in every field (1 deg grid)")
-    print(f"{'FOV':>5}{'seed 4':>8}{'seed 6':>8}{'cone 4':>8}{'cone 6':>8}{'square 4':>10}{'square 6':>10}"
-          f"{'mean 4':>8}{'mean 6':>8}")
-    for r in results["table_5_1"]:
-        print(f"{r['fov_deg']:>5}{r['seed_min4']:>8.1f}{r['seed_min6']:>8.1f}{r['circle_min4']:>8.2f}"
-              f"{r['circle_min6']:>8.2f}{r['square_min4']:>10.2f}{r['square_min6']:>10.2f}"
-              f"{r['circle_mean4']:>8.2f}{r['circle_mean6']:>8.2f}")
-    for scale in ("seed", "physical"):
-        print(f"\nseed 000 Table 5.3: magnitude error, thresholded weighted sum ({scale} signal scale)")
-        print(f"{'V':>3}{'seed mean':>11}{'seed std':>10}{'ours mean':>11}{'ours std':>10}{'median':>9}"
-              f"{'kept':>6}{'found':>7}")
-        for r in results[f"table_5_3_{scale}"]:
-            print(f"{r['mag']:>3}{r['seed_mean']:>11.4f}{r['seed_std']:>10.4f}{r['mean_diff']:>11.4f}"
-                  f"{r['std_diff']:>10.4f}{r['median_diff']:>9.4f}{r['kept_stars']:>6}{r['detected_fraction']:>7.0%}")
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeats", type=int, default=15, help="timed runs per frame (default 15)")
-    parser.add_argument("--quick", action="store_true", help="no plain loops, coarse grids, fewer stars")
+    parser.add_argument("--quick", action="store_true", help="no plain loops; seed tables with few trials")
     parser.add_argument("--no-save", action="store_true", help="do not write benchmarks/results/simulate-*.json")
+    parser.add_argument("--no-seed-tables", action="store_true", help="only the speed part")
+    add_run_arguments(parser)
     args = parser.parse_args(argv)
-    results = {"timings": timings(args.repeats, not args.quick), "table_1": table_1(),
-               "table_5_1": table_5_1(5.0 if args.quick else 1.0)}
-    for scale in ("seed", "physical"):
-        results[f"table_5_3_{scale}"] = table_5_3(100 if args.quick else 500, scale)
+    results = {"timings": timings(args.repeats, not args.quick)}
     print_results(results)
+    if not args.no_seed_tables:
+        print()
+        results["seed_tables"] = seed_tables(args)
     if not args.no_save:
         RESULTS.mkdir(exist_ok=True)
         path = RESULTS / f"simulate-{time.strftime('%Y%m%d-%H%M%S')}.json"

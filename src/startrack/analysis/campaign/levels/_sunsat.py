@@ -34,7 +34,7 @@ from scipy.spatial.transform import Rotation
 
 from ....camera import get_preset
 from ....catalog import load_catalog
-from ....frames import angle_between, boresight, rotation_from_radec_roll, vector_to_radec
+from ....frames import angle_between, rotation_from_radec_roll, vector_to_radec
 from ....identify.match_groups import region_mask, sub_catalogue
 from ....identify.pair_database import PairDatabase, PairSettings, load_pair_database
 from ....units import DEG
@@ -58,8 +58,9 @@ SEED_ROWS = {  # seed 002 §3.5 Tables 3-5/3-6/3-7 (notes seed-002.md §2.2)
 """The noise and the tolerances of each row of the seed's tables."""
 
 
-def region_attitudes(n: int, rng: np.random.Generator) -> list[Rotation]:
-    """``n`` attitudes ``rot_cam_from_icrs`` in the seed's region (module docstring)."""
+def region_pointings(n: int, rng: np.random.Generator) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Boresights (n, 3) and camera rolls (n,) (rad) of ``n`` attitudes in the seed's region
+    (module docstring)."""
     node = rng.uniform(0.0, 120.0 * DEG, n)
     position = rng.uniform(0.0, 2 * math.pi, n)
     roll, yaw, pitch = (rng.uniform(-a, a, n) * DEG for a in (10.0, 5.0, 5.0))
@@ -70,8 +71,15 @@ def region_attitudes(n: int, rng: np.random.Generator) -> list[Rotation]:
     radial = np.cos(position)[:, None] * ascending + np.sin(position)[:, None] * along
     track = np.cross(normal, radial)
     bore = -normal + roll[:, None] * radial + yaw[:, None] * track  # small-angle tilt of the anti-normal
-    ra, dec = vector_to_radec(bore / np.linalg.norm(bore, axis=1, keepdims=True))
-    return [rotation_from_radec_roll(a, d, r) for a, d, r in zip(ra, dec, position + pitch, strict=True)]
+    return bore / np.linalg.norm(bore, axis=1, keepdims=True), position + pitch
+
+
+def region_attitudes(n: int, rng: np.random.Generator) -> list[Rotation]:
+    """``n`` attitudes ``rot_cam_from_icrs`` in the seed's region (module docstring)."""
+    bore, roll = region_pointings(n, rng)
+    ra, dec = vector_to_radec(bore)
+    rots = rotation_from_radec_roll(ra, dec, roll)
+    return [rots[i] for i in range(n)]
 
 
 @dataclass(frozen=True)
@@ -89,8 +97,7 @@ class Guides:
 def guides() -> Guides:
     """The guide catalogues (built once per process; the pair directory is cached on disk)."""
     full = load_pair_database(PairSettings(fov_deg=14.0, stars_per_field=64, max_mag=6.0))
-    rng = np.random.default_rng(REGION_SEED)
-    bores = np.array([boresight(r) for r in region_attitudes(REGION_SAMPLES, rng)])
+    bores, _ = region_pointings(REGION_SAMPLES, np.random.default_rng(REGION_SEED))
     sub = sub_catalogue(full, region_mask(full, bores, math.radians(CAMERA.fov_diagonal_deg) / 2 + 0.5 * DEG))
     catalog = load_catalog()
     return Guides(full, sub, catalog.v_mag[full.catalog_rows], catalog.hip[full.catalog_rows].astype(np.int64))
