@@ -6,8 +6,9 @@ plant, a PD on the same gains holds the x and z angles at zero); the coils get t
 (:func:`.actuation.allocate` with the field the controller expects at the estimated attitude) and
 the expected acceleration is logged for the propagation of late measurements; the plant then
 runs for dt with the delivered currents (commanded + the PWM error, uniform within
-``current_noise_a``), and any camera frame whose mid-exposure falls in that period is rendered
-from the true state at that instant. Until the first measurement the coils are off.
+``current_noise_a``, while the coils are on), and any camera frame whose mid-exposure falls in
+that period is rendered from the true state at that instant. Until the first measurement the
+coils are off.
 """
 
 from __future__ import annotations
@@ -174,7 +175,8 @@ def run_loop(config: LoopConfig, progress=None) -> RunRecord:
         target = sc.target_at(t)
         currents, torque, plan = controller.command(t, est, target)
         log.append(t, torque / inertia)
-        delivered = currents + pwm.uniform(-sat.current_noise_a, sat.current_noise_a, currents.size)
+        noise = pwm.uniform(-sat.current_noise_a, sat.current_noise_a, currents.size)
+        delivered = currents + noise if est.valid else currents  # no PWM while the coils are off
         _record(rec, j, plant, est, plan, target, currents, delivered)
         times = feedback.sample_times(t, t + dt)
         for tt, (rot, rate) in zip(times, plant.step(delivered, dt, times), strict=True):

@@ -239,8 +239,8 @@ class TrackerNoiseModel:
         Standard deviation of the rate error against the truth at the rate's time tag.
     rate_delay_s : float
         Mean delay of the rate's time tag behind mid-exposure.
-    processing_s : float
-        Mean processing time.
+    latency_s : float
+        Mean time from mid-exposure to the result (half the exposure + processing).
     valid_fraction : float
         Fraction of frames tracked.
     frames : int
@@ -251,7 +251,7 @@ class TrackerNoiseModel:
     theta_sigma_rad: float
     rate_sigma_rad_s: float
     rate_delay_s: float
-    processing_s: float
+    latency_s: float
     valid_fraction: float
     frames: int
 
@@ -277,7 +277,7 @@ def fit_noise_model(frames: list[FrameRecord], t_s: NDArray, omega_true_rad_s: N
     rate_err = np.array([f.omega_est_rad_s for f in ok]) - rate_true
     return TrackerNoiseModel(float(theta_err.mean()), float(theta_err.std()), float(rate_err.std()),
                              float(np.mean([f.t_mid_s - f.t_rate_s for f in ok])),
-                             float(np.mean([f.processing_s for f in ok])), len(ok) / len(frames), len(frames))
+                             float(np.mean([f.latency_s for f in ok])), len(ok) / len(frames), len(frames))
 
 
 def _wrap(angle: float) -> float:
@@ -301,7 +301,7 @@ class ModelTrackerFeedback(_FramedFeedback):
         d_theta = m.theta_bias_rad + m.theta_sigma_rad * float(self.rng.standard_normal())
         est_rot = rot * Rotation.from_rotvec([0.0, d_theta, 0.0])
         est_rate = rate + np.array([0.0, m.rate_sigma_rad_s * float(self.rng.standard_normal()), 0.0])
-        available = self._available(t_s, m.processing_s)
-        record = FrameRecord(k, t_s, available, t_s, ok, "model", "" if ok else "modelled loss", 0, m.processing_s,
+        available = t_s + m.latency_s
+        record = FrameRecord(k, t_s, available, t_s, ok, "model", "" if ok else "modelled loss", 0, math.nan,
                              y_angle(rot), y_angle(est_rot) if ok else math.nan, float(est_rate[1]) if ok else math.nan)
         return (Measurement(t_s, t_s, available, est_rot, est_rate) if ok else None), record
