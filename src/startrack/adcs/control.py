@@ -93,6 +93,14 @@ class LQRTracking:
     name: str = "lqr"
     field_compensated: bool = True
 
+    @property
+    def k_angle(self) -> float:
+        return self.lqr.k_angle
+
+    @property
+    def k_rate(self) -> float:
+        return self.lqr.k_rate
+
     def accel(self, theta_rad: float, omega_rad_s: float, plan: tuple[float, float, float]) -> float:
         phi, phi_dot, phi_ddot = plan
         e, e_dot = tracking_error(theta_rad, omega_rad_s, phi, phi_dot)

@@ -136,8 +136,6 @@ class _Controller:
         self.config, self.plant = config, plant
         self.law = tracking_law(config.law, config.q_weight, config.r_weight)
         self.guidance = Guidance(config.cubesat, config.guidance)
-        self.hold_gains = (self.law.k_angle, self.law.k_rate) if hasattr(self.law, "k_angle") else \
-            (self.law.lqr.k_angle, self.law.lqr.k_rate)
 
     def command(self, t: float, est: Estimate, target_q2: float) -> tuple[NDArray, NDArray, tuple]:
         """(currents, expected torque, plan sample) for the estimate; coils off when it is invalid."""
@@ -150,7 +148,7 @@ class _Controller:
         accel[1] = self.law.accel(theta, omega, plan)
         if n_coils == 3:
             tilt = (y_rotation(theta).inv() * est.rot_ref_from_body).as_rotvec()
-            kp, kd = self.hold_gains
+            kp, kd = self.law.k_angle, self.law.k_rate
             accel[[0, 2]] = -(kp * tilt[[0, 2]] + kd * est.rate_body_rad_s[[0, 2]])
         b_body = est.rot_ref_from_body.inv().apply(self.plant.field.field_ref(t))
         currents, torque = allocate(self.config.cubesat, self.plant.coil_normals_body, b_body, accel,

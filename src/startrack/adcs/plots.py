@@ -42,6 +42,7 @@ def _title(record: RunRecord) -> str:
 
 
 def draw_attitude(record: RunRecord) -> Figure:
+    """Angle about y (truth, estimate, plan, target) and the pointing error with the 4.5 deg band."""
     fig = Figure(figsize=(10, 6.5), layout="constrained")
     top, bottom = fig.subplots(2, 1, sharex=True)
     t, deg = record.t_s, np.degrees
@@ -65,11 +66,12 @@ def draw_attitude(record: RunRecord) -> Figure:
 
 
 def draw_actuation(record: RunRecord) -> Figure:
+    """Commanded and delivered current with the limit, torque about y and power I^2 R."""
     fig = Figure(figsize=(10, 7.5), layout="constrained")
     cur, tor, pw = fig.subplots(3, 1, sharex=True)
     t, limit = record.t_s, record.config.cubesat.max_current_a
-    cur.plot(t, 1e3 * record.current_delivered, color="tab:blue", lw=0.5, label="delivered")
     cur.plot(t, 1e3 * record.current_cmd, color="tab:orange", lw=0.8, label="commanded")
+    cur.plot(t, 1e3 * record.current_delivered, color="tab:blue", lw=0.4, alpha=0.7, label="delivered")
     for sign in (-1, 1):
         cur.axhline(1e3 * sign * limit, color="tab:red", lw=0.8, ls="--", label="saturation" if sign > 0 else None)
     saturated = np.abs(record.current_cmd) >= limit * (1 - 1e-9)
@@ -88,6 +90,7 @@ def draw_actuation(record: RunRecord) -> Figure:
 
 
 def draw_feedback(record: RunRecord) -> Figure:
+    """Validity and latency of the feedback, and the rate estimate against the truth."""
     fig = Figure(figsize=(10, 7.5), layout="constrained")
     valid, rate, rate_err = fig.subplots(3, 1, sharex=True)
     _validity(valid, record)

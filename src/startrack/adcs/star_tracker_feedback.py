@@ -9,7 +9,9 @@ mid-exposure; its rate is an exponentially smoothed difference of attitudes (gai
 steadily changing rate lags the attitude by ``dt / 2 + dt (1 - g) / g`` (dt since the previous
 tracked frame): that is the rate's time tag. The result is available at the end of the exposure
 plus the processing time (detection + tracking), measured on this machine for every frame unless
-``latency_s`` fixes it. The controller propagates it to the present (:mod:`.estimate`).
+``latency_s`` fixes it; one processor handles the frames in order, so a frame waits while the
+previous one is still being processed. The controller propagates the newest result to the
+present (:mod:`.estimate`).
 
 Frames: the camera is fixed to the body (``rot_cam_from_body``, identity by default: boresight
 body +z, so the turn about y sweeps the stars along image x); the reference frame is fixed in
@@ -115,7 +117,9 @@ class StarTrackerSetup:
 
 @dataclass(frozen=True)
 class FrameRecord:
-    """What one frame gave: times (s), the tracker's verdict and its y angle and rate against the truth."""
+    """What one frame gave: times (s), the tracker's verdict, the wall time of rendering the image
+    (the simulated world, not part of the latency) and of processing it (detection + tracking, s),
+    and its y angle and rate against the truth."""
 
     index: int
     t_mid_s: float
@@ -126,6 +130,7 @@ class FrameRecord:
     reason: str
     n_matched: int
     processing_s: float
+    render_s: float
     theta_true_rad: float
     theta_est_rad: float
     omega_est_rad_s: float
@@ -147,6 +152,7 @@ class _FramedFeedback:
         self._pending: list[Measurement] = []
         self._latest: Measurement | None = None
         self._last_ok_t: float | None = None
+        self._busy_until = -math.inf
 
     def sample_times(self, t0_s: float, t1_s: float) -> list[float]:
         return [t for _, t in self.setup.mid_times(t0_s, t1_s)]
@@ -165,8 +171,11 @@ class _FramedFeedback:
         return estimate_from(self.log, self._latest, t_s)
 
     def _available(self, t_mid_s: float, processing_s: float) -> float:
+        """When frame results are ready: processing starts at the end of the exposure, or when the
+        previous frame's is done (one processor, frames in order)."""
         latency = processing_s if self.setup.latency_s is None else self.setup.latency_s
-        return t_mid_s + 0.5 * self.setup.exposure_s + latency
+        self._busy_until = max(t_mid_s + 0.5 * self.setup.exposure_s, self._busy_until) + latency
+        return self._busy_until
 
     def _fallback_rate(self, t_s: float) -> NDArray[np.float64]:
         """The rate of the previous measurement carried to ``t_s`` (zero without one)."""
@@ -203,8 +212,10 @@ class StarTrackerFeedback(_FramedFeedback):
 
     def _measure(self, k: int, t_s: float, rot: Rotation, rate: NDArray) -> tuple[Measurement | None, FrameRecord]:
         setup = self.setup
+        start = time.perf_counter()
         sim = simulate_frame(setup.camera, setup.rot_cam_from_icrs(rot), sensor=setup.sensor, max_mag=setup.max_mag,
                              rate_rad_s=setup.rot_cam_from_body.apply(rate), rng=frame_rng(setup.seed, k))
+        render = time.perf_counter() - start
         start = time.perf_counter()
         step = self.tracker.update_image(sim.image, t_s, detector=self.detector)
         processing = time.perf_counter() - start
@@ -213,7 +224,8 @@ class StarTrackerFeedback(_FramedFeedback):
         est_rot = setup.rot_ref_from_body(step.rot_cam_from_icrs) if ok else None
         t_rate, est_rate = self._rate(step.rate_rad_s, t_s)
         record = FrameRecord(k, t_s, available, t_rate, ok, step.mode, step.reason, step.n_matched, processing,
-                             y_angle(rot), y_angle(est_rot) if ok else math.nan, float(est_rate[1]) if ok else math.nan)
+                             render, y_angle(rot), y_angle(est_rot) if ok else math.nan,
+                             float(est_rate[1]) if ok else math.nan)
         if not ok:
             return None, record
         return Measurement(t_s, t_rate, available, est_rot, est_rate), record
@@ -302,6 +314,6 @@ class ModelTrackerFeedback(_FramedFeedback):
         est_rot = rot * Rotation.from_rotvec([0.0, d_theta, 0.0])
         est_rate = rate + np.array([0.0, m.rate_sigma_rad_s * float(self.rng.standard_normal()), 0.0])
         available = t_s + m.latency_s
-        record = FrameRecord(k, t_s, available, t_s, ok, "model", "" if ok else "modelled loss", 0, math.nan,
+        record = FrameRecord(k, t_s, available, t_s, ok, "model", "" if ok else "modelled loss", 0, math.nan, 0.0,
                              y_angle(rot), y_angle(est_rot) if ok else math.nan, float(est_rate[1]) if ok else math.nan)
         return (Measurement(t_s, t_s, available, est_rot, est_rate) if ok else None), record
