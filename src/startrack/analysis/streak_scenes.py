@@ -37,6 +37,7 @@ from ..simulate import (
     OrbitalScene,
     Sensor,
     Snapshot,
+    Truth,
     magnitude_from_electrons,
     render_stars,
 )
@@ -69,6 +70,8 @@ class StreakScene:
     icrs : ndarray, shape (N, 3)
         Reference directions (the stars'; an RSO's at the start of the exposure).
     is_rso : ndarray of bool, shape (N,)
+    truth : startrack.simulate.Truth
+        The simulator's own truth of the frame (what ``campaign rerun --save-image`` writes).
     """
 
     image: NDArray[np.float64]
@@ -81,6 +84,7 @@ class StreakScene:
     end_xy: NDArray[np.float64]
     icrs: NDArray[np.float64]
     is_rso: NDArray[np.bool_]
+    truth: Truth
 
 
 def streak_sensor(exposure_s: float, psf_sigma_px: float = 1.0, read_noise_e: float = 5.0) -> Sensor:
@@ -166,7 +170,7 @@ def render_streak_scene(
         is_rso[-1] = True
         icrs = np.vstack([icrs, rso.lines_of_sight(np.array([[-exposure_s / 2]]), np.array([0]))[0]])
     return StreakScene(np.asarray(sim.image, dtype=float), camera, t.rot_start, t.rot_end, omega, exposure_s,
-                       start, end, icrs, is_rso)
+                       start, end, icrs, is_rso, t)
 
 
 def star_field(camera: Camera, omega_rad_s: ArrayLike, exposure_s: float, count: int,

@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 from seed_tables_checks import finite, shipped, tiny_run
 
 from startrack.analysis.campaign.levels import get_level
-from startrack.analysis.campaign.levels.rso import passes, rate_columns, rso_streak
+from startrack.analysis.campaign.levels.rso import draw_frame, passes, rate_columns, rso_streak
 from startrack.analysis.campaign.params import SpecError
 from startrack.analysis.campaign.spec import parse_spec
 from startrack.analysis.rso_passes import SEED001_CAMERA_ELEMENTS, SEED001_RSO_ELEMENTS, camera_rotation, elements
@@ -103,9 +103,10 @@ def test_each_opportunity_sees_the_rso_lit_inside_the_image_with_no_earth_or_sun
 def test_an_orbit_frame_renders_the_rso_where_the_orbits_put_it():
     p = params(scenario="orbits", opportunity=0, stars=6, detector="harris", bias_px=0.64)
     out = LEVEL.run(p, Rotation.identity(), np.random.default_rng(1), 5.0)
-    scene, chosen = out.truth, passes(p)[0]
-    assert scene.is_rso[-1] and out.row["opportunities"] == len(passes(p))
+    scene, chosen = draw_frame(p, Rotation.identity(), np.random.default_rng(1))  # what run drew
+    assert chosen is passes(p)[0] and scene.is_rso[-1] and out.row["opportunities"] == len(passes(p))
     assert scene.rot_start.approx_equal(chosen.rot_start, atol=1e-9)
+    assert out.truth.rsos.rendered[0] and out.truth.rsos.x_start[0] == scene.start_xy[-1, 0]
     assert out.row["start_s"] == chosen.start_s and out.row["rso_range_km"] == pytest.approx(chosen.range_km)
     assert out.row["rso_measured"]
 

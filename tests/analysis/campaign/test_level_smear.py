@@ -12,6 +12,7 @@ from seed_tables_checks import finite, seed_numbers, shipped, tiny_run
 
 from startrack.analysis.campaign.levels import get_level
 from startrack.analysis.campaign.levels.smear import image_rms_rad, interstar_rms_rad
+from startrack.analysis.campaign.rerun import rerun_trial
 from startrack.camera import Camera
 from startrack.units import DEG
 
@@ -86,3 +87,5 @@ def test_a_tiny_run_of_the_spec_gives_every_reference(tmp_path):
     for title, rows in tables.items():
         if title.startswith("seed 004"):
             assert finite(rows), title
+    again = rerun_trial(tmp_path / "out", 14, 0, save_dir=tmp_path / "frames")  # the image and its truth
+    assert again.same and [f.suffix for f in again.files] == [".fits"]

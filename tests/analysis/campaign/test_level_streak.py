@@ -11,6 +11,7 @@ from seed_tables_checks import finite, seed_numbers, shipped, tiny_run
 
 from startrack.analysis.campaign.levels import get_level
 from startrack.analysis.campaign.levels._streaks import in_time_order
+from startrack.analysis.campaign.levels.streak import draw_frame
 from startrack.analysis.campaign.params import SpecError
 from startrack.analysis.campaign.spec import parse_spec
 from startrack.analysis.streak_scenes import paths_apart, spin_rate, star_paths
@@ -43,7 +44,7 @@ def test_a_frame_has_the_exposure_of_its_streak_fraction_and_its_paths_apart():
     row = LEVEL.run(p, Rotation.identity(), np.random.default_rng(3), 5.0).row
     assert row["exposure_s"] == pytest.approx(0.2 * math.radians(11.4) / 0.05, rel=1e-12)
     assert 30.0 <= row["theta_deg"] <= 90.0 and row["n_true"] == 6
-    truth = LEVEL.run(p, Rotation.identity(), np.random.default_rng(3), 5.0).truth
+    truth = draw_frame(p, Rotation.identity(), np.random.default_rng(3), 0.2, 6)  # what run drew
     camera = Camera.from_fov(512, 512, fov_deg=11.4)
     paths = star_paths(camera, truth.omega_rad_s, truth.exposure_s, truth.rot_start.apply(truth.icrs))
     assert paths_apart(paths, 15.0)

@@ -228,7 +228,7 @@ def run(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generator, tole
                rso_range_km=chosen.range_km if chosen is not None else NAN,
                start_s=chosen.start_s if chosen is not None else 0.0,
                opportunities=len(passes(params)) if chosen is not None else 0)
-    return TrialOutput(row, image=scene.image, truth=scene)
+    return TrialOutput(row, image=scene.image, truth=scene.truth)
 
 
 def check(params: Mapping[str, Any]) -> None:

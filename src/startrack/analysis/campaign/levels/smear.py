@@ -130,14 +130,14 @@ def run(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generator, tole
     if len(stars) < 3:
         row.update(status="TOO_FEW_STARS", solved=False, **error_columns(truth_mid, None, camera, tolerance_px),
                    sigma_urad=NAN, std_urad=NAN, std_truth_urad=NAN)
-        return TrialOutput(row, image=scene.image, truth=scene)
+        return TrialOutput(row, image=scene.image, truth=scene.truth)
     measured = camera.pixel_to_vector(xy[:, 0], xy[:, 1])
     fit = solve_wahba(measured, scene.icrs[stars]).rotation
     row.update(status="OK", solved=True, **error_columns(truth_mid, fit, camera, tolerance_px),
                sigma_urad=1e6 * interstar_rms_rad(measured, truth_mid.apply(scene.icrs[stars])),
                std_urad=1e6 * image_rms_rad(camera, xy, fit.apply(scene.icrs[stars])),
                std_truth_urad=1e6 * image_rms_rad(camera, xy, truth_mid.apply(scene.icrs[stars])))
-    return TrialOutput(row, image=scene.image, truth=scene)
+    return TrialOutput(row, image=scene.image, truth=scene.truth)
 
 
 def check(params: Mapping[str, Any]) -> None:

@@ -161,7 +161,7 @@ def run(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generator, tole
                **error_columns(scene.rot_start, scores.pop("rot_start_est"), scene.camera, tolerance_px), **scores}
     row.update(error="", sigma_cross_arcsec=NAN, sigma_roll_arcsec=NAN, n_stars=n, n_matched=n,
                false_match_prob=NAN, time_s=elapsed, **truth_columns(scene.rot_start), **extra)
-    return TrialOutput(row, image=scene.image, truth=scene)
+    return TrialOutput(row, image=scene.image, truth=scene.truth)
 
 
 def check(params: Mapping[str, Any]) -> None:
