@@ -10,13 +10,13 @@
 3. **Joint fit.** One Wahba solution over all matched stars of all heads in the body frame, each
    weighted by its head's measured centroid noise (:mod:`.joint`), repeated with the new matches
    and noise estimates.
-4. **Consistency.** A head whose stars the prediction did not find (a wrong mounting moves them out
-   of the windows) is identified on its own if it can be. Every head with its own solution is
-   compared, through its mounting, with an *anchor* (the rig's reference head when it has its own
-   solution, else the head with the most matched stars): a chi-square above
-   :attr:`RigOptions.consistency_chi2` marks the head inconsistent; it is left out and the rig is
-   solved again from the anchor. ``consistency_deg`` is the largest angle between a head's own
-   solution and the joint one.
+4. **Consistency.** A head whose stars the prediction did not find, or found less than half of
+   (a wrong mounting moves them out of the windows), is identified on its own if it can be. Every
+   head with its own solution is compared, through its mounting, with an *anchor* (the rig's
+   reference head when it has its own solution, else the head with the most matched stars): a
+   chi-square above :attr:`RigOptions.consistency_chi2` marks the head inconsistent; it is left
+   out and the rig is solved again from the anchor. ``consistency_deg`` is the largest angle
+   between a head's own solution and the joint one.
 
 Stars of a split detector that could belong to either field are in both heads' lists
 (:mod:`.split_fov`); when both match such a spot, the field whose prediction lies closer keeps it.
@@ -61,6 +61,9 @@ from .stars import HeadStars, rig_stars
 
 LIS_MIN_STARS = 4
 """A head is identified lost-in-space on its own only with this many stars (a pattern and one more)."""
+
+UNMATCHED_CHECK = 0.5
+"""A head whose windows matched less than this share of its stars is also identified on its own."""
 
 
 @dataclass(frozen=True)
@@ -240,14 +243,17 @@ def _without_shared(matches: dict[str, HeadMatch], rot: Rotation) -> dict[str, H
 
 # --- own solutions and consistency ------------------------------------------------------------
 def _own_solutions(work: _Work, matches: dict[str, HeadMatch], false_match_prob: float) -> dict[str, AttitudeSolution]:
-    """Each head's own solution: from its matched stars, else from lost-in-space on it alone."""
+    """Each head's own solution: from its matched stars; from lost-in-space on it alone when the
+    windows matched less than half of its stars (a mounting off by about a window matches only
+    the stars the error moves least, whose own fit cannot show the error) and that matches more."""
     own = {}
     for name, stars in work.stars.items():
         match = matches.get(name, HeadMatch.empty(stars))
         sol = own_solution(match, work.options.min_sigma_px, work.options.min_head_stars, false_match_prob)
-        if not sol.solved:
+        if len(match) < UNMATCHED_CHECK * len(stars):
             alone = _lost_in_space(work, stars)
-            sol = alone if alone.solved else sol
+            if alone.solved and len(alone.matches) > len(match):
+                sol = alone
         own[name] = sol
     return own
 
