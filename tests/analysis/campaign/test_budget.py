@@ -8,14 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from startrack.analysis.campaign.budget import (
-    BUDGET_KEYS,
-    SOURCES,
-    budget_manifest,
-    contribution,
-    ecss_terms,
-    variance_components,
-)
+from startrack.analysis.campaign.budget import BUDGET_KEYS, SOURCES, budget_manifest
+from startrack.analysis.campaign.budget_terms import contribution, ecss_terms, variance_components
 from startrack.analysis.campaign.levels.image import PARAMS, field_and_dither, trial_attitude, trial_key
 from startrack.analysis.campaign.params import SpecError
 from startrack.analysis.campaign.spec import parse_spec

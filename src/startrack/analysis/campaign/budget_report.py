@@ -18,7 +18,7 @@ import pyarrow as pa
 from matplotlib.figure import Figure
 
 from .aggregate import as_columns, read_campaign
-from .budget import AXES, TERMS, budget_rows
+from .budget_terms import AXES, TERMS, budget_rows
 from .figures import ReportFigure
 from .report import esc, html_table, register_section, save_figure
 
