@@ -9,19 +9,47 @@ solve        :func:`solve_rig`: lost-in-space on the head that can be solved, th
 pattern      identification on the combined star set when no head can be identified alone
 predict      stars predicted through a mounting and matched in windows
 joint        one weighted Wahba fit in the body frame, per-head own solutions, consistency
+stars        the star lists of the heads, checked against the rig
 split_fov    the field of each spot of a split-FOV frame from its intensity-weighted second moments
 images       :func:`solve_rig_images`: detect, classify split fields, solve
 tracking     :class:`RigTracker`, the rig mode of :class:`startrack.track.Tracker`
 mounting     in-flight mounting calibration against a reference head, and drift detection
 exclusion    Sun, Earth-limb and Moon exclusion of each head
 availability fraction of pointings where a head, and the joint solution, has enough stars
+report       a RigSolution as JSON values and a table (``startrack solve-rig``)
 
 ``docs/rig.md`` describes them, with measured figures.
 """
 
 from __future__ import annotations
 
+from .availability import RigAvailability, rig_availability
+from .exclusion import BrightBodies, dawn_dusk_bodies
+from .images import solve_rig_images
+from .mounting import MountingEstimate, calibrate_mountings, recalibrated
 from .solution import IDENTIFIED_BY_HEAD, IDENTIFIED_JOINTLY, RigOptions, RigSolution
 from .solve import consistency_chi2, solve_rig
+from .split_fov import FieldClassification, classify_fields, spot_moments
+from .tracking import RigTracker, RigTrackStep
 
-__all__ = ["IDENTIFIED_BY_HEAD", "IDENTIFIED_JOINTLY", "RigOptions", "RigSolution", "consistency_chi2", "solve_rig"]
+__all__ = [
+    "IDENTIFIED_BY_HEAD",
+    "IDENTIFIED_JOINTLY",
+    "BrightBodies",
+    "FieldClassification",
+    "MountingEstimate",
+    "RigAvailability",
+    "RigOptions",
+    "RigSolution",
+    "RigTrackStep",
+    "RigTracker",
+    "calibrate_mountings",
+    "classify_fields",
+    "consistency_chi2",
+    "dawn_dusk_bodies",
+    "recalibrated",
+    "rig_availability",
+    "solve_rig",
+    "solve_rig_images",
+    "spot_moments",
+]
