@@ -238,7 +238,7 @@ def error_cdf_figure(table: pa.Table, split: str, title: str = "") -> Figure:
     panels[0].set_ylim(0, 1.01)
     handles = [panels[1].plot([], [], m, color="0.3", ls="")[0] for m in MARKERS.values()]
     panels[1].legend(handles, [f"{q:g} %" for q in MARKERS], title="percentiles", fontsize=8, loc="lower right")
-    if curves:
+    if panels[0].get_legend_handles_labels()[0]:  # curves with cross-boresight errors
         panels[0].legend(fontsize=7, loc="upper left")
     _title(fig, title or "Error distributions", f"curves per {split}")
     return fig
