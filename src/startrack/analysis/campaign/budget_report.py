@@ -38,8 +38,17 @@ def budget_table(manifest: Mapping[str, Any], trials: pa.Table) -> pa.Table:
     return pa.Table.from_pylist(budget_rows(as_columns(trials), manifest["budget"]))
 
 
+ZERO_ARCSEC = 1e-6
+"""Sizes below this are rounding left over from differences of equal numbers: shown as 0."""
+LOG_SPAN = 1e4
+"""The bar chart turns logarithmic when the contributions span more than 100, and shows this range
+below its largest (smaller bars are too small to matter beside it)."""
+
+
 def _num(value: float) -> str:
-    return "-" if not math.isfinite(value) else f"{value:.3g}"
+    if not math.isfinite(value):
+        return "-"
+    return "0" if abs(value) < ZERO_ARCSEC else f"{value:.3g}"
 
 
 def _bars(ax, rows: Sequence[Mapping[str, Any]], axis: str) -> None:
@@ -48,14 +57,15 @@ def _bars(ax, rows: Sequence[Mapping[str, Any]], axis: str) -> None:
     width = 0.8 / len(terms)
     for j, term in enumerate(terms):
         values = np.array([r[f"contrib_{axis}_{term}_arcsec"] for r in rows], dtype=float)
-        shown = np.where(np.isfinite(values) & (values > 0), values, np.nan)
+        shown = np.where(np.isfinite(values) & (values > ZERO_ARCSEC), values, np.nan)
         ax.bar(x - 0.4 + (j + 0.5) * width, shown, width, label=TERM_NAMES[term], color=TERM_COLOURS[term])
     totals = np.array([r[f"contrib_{axis}_total_arcsec"] for r in rows], dtype=float)
-    ax.scatter(x, np.where(totals > 0, totals, np.nan), marker="_", s=400, color="k", label="total", zorder=3)
+    ax.scatter(x, np.where(totals > ZERO_ARCSEC, totals, np.nan), marker="_", s=400, color="k", label="total", zorder=3)
     positive = np.array([r[f"contrib_{axis}_{t}_arcsec"] for r in rows for t in TERMS], dtype=float)
-    positive = positive[np.isfinite(positive) & (positive > 0)]
+    positive = positive[np.isfinite(positive) & (positive > ZERO_ARCSEC)]
     if positive.size and positive.max() / positive.min() > 100.0:
         ax.set_yscale("log")
+        ax.set_ylim(bottom=max(positive.min(), positive.max() / LOG_SPAN) / 2.0)
     ax.set_xticks(x, [r["source"] for r in rows], rotation=35, ha="right")
     ax.set_ylabel(f"{axis} contribution (arcsec)")
     ax.grid(axis="y", alpha=0.3)
@@ -72,7 +82,8 @@ def budget_figure(table: pa.Table) -> ReportFigure:
         for j, axis in enumerate(AXES):
             _bars(axes[i, j], mine, axis)
             axes[i, j].set_title(f"{case}: {axis}" if len(cases) > 1 else axis)
-    axes[0, 1].legend(fontsize="small")
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=len(labels), fontsize="small")
     return ReportFigure("budget", "Error budget", CAPTION, fig, {"": table})
 
 
