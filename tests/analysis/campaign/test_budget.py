@@ -205,3 +205,20 @@ def test_shared_attitudes_follow_fields_and_dithers_and_ignore_the_cell():
     far = angle_between(boresight(rot[0, 0]), boresight(rot[0, 6]))
     assert far > 0.01                                                 # another field
     assert trial_key(np.random.default_rng(0)) is None and trial_key(trial_rng(5, 2, 9)) == (5, 2, 9)
+
+
+@pytest.mark.parametrize(("name", "cases"), [("error-budget", ["base"]), ("seed003-error-budget", ["aptina", "droid"])])
+def test_the_shipped_budgets_parse_and_their_references_select_cells(name, cases):
+    from startrack.analysis.campaign.reference import match_cells
+    from startrack.analysis.campaign.run import _manifest
+    from startrack.analysis.campaign.shipped import find_spec
+    from startrack.analysis.campaign.spec import load_spec
+
+    spec = load_spec(find_spec(name))
+    cells = spec.cells()
+    assert len(cells) == len(cases) * (2 + len(SOURCES))
+    manifest = _manifest(spec, 10)
+    assert [c["name"] for c in manifest["budget"]["cases"]] == cases
+    for ref in spec.reference:
+        for row in ref["rows"]:
+            assert len(match_cells(manifest, row["where"])) == 1, row
