@@ -103,3 +103,13 @@ def test_config_refusals():
         StarTrackerSetup(frame_rate_hz=20.0)
     with pytest.raises(InvalidInputError, match="last target"):
         Scenario(q2_start=0.4, n_steps=7)
+
+
+@pytest.mark.parametrize("rate_hz", [2.0, 3.0, 10.0])
+def test_every_frame_is_sampled_once_by_the_control_ticks(rate_hz):
+    setup = StarTrackerSetup(frame_rate_hz=rate_hz)
+    ticks = np.arange(400) * 0.025
+    mids = [t for t0 in ticks for _, t in setup.mid_times(t0, t0 + 0.025)]
+    assert len(mids) == round(10 * rate_hz)
+    np.testing.assert_allclose(np.diff(mids), 1 / rate_hz, rtol=1e-9)
+    assert mids[0] == pytest.approx(0.05)  # mid-exposure of frame 0 (0.1 s exposure)
