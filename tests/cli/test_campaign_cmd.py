@@ -116,3 +116,28 @@ def test_refusals_name_the_problem(campaign, tmp_path):
 def test_without_the_extra_the_command_names_it(monkeypatch, tmp_path):
     monkeypatch.setitem(sys.modules, "distributed", None)   # as if Dask were not installed
     _refused(run("campaign", "list"), "startrack[campaign]")
+
+
+def test_progress_draws_a_bar_on_a_terminal_and_plain_lines_elsewhere(monkeypatch):
+    from startrack.cli.progress import ProgressBar
+
+    class Stream(io.StringIO):
+        def __init__(self, tty):
+            super().__init__()
+            self.tty = tty
+
+        def isatty(self):
+            return self.tty
+
+    for tty in (True, False):
+        stream = Stream(tty)
+        monkeypatch.setattr(sys, "stderr", stream)
+        bar = ProgressBar("  trials")
+        for done in range(1, 101):
+            bar(done, 100)
+        text = stream.getvalue()
+        if tty:
+            assert "\r  trials [" in text and text.endswith("100/100\n")
+        else:
+            assert "\r" not in text and "[" not in text
+            assert text.splitlines() == ["trials: 1/100"] + [f"trials: {k}/100" for k in range(10, 101, 10)]
