@@ -122,7 +122,7 @@ def sim(tmp_path_factory) -> dict[str, Path]:
 # ---------------------------------------------------------------- help, usage, version
 
 
-ATTITUDE_COMMANDS = {"solve", "solve-stars", "simulate", "demo"}
+ATTITUDE_COMMANDS = {"solve", "solve-stars", "solve-rig", "simulate", "demo"}
 """Commands whose output is an attitude (table or JSON with the quaternion columns)."""
 
 
