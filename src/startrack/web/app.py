@@ -72,7 +72,7 @@ def _refusal(request: Request, status: int, message: str, field: str | None = No
     if request.url.path.startswith("/api"):
         body = {"error": message, **({"field": field} if field else {})}
         return JSONResponse(body, status, headers=headers)
-    return pages.render(request, "error.html", status, status=status, message=message, field=field)
+    return pages.render(request, "error.html", status, status=status, message=message, field=field, twin=None)
 
 
 async def on_refusal(request: Request, exc: Exception) -> Response:

@@ -30,6 +30,10 @@ from ..io.atomic import atomic_path
 JOB_ID = re.compile(r"^[0-9a-f]{32}$")
 STATES = ("queued", "running", "done", "failed", "cancelled")
 TERMINAL = frozenset({"done", "failed", "cancelled"})
+SOLVE_STAGES = ("read", "detect", "identify", "attitude", "refine", "annotate")
+"""The stages of a solve job (:mod:`.pipeline`)."""
+ANALYSIS_STAGES = ("records", "analyse", "write")
+"""The stages of an analysis job (:mod:`.analysis_jobs`)."""
 SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,80}\.(png|json|csv|wcs)$")
 """Names of result files that may be served (a job's own files; nothing else is looked up)."""
 INTERNAL = frozenset({"job.json", "state.json"})

@@ -31,8 +31,8 @@ from starlette.templating import Jinja2Templates
 
 from .. import __version__
 from .api import service_of
+from .jobs import ANALYSIS_STAGES, SOLVE_STAGES
 from .options import OptionError, validate_options
-from .pipeline import STAGES
 from .refusals import Refusal
 from .schema import openapi_document
 from .service import option_refusal
@@ -41,11 +41,10 @@ from .views import analyses_view, options_view
 
 TEMPLATES = Jinja2Templates(directory=str(Path(__file__).parent / "templates"))
 TEMPLATES.env.globals["version"] = __version__
-ANALYSIS_STAGES = ("records", "analyse", "write")
 
 
-def render(request: Request, name: str, status: int = 200, **context: Any) -> HTMLResponse:
-    return TEMPLATES.TemplateResponse(request, name, context, status_code=status)
+def render(request: Request, name: str, status_code: int = 200, **context: Any) -> HTMLResponse:
+    return TEMPLATES.TemplateResponse(request, name, context, status_code=status_code)
 
 
 def _last(fields: dict[str, list[str]], key: str) -> str:
@@ -140,7 +139,7 @@ async def jobs_page(request: Request) -> HTMLResponse:
 
 async def job_page(request: Request) -> HTMLResponse:
     job = service_of(request).job_view(request.path_params["job_id"])
-    stages = STAGES if job["kind"] == "solve" else ANALYSIS_STAGES
+    stages = SOLVE_STAGES if job["kind"] == "solve" else ANALYSIS_STAGES
     return render(request, "job.html", nav="jobs", twin=f"/api/jobs/{job['id']}", job=job, stages=stages)
 
 

@@ -46,13 +46,13 @@ from ..io import Image, read_image
 from ..results import AttitudeSolution
 from ..solve import DEFAULT_EPOCH_JYEAR, solve_stars
 from .annotate import write_annotated
-from .jobs import now_iso, read_json, update_state, write_json
+from .jobs import SOLVE_STAGES, now_iso, read_json, update_state, write_json
 from .outputs import num, rerun_dict, result_dict, write_solution_files
 from .presets import auto_settings, preset_detector
 from .records import save_solution
 from .rejects import rejected_spots
 
-STAGES = ("read", "detect", "identify", "attitude", "refine", "annotate")
+STAGES = SOLVE_STAGES
 WEIGHTS = {"read": 0.10, "detect": 0.15, "identify": 0.35, "attitude": 0.10, "refine": 0.15, "annotate": 0.15}
 """Share of a typical job's time per stage, for the progress fraction."""
 

@@ -44,6 +44,7 @@ class _Worker:
     ready: bool = False
     job_id: str | None = None
     started_s: float = 0.0
+    limit_s: float = 0.0
 
 
 class WorkerPool:
@@ -54,7 +55,8 @@ class WorkerPool:
     store : JobStore
     n_workers : int
     time_limit_s : float
-        Wall-clock limit of one job, counted from the moment a ready worker takes it.
+        Wall-clock limit of one job, counted from the moment a ready worker takes it (a job's
+        ``time_limit_s`` option may shorten it).
     max_queued : int
         Jobs that may wait.
     prewarm : bool
@@ -166,9 +168,11 @@ class WorkerPool:
 
     def _dispatch(self, worker: _Worker, job_id: str) -> None:
         try:
+            asked = (self.store.meta(job_id).get("options") or {}).get("time_limit_s")
             self.store.set_state(job_id, state="running", stage=None, started=now_iso())
         except UnknownJobError:  # deleted while it waited
             return
+        worker.limit_s = self.time_limit_s if asked is None else min(float(asked), self.time_limit_s)
         worker.job_id, worker.started_s = job_id, time.monotonic()
         worker.conn.send(("run", job_id))
 
@@ -194,9 +198,9 @@ class WorkerPool:
             self._cancel.discard(job_id)
             self._replace(worker)
             self._end(job_id, "cancelled", None)
-        elif job_id is not None and time.monotonic() - worker.started_s > self.time_limit_s:
+        elif job_id is not None and time.monotonic() - worker.started_s > worker.limit_s:
             self._replace(worker)
-            self._end(job_id, "failed", f"timed out after {self.time_limit_s:g} s")
+            self._end(job_id, "failed", f"timed out after {worker.limit_s:g} s")
 
     def _end(self, job_id: str, state: str, error: str | None) -> None:
         """Set an end state unless the job already reached one (the worker wrote it just before)."""

@@ -21,8 +21,6 @@ import numpy as np
 from ..camera import Camera
 from ..errors import InvalidInputError
 from ..frames import random_rotations, rotation_from_radec_roll
-from ..io.truth_files import write_frame
-from ..simulate import SENSOR_PRESETS, get_sensor_preset, simulate_frame
 from .options import OptionError
 
 DEFAULTS: dict[str, Any] = {"fov_deg": 15.0, "width": 1024, "height": 1024, "ra_deg": None, "dec_deg": None,
@@ -35,6 +33,8 @@ INTEGER = ("width", "height", "seed")
 
 def validate_simulation(params: Any) -> dict[str, Any]:
     """Checked parameters with their defaults (a fresh seed when none); OptionError naming the field."""
+    from ..simulate import SENSOR_PRESETS
+
     if not isinstance(params, dict):
         raise OptionError("simulate", f"must be a JSON object of scene parameters, got {type(params).__name__}")
     unknown = sorted(set(params) - set(DEFAULTS))
@@ -62,6 +62,9 @@ def validate_simulation(params: Any) -> dict[str, Any]:
 
 def render(params: dict[str, Any], path: Path) -> None:
     """Render the checked scene and write it (image + truth) to ``path`` (a .fits file)."""
+    from ..io.truth_files import write_frame
+    from ..simulate import get_sensor_preset, simulate_frame
+
     rng = np.random.default_rng(params["seed"])
     try:
         camera = Camera.from_fov(params["width"], params["height"], params["fov_deg"], name="simulated")

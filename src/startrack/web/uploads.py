@@ -7,7 +7,8 @@ and the image's dimensions read from its header before anything is decoded.
    RAW one; the client's file name is never trusted for the type (it only chooses between TIFF
    and a TIFF-based RAW with the same signature, and names the RAW decoder).
 3. **Dimensions** (422, field ``file``): from the header alone (Pillow's lazy ``Image.open``,
-   FITS ``NAXISn`` cards, LibRaw's ``sizes`` without unpacking), each side within
+   the FITS ``NAXISn`` / ``ZNAXISn`` cards read here, block by block, without astropy, which
+   would look at the data's size; LibRaw's ``sizes`` without unpacking), each side within
    :data:`~.config.MIN_SIDE_PX`..:data:`~.config.MAX_SIDE_PX` and at most ``max_pixels`` in all.
 
 The stored file is named by the server (``input.<ext>``, the extension from the sniffed type);
@@ -17,9 +18,10 @@ characters.
 
 from __future__ import annotations
 
+import gzip
 import hashlib
+import math
 import re
-import shutil
 import warnings
 from collections.abc import AsyncIterator
 from dataclasses import dataclass
@@ -43,6 +45,9 @@ SIGNATURES: tuple[tuple[bytes, str], ...] = (
 """Leading bytes of each accepted format (RAW: Olympus ORF, Panasonic RW2, Fuji RAF; CR3 is an
 ISO media file, ``ftypcrx`` at offset 4; DNG, NEF, CR2, ARW, PEF and SRW are TIFF containers)."""
 EXTENSIONS = {"fits": ".fits", "png": ".png", "jpeg": ".jpg", "tiff": ".tif"}
+FITS_BLOCK = 2880
+FITS_MAX_BLOCKS = 200
+FITS_MAX_HDUS = 8
 MAX_FILES = 200
 MAX_FIELDS = 20
 MAX_FIELD_BYTES = 65_536
@@ -96,7 +101,10 @@ async def read_form(request: Request, limit: int) -> tuple[dict[str, list[str]],
         if isinstance(value, str):
             fields.setdefault(key, []).append(value)
         else:
-            files.append(value) if key == "file" else value.file.close()
+            if key == "file":
+                files.append(value)
+            else:
+                value.file.close()
     return fields, files
 
 
@@ -180,14 +188,57 @@ def image_size(path: Path, kind: str, label: str) -> tuple[int, int]:
 
 
 def _fits_size(path: Path) -> tuple[int, int]:
-    from astropy.io import fits
-
-    with fits.open(path, memmap=False, lazy_load_hdus=True) as hdus:
-        for hdu in hdus:
-            header: Any = hdu.header
-            if getattr(hdu, "is_image", False) and int(header.get("NAXIS", 0)) >= 2:
-                return int(header["NAXIS1"]), int(header["NAXIS2"])
+    """Width and height of the first image HDU (or tile-compressed image) from the header cards,
+    reading at most :data:`FITS_MAX_BLOCKS` blocks per header and nothing of the data."""
+    with open(path, "rb") as probe:
+        compressed = probe.read(2) == b"\x1f\x8b"
+    with (gzip.open if compressed else open)(path, "rb") as fh:
+        for _ in range(FITS_MAX_HDUS):
+            cards = _fits_cards(fh)
+            if cards is None:
+                break
+            if cards.get("ZIMAGE") is True and int(cards.get("ZNAXIS", 0)) >= 2:
+                return int(cards["ZNAXIS1"]), int(cards["ZNAXIS2"])
+            naxis = int(cards.get("NAXIS", 0))
+            if naxis >= 2 and cards.get("XTENSION", "IMAGE") == "IMAGE":
+                return int(cards["NAXIS1"]), int(cards["NAXIS2"])
+            size = abs(int(cards.get("BITPIX", 8))) // 8 * int(cards.get("GCOUNT", 1)) * (
+                int(cards.get("PCOUNT", 0)) + (math.prod(int(cards[f"NAXIS{i}"]) for i in range(1, naxis + 1))
+                                               if naxis else 0))
+            fh.seek(-(-size // FITS_BLOCK) * FITS_BLOCK, 1)
     raise ValueError("no image HDU with NAXIS >= 2")
+
+
+def _fits_cards(fh) -> dict[str, Any] | None:
+    """The keyword values of one FITS header (integers, logicals and strings), up to END; None at
+    the end of the file."""
+    cards: dict[str, Any] = {}
+    for n in range(FITS_MAX_BLOCKS):
+        block = fh.read(FITS_BLOCK)
+        if n == 0 and not block:
+            return None
+        if len(block) < FITS_BLOCK:
+            raise ValueError("the FITS header ends before its END card")
+        for i in range(0, FITS_BLOCK, 80):
+            card = block[i:i + 80].decode("ascii", errors="replace")
+            key = card[:8].strip()
+            if key == "END":
+                return cards
+            if card[8:10] == "= ":
+                cards[key] = _fits_value(card[10:])
+    raise ValueError(f"the FITS header is longer than {FITS_MAX_BLOCKS} blocks")
+
+
+def _fits_value(text: str) -> Any:
+    text = text.split("/", 1)[0].strip() if not text.lstrip().startswith("'") else text.strip()
+    if text in ("T", "F"):
+        return text == "T"
+    if text.startswith("'"):
+        return text[1:].split("'", 1)[0].strip()
+    try:
+        return int(text)
+    except ValueError:
+        return text
 
 
 def _raw_size(path: Path) -> tuple[int, int]:
@@ -200,15 +251,3 @@ def _raw_size(path: Path) -> tuple[int, int]:
         return int(sizes.raw_width), int(sizes.raw_height)
     finally:
         raw.close()
-
-
-def discard_files(files: list[UploadFile]) -> None:
-    for upload in files:
-        upload.file.close()
-
-
-def remove_quietly(path: Path) -> None:
-    if path.is_dir():
-        shutil.rmtree(path, ignore_errors=True)
-    else:
-        path.unlink(missing_ok=True)

@@ -1,0 +1,206 @@
+"""Every refusal of the server, through a real server: 400, 403, 404, 413 (while streaming), 415
+(from the content), 422 (options, absurd dimensions from the header), 429; and the server keeps
+serving after each one."""
+
+from __future__ import annotations
+
+import io
+import json
+import re
+import struct
+import zlib
+from pathlib import Path
+
+import pytest
+from astropy.io import fits
+
+LIMIT_BYTES = 8_000_000  # the session server's --max-upload-mb 8
+SOURCES = Path(__file__).resolve().parents[2] / "src" / "startrack"
+
+
+def still_serving(server) -> None:
+    assert server.client.get("/api/status").status_code == 200
+
+
+def png_header(width: int, height: int) -> bytes:
+    """A PNG whose IHDR declares ``width`` x ``height`` (8-bit grey) with a token IDAT: what a
+    decompression bomb looks like before it is decoded."""
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 0, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(b"\x00" * 64)) + chunk(b"IEND", b""))
+
+
+def fits_header_only(width: int, height: int) -> bytes:
+    header = fits.Header([("SIMPLE", True), ("BITPIX", 16), ("NAXIS", 2), ("NAXIS1", width), ("NAXIS2", height)])
+    return header.tostring().encode("ascii")
+
+
+def post_file(server, content: bytes, name: str, options: dict | None = None):
+    data = {} if options is None else {"options": json.dumps(options)}
+    return server.client.post("/api/jobs", files={"file": (name, io.BytesIO(content))}, data=data)
+
+
+def multipart_head(server, extra: str) -> bytes:
+    return (f"POST /api/jobs HTTP/1.1\r\nHost: {server.host}:{server.port}\r\n"
+            f"Content-Type: multipart/form-data; boundary=B0UND\r\n{extra}\r\n").encode()
+
+
+def test_413_from_the_declared_length_before_any_body_is_sent(server):
+    status, body = server.raw_request(multipart_head(server, f"Content-Length: {LIMIT_BYTES + 1}\r\n"))
+    assert status == 413
+    assert "limit is 8 MB" in body["error"] and str(LIMIT_BYTES + 1) in body["error"]
+    still_serving(server)
+
+
+def test_413_while_a_chunked_body_streams_before_its_end(server):
+    part_head = b'--B0UND\r\nContent-Disposition: form-data; name="file"; filename="big.fits"\r\n\r\n'
+    chunk = b"\x00" * 1_000_000
+    chunks = [part_head] + [chunk] * 9  # 9 MB of file data, and the body's last chunk never sent
+    framed = [f"{len(c):x}\r\n".encode() + c + b"\r\n" for c in chunks]
+    status, body = server.raw_request(multipart_head(server, "Transfer-Encoding: chunked\r\n"), framed)
+    assert status == 413 and "more than 8000000 bytes arrived" in body["error"]
+    still_serving(server)
+
+
+@pytest.mark.parametrize(("content", "name", "said"), [
+    (b"just some text, not an image\n" * 10, "notes.png", "is not FITS, PNG, JPEG, TIFF or camera RAW"),
+    (b"GIF89a" + b"\x00" * 200, "anim.jpg", "is not FITS, PNG, JPEG, TIFF or camera RAW"),
+    (b"\x89PNG\r\n\x1a\n" + b"garbage" * 30, "broken.png", "its header cannot be read"),
+    (b"SIMPLE  =                    T" + b" " * 50 + b"NAXIS   = nonsense", "broken.fits", "header cannot be read"),
+])
+def test_415_from_the_content_not_the_name(server, content, name, said):
+    response = post_file(server, content, name)
+    assert response.status_code == 415
+    assert said in response.json()["error"] and response.json()["field"] == "file"
+    still_serving(server)
+
+
+def test_415_for_a_body_that_is_not_multipart(server):
+    response = server.client.post("/api/jobs", json={"file": "roof.jpg"})
+    assert response.status_code == 415 and "multipart/form-data" in response.json()["error"]
+    still_serving(server)
+
+
+@pytest.mark.parametrize(("content", "name", "said"), [
+    (png_header(100_000, 100_000), "bomb.png", "10000000000 pixels"),
+    (png_header(15_000, 9_000), "wide.png", "is 15000 x 9000 px"),
+    (png_header(10, 10), "tiny.png", "is 10 x 10 px"),
+    (fits_header_only(100_000, 100_000), "huge.fits", "is 100000 x 100000 px"),
+])
+def test_422_for_absurd_dimensions_read_from_the_header(server, content, name, said):
+    assert len(content) < 10_000  # the refusal comes from the header: nothing near that size was sent
+    response = post_file(server, content, name)
+    assert response.status_code == 422 and response.json()["field"] == "file"
+    assert said in response.json()["error"]
+    still_serving(server)
+
+
+@pytest.mark.parametrize(("options", "field"), [
+    ("{not json", "options"),
+    ([1, 2], "options"),
+    ({"colour": "red"}, "options.colour"),
+    ({"fov_deg": 500}, "options.fov_deg"),
+    ({"fov_deg": "ten"}, "options.fov_deg"),
+    ({"fov_range_deg": [30, 10]}, "options.fov_range_deg"),
+    ({"fov_deg": 10, "camera": "aptina-mt9p031"}, "options.camera"),
+    ({"camera": "no-such-camera"}, "options.camera"),
+    ({"camera": "../../etc/passwd"}, "options.camera"),
+    ({"epoch": 12}, "options.epoch"),
+    ({"time": "yesterday"}, "options.time"),
+    ({"site": "atlantis"}, "options.site"),
+    ({"latitude_deg": 40}, "options.longitude_deg"),
+    ({"latitude_deg": 95, "longitude_deg": 0}, "options.latitude_deg"),
+    ({"lens_correction": "yes"}, "options.lens_correction"),
+    ({"method": "guess"}, "options.method"),
+    ({"method": "pyramid"}, "options.method"),
+    ({"detection_preset": "magic"}, "options.detection_preset"),
+    ({"detection": {"sigma": -1}}, "options.detection.sigma"),
+    ({"detection": {"dark_frame": [1]}}, "options.detection.dark_frame"),
+    ({"time_limit_s": 0}, "options.time_limit_s"),
+])
+def test_422_names_the_option(server, real_images, options, field):
+    text = options if isinstance(options, str) else json.dumps(options)
+    with open(real_images["roof.jpg"], "rb") as fh:
+        response = server.client.post("/api/jobs", files={"file": ("roof.jpg", fh)}, data={"options": text})
+    assert response.status_code == 422, response.text
+    assert response.json()["field"] == field and response.json()["error"].startswith(field)
+    still_serving(server)
+
+
+@pytest.mark.parametrize(("scene", "field"), [({"fov_deg": 500}, "simulate.fov_deg"),
+                                              ({"width": 10.5}, "simulate.width"), ({"ra_deg": 10}, "simulate.dec_deg"),
+                                              ({"planet": "mars"}, "simulate.planet")])
+def test_422_names_the_scene_parameter(server, scene, field):
+    response = server.client.post("/api/jobs", files={"simulate": (None, json.dumps(scene))})
+    assert response.status_code == 422 and response.json()["field"] == field
+    still_serving(server)
+
+
+def test_400_for_no_file_or_two(server, real_images):
+    assert server.client.post("/api/jobs", files={"options": (None, "{}")}).status_code == 400
+    content = real_images["roof.jpg"].read_bytes()
+    response = server.client.post("/api/jobs", files=[("file", ("a.jpg", content)), ("file", ("b.jpg", content))])
+    assert response.status_code == 400 and "POST /api/batches" in response.json()["error"]
+    still_serving(server)
+
+
+@pytest.mark.parametrize("path", [
+    "/api/jobs/..%2F..%2Fetc%2Fpasswd", "/api/jobs/%2E%2E", "/api/jobs/ABCDEF", "/api/jobs/" + "0" * 32,
+    "/api/jobs/" + "0" * 31 + "g", "/api/batches/..%2Fjobs", "/api/batches/" + "f" * 32, "/jobs/" + "1" * 32,
+])
+def test_404_for_malformed_or_unknown_ids(server, path):
+    response = server.client.get(path)
+    assert response.status_code == 404
+    still_serving(server)
+
+
+def test_404_for_file_names_outside_the_job(server, real_images):
+    job_id = server.submit(real_images["crappy.jpg"]).json()["id"]
+    server.wait_job(job_id)
+    for name in ("..%2Fjob.json", "job.json", "state.json", "input.jpg", "record.npz", "%2Fetc%2Fpasswd",
+                 "..%2F..%2F..%2Fetc%2Fpasswd", "nothing.png"):
+        response = server.client.get(f"/api/jobs/{job_id}/files/{name}")
+        assert response.status_code == 404, name
+        assert "error" in response.json()
+    assert server.client.get(f"/api/jobs/{job_id}/files/annotated.png").status_code == 200
+    still_serving(server)
+
+
+def test_403_for_a_cross_site_post(server, real_images):
+    with open(real_images["roof.jpg"], "rb") as fh:
+        response = server.client.post("/api/jobs", files={"file": ("roof.jpg", fh)},
+                                      headers={"Origin": "http://evil.example"})
+    assert response.status_code == 403
+    assert server.client.delete("/api/jobs/" + "0" * 32, headers={"Origin": "null"}).status_code == 403
+    still_serving(server)
+
+
+def test_429_when_the_queue_is_full_then_cancelled(idle_server, random_field):
+    running = idle_server.submit(random_field).json()["id"]
+    idle_server.wait_job(running, states=("running",))
+    waiting = [idle_server.submit(random_field) for _ in range(3)]  # --max-queued 3
+    assert [r.status_code for r in waiting] == [201, 201, 201]
+    refused = idle_server.submit(random_field)
+    assert refused.status_code == 429 and refused.headers["retry-after"] == "10"
+    assert "the queue is full: 3 of 3 jobs waiting" in refused.json()["error"]
+    for job_id in [r.json()["id"] for r in waiting] + [running]:
+        assert idle_server.client.delete(f"/api/jobs/{job_id}").json()["state"] == "cancelled"
+    assert idle_server.client.get("/api/status").json()["queued"] == 0
+    still_serving(idle_server)
+
+
+def test_nothing_is_run_through_a_shell():
+    sources = [*sorted((SOURCES / "web").rglob("*.py")), SOURCES / "cli" / "web_cmd.py"]
+    assert len(sources) > 10
+    pattern = re.compile(r"\bsubprocess\b|os\.system|os\.popen|shell\s*=\s*True|\bpty\b|os\.exec")
+    offenders = [f"{p.name}: {m.group(0)}" for p in sources for m in pattern.finditer(p.read_text())]
+    assert offenders == []
+
+
+def test_the_jobs_folder_holds_only_server_made_names(server):
+    jobs = server.data_dir / "jobs"
+    names = [p.name for p in jobs.iterdir()]
+    assert names and all(re.fullmatch(r"[0-9a-f]{32}", n) for n in names)
+    inputs = {q.name for p in jobs.iterdir() for q in p.iterdir() if q.name.startswith("input")}
+    assert inputs <= {"input.jpg", "input.png", "input.fits", "input.tif"}
