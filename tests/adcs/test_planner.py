@@ -41,13 +41,13 @@ def test_plan_meets_its_boundary_conditions_and_the_current_bound(step_plan):
     assert np.all(np.abs(plan.q2) <= 1)
 
 
-def test_plan_uses_no_more_energy_than_its_prey(step_plan):
+def test_plan_costs_no_more_than_its_prey(step_plan):
     prey_only = plan_path(SAT, Boundary(0.3, 0.002), Boundary(0.4, 0.0), 5.0, 10.0, PlannerOptions(max_iter=1))
-    assert step_plan.energy_j <= prey_only.energy_j * (1 + 1e-9)
+    assert step_plan.cost_j <= prey_only.cost_j * (1 + 1e-9)
     # 1/2 int I^2 R dt by the LGL weights equals the trapezoid over the interpolated current to 1 %
     t = np.linspace(step_plan.t0_s, step_plan.t_end_s, 4001)
     current = np.interp(t, step_plan.times_s, step_plan.current_a)
-    assert 0.5 * SAT.resistance_ohm * np.trapezoid(current**2, t) == pytest.approx(step_plan.energy_j, rel=0.05)
+    assert 0.5 * SAT.resistance_ohm * np.trapezoid(current**2, t) == pytest.approx(step_plan.cost_j, rel=0.05)
 
 
 def test_plan_flown_open_loop_reaches_its_target(step_plan):

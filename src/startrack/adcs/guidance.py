@@ -54,12 +54,12 @@ class GuidanceOptions:
 
 @dataclass(frozen=True)
 class PlanEvent:
-    """One planning call: when, the horizon used, the outcome, energy (J) and SLSQP wall time (s)."""
+    """One planning call: when, the horizon used, the outcome, the cost 1/2 int I^2 R dt (J) and SLSQP wall time (s)."""
 
     t_s: float
     horizon_s: float
     status: str
-    energy_j: float
+    cost_j: float
     wall_s: float
 
 
@@ -102,7 +102,7 @@ class Guidance:
         while True:
             wall = time.perf_counter()
             plan = plan_path(self.cubesat, start, end, t_s, horizon_s, opt.planner)
-            self.events.append(PlanEvent(t_s, horizon_s, plan.status.value, plan.energy_j, time.perf_counter() - wall))
+            self.events.append(PlanEvent(t_s, horizon_s, plan.status.value, plan.cost_j, time.perf_counter() - wall))
             if plan.feasible or horizon_s * opt.growth > opt.max_horizon_s:
                 break
             horizon_s *= opt.growth

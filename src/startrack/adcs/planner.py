@@ -105,8 +105,9 @@ class PlannedPath:
         Node times, attitude, rate about y and the coil current the path needs.
     nu : ndarray, shape (N,)
         Path-control parameters.
-    energy_j : float
-        ``1/2 int I^2 R dt`` by the LGL quadrature, J.
+    cost_j : float
+        The seed's cost ``1/2 int I^2 R dt`` (eq. 5.1) by the LGL quadrature, J: half the
+        electrical energy the coil dissipates along the path.
     prey : ndarray, shape (4,)
         Cubic prey coefficients in time from ``t0_s`` (eq. 5.35).
     q_ref : float
@@ -122,7 +123,7 @@ class PlannedPath:
     omega_rad_s: NDArray[np.float64]
     current_a: NDArray[np.float64]
     nu: NDArray[np.float64]
-    energy_j: float
+    cost_j: float
     prey: NDArray[np.float64]
     q_ref: float
 
@@ -220,7 +221,7 @@ class _Problem:
         current = sat.j22 * (self.diff @ omega) / np.where(np.abs(authority) > 1e-15, authority, 1e-15)
         return nu, q2, omega, current
 
-    def energy(self, current: NDArray) -> float:
+    def cost(self, current: NDArray) -> float:
         return float(0.5 * self.sat.resistance_ohm * 0.5 * self.tf * (self.grid.weights @ current**2))
 
 
@@ -253,16 +254,16 @@ def plan_path(cubesat: CubeSat, start: Boundary, end: Boundary, t0_s: float, tf_
     nu, q2, omega, current = problem.path(free)
     status, reason = _judge(cubesat, q2, current, converged)
     return PlannedPath(status, reason, float(t0_s), float(tf_s), time_nodes(problem.grid, t0_s, tf_s),
-                       q2, omega, current, nu, problem.energy(current), problem.prey, options.q_ref)
+                       q2, omega, current, nu, problem.cost(current), problem.prey, options.q_ref)
 
 
 def _optimise(problem: _Problem, options: PlannerOptions) -> tuple[NDArray, bool]:
     """SLSQP over the free PCPs from nu = 1 (the prey path); the solution and whether it converged."""
     i_max = problem.sat.max_current_a
-    scale = 1.0 / (problem.energy(np.full(problem.grid.n, i_max)) or 1.0)
+    scale = 1.0 / (problem.cost(np.full(problem.grid.n, i_max)) or 1.0)
 
     def cost(free):
-        return scale * problem.energy(problem.path(free)[3])
+        return scale * problem.cost(problem.path(free)[3])
 
     def bounds(free):
         _, q2, _, current = problem.path(free)
