@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 from astropy.io import fits
+from conftest import SLOW
 
 LIMIT_BYTES = 8_000_000  # the session server's --max-upload-mb 8
 SOURCES = Path(__file__).resolve().parents[2] / "src" / "startrack"
@@ -177,11 +178,11 @@ def test_403_for_a_cross_site_post(server, real_images):
 
 
 def test_429_when_the_queue_is_full_then_cancelled(idle_server, random_field):
-    running = idle_server.submit(random_field).json()["id"]
+    running = idle_server.submit(random_field, SLOW).json()["id"]
     idle_server.wait_job(running, states=("running",))
-    waiting = [idle_server.submit(random_field) for _ in range(3)]  # --max-queued 3
+    waiting = [idle_server.submit(random_field, SLOW) for _ in range(3)]  # --max-queued 3
     assert [r.status_code for r in waiting] == [201, 201, 201]
-    refused = idle_server.submit(random_field)
+    refused = idle_server.submit(random_field, SLOW)
     assert refused.status_code == 429 and refused.headers["retry-after"] == "10"
     assert "the queue is full: 3 of 3 jobs waiting" in refused.json()["error"]
     for job_id in [r.json()["id"] for r in waiting] + [running]:

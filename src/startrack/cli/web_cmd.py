@@ -75,11 +75,16 @@ def main(argv: list[str]) -> int:
     sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
     try:
         sock.bind((args.host, args.port))
+        sock.listen(2048)  # connections wait in the backlog until the server accepts them
     except OSError as exc:
         raise OSError(f"cannot listen on {args.host}:{args.port}: {exc.strerror}") from None
     host, port = sock.getsockname()[:2]
     print(f"startrack web: http://{'[' + host + ']' if ':' in host else host}:{port}/ "
           f"(data in {config.data_dir}, {config.workers} worker(s)); Ctrl-C stops it", file=sys.stderr, flush=True)
     server = uvicorn.Server(uvicorn.Config(create_app(config), log_level="warning", access_log=False))
-    server.run(sockets=[sock])
+    try:
+        server.run(sockets=[sock])
+    except KeyboardInterrupt:  # uvicorn re-raises the Ctrl-C it handled: for a server, the normal stop
+        pass
+    print("startrack web: stopped", file=sys.stderr)
     return 0

@@ -1,0 +1,142 @@
+"""A solve job run in this process (no server): the auto preset and camera fit on a real image,
+the solution kept on disk and the analysis record made from it, a ground photo's altitude and
+azimuth against astropy, and the spots the detector refused with their reasons."""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+import warnings
+
+import astropy.units as u
+import numpy as np
+import pytest
+from astropy.coordinates import AltAz, EarthLocation, SkyCoord
+from astropy.time import Time
+from astropy.utils import iers
+
+from startrack.calibrate.sites import get_site
+from startrack.detect import StarDetector
+from startrack.frames import angle_between, radec_to_vector
+from startrack.results import AttitudeSolution, Status
+from startrack.units import ARCSEC, DEG
+from startrack.web.annotate import grid_step_deg, residual_gain
+from startrack.web.jobs import JobStore, read_json
+from startrack.web.options import validate_options
+from startrack.web.outputs import failure_words
+from startrack.web.pipeline import run_solve_job
+from startrack.web.records import job_record, load_solution
+from startrack.web.rejects import rejected_spots
+
+
+@pytest.fixture(scope="module")
+def store(tmp_path_factory) -> JobStore:
+    return JobStore(tmp_path_factory.mktemp("pipeline") / "jobs")
+
+
+def make_job(store: JobStore, source, options: dict):
+    """A queued solve job of ``source`` as the server makes one (same store, same options check)."""
+    job_id, folder = store.reserve()
+    shutil.copy(source, folder / f"input{source.suffix}")
+    store.create("solve", {"label": source.name, "input": f"input{source.suffix}", "options":
+                           validate_options(options, store.root.parent / "cameras")}, job_id)
+    return folder
+
+
+def centre_error_px(solution: AttitudeSolution, row: dict) -> float:
+    """Angle between the solved and the true direction of the image centre, in true pixels."""
+    width, height = int(row["width"]), int(row["height"])
+    centre_cam = solution.camera.pixel_to_vector((width - 1) / 2, (height - 1) / 2)
+    centre = solution.rot_cam_from_icrs.inv().apply(centre_cam)
+    truth = radec_to_vector(float(row["ra_center_deg"]) * DEG, float(row["dec_center_deg"]) * DEG)
+    return float(angle_between(centre, truth) / (float(row["pixscale_arcsec"]) * ARCSEC))
+
+
+@pytest.fixture(scope="module")
+def auto_job(store, real_images):
+    folder = make_job(store, real_images["img3.png"], {"detection_preset": "auto"})
+    run_solve_job(folder)
+    return folder
+
+
+def test_auto_preset_sets_the_detector_from_the_image_and_fits_the_camera(auto_job, truth_table):
+    state, result = read_json(auto_job / "state.json"), read_json(auto_job / "result.json")
+    assert state["state"] == "done" and state["progress"] == 1.0
+    auto = result["auto"]
+    assert 4.0 <= auto["sigma"] <= 50.0 and 2 <= auto["min_area_px"] <= 9 and auto["probe_spots"] > 0
+    fit = result["camera_fit"]
+    assert fit["kept"] and "f" in fit["fitted"] and fit["matches_after"] >= fit["matches_before"]
+    row = next(r for r in truth_table if r["file"] == "img3.png")
+    assert result["fov_deg"] == pytest.approx(float(row["fov_w_pinhole_deg"]), rel=0.01)
+    assert centre_error_px(load_solution(auto_job / "record.npz")[0], row) < 2.0
+    rerun = read_json(auto_job / "rerun.json")
+    assert rerun["detector"]["sigma"] == pytest.approx(auto["sigma"]) and rerun["auto"] == auto
+
+
+def test_the_solution_on_disk_rebuilds_the_analysis_record(auto_job):
+    result = read_json(auto_job / "result.json")
+    solution, extra = load_solution(auto_job / "record.npz")
+    assert isinstance(solution, AttitudeSolution) and solution.solved
+    np.testing.assert_allclose(solution.quaternion_xyzw, [result[k] for k in ("qx", "qy", "qz", "qw")], atol=1e-12)
+    assert len(solution.detections) == result["n_detected"] and len(solution.matches) == result["n_matched"]
+    with open(auto_job / "matches.csv", newline="") as fh:
+        assert [int(r["hip"]) for r in csv.DictReader(fh)] == solution.matches.hip.tolist()
+    record = job_record(auto_job)
+    assert record.name == "img3.png" and record.path.is_file() and record.image is None
+    assert record.settings["detector"]["sigma"] == pytest.approx(result["auto"]["sigma"])
+    assert record.camera is not None and record.camera.fx == pytest.approx(result["focal_px"])
+    assert extra["epoch_jyear"] == 2000.0
+
+
+def test_a_ground_photo_has_the_altitude_and_azimuth_astropy_gives(store, real_images):
+    when, site = "2021-02-01T04:00:00", get_site("logan-ut")
+    folder = make_job(store, real_images["roof.jpg"], {"site": "logan-ut", "time": when})
+    run_solve_job(folder)
+    result = read_json(folder / "result.json")
+    assert result["status"] == "ok" and result["site"] == "logan-ut" and result["time_utc"].startswith(when)
+    location = EarthLocation(lat=site.latitude_deg * u.deg, lon=site.longitude_deg * u.deg, height=site.height_m * u.m)
+    frame = AltAz(obstime=Time(when, scale="utc"), location=location, pressure=site.pressure * 10 * u.hPa,
+                  temperature=site.temperature_c * u.deg_C, relative_humidity=0.0, obswl=0.55 * u.micron)
+    with iers.conf.set_temp("auto_download", False), warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # astropy's notes on its offline IERS table
+        seen = SkyCoord(ra=result["ra_deg"] * u.deg, dec=result["dec_deg"] * u.deg).transform_to(frame)
+    assert seen.alt.deg > 30
+    assert result["altitude_deg"] == pytest.approx(seen.alt.deg, abs=0.01)
+    assert result["azimuth_deg"] == pytest.approx(seen.az.deg, abs=0.01 / np.cos(np.radians(seen.alt.deg)))
+
+
+def test_refused_spots_carry_the_filter_that_refused_them():
+    rng = np.random.default_rng(0)
+    yy, xx = np.mgrid[0:200, 0:200]
+    image = rng.normal(100.0, 3.0, (200, 200))
+    for x, y, amplitude in ((60, 60, 800), (140, 50, 600), (100, 0.2, 900)):  # the last at the top edge
+        image += amplitude * np.exp(-((xx - x) ** 2 + (yy - y) ** 2) / (2 * 1.3**2))
+    image[120, 120] += 2000  # a hot pixel
+    image[150:153, 30:90] += 300  # a line, not a star
+    detector = StarDetector()
+    kept = detector.detect(image)
+    refused = rejected_spots(image, detector, kept)
+    found = {(round(x), round(y)): c for x, y, c in zip(refused["x"], refused["y"], refused["category"], strict=True)}
+    assert found[(120, 120)] == "hot pixel" and found[(100, 1)] == "edge"
+    assert [c for (x, y), c in found.items() if 140 <= y <= 160] == ["elongation"]
+    assert len(kept) == 2 and not any(abs(x - 60) < 2 and abs(y - 60) < 2 for x, y in found)
+
+
+def test_failure_words():
+    assert failure_words(AttitudeSolution(status=Status.TOO_FEW_STARS), 0) == "no stars found"
+    assert failure_words(AttitudeSolution(status=Status.TOO_FEW_STARS), 3) == "too few stars (3 found)"
+    assert failure_words(AttitudeSolution(status=Status.NO_MATCH), 30) == "no pattern matched"
+    assert failure_words(AttitudeSolution(status=Status.TIMEOUT), 30) == "timed out"
+    assert failure_words(AttitudeSolution(status=Status.DEGENERATE), 30) == "ambiguous"
+
+
+def test_residual_magnification_and_grid_spacing_are_round():
+    assert residual_gain(np.array([0.5, 1.0, 1.5]), 500) == 20.0  # 4 % of 500 px over a 1 px median
+    assert residual_gain(np.array([0.0]), 500) == 1.0
+    assert grid_step_deg(10.2) == 5.0 and grid_step_deg(6.0) == 2.0 and grid_step_deg(60.0) == 15.0
+
+
+def test_a_refused_job_options_file_is_plain_json(auto_job):
+    meta = json.loads((auto_job / "job.json").read_text())
+    assert meta["options"]["detection_preset"] == "auto" and meta["options"]["fit_camera"] is True
