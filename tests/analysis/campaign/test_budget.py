@@ -38,7 +38,8 @@ timing_error_s = 0.05
 
 SWITCHES = {"shot_noise": {"noise_shot"}, "read_noise": {"noise_read"},
             "dark_current": {"noise_dark", "noise_dsnu", "noise_hot_pixels", "noise_read", "read_noise_e"},
-            "psf_width": {"psf_sigma_px"}, "quantisation": {"noise_quantize"}, "distortion": {"distortion_known"},
+            "psf_width": {"psf_sigma_px"}, "quantisation": {"noise_quantize", "noise_saturate"},
+            "distortion": {"distortion_known"},
             "proper_motion": {"solver_epoch_jyear"}, "aberration": {"aberration_annual"},
             "timing": {"timing_error_s"}}
 """The parameters each source alone changes from the baseline (the dark current without shot
@@ -56,7 +57,8 @@ def test_cells_are_the_baseline_all_on_then_each_source_alone():
     assert [c.source for c in cells] == ["baseline", "all", *SOURCES]
     assert [c.label for c in cells] == [c.source for c in cells]
     base, every = cells[0].params, cells[1].params
-    assert not any(base[k] for k in ("noise_shot", "noise_read", "noise_dark", "noise_quantize", "aberration_annual"))
+    assert not any(base[k] for k in ("noise_shot", "noise_read", "noise_dark", "noise_quantize", "noise_saturate",
+                                     "aberration_annual"))
     assert base["psf_sigma_px"] == 0.8 and base["distortion_known"] and base["solver_epoch_jyear"] is None
     assert base["timing_error_s"] == 0.0 and base["aberration_velocity_km_s"] == (0.0, 0.0, 0.0)
     assert all(every[k] for k in ("noise_shot", "noise_read", "noise_dark", "noise_quantize", "aberration_annual"))

@@ -94,9 +94,11 @@ SOURCES: dict[str, Source] = {s.name: s for s in (
            lambda on, scene, budget: {"psf_sigma_px": _psf_on(scene, budget) if on else budget["psf_off_sigma_px"]},
            lambda scene, budget: (f"PSF sigma {budget['psf_off_sigma_px']:g} px (a focused spot)",
                                   f"PSF sigma {_psf_on(scene, budget):g} px")),
-    Source("quantisation", "rounding to whole ADU and the ADC's range", _switch("noise_quantize"),
-           lambda scene, budget: ("unquantised ADU",
-                                  f"{frame_sensor(scene).detector.bit_depth}-bit ADC, rounded and clipped")),
+    Source("quantisation", "rounding to whole ADU, the ADC's range and the full well",
+           _switch("noise_quantize", "noise_saturate"),
+           lambda scene, budget: ("unquantised ADU, no saturation",
+                                  f"{frame_sensor(scene).detector.bit_depth}-bit ADC, rounded and clipped, "
+                                  f"full well {frame_sensor(scene).detector.full_well_e:g} e-")),
     Source("distortion", "the lens's radial distortion left uncalibrated",
            lambda on, scene, budget: {"distortion_known": not on},
            lambda scene, budget: ("the solver has the true lens", "the solver assumes k1 = k2 = 0 for a lens with "
@@ -138,7 +140,8 @@ BUDGET_KEYS: dict[str, Param] = {p.name: p for p in (
     Param("timing_error_s", "float", 0.01, "time-tag error with timing on (s)", lo=-100.0, hi=100.0),
 )}
 
-OWNED = ("noise_shot", "noise_read", "noise_dark", "noise_dsnu", "noise_hot_pixels", "noise_quantize", "calibrated",
+OWNED = ("noise_shot", "noise_read", "noise_dark", "noise_dsnu", "noise_hot_pixels", "noise_quantize", "noise_saturate",
+         "calibrated",
          "distortion_known", "solver_epoch_jyear", "aberration_annual", "aberration_velocity_km_s", "timing_error_s",
          "frames_per_attitude", "attitudes_per_field", "dither_px")
 """Image-level parameters the budget sets in every cell (refused in ``[base]`` and in a case)."""
