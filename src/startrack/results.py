@@ -54,6 +54,12 @@ class Detections:
         Ratio of the long to the short axis of the spot's second moments (1 for round).
     background, noise : float
         Robust background level and noise (standard deviation) of the image.
+    point_quality : ndarray, shape (N,), or None
+        How much each spot looks like the frame's point sources (stars), in [0, 1]: 1 for a
+        spot as narrow and round as the frame's stars, falling to 0 for extended spots (nebula
+        knots, glow) and elongated ones (limbs, streaks among round stars). None when not
+        measured (a star list, an older detector): every spot then counts as a point source.
+        :attr:`is_point_source` thresholds it.
     """
 
     x: NDArray[np.float64] = field(default_factory=_empty)
@@ -67,15 +73,28 @@ class Detections:
     noise: float = 0.0
     width: int = 0
     height: int = 0
+    point_quality: NDArray[np.float64] | None = None
+
+    POINT_SOURCE_MIN_QUALITY = 0.5
+    """A spot with at least this :attr:`point_quality` counts as a point source."""
 
     def __len__(self) -> int:
         return int(self.x.shape[0])
 
+    @property
+    def is_point_source(self) -> NDArray[np.bool_]:
+        """Shape (N,): True for spots whose :attr:`point_quality` is at least
+        :attr:`POINT_SOURCE_MIN_QUALITY` (all True when it was not measured)."""
+        if self.point_quality is None:
+            return np.ones(len(self), dtype=bool)
+        return np.asarray(self.point_quality) >= self.POINT_SOURCE_MIN_QUALITY
+
     def take(self, index) -> Detections:
         """A subset (or reordering) of the detections, by index array or boolean mask."""
         fields = ("x", "y", "flux", "sigma_px", "area_px", "peak", "elongation")
+        quality = None if self.point_quality is None else self.point_quality[index]
         return Detections(**{k: getattr(self, k)[index] for k in fields}, background=self.background,
-                          noise=self.noise, width=self.width, height=self.height)
+                          noise=self.noise, width=self.width, height=self.height, point_quality=quality)
 
 
 @dataclass(frozen=True)
