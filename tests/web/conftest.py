@@ -73,7 +73,8 @@ def server(tmp_path_factory, web_root) -> WebServer:
 
 @pytest.fixture()
 def idle_server(server) -> WebServer:
-    """The session server with no job waiting or running (earlier tests' jobs cancelled)."""
+    """The session server with no job waiting or running (earlier tests' jobs cancelled) and its
+    worker ready."""
     for job in server.client.get("/api/jobs").json()["jobs"]:
         if job["state"] in ("queued", "running"):
             server.client.delete(f"/api/jobs/{job['id']}")

@@ -1,6 +1,6 @@
 """Every refusal of the server, through a real server: 400, 403, 404, 413 (while streaming), 415
-(from the content), 422 (options, absurd dimensions from the header), 429; and the server keeps
-serving after each one."""
+(from the content), 422 (options, absurd dimensions from the header), and the server keeps
+serving after each one (429 and 409 are in test_runner.py, with the queue they need)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,6 @@ from pathlib import Path
 
 import pytest
 from astropy.io import fits
-from conftest import SLOW
 
 LIMIT_BYTES = 8_000_000  # the session server's --max-upload-mb 8
 SOURCES = Path(__file__).resolve().parents[2] / "src" / "startrack"
@@ -175,20 +174,6 @@ def test_403_for_a_cross_site_post(server, real_images):
     assert response.status_code == 403
     assert server.client.delete("/api/jobs/" + "0" * 32, headers={"Origin": "null"}).status_code == 403
     still_serving(server)
-
-
-def test_429_when_the_queue_is_full_then_cancelled(idle_server, random_field):
-    running = idle_server.submit(random_field, SLOW).json()["id"]
-    idle_server.wait_job(running, states=("running",))
-    waiting = [idle_server.submit(random_field, SLOW) for _ in range(3)]  # --max-queued 3
-    assert [r.status_code for r in waiting] == [201, 201, 201]
-    refused = idle_server.submit(random_field, SLOW)
-    assert refused.status_code == 429 and refused.headers["retry-after"] == "10"
-    assert "the queue is full: 3 of 3 jobs waiting" in refused.json()["error"]
-    for job_id in [r.json()["id"] for r in waiting] + [running]:
-        assert idle_server.client.delete(f"/api/jobs/{job_id}").json()["state"] == "cancelled"
-    assert idle_server.client.get("/api/status").json()["queued"] == 0
-    still_serving(idle_server)
 
 
 def test_nothing_is_run_through_a_shell():

@@ -1,8 +1,11 @@
 """The bounded pool of worker processes that runs the jobs: queue, time limit, cancellation, crashes.
 
-Each worker is a long-lived ``spawn`` process (:mod:`.worker`) that keeps its catalog and pattern
-database loaded between jobs, so that a sub-second solve takes a sub-second. A dispatcher thread
-in the server wakes every :data:`TICK_S` and, under one lock:
+Each worker is a long-lived process (:mod:`.worker`) that keeps its catalog and pattern database
+loaded between jobs, so that a sub-second solve takes a sub-second. Workers are forked by
+multiprocessing's fork server, a fresh interpreter (not a fork of the server and its threads)
+that has imported the job's modules and loaded the catalog and default database once
+(:mod:`.preload`): a worker that replaces a killed one is ready at once. A dispatcher thread in
+the server wakes every :data:`TICK_S` and, under one lock:
 
 - hands the oldest queued job to each idle, ready worker (the job becomes ``running``);
 - ends a job whose worker said it finished (the worker wrote its end state);
@@ -67,7 +70,9 @@ class WorkerPool:
                  prewarm: bool = True):
         self.store, self.n_workers = store, n_workers
         self.time_limit_s, self.max_queued, self.prewarm = time_limit_s, max_queued, prewarm
-        self._ctx = mp.get_context("spawn")
+        self._ctx = mp.get_context("forkserver")
+        if prewarm:
+            self._ctx.set_forkserver_preload(["startrack.web.preload"])
         self._lock = threading.RLock()
         self._queue: deque[str] = deque()
         self._cancel: set[str] = set()
