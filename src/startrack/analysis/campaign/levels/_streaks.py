@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ....camera import Camera
+from ....simulate import Snapshot
 from ...streak_scenes import StreakScene, render_streak_scene
 from ..params import Param, SpecError
 from .common import CAMERA_PARAMS
@@ -57,7 +58,7 @@ def check_range(params: Mapping[str, Any], name: str) -> None:
 
 
 def render(params: Mapping[str, Any], rot_start: Rotation, omega: NDArray, exposure_s: float, vectors: NDArray,
-           flux: NDArray, rng: np.random.Generator, rso=None) -> StreakScene:
+           flux: NDArray, rng: np.random.Generator, rso: Snapshot | None = None) -> StreakScene:
     """:func:`~startrack.analysis.streak_scenes.render_streak_scene` with the cell's camera and noise."""
     return render_streak_scene(streak_camera(params), rot_start, omega, exposure_s, vectors, flux, rso=rso,
                                psf_sigma_px=params["psf_sigma_px"], background_e=params["sky_e"],

@@ -53,8 +53,9 @@ from scipy.spatial.transform import Rotation
 from ....errors import InvalidInputError
 from ....rate import axis_error_rad
 from ....rate.endpoints import DETECTORS
+from ....rate.estimate import RateEstimate
 from ....rate.rso import INDICATORS
-from ....rate.streak_rate import SEGMENT, streak_rate
+from ....rate.streak_rate import SEGMENT, StreakRate, streak_rate
 from ....units import DEG
 from ...rso_passes import SEED001_CAMERA_ELEMENTS, SEED001_RSO_ELEMENTS, Pass, elements, find_passes
 from ...streak_scenes import StreakScene, rso_path, separated_field, star_field, turning_rso_snapshot
@@ -168,7 +169,7 @@ def rso_streak(scene: StreakScene, ends_a: np.ndarray, ends_b: np.ndarray) -> in
     return best if misfit[best] <= RSO_MATCH_PX else None
 
 
-def rate_columns(estimate, omega: np.ndarray, exposure_s: float) -> dict[str, Any]:
+def rate_columns(estimate: RateEstimate, omega: np.ndarray, exposure_s: float) -> dict[str, Any]:
     """The estimated rate, displacement, errors and unit axis of a rate estimate (NaN when none)."""
     est = np.asarray(estimate.omega_rad_s, dtype=float)
     if not estimate.ok:
@@ -184,7 +185,7 @@ def rate_columns(estimate, omega: np.ndarray, exposure_s: float) -> dict[str, An
             "axis_x": float(axis[0]), "axis_y": float(axis[1]), "axis_z": float(axis[2])}
 
 
-def indicator_columns(scene: StreakScene, result) -> dict[str, Any]:
+def indicator_columns(scene: StreakScene, result: StreakRate) -> dict[str, Any]:
     """Whether each indicator flagged the RSO's streak, and how many star streaks it flagged."""
     meas = result.measurement
     index = rso_streak(scene, meas.ends_a, meas.ends_b)
