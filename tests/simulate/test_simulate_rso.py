@@ -46,6 +46,18 @@ def test_two_body_orbit_closes_after_one_period():
     assert np.linalg.norm(orbit.r_km) == pytest.approx(7200.0 * (1 - 0.05**2) / (1 + 0.05 * math.cos(10 * DEG)))
 
 
+def test_repeated_and_unsorted_times_give_the_states_of_each_time():
+    """Repeated times raised "t_eval not properly sorted" from solve_ivp before."""
+    orbit = Orbit.from_elements(EPOCH, KeplerElements.from_degrees(7000.0, 0.01, 50.0, 10.0, 20.0, 30.0))
+    times = np.array([300.0, -120.0, 300.0, 0.0, 60.0, -120.0, 60.0])
+    r, v = orbit.states(times)
+    r_once, v_once = orbit.states(np.array([300.0, -120.0, 0.0, 60.0]))
+    for k, t in enumerate(times):
+        j = [300.0, -120.0, 0.0, 60.0].index(t)
+        np.testing.assert_allclose(r[k], r_once[j], atol=1e-6)   # km
+        np.testing.assert_allclose(v[k], v_once[j], atol=1e-9)   # km/s
+
+
 def test_j2_regresses_the_node_at_the_textbook_rate():
     a, inc = 7000.0, 50.0 * DEG
     el = KeplerElements(a, 0.0, inc, 0.0, 0.0, 0.0)

@@ -137,11 +137,11 @@ class Orbit:
         y0 = np.concatenate([self.r_km, self.v_km_s])
         for sign in (1.0, -1.0):
             sel = np.flatnonzero(dt * sign > 0)
-            if sel.size:
-                order = sel[np.argsort(dt[sel] * sign)]
-                sol = solve_ivp(self._rhs, (0.0, float(dt[order[-1]])), y0, method="DOP853",
-                                t_eval=dt[order], rtol=_RTOL, atol=1e-9)
-                r[order], v[order] = sol.y[:3].T, sol.y[3:].T
+            if sel.size:  # solve_ivp needs strictly monotonic times: propagate each time once
+                times, back = np.unique(dt[sel] * sign, return_inverse=True)
+                sol = solve_ivp(self._rhs, (0.0, sign * float(times[-1])), y0, method="DOP853",
+                                t_eval=sign * times, rtol=_RTOL, atol=1e-9)
+                r[sel], v[sel] = sol.y[:3, back].T, sol.y[3:, back].T
         at_epoch = dt == 0
         r[at_epoch], v[at_epoch] = self.r_km, self.v_km_s
         return r, v
