@@ -42,13 +42,16 @@ Progress = Callable[[int, int], None]
 
 
 def warm_cells(spec: CampaignSpec) -> None:
-    """Run one throwaway trial of each distinct cell in this process (see :mod:`.levels`)."""
-    seen: list[dict[str, Any]] = []
+    """Run one throwaway trial per distinct warm-up key (the cell's parameters unless the level
+    says otherwise, :mod:`.levels`) in this process."""
+    level = spec.level_def
+    seen: list[Any] = []
     for cell in spec.cells():
-        if cell.params not in seen:
-            seen.append(cell.params)
+        key = cell.params if level.warm_key is None else level.warm_key(cell.params)
+        if key not in seen:
+            seen.append(key)
             with contextlib.suppress(Exception):  # a cell that raises will say so in its own rows
-                warm(spec.level_def, cell.params)
+                warm(level, cell.params)
 
 
 def run_sync(spec: CampaignSpec, chunks: list[Chunk], on_chunk: ChunkDone,

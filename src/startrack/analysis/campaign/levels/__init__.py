@@ -6,7 +6,9 @@ trial: ``run(params, attitude, rng, tolerance_px) -> TrialOutput``, and optional
 refuses a cell's combination of parameters before any work (``SpecError``). A worker is warmed
 for a cell by running one throwaway trial of it (:func:`warm`), which loads the catalog and the
 pattern database and compiles exactly the kernels the trials use. ``chunk_trials`` is the default
-number of trials sent to a worker at once (about a second of work).
+number of trials sent to a worker at once (about a second of work). ``warm_key(params)``, when
+given, says which cells need the same warm-up (e.g. leaving out a parameter that only picks a
+frame): one throwaway trial is run per distinct key instead of per distinct cell.
 
 Built-in levels: ``stars`` (:mod:`.stars`), ``image`` (:mod:`.image`), ``sequence``
 (:mod:`.sequence`), and every other module of this package whose name does not start with an
@@ -50,6 +52,7 @@ class Level:
     columns: Mapping[str, pa.DataType] = field(default_factory=dict)
     check: Callable[[Mapping[str, Any]], None] | None = None
     chunk_trials: int = 20
+    warm_key: Callable[[Mapping[str, Any]], Any] | None = None
 
 
 WARM_ROTATION = Rotation.from_euler("zyx", [40.0, 20.0, 10.0], degrees=True)

@@ -260,6 +260,12 @@ COLUMNS: dict[str, pa.DataType] = {
     "opportunities": pa.int32(),
 }
 
+def warm_key(params: Mapping[str, Any]) -> dict[str, Any]:
+    """Cells that differ only in the opportunity they pick share one warm-up."""
+    return {k: v for k, v in params.items() if k != "opportunity"}
+
+
 LEVEL = register(Level(
     name="rso", doc=" ".join(__doc__.split("\n\n")[0].split()), params=PARAMS, run=run, check=check,
-    columns=COLUMNS, chunk_trials=2))
+    columns=COLUMNS, chunk_trials=2,
+    warm_key=warm_key))
