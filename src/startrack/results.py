@@ -155,6 +155,12 @@ class AttitudeSolution:
     detections : Detections or None
         The stars detected in the image (for a solve from an image); ``matches.det_index``
         indexes them. None for a solve from a star list.
+    epoch_jyear : float
+        Catalog epoch the stars were taken at (Julian year, TDB; NaN when not recorded).
+    epoch_source : str
+        Where that epoch came from: "given", an image header card ("CATEPOCH", "DATE-OBS",
+        "MJD-OBS", "DateTimeOriginal") or "default" (J2000.0, nothing said when); empty when not
+        recorded. See :mod:`startrack.identify.image_epoch`.
     """
 
     status: Status
@@ -171,6 +177,8 @@ class AttitudeSolution:
     false_match_prob: float = 1.0
     solve_time_s: float = 0.0
     detections: Detections | None = None
+    epoch_jyear: float = float("nan")
+    epoch_source: str = ""
 
     @property
     def solved(self) -> bool:

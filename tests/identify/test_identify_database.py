@@ -6,13 +6,16 @@ import pytest
 from startrack import cache
 from startrack.errors import InvalidInputError
 from startrack.identify.database import (
-    LARGEST_SCALE_RAD,
+    LARGEST_LN_STEP,
     RATIO_SCALE,
     DatabaseSettings,
     build_database_arrays,
     database_report,
+    largest_from_stored,
+    largest_to_stored,
     pattern_key,
 )
+from startrack.identify.registry import database_settings_for
 from startrack.identify.patterns import edge_ratios, pair_angles
 
 SMALL = DatabaseSettings(fov_min_deg=20.0, fov_max_deg=30.0, max_mag=7.0)
@@ -33,14 +36,14 @@ def test_stored_ratios_and_edges_match_the_star_vectors(arrays):
     stars = arrays["pattern_stars"]
     ratios, largest = edge_ratios(pair_angles(arrays["vectors"][stars]))
     np.testing.assert_allclose(arrays["pattern_ratios"] / RATIO_SCALE, ratios, atol=1.0 / RATIO_SCALE)
-    np.testing.assert_allclose(arrays["pattern_largest"] * LARGEST_SCALE_RAD, largest, atol=LARGEST_SCALE_RAD)
+    np.testing.assert_allclose(largest_from_stored(arrays["pattern_largest"]), largest, rtol=LARGEST_LN_STEP)
 
 
 def test_patterns_fit_their_level_and_are_sorted_by_key(arrays):
     offsets = arrays["level_offsets"]
     for k, fov in enumerate(arrays["level_fov_rad"]):
         sl = slice(offsets[k], offsets[k + 1])
-        assert np.all(arrays["pattern_largest"][sl] * LARGEST_SCALE_RAD <= 2 * SMALL.region_fraction * fov * 1.0001)
+        assert np.all(largest_from_stored(arrays["pattern_largest"][sl]) <= 2 * SMALL.region_fraction * fov * 1.0002)
         keys = pattern_key(arrays["pattern_ratios"][sl])
         assert np.all(np.diff(keys) >= 0)
 
@@ -76,3 +79,23 @@ def test_corrupt_database_file_is_rebuilt(tmp_path, monkeypatch):
 def test_bad_settings_are_refused():
     with pytest.raises(InvalidInputError, match="FOV range"):
         DatabaseSettings(fov_min_deg=30.0, fov_max_deg=10.0)
+
+
+def test_largest_edges_keep_their_relative_precision_from_arcseconds_to_120_deg():
+    """The log scale: 2e-4 relative from a 0.01 deg edge of a 1 deg field to a 120 deg edge of a
+    wide one (the old linear scale stopped at 28.6 deg)."""
+    angles = np.radians(np.array([0.01, 0.2, 5.0, 37.0, 90.0, 120.0]))
+    back = largest_from_stored(largest_to_stored(angles))
+    assert np.all(np.abs(back / angles - 1.0) <= LARGEST_LN_STEP)
+
+
+@pytest.mark.parametrize(("request_deg", "expected"), [
+    ((3.0, 100.0), (3.0, 100.0)), ((5.0, 100.0), (3.0, 100.0)), ((10.0, 20.0), (3.0, 100.0)),
+    ((1.0, 2.0), (0.97, 2.06)), ((0.5, 100.0), (0.485, 103.0)),
+])
+def test_every_valid_range_gets_a_database(request_deg, expected):
+    """A request inside the default range uses the default database; one reaching outside gets
+    a database for just its range, 3 % wider. (5, 100) used to raise 'database FOV range must
+    satisfy ... got 4.85 to 103.0' from that margin.)"""
+    settings = database_settings_for(request_deg)
+    assert (settings.fov_min_deg, settings.fov_max_deg) == pytest.approx(expected)

@@ -42,19 +42,20 @@ def test_jacobian_matches_finite_differences(camera):
     matrix = (Rotation.from_rotvec([2e-3, -1e-3, 3e-3]) * rot).as_matrix()  # not at the optimum
     offset = np.array([x - camera.cx, y - camera.cy])
     focal = np.array([[camera.fx], [camera.fy]])
-    system = refine._system(camera, focal, matrix @ ref.T, offset, 5)
+    free = refine.free_flags(fit_focal=True, fit_aspect=True, fit_k1=True, fit_k2=True)
+    system = refine._system(camera, focal, matrix @ ref.T, offset, free)
     assert np.allclose(system[-1], np.concatenate([x, y]) - np.concatenate(_pixels(matrix, camera, ref)),
                        atol=1e-9 * PIXEL)
 
     def predicted(params):
         turned = Rotation.from_rotvec(params[:3]).as_matrix() @ matrix
-        moved = camera.with_focal(camera.fx * np.exp(params[3]), camera.fy * np.exp(params[3]))
-        moved = moved.with_distortion(k1=camera.k1 + params[4])
+        moved = camera.with_focal(camera.fx * np.exp(params[3]), camera.fy * np.exp(params[3] + params[4]))
+        moved = moved.with_distortion(k1=camera.k1 + params[5], k2=camera.k2 + params[6])
         return np.concatenate(_pixels(turned, moved, ref))
 
     step = 1e-7
-    for k in range(5):
-        delta = np.zeros(5)
+    for k in range(7):
+        delta = np.zeros(7)
         delta[k] = step
         numeric = (predicted(delta) - predicted(-delta)) / (2 * step)
         assert np.allclose(system[k], numeric, rtol=1e-5, atol=1e-4 * PIXEL), k
@@ -70,6 +71,21 @@ def test_fit_recovers_attitude_focal_and_k1_of_a_distorted_camera():
     assert camera.fy == pytest.approx(DISTORTED.fy, rel=1e-9)
     assert camera.k1 == pytest.approx(DISTORTED.k1, abs=1e-9)
     assert np.max(residual) < 1e-6 * PIXEL
+
+
+def test_fit_recovers_pixel_aspect_and_k2_from_a_square_pixel_guess():
+    """A guess with square pixels and no k2 (the start of a solve of an uncalibrated sensor with
+    rectangular pixels and a wide lens) converges to the true fy / fx and k2."""
+    camera = Camera(width=1600, height=1200, fx=900.0, fy=900.0 / 1.9, k1=-0.08, k2=0.02)
+    rot, ref, x, y = _field(camera, 40, seed=5)
+    guess = camera.with_focal(camera.fx, camera.fx * 0.97 / 1.9).with_distortion(k1=0.0, k2=0.0)
+    matrix, fitted, residual = refine.fit_pose(rot.as_matrix(), guess, ref, x, y, fit_focal=True, fit_k1=True,
+                                               fit_aspect=True, fit_k2=True)
+    assert fitted.fy / fitted.fx == pytest.approx(1 / 1.9, rel=1e-9)
+    assert (fitted.k1, fitted.k2) == pytest.approx((-0.08, 0.02), abs=1e-9)
+    assert np.max(residual) < 1e-6 * PIXEL
+    too_few = refine.fit_pose(rot.as_matrix(), guess, ref[:5], x[:5], y[:5], fit_focal=True, fit_aspect=True)[1]
+    assert too_few.fy / too_few.fx == pytest.approx(guess.fy / guess.fx, rel=1e-12)  # 5 stars: aspect stays
 
 
 def test_fixed_focal_stays_fixed_and_refine_pointing_is_the_same_fit():

@@ -4,7 +4,10 @@ lost-in-space matcher (see :mod:`.verify` for the false-match probability).
 The candidate is tested at the tight match radius. If it falls short, its matches at a loose
 radius (``LOOSE_RADIUS_FACTOR`` times wider) are used to refit the attitude (and the focal length
 when it is free), and it is tested again at the tight radius: a pattern fitted on a few close
-stars can be off by more than the tight radius at the far side of the image.
+stars can be off by more than the tight radius at the far side of the image. For a lens that is
+not calibrated the refit also takes the radial distortion k1 (and, when the pixel aspect is
+searched, the aspect), and the loose pass is made twice: a wide lens bends the far side of the
+image by tens of pixels, which a pinhole fit to a pattern near the centre cannot predict.
 """
 
 from __future__ import annotations
@@ -27,6 +30,9 @@ LOOSE_RADIUS_FACTOR = 2.5
 
 MIN_EXTRA_MATCHES = 2
 """A candidate needs at least this many stars beyond its pattern at the loose radius."""
+
+LOOSE_ROUNDS_DISTORTED = 2
+"""Loose passes for a lens whose distortion is fitted (one otherwise)."""
 
 
 @dataclass(frozen=True)
@@ -54,6 +60,11 @@ class Confirmer:
     max_false_match_prob : float
     fit_focal : bool
         Refit the focal length with the attitude in the loose pass.
+    fit_distortion : bool
+        Also refit k1 there (a lens that is not calibrated), in up to
+        :data:`LOOSE_ROUNDS_DISTORTED` passes.
+    fit_aspect : bool
+        Also refit the pixel aspect there (when it is searched).
     """
 
     x: NDArray[np.float64]
@@ -62,28 +73,37 @@ class Confirmer:
     verify_stars: int
     max_false_match_prob: float
     fit_focal: bool
+    fit_distortion: bool = False
+    fit_aspect: bool = False
 
     def __post_init__(self) -> None:
         warm_up_pose()  # the loose pass refits poses: compile (or load) that before a matcher's clock starts
 
     def confirm(self, stars: StarSet, rot: Rotation, camera: Camera, pattern_img: NDArray,
-                n_trials: int) -> Candidate | None:
-        """A verified :class:`Candidate`, or None (see the module docstring)."""
-        found = self._verify(stars, rot, camera, pattern_img, n_trials)
-        if found is not None:
-            return found
-        n = min(len(self.x), self.verify_stars)
-        proj = project_stars(stars.tree, stars.vectors, rot, camera, stars.keep)
-        img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y, LOOSE_RADIUS_FACTOR * self.radius_px)
-        if np.count_nonzero(_not_in(img_i, pattern_img)) < MIN_EXTRA_MATCHES:
-            return None
-        ref = stars.vectors[proj.star[cat_i]]
-        rot, camera, _ = refine_pointing(rot, camera, ref, self.x[img_i], self.y[img_i], fit_focal=self.fit_focal)
-        return self._verify(stars, rot, camera, pattern_img, n_trials)
+                n_trials: int, pool_end: int = 0) -> Candidate | None:
+        """A verified :class:`Candidate`, or None (see the module docstring). ``pool_end``: one past
+        the faintest star rank the patterns are drawn from; the test covers
+        :attr:`verify_stars` stars, more when the pool reaches deeper (half as many again beyond it)."""
+        n = min(len(self.x), max(self.verify_stars, pool_end + self.verify_stars // 2))
+        found = self._verify(stars, rot, camera, pattern_img, n_trials, n)
+        rounds = LOOSE_ROUNDS_DISTORTED if self.fit_distortion else 1
+        for _ in range(rounds):
+            if found is not None:
+                return found
+            proj = project_stars(stars.tree, stars.vectors, rot, camera, stars.keep)
+            img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y,
+                                         LOOSE_RADIUS_FACTOR * self.radius_px)
+            if np.count_nonzero(_not_in(img_i, pattern_img)) < MIN_EXTRA_MATCHES:
+                return None
+            ref = stars.vectors[proj.star[cat_i]]
+            rot, camera, _ = refine_pointing(rot, camera, ref, self.x[img_i], self.y[img_i], fit_focal=self.fit_focal,
+                                             fit_k1=self.fit_distortion, fit_aspect=self.fit_aspect)
+            found = self._verify(stars, rot, camera, pattern_img, n_trials, n)
+        return found
 
-    def _verify(self, stars: StarSet, rot, camera, pattern_img, n_trials: int) -> Candidate | None:
-        """The candidate if its tight-radius matches make a false match unlikely enough."""
-        n = min(len(self.x), self.verify_stars)
+    def _verify(self, stars: StarSet, rot, camera, pattern_img, n_trials: int, n: int) -> Candidate | None:
+        """The candidate if its tight-radius matches among the first ``n`` stars make a false
+        match unlikely enough."""
         proj = project_stars(stars.tree, stars.vectors, rot, camera, stars.keep)
         img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y, self.radius_px)
         extra = _not_in(img_i, pattern_img)

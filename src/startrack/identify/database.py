@@ -46,15 +46,20 @@ from ..errors import InvalidInputError
 from .patterns import edge_ratios, pair_angles
 
 DB_KIND = "patterns"
-DB_VERSION = 2
+DB_VERSION = 3
+"""3: largest edges stored on a logarithmic scale (fields of view to 120 deg), star and level
+masks widened when needed."""
+
+DB_MAX_FOV_DEG = 120.0
+"""Widest level a database may reach: a 100 deg camera's short side plus the search margin."""
 
 
 @dataclass(frozen=True)
 class DatabaseSettings:
     """What a pattern database is built from; its hash names the cache file."""
 
-    fov_min_deg: float = 5.0
-    fov_max_deg: float = 35.0
+    fov_min_deg: float = 3.0
+    fov_max_deg: float = 100.0
     level_ratio: float = 1.4
     stars_per_region: int = 6
     region_fraction: float = 0.35
@@ -66,9 +71,9 @@ class DatabaseSettings:
     epoch_jyear: float = 2000.0
 
     def __post_init__(self) -> None:
-        if not (0.5 <= self.fov_min_deg <= self.fov_max_deg <= 100.0):
+        if not (0.4 <= self.fov_min_deg <= self.fov_max_deg <= DB_MAX_FOV_DEG):
             raise InvalidInputError(
-                "database FOV range must satisfy 0.5 <= fov_min_deg <= fov_max_deg <= 100 deg, "
+                f"database FOV range must satisfy 0.4 <= fov_min_deg <= fov_max_deg <= {DB_MAX_FOV_DEG:g} deg, "
                 f"got {self.fov_min_deg} to {self.fov_max_deg}")
         if self.level_ratio <= 1.05 or self.stars_per_region < 4:
             raise InvalidInputError("level_ratio must exceed 1.05 and stars_per_region be at least 4")
@@ -98,10 +103,10 @@ class PatternDatabase:
     pattern_ratios : ndarray of uint16, shape (P, 5)
         Sorted edge ratios times :data:`RATIO_SCALE`.
     pattern_largest : ndarray of uint16, shape (P,)
-        Largest edge angle of each pattern, in units of :data:`LARGEST_SCALE_RAD`.
+        Largest edge angle of each pattern on a logarithmic scale (:func:`largest_from_stored`).
     level_offsets : ndarray of int, shape (L + 1,)
         Patterns of level k are rows ``level_offsets[k]:level_offsets[k + 1]``.
-    verify_levels : ndarray of uint16, shape (S,)
+    verify_levels : ndarray of uint16 (uint32 beyond 16 levels), shape (S,)
         Bit k set when the star belongs to level k's verification set.
     keys : ndarray of int64, shape (P,)
         ``(level << LEVEL_SHIFT) + pattern_key``, ascending (built at load time).
@@ -132,7 +137,8 @@ class PatternDatabase:
         (V, 3) and their catalog rows (V,). Built on first use, then kept: querying them costs a
         fraction of filtering every database star around the field."""
         if level not in self._verify_sets:
-            members = np.flatnonzero((self.verify_levels >> np.uint16(level)) & np.uint16(1))
+            bits = self.verify_levels.dtype.type
+            members = np.flatnonzero((self.verify_levels >> bits(level)) & bits(1))
             vectors = np.ascontiguousarray(self.vectors[members])
             self._verify_sets[level] = (cKDTree(vectors), vectors, self.cat_index[members])
         return self._verify_sets[level]
@@ -150,7 +156,7 @@ class PatternDatabase:
 
     def largest_rad(self, rows: NDArray) -> NDArray[np.float64]:
         """Largest edge angle (radians) of the patterns in ``rows``."""
-        return self.pattern_largest[rows] * LARGEST_SCALE_RAD
+        return largest_from_stored(self.pattern_largest[rows])
 
     def level_patterns(self, level: int) -> slice:
         return slice(int(self.level_offsets[level]), int(self.level_offsets[level + 1]))
@@ -222,7 +228,8 @@ def build_database_arrays(settings: DatabaseSettings,
     tree = cKDTree(vectors)
     levels = settings.level_fovs_rad()
     stars_used = np.zeros(len(keep), dtype=bool)
-    verify_bits = np.zeros(len(keep), dtype=np.uint16)
+    bits = np.uint16 if len(levels) <= 16 else np.uint32
+    verify_bits = np.zeros(len(keep), dtype=bits)
     level_patterns = []
     for k, fov in enumerate(levels):
         doubles = flag_doubles(sub, settings.blend_fraction * fov, settings.blend_delta_mag)
@@ -230,7 +237,7 @@ def build_database_arrays(settings: DatabaseSettings,
         level_patterns.append(patterns)
         stars_used[patterns.ravel()] = True
         stars_used[verify] = True
-        verify_bits[verify] |= np.uint16(1 << k)
+        verify_bits[verify] |= bits(1 << k)
         if progress is not None:
             progress(k + 1, len(levels))
     return _compact(keep, sub, vectors, stars_used, verify_bits, level_patterns, levels)
@@ -239,8 +246,23 @@ def build_database_arrays(settings: DatabaseSettings,
 RATIO_SCALE = 65535.0
 """Edge ratios are stored as uint16: ratio = stored / RATIO_SCALE (resolution 1.5e-5)."""
 
-LARGEST_SCALE_RAD = 0.5 / 65535.0
-"""Largest edges are stored as uint16: angle = stored * LARGEST_SCALE_RAD (resolution 1.6 arcsec)."""
+LARGEST_LN_MIN = math.log(1e-5)
+LARGEST_LN_STEP = (math.log(math.pi) - LARGEST_LN_MIN) / 65535.0
+"""Largest edges are stored as uint16 on a logarithmic scale, from 1e-5 rad (2 arcsec) to pi:
+angle = exp(LARGEST_LN_MIN + stored * LARGEST_LN_STEP), a relative resolution of 1.9e-4 at any
+size (a linear scale that reached the 120 deg edges of the widest levels would have been 1.1 %
+coarse on the 0.2 deg edges of the narrowest)."""
+
+
+def largest_to_stored(angle_rad: NDArray) -> NDArray[np.uint16]:
+    """Largest edge angles (radians) in stored units (see :data:`LARGEST_LN_STEP`)."""
+    ln = np.log(np.clip(angle_rad, math.exp(LARGEST_LN_MIN), math.pi))
+    return np.round((ln - LARGEST_LN_MIN) / LARGEST_LN_STEP).astype(np.uint16)
+
+
+def largest_from_stored(stored: NDArray) -> NDArray[np.float64]:
+    """Largest edge angles (radians) from stored units."""
+    return np.exp(LARGEST_LN_MIN + np.asarray(stored, dtype=np.float64) * LARGEST_LN_STEP)
 
 KEY_BINS = 64
 """Bins of each of the two smallest ratios in the key (see :func:`pattern_key`)."""
@@ -281,7 +303,7 @@ def _compact(keep, sub, vectors, stars_used, verify_bits, level_patterns, levels
         order = np.argsort(pattern_key(quantised), kind="stable")
         stars.append(local[order].astype(np.uint16 if used.size <= 65536 else np.uint32))
         ratios.append(quantised[order])
-        largest.append(np.round(big[order] / LARGEST_SCALE_RAD).astype(np.uint16))
+        largest.append(largest_to_stored(big[order]))
         offsets.append(offsets[-1] + len(order))
     return {
         "cat_index": keep[used], "hip": sub.hip[used].astype(np.int64), "vectors": vec,

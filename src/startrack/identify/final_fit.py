@@ -46,7 +46,23 @@ K1_FOCAL_SPAN = 0.1
 """When the focal length is searched over a range wider than 10 % (an uncalibrated camera), the
 final fit also estimates the radial distortion k1 if at least MIN_STARS_FOR_K1 stars are
 matched: the lenses of photographs are rarely calibrated. A ``fov_deg`` (+-3 %) fits the focal
-length only."""
+length only, unless the field is wide (:data:`WIDE_FOV_DEG`)."""
+
+WIDE_FOV_DEG = 40.0
+MIN_STARS_FOR_K2 = 30
+"""A lens that is not calibrated and spans at least WIDE_FOV_DEG horizontally (a phone, a
+webcam, a wide lens) is fitted with k1 at every round of the re-match, not only at the end (its
+far side is bent by tens of pixels, beyond the re-match radius of a pinhole fit), and with k2 as
+well once MIN_STARS_FOR_K2 stars are matched."""
+
+MIN_STARS_FOR_ASPECT = 12
+"""The pixel aspect (fy / fx), when not known, is fitted once this many stars are matched."""
+
+DEPTH_FACTOR = 5.0
+"""The re-match considers only the catalog stars that are bright enough for the image: the
+brightest DEPTH_FACTOR times as many as there are image stars in the field's solid angle (all
+of them for a narrow field). In a wide field a 3 px radius covers a tenth of a square degree,
+and the whole catalog to V 9.5 would put a faint star within reach of every false detection."""
 
 BLEND_PX = 0.5
 """Catalog stars closer than this (pixels) to a brighter catalog star are not matched separately."""
@@ -96,13 +112,41 @@ times that, for the distortion of an uncalibrated lens."""
 @dataclass(frozen=True)
 class _Field:
     """What stays fixed while a candidate settles: image stars (N,) px, the catalog stars at the
-    solve epoch and whether the focal length is free."""
+    solve epoch, which camera parameters are free at every round (focal length, pixel aspect,
+    k1, k2; each also needs enough matched stars, :func:`_free`) and how many of the catalog
+    stars (brightest first) a re-match may use (:func:`depth_limit`)."""
 
     x: NDArray[np.float64]
     y: NDArray[np.float64]
     stars: FieldStars
     fit_focal: bool
+    fit_aspect: bool = False
+    fit_k1: bool = False
+    fit_k2: bool = False
+    depth: int | None = None
 
+
+def _free(field: _Field, n_stars: int) -> dict[str, bool]:
+    """Keyword flags of :func:`.refine.fit_pose` for a fit of ``n_stars`` stars of this field."""
+    return {"fit_focal": field.fit_focal, "fit_aspect": field.fit_aspect and n_stars >= MIN_STARS_FOR_ASPECT,
+            "fit_k1": field.fit_k1 and n_stars >= MIN_STARS_FOR_K1,
+            "fit_k2": field.fit_k2 and n_stars >= MIN_STARS_FOR_K2}
+
+
+def field_solid_angle_sr(camera: Camera) -> float:
+    """Solid angle (sr) of the pinhole image rectangle: 4 asin(sin(a / 2) sin(b / 2)) for full
+    angular width a and height b."""
+    half_w = math.atan(camera.width / (2.0 * camera.fx))
+    half_h = math.atan(camera.height / (2.0 * camera.fy))
+    return 4.0 * math.asin(math.sin(half_w) * math.sin(half_h))
+
+
+def depth_limit(n_image_stars: int, camera: Camera, n_catalog: int) -> int:
+    """How many of the catalog's stars (brightest first, all-sky) the re-match may use: those
+    brighter than the magnitude at which the field holds :data:`DEPTH_FACTOR` times
+    ``n_image_stars`` of them on average (at most ``n_catalog``)."""
+    share = field_solid_angle_sr(camera) / (4.0 * math.pi)
+    return int(min(n_catalog, math.ceil(DEPTH_FACTOR * max(n_image_stars, 1) / share)))
 
 @dataclass(frozen=True)
 class _Catalog:
@@ -126,6 +170,8 @@ class _Catalog:
         directions = camera.pixel_to_vector(field.x, field.y) @ matrix  # ICRS unit vectors (N, 3)
         reach_px = REMATCH_RADIUS_PX + SELECT_MARGIN_PX
         near = field.stars.around(directions, ANGLE_PER_PIXEL_SAFETY * reach_px / min(camera.fx, camera.fy))
+        if field.depth is not None:
+            near = near[near < field.depth]  # indices are brightness ranks
         near = near[field.stars.brighter_neighbour_rad[near] >= BLEND_PX / camera.fx]
         return cls(matrix, camera, field.stars.rows[near], field.stars.vectors[near])
 
@@ -169,7 +215,7 @@ def _settle(field: _Field, matrix: NDArray, camera: Camera, img: NDArray, rows: 
     moved beyond the margin of ``catalog``, or when it is None)."""
     for round_ in range(MAX_REFINE_ROUNDS):
         before = (matrix, camera)
-        matrix, camera, res = fit_pose(matrix, camera, ref, field.x[img], field.y[img], fit_focal=field.fit_focal)
+        matrix, camera, res = fit_pose(matrix, camera, ref, field.x[img], field.y[img], **_free(field, img.size))
         if round_ == MAX_REFINE_ROUNDS - 1 or (round_ > 0 and _pose_shift_px(*before, matrix, camera) < SETTLED_PX):
             break
         if catalog is None or not catalog.serves(matrix, camera):
@@ -187,8 +233,9 @@ def _without_worst(field: _Field, fit: FinalFit, catalog: _Catalog | None) -> tu
     from its match, if that is beyond the re-match radius (the others would not have matched it);
     else None."""
     img = fit.image_index
+    free = _free(field, img.size)
     deleted = leave_one_out_residuals(fit.matrix_cam_from_icrs, fit.camera, fit.ref_icrs, field.x[img],
-                                      field.y[img], fit_focal=field.fit_focal)
+                                      field.y[img], fit_focal=free["fit_focal"], fit_aspect=free["fit_aspect"])
     deleted = np.where(np.isfinite(deleted), deleted, 0.0)  # a star the fit cannot do without is kept
     worst = int(np.argmax(deleted))
     if deleted[worst] <= REMATCH_RADIUS_PX:
@@ -199,7 +246,7 @@ def _without_worst(field: _Field, fit: FinalFit, catalog: _Catalog | None) -> tu
 
 
 def settle_matches(x: NDArray, y: NDArray, stars: FieldStars, cand: Candidate,
-                   focal_range: tuple[float, float] | None) -> FinalFit:
+                   focal_range: tuple[float, float] | None, *, fit_aspect: bool = False) -> FinalFit:
     """Fit a verified candidate to every star it explains, dropping a wrong association.
 
     Parameters
@@ -213,15 +260,21 @@ def settle_matches(x: NDArray, y: NDArray, stars: FieldStars, cand: Candidate,
     focal_range : (float, float) or None
         Focal lengths searched (pixels), or None when the camera is calibrated (focal length
         fixed). The focal length is fitted when a range is given; k1 as well when the range is
-        wider than :data:`K1_FOCAL_SPAN` and at least :data:`MIN_STARS_FOR_K1` stars match.
+        wider than :data:`K1_FOCAL_SPAN` or the field wide (:data:`WIDE_FOV_DEG`), and at least
+        :data:`MIN_STARS_FOR_K1` stars match (k2 too in a wide field, from
+        :data:`MIN_STARS_FOR_K2` stars).
+    fit_aspect : bool
+        Fit the pixel aspect fy / fx too (it is not known), from :data:`MIN_STARS_FOR_ASPECT` stars.
 
     Returns
     -------
     FinalFit
     """
     fit_focal = focal_range is not None
-    fit_k1 = fit_focal and focal_range[1] > focal_range[0] * (1 + K1_FOCAL_SPAN)
-    field = _Field(x, y, stars, fit_focal)
+    wide = fit_focal and cand.camera.fov_deg >= WIDE_FOV_DEG
+    fit_k1 = wide or (fit_focal and (focal_range[1] > focal_range[0] * (1 + K1_FOCAL_SPAN) or cand.camera.k1 != 0))
+    field = _Field(x, y, stars, fit_focal, fit_aspect and fit_focal, wide, wide,
+                   depth_limit(len(x), cand.camera, len(stars.rows)))
     rows = cand.catalog_rows
     fit, catalog = _settle(field, cand.rot_cam_from_icrs.as_matrix(), cand.camera, cand.image_index, rows,
                            stars.vectors_of(rows), None)
@@ -230,9 +283,9 @@ def settle_matches(x: NDArray, y: NDArray, stars: FieldStars, cand: Candidate,
         if better is None:
             break
         fit, catalog = better
-    if fit_k1 and fit.image_index.size >= MIN_STARS_FOR_K1:  # lens distortion last, on the settled matches
+    if fit_k1 and not wide and fit.image_index.size >= MIN_STARS_FOR_K1:  # lens distortion last, settled matches
         img = fit.image_index
         matrix, camera, res = fit_pose(fit.matrix_cam_from_icrs, fit.camera, fit.ref_icrs, x[img], y[img],
-                                       fit_focal=True, fit_k1=True)
+                                       **{**_free(field, img.size), "fit_k1": True})
         fit = FinalFit(matrix, camera, img, fit.catalog_rows, fit.ref_icrs, res)
     return fit

@@ -44,22 +44,35 @@ def _project(vx, vy, vz, dist):
     return a, b, ad, bd, daa, dab, dba, dbb
 
 
+FREE_FOCAL, FREE_ASPECT, FREE_K1, FREE_K2 = 0, 1, 2, 3
+"""Positions in the ``free`` flags (int64 array (4,), 1 = fitted) of the parameters beyond the
+rotation, in the order their columns follow the rotation's three: ln f (fx and fy together),
+ln(fy / fx) (fy alone, the pixel aspect), k1, k2."""
+
+
 @njit(cache=True)
-def fill_system(cam_vec, offset, fx, fy, dist, n_params, out):
-    """Write the least-squares system of a fit to ``out`` (n_params + 1, 2N).
+def n_parameters(free) -> int:
+    """Parameters of a fit: the rotation's three and one per set flag of ``free`` (4,)."""
+    return 3 + free[0] + free[1] + free[2] + free[3]
+
+
+@njit(cache=True)
+def fill_system(cam_vec, offset, fx, fy, dist, free, out):
+    """Write the least-squares system of a fit to ``out`` (n_parameters(free) + 1, 2N).
 
     Rows: the transposed Jacobian of the predicted pixels (x_0, ..., x_N-1, y_0, ..., y_N-1)
     of camera vectors ``cam_vec`` (3, N) with respect to (small rotation of the camera frame,
-    [ln f], [k1]) and, last, the residuals (detected minus predicted pixels). ``offset`` (2, N)
-    holds the detected positions minus the principal point (pixels), ``fx``, ``fy`` the focal
-    lengths (pixels, scaling together under ln f).
+    then the free parameters of :data:`FREE_FOCAL` ...) and, last, the residuals (detected minus
+    predicted pixels). ``offset`` (2, N) holds the detected positions minus the principal point
+    (pixels), ``fx``, ``fy`` the focal lengths (pixels).
 
     A rotation d moves a camera vector v to v + d x v; for the pinhole coordinates u = (a, b)
     that is du/dd_x = (-b a, -b b - 1), du/dd_y = (a a + 1, a b) and du/dd_z = (-b, a), then
     through the distortion's 2 x 2 Jacobian and the focal lengths. d/d ln f is the distorted
-    point itself, d/d k1 is u r^2.
+    point itself, d/d ln(fy / fx) its y part, d/d k1 is u r^2 and d/d k2 is u r^4.
     """
     n = cam_vec.shape[1]
+    last = n_parameters(free)
     for i in range(n):
         a, b, ad, bd, daa, dab, dba, dbb = _project(cam_vec[0, i], cam_vec[1, i], cam_vec[2, i], dist)
         turn_a = (-b * a, a * a + 1.0, -b)
@@ -67,13 +80,21 @@ def fill_system(cam_vec, offset, fx, fy, dist, n_params, out):
         for k in range(3):
             out[k, i] = fx * (daa * turn_a[k] + dab * turn_b[k])
             out[k, n + i] = fy * (dba * turn_a[k] + dbb * turn_b[k])
-        if n_params > 3:
-            out[3, i], out[3, n + i] = fx * ad, fy * bd
-        if n_params > 4:
-            r2 = a * a + b * b
-            out[4, i], out[4, n + i] = fx * (a * r2), fy * (b * r2)
-        out[n_params, i] = fx * (offset[0, i] / fx - ad)
-        out[n_params, n + i] = fy * (offset[1, i] / fy - bd)
+        r2 = a * a + b * b
+        row = 3
+        if free[FREE_FOCAL]:
+            out[row, i], out[row, n + i] = fx * ad, fy * bd
+            row += 1
+        if free[FREE_ASPECT]:
+            out[row, i], out[row, n + i] = 0.0, fy * bd
+            row += 1
+        if free[FREE_K1]:
+            out[row, i], out[row, n + i] = fx * (a * r2), fy * (b * r2)
+            row += 1
+        if free[FREE_K2]:
+            out[row, i], out[row, n + i] = fx * (a * r2 * r2), fy * (b * r2 * r2)
+        out[last, i] = fx * (offset[0, i] / fx - ad)
+        out[last, n + i] = fy * (offset[1, i] / fy - bd)
 
 
 @njit(cache=True)
@@ -177,15 +198,18 @@ def _rotate(matrix, ref, cam_vec):
 
 
 @njit(cache=True)
-def _moved_px(delta, fx, corner):
+def _moved_px(delta, free, fx, corner):
     """Largest image motion (pixels) a step ``delta`` (p,) causes, roughly: rotation times focal
-    length ``fx``, plus the focal and k1 changes at the image corner (``corner`` pixels from
-    the centre)."""
+    length ``fx``, plus the focal, aspect, k1 and k2 changes at the image corner (``corner``
+    pixels from the centre)."""
     moved = max(abs(delta[0]), abs(delta[1]), abs(delta[2])) * fx * 2.0
-    if delta.size > 3:
-        moved += abs(delta[3]) * corner
-    if delta.size > 4:
-        moved += abs(delta[4]) * corner * (corner / fx) ** 2
+    reach = corner / fx  # the corner in pinhole units
+    gains = (corner, corner, corner * reach**2, corner * reach**4)
+    row = 3
+    for k in range(4):
+        if free[k]:
+            moved += abs(delta[row]) * gains[k]
+            row += 1
     return moved
 
 
@@ -201,37 +225,55 @@ def _residual_px(cam_vec, offset, fx, fy, dist):
 
 
 @njit(cache=True)
-def fit(matrix, ref, x, y, fx, fy, cx, cy, dist, n_params, corner, max_iter, converged_px):
-    """Gauss-Newton fit of an attitude (and ln f, and k1, per ``n_params`` = 3, 4 or 5).
+def _apply_step(delta, free, fx, fy, dist):
+    """The focal lengths (fx, fy) after a step ``delta`` of the free parameters (rows 3...);
+    updates k1 and k2 in ``dist`` in place."""
+    row = 3
+    if free[FREE_FOCAL]:
+        scale = math.exp(delta[row])
+        fx, fy = fx * scale, fy * scale
+        row += 1
+    if free[FREE_ASPECT]:
+        fy = fy * math.exp(delta[row])
+        row += 1
+    if free[FREE_K1]:
+        dist[0] += delta[row]
+        row += 1
+    if free[FREE_K2]:
+        dist[1] += delta[row]
+    return fx, fy
+
+
+@njit(cache=True)
+def fit(matrix, ref, x, y, fx, fy, cx, cy, dist, free, corner, max_iter, converged_px):
+    """Gauss-Newton fit of an attitude and the parameters flagged in ``free`` (4,: ln f,
+    ln(fy / fx), k1, k2; see :data:`FREE_FOCAL`).
 
     ``matrix`` (3, 3) is the starting ICRS-to-camera rotation matrix, ``ref`` (K, 3) the ICRS unit
     vectors of the stars, ``x``, ``y`` (K,) their detected positions (pixels); the camera has
     focal lengths ``fx``, ``fy`` and principal point ``cx``, ``cy`` (pixels) and distortion
-    coefficients ``dist`` (5,) (k1 is the one fitted). Iterates at most ``max_iter`` times,
-    stopping when :func:`_moved_px` of a step is below ``converged_px``.
-    Returns (matrix (3, 3), fx, fy, k1, residual distance (K,) in pixels).
+    coefficients ``dist`` (5,). Iterates at most ``max_iter`` times, stopping when
+    :func:`_moved_px` of a step is below ``converged_px``.
+    Returns (matrix (3, 3), fx, fy, k1, k2, residual distance (K,) in pixels).
     """
     matrix, dist = matrix.copy(), dist.copy()
     offset = np.empty((2, ref.shape[0]))
     for i in range(ref.shape[0]):
         offset[0, i], offset[1, i] = x[i] - cx, y[i] - cy
     cam_vec = np.empty((3, ref.shape[0]))
+    n_params = n_parameters(free)
     system = np.empty((n_params + 1, 2 * ref.shape[0]))
     delta = np.empty(n_params)
     for _ in range(max_iter):
         _rotate(matrix, ref, cam_vec)
-        fill_system(cam_vec, offset, fx, fy, dist, n_params, system)
+        fill_system(cam_vec, offset, fx, fy, dist, free, system)
         _step(system, delta)
         _turn(delta, matrix)
-        if n_params > 3:
-            scale = math.exp(delta[3])
-            fx, fy = fx * scale, fy * scale
-        if n_params > 4:
-            dist[0] += delta[4]
-        if _moved_px(delta, fx, corner) < converged_px:
+        fx, fy = _apply_step(delta, free, fx, fy, dist)
+        if _moved_px(delta, free, fx, corner) < converged_px:
             break
     _rotate(matrix, ref, cam_vec)
-    return matrix, fx, fy, dist[0], _residual_px(cam_vec, offset, fx, fy, dist)
+    return matrix, fx, fy, dist[0], dist[1], _residual_px(cam_vec, offset, fx, fy, dist)
 
 
 @njit(cache=True)

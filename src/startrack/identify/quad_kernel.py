@@ -12,7 +12,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .database import KEY_BINS, LARGEST_SCALE_RAD, LEVEL_SHIFT, RATIO_SCALE
+from .database import KEY_BINS, LARGEST_LN_MIN, LARGEST_LN_STEP, LEVEL_SHIFT, RATIO_SCALE
 from .patterns import EDGE_PAIRS, PERMUTATIONS, PERMUTED_EDGES
 from .pose_kernel import q_method
 
@@ -112,17 +112,38 @@ def _trial_starts(u, w, quad, grid, step, vec, angles, ordered, ratios, starts):
 
 
 @njit(cache=True)
-def ratio_tolerances(ordered, ratios, step, noise_px, focal_px, tol) -> float:
+def ratio_tolerances(ordered, ratios, step, noise_px, focal_px, shape, tol) -> float:
     """Tolerance of each of the five edge ratios (step 2); writes ``tol`` (5,), returns the largest.
 
     ``ordered`` (6,) are the sorted edge angles (radians), ``ratios`` (5,) the first five over the
     largest, ``noise_px`` the error bound of one edge length (pixels), ``focal_px`` the trial's
-    focal length. A ratio r = a / b of edges a <= b measured with errors da, db moves by
-    da / b - r db / b, so its bound is step + noise (1 + r) / b, with b in pixels."""
+    focal length, ``shape`` the bound on the relative change of one edge against another that
+    the lens may cause (:func:`shape_bound`). A ratio r = a / b of edges a <= b measured with
+    errors da, db moves by da / b - r db / b, so its bound is step + noise (1 + r) / b, with b in
+    pixels; a lens that stretches a by a fraction s more than b moves it by r s more."""
     largest_px = ordered[5] * focal_px
     for k in range(5):
-        tol[k] = step + noise_px * (1.0 + ratios[k]) / largest_px
+        tol[k] = step + noise_px * (1.0 + ratios[k]) / largest_px + shape * ratios[k]
     return tol.max()
+
+
+@njit(cache=True)
+def radius2_range(u, w, quad, scale):
+    """Smallest and largest squared pinhole radius (a^2 + b^2) of the pattern's four stars at ``scale``."""
+    lo, hi = np.inf, 0.0
+    for i in range(4):
+        r2 = (u[quad[i]] * u[quad[i]] + w[quad[i]] * w[quad[i]]) * scale * scale
+        lo, hi = min(lo, r2), max(hi, r2)
+    return lo, hi
+
+
+@njit(cache=True)
+def shape_bound(distortion, r2_lo, r2_hi) -> float:
+    """Bound on the relative stretch of one pattern edge against another by a radial distortion
+    r -> r (1 + k1 r^2) with |k1| <= ``distortion``, for stars at squared pinhole radii
+    ``r2_lo`` .. ``r2_hi``: an edge there is scaled by between 1 + k1 r^2 (across the radius) and
+    1 + 3 k1 r^2 (along it), so two edges differ by at most |k1| (3 r2_hi - r2_lo)."""
+    return distortion * (3.0 * r2_hi - r2_lo)
 
 
 @njit(cache=True)
@@ -232,7 +253,7 @@ def _matching_rows(keys, cell_starts, pattern_ratios, pattern_largest, level_fov
                         break
                     if not _ratios_fit(pattern_ratios[r], low, high):
                         continue
-                    implied = trial_focal * largest / (pattern_largest[r] * LARGEST_SCALE_RAD)
+                    implied = trial_focal * largest / math.exp(LARGEST_LN_MIN + pattern_largest[r] * LARGEST_LN_STEP)
                     if window_lo <= implied <= window_hi:
                         if count == rows.size:
                             rows = np.concatenate((rows, np.empty(rows.size, np.int64)))
@@ -254,12 +275,15 @@ def _fit_order(u, w, quad, order, scale, cat_vec, stars, obs):
 
 
 @njit(cache=True)
-def search(u, w, quads, grid, focal_nominal, short_px, sigma_px, step, max_tolerance, fit_focal,
-           level_fovs, level_ratio, region_fraction, keys, cell_starts, pattern_ratios, pattern_largest,
+def search(u, w, quads, grid, focal_nominal, short_px, sigma_px, step, max_tolerance, fit_focal, distortion,
+           shape_floor, level_fovs, level_ratio, region_fraction, keys, cell_starts, pattern_ratios, pattern_largest,
            pattern_stars, vectors, first):
     """The compiled loop of :func:`.quad_search.search_batch` (steps 1-4 of the module docstring),
     from pattern ``first`` up to and including the first pattern that yields a candidate; also
-    returns the index of the pattern after the last one searched."""
+    returns the index of the pattern after the last one searched. ``distortion`` bounds |k1| of
+    an uncalibrated lens (0: none), which widens the tolerances (:func:`shape_bound`);
+    ``shape_floor`` is a relative edge stretch allowed everywhere (a pixel aspect known to
+    +-``shape_floor``)."""
     vec, cat_vec, obs = np.empty((4, 3)), np.empty((4, 3)), np.empty((4, 3))
     angles, cat_angles, ordered, ratios, tol = np.empty(6), np.empty(6), np.empty(6), np.empty(5), np.empty(5)
     quad, stars, rows = np.empty(4, np.int64), np.empty(4, np.int64), np.empty(64, np.int64)
@@ -279,14 +303,18 @@ def search(u, w, quads, grid, focal_nominal, short_px, sigma_px, step, max_toler
             _edges(vec, angles)
             largest = _sorted_ratios(angles, ordered, ratios)
             trial_focal = focal_nominal / scale
-            worst_tol = ratio_tolerances(ordered, ratios, step, noise, trial_focal, tol)
+            r2_lo, r2_hi = radius2_range(u, w, quad, scale)
+            shape = shape_floor + shape_bound(distortion, r2_lo, r2_hi)
+            worst_tol = ratio_tolerances(ordered, ratios, step, noise, trial_focal, shape, tol)
             if worst_tol > max_tolerance:
                 continue
             fov_lo = 2.0 * math.atan(short_px * scale / (2.0 * focal_nominal))
             fov_hi = 2.0 * math.atan(short_px * scale_hi / (2.0 * focal_nominal))
+            stretch = min(0.5, shape_floor + 3.0 * distortion * r2_hi)  # the lens may lengthen the largest edge
             rows, n_rows = _matching_rows(keys, cell_starts, pattern_ratios, pattern_largest, level_fovs, level_ratio,
                                           region_fraction, ratios, tol, largest, trial_focal, fov_lo, fov_hi,
-                                          focal_nominal / scale_hi * 0.98, trial_focal * 1.02, rows, low, high)
+                                          focal_nominal / scale_hi * 0.98 * (1.0 - stretch),
+                                          trial_focal * 1.02 * (1.0 + stretch), rows, low, high)
             for j in range(n_rows):
                 r = rows[j]
                 for i in range(4):
@@ -299,7 +327,7 @@ def search(u, w, quads, grid, focal_nominal, short_px, sigma_px, step, max_toler
                 fitted = scale * edge_scale if fit_focal else scale
                 quat, rot = _fit_order(u, w, quad, order, fitted, cat_vec, stars, obs)
                 f = focal_nominal / fitted
-                if _worst_residual(rot, obs, cat_vec) > 6.0 * sigma_px / f + step_share * step * largest:
+                if _worst_residual(rot, obs, cat_vec) > 6.0 * sigma_px / f + (step_share * step + shape) * largest:
                     continue
                 if count == focal.size:
                     quats, focal, out_stars, out_row = _grow(quats, focal, out_stars, out_row, count)

@@ -86,8 +86,9 @@ class SearchSetup:
         From :func:`focal_grid`.
     focal_nominal : float
         The nominal focal length (pixels); a scale s stands for focal length focal_nominal / s.
-    short_px : int
-        Shorter image side (pixels): sets the field of view a level must suit.
+    short_px : float
+        Shorter image side in units of x pixels (the height times fx / fy when it is the
+        shorter): sets the field of view a level must suit.
     sigma_px : float
         Assumed 1-sigma centroid error (pixels).
     focal_step : float
@@ -96,15 +97,23 @@ class SearchSetup:
         Patterns with a ratio less certain than this are not looked up.
     fit_focal : bool
         Correct the focal length of each candidate from its edge sums.
+    distortion : float
+        Bound on |k1| of the lens (normalised pinhole radius r -> r (1 + k1 r^2)) that the
+        tolerances allow for; 0 for a calibrated camera.
+    shape_floor : float
+        Relative stretch of one edge against another allowed in every pattern (a pixel aspect
+        searched in steps of twice this).
     """
 
     grid: NDArray[np.float64]
     focal_nominal: float
-    short_px: int
+    short_px: float
     sigma_px: float
     focal_step: float
     max_tolerance: float
     fit_focal: bool
+    distortion: float = 0.0
+    shape_floor: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -163,7 +172,8 @@ def search_batch(db: PatternDatabase, u: NDArray, w: NDArray, quads: NDArray, se
         np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(w, dtype=np.float64),
         np.ascontiguousarray(quads, dtype=np.int64), setup.grid, float(setup.focal_nominal),
         float(setup.short_px), float(setup.sigma_px), float(setup.focal_step), float(setup.max_tolerance),
-        bool(setup.fit_focal), db.level_fov_rad, float(s.level_ratio), float(s.region_fraction), db.keys,
+        bool(setup.fit_focal), float(setup.distortion), float(setup.shape_floor), db.level_fov_rad,
+        float(s.level_ratio), float(s.region_fraction), db.keys,
         db.cell_starts, db.pattern_ratios, db.pattern_largest, db.pattern_stars, db.vectors, int(first))
     return Fits(quat, focal, stars, row, int(n_tried), int(next_pattern))
 

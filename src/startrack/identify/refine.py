@@ -1,8 +1,9 @@
 """Least-squares refinement of an attitude (and optionally the focal length) from matched stars.
 
 Minimises the pixel residuals between detected stars and their catalog stars projected through
-the camera, over a small rotation of the camera frame and, when it is free, the logarithm of the
-focal length (fx and fy scale together). Gauss-Newton with the analytic Jacobian of the
+the camera, over a small rotation of the camera frame and, when they are free, the logarithm of the
+focal length (fx and fy scale together), the logarithm of the pixel aspect fy / fx and the radial
+distortion coefficients k1 and k2. Gauss-Newton with the analytic Jacobian of the
 projection; a few iterations suffice.
 
 The fits run on rotation matrices (``matrix_cam_from_icrs``, (3, 3), mapping ICRS vectors to
@@ -54,25 +55,49 @@ def _offset(camera: Camera, x: NDArray, y: NDArray) -> NDArray[np.float64]:
     return np.array([x - camera.cx, y - camera.cy], dtype=np.float64)
 
 
-def _system(camera: Camera, focal: NDArray, cam_vec: NDArray, offset: NDArray, n_params: int) -> NDArray:
-    """The least-squares system of a fit (:func:`.pose_kernel.fill_system`), shape (n_params + 1, 2N).
+def free_flags(*, fit_focal: bool, fit_aspect: bool = False, fit_k1: bool = False,
+               fit_k2: bool = False) -> NDArray[np.int64]:
+    """The ``free`` flags (4,) of the compiled fit (:data:`.pose_kernel.FREE_FOCAL` order: ln f,
+    ln(fy / fx), k1, k2)."""
+    return np.array([fit_focal, fit_aspect, fit_k1, fit_k2], dtype=np.int64)
+
+
+def _system(camera: Camera, focal: NDArray, cam_vec: NDArray, offset: NDArray, free: NDArray) -> NDArray:
+    """The least-squares system of a fit (:func:`.pose_kernel.fill_system`), shape (p + 1, 2N).
 
     Rows: the transposed Jacobian of the predicted pixels (x_0, ..., x_N-1, y_0, ..., y_N-1) of
     camera vectors ``cam_vec`` (3, N) with respect to (small rotation of the camera frame (rad),
-    [ln f], [k1]) and, last, the residuals (detected minus predicted pixels). The camera gives
-    the distortion, ``focal`` (2, 1) the focal lengths (fx, fy) in pixels and ``offset`` (2, N)
-    the detected positions minus the principal point (pixels). The product of the rows with
-    their transpose holds the normal equations ``[[J^T J, J^T r], [r^T J, r^T r]]``.
+    then the parameters ``free`` (4,) flags: [ln f], [ln(fy / fx)], [k1], [k2]) and, last, the
+    residuals (detected minus predicted pixels). The camera gives the distortion, ``focal``
+    (2, 1) the focal lengths (fx, fy) in pixels and ``offset`` (2, N) the detected positions
+    minus the principal point (pixels). The product of the rows with their transpose holds the
+    normal equations ``[[J^T J, J^T r], [r^T J, r^T r]]``.
     """
-    system = np.empty((n_params + 1, 2 * cam_vec.shape[1]))
+    free = np.ascontiguousarray(free, dtype=np.int64)
+    system = np.empty((3 + int(free.sum()) + 1, 2 * cam_vec.shape[1]))
     _kernel().fill_system(_plain(cam_vec), _plain(offset), float(focal[0, 0]), float(focal[1, 0]),
-                          _distortion(camera), int(n_params), system)
+                          _distortion(camera), free, system)
     return system
 
 
+MIN_STARS_FOCAL, MIN_STARS_ASPECT, MIN_STARS_K1, MIN_STARS_K2 = 3, 6, 8, 12
+"""Fewest stars with which each parameter is fitted (below, it stays fixed): the rotation and the
+focal length need three stars; every further parameter wants a few more stars than unknowns."""
+
+
+def _usable_flags(n_stars: int, fit_focal: bool, fit_aspect: bool, fit_k1: bool,
+                  fit_k2: bool) -> NDArray[np.int64]:
+    """The flags a fit to ``n_stars`` stars can afford (each parameter needs the ones before it)."""
+    focal = fit_focal and n_stars >= MIN_STARS_FOCAL
+    k1 = fit_k1 and focal and n_stars >= MIN_STARS_K1
+    return free_flags(fit_focal=focal, fit_aspect=fit_aspect and focal and n_stars >= MIN_STARS_ASPECT,
+                      fit_k1=k1, fit_k2=fit_k2 and k1 and n_stars >= MIN_STARS_K2)
+
+
 def fit_pose(matrix_cam_from_icrs: NDArray, camera: Camera, ref_icrs: NDArray, x: NDArray, y: NDArray, *,
-             fit_focal: bool, fit_k1: bool = False) -> tuple[NDArray[np.float64], Camera, NDArray[np.float64]]:
-    """Refine an attitude matrix (and focal length) to matched stars.
+             fit_focal: bool, fit_k1: bool = False, fit_aspect: bool = False,
+             fit_k2: bool = False) -> tuple[NDArray[np.float64], Camera, NDArray[np.float64]]:
+    """Refine an attitude matrix (and focal length, pixel aspect, radial distortion) to matched stars.
 
     Gauss-Newton (:func:`.pose_kernel.fit`): at most ``_MAX_ITER`` steps, until a step moves no
     image point by more than ``_CONVERGED_PX``; a step whose normal equations are singular is the
@@ -83,47 +108,50 @@ def fit_pose(matrix_cam_from_icrs: NDArray, camera: Camera, ref_icrs: NDArray, x
     matrix_cam_from_icrs : ndarray, shape (3, 3)
         Starting attitude, the rotation matrix taking ICRS vectors to camera vectors.
     camera : Camera
-        Starting camera; only its focal length (and k1) change when they are fitted.
+        Starting camera; only its focal lengths (and k1, k2) change when they are fitted.
     ref_icrs : ndarray, shape (K, 3)
         ICRS unit vectors of the matched catalog stars.
     x, y : ndarray, shape (K,)
         Detected positions (pixels) of the same stars.
     fit_focal : bool
-        Also fit the focal length (needs at least 3 stars; otherwise it stays fixed).
+        Also fit the focal length, fx and fy together (needs at least 3 stars; otherwise it
+        stays fixed).
     fit_k1 : bool
         Also fit the first radial distortion coefficient (with the focal length; needs at least
         8 stars). For photographs from lenses nobody calibrated.
+    fit_aspect : bool
+        Also fit the pixel aspect, fy against fx (with the focal length; needs at least 6 stars).
+    fit_k2 : bool
+        Also fit the second radial coefficient (with k1; needs at least 12 stars): wide lenses.
 
     Returns
     -------
     matrix, camera, residual_px
         The refined attitude matrix (3, 3) and camera and each star's pixel residual distance, shape (K,).
     """
-    fit_focal = fit_focal and len(x) >= 3
-    fit_k1 = fit_k1 and fit_focal and len(x) >= 8
-    n_params = 3 + int(fit_focal) + int(fit_k1)
+    free = _usable_flags(len(x), fit_focal, fit_aspect, fit_k1, fit_k2)
     corner = 0.5 * math.hypot(camera.width, camera.height)
-    matrix, fx, fy, k1, residual = _kernel().fit(
+    matrix, fx, fy, k1, k2, residual = _kernel().fit(
         _plain(matrix_cam_from_icrs), _plain(ref_icrs), _plain(x), _plain(y), float(camera.fx), float(camera.fy),
-        float(camera.cx), float(camera.cy), _distortion(camera), n_params, corner, _MAX_ITER, _CONVERGED_PX)
-    if fit_k1:
-        camera = camera.with_distortion(k1=k1)
-    if fit_focal:
+        float(camera.cx), float(camera.cy), _distortion(camera), free, corner, _MAX_ITER, _CONVERGED_PX)
+    if free[2] or free[3]:
+        camera = camera.with_distortion(k1=k1, k2=k2)
+    if free[0] or free[1]:
         camera = camera.with_focal(fx, fy)
     return matrix, camera, residual
 
 
 def refine_pointing(rot_cam_from_icrs: Rotation, camera: Camera, ref_icrs: NDArray, x: NDArray,
-                    y: NDArray, *, fit_focal: bool,
-                    fit_k1: bool = False) -> tuple[Rotation, Camera, NDArray[np.float64]]:
+                    y: NDArray, *, fit_focal: bool, fit_k1: bool = False,
+                    fit_aspect: bool = False) -> tuple[Rotation, Camera, NDArray[np.float64]]:
     """:func:`fit_pose` for an attitude given as a Rotation: (rotation, camera, residual_px (K,))."""
     matrix, camera, residual_px = fit_pose(rot_cam_from_icrs.as_matrix(), camera, ref_icrs, x, y,
-                                           fit_focal=fit_focal, fit_k1=fit_k1)
+                                           fit_focal=fit_focal, fit_k1=fit_k1, fit_aspect=fit_aspect)
     return Rotation.from_matrix(matrix), camera, residual_px
 
 
 def leave_one_out_residuals(matrix_cam_from_icrs: NDArray, camera: Camera, ref_icrs: NDArray, x: NDArray,
-                            y: NDArray, *, fit_focal: bool) -> NDArray[np.float64]:
+                            y: NDArray, *, fit_focal: bool, fit_aspect: bool = False) -> NDArray[np.float64]:
     """How far (pixels, (K,)) each star lies from where a fit to the other stars puts it.
 
     At a converged fit (attitude matrix (3, 3) as in :func:`fit_pose`, ICRS unit vectors
@@ -133,12 +161,13 @@ def leave_one_out_residuals(matrix_cam_from_icrs: NDArray, camera: Camera, ref_i
     Weisberg 1982, "Residuals and Influence in Regression", §2.2). A wrong association pulls a
     few-star fit towards itself, so its own residual can be unremarkable while its deleted
     residual is not. Stars with a leverage block near singular (a fit that needs that star) get
-    inf; all do when J^T J is singular.
+    inf; all do when J^T J is singular. The parameters are those :func:`fit_pose` fits with
+    the same flags (focal length, pixel aspect).
     """
-    n_params = 3 + int(fit_focal and len(x) >= 3)
+    free = _usable_flags(len(x), fit_focal, fit_aspect, False, False)
     focal = np.array([[camera.fx], [camera.fy]])
     cam_vec = _plain(matrix_cam_from_icrs) @ _plain(ref_icrs).T
-    return _kernel().deleted_residuals(_system(camera, focal, cam_vec, _offset(camera, x, y), n_params))
+    return _kernel().deleted_residuals(_system(camera, focal, cam_vec, _offset(camera, x, y), free))
 
 
 def wahba_equal_weights(observed: NDArray, reference: NDArray) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

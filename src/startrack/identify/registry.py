@@ -26,7 +26,7 @@ from ..camera import Camera
 from ..errors import InvalidInputError
 from .angle_pivot import AnglePivotOptions, match_angle_pivot
 from .candidate import MatchOutcome
-from .database import DatabaseSettings, load_database
+from .database import DB_MAX_FOV_DEG, DatabaseSettings, load_database
 from .field_stars import FieldStars, field_stars
 from .match_groups import VanBezooijenOptions, match_van_bezooijen
 from .nvertex import NVertexOptions, match_nvertex
@@ -37,8 +37,9 @@ from .quad_matcher import MatcherOptions, match_lost_in_space
 from .quad_search import warm_up
 from .triangles import TriangleOptions, match_triangles
 
-DEFAULT_FOV_RANGE_DEG: tuple[float, float] = (5.0, 35.0)
-"""Searched when no field of view is given: ordinary star trackers and camera lenses."""
+DEFAULT_FOV_RANGE_DEG: tuple[float, float] = (3.0, 100.0)
+"""Searched when no field of view is given: telescopes' finder fields, star trackers, camera
+lenses, phones and webcams (the range of the default pattern database)."""
 
 PAIR_MAX_FOCAL_TOLERANCE = 0.05
 """The pair-directory matchers need the focal length to within this fraction."""
@@ -58,6 +59,7 @@ class MatchRequest(Protocol):
     epoch_jyear: float
     prior_rot: Rotation | None
     prior_sigma_deg: float
+    aspect_range: tuple[float, float] | None
 
 
 Matcher = Callable[[object | None], MatchOutcome]
@@ -67,15 +69,15 @@ Matcher = Callable[[object | None], MatchOutcome]
 def database_settings_for(fov_range_deg: tuple[float, float] = DEFAULT_FOV_RANGE_DEG) -> DatabaseSettings:
     """Settings of the pattern database that serves this range of horizontal FOVs (degrees).
 
-    The default database covers 5 to 35 deg; a range outside it gets a database of its own
-    (built on first use).
+    The default database covers :data:`DEFAULT_FOV_RANGE_DEG`; a range reaching outside it
+    gets a database of its own that covers just that range, 3 % wider on each side (built on
+    first use; below 3 deg the Hipparcos stars thin out and so do the patterns).
     """
     lo, hi = fov_range_deg
     default = DatabaseSettings()
     if default.fov_min_deg <= lo and hi <= default.fov_max_deg:
         return default
-    return DatabaseSettings(fov_min_deg=min(lo, default.fov_min_deg) * 0.97,
-                            fov_max_deg=max(hi, default.fov_max_deg) * 1.03)
+    return DatabaseSettings(fov_min_deg=max(lo * 0.97, 0.4), fov_max_deg=min(hi * 1.03, DB_MAX_FOV_DEG))
 
 
 def _quads(request: MatchRequest) -> tuple[Matcher, FieldStars]:
@@ -83,13 +85,17 @@ def _quads(request: MatchRequest) -> tuple[Matcher, FieldStars]:
     warm_up(db)
 
     def run(options):
-        return match_lost_in_space(request.x, request.y, request.camera, db, request.focal_range, options)
+        return match_lost_in_space(request.x, request.y, request.camera, db, request.focal_range, options,
+                                   aspect_range=request.aspect_range)
 
     return run, field_stars(db.settings.max_mag, request.epoch_jyear)
 
 
 def _known_focal(request: MatchRequest, name: str) -> tuple[Camera, float]:
     """The camera at the middle of the focal range, and the range's relative half-width."""
+    if request.aspect_range is not None:
+        raise InvalidInputError(f"the {name} matcher needs the pixel aspect: give pixel_aspect as one number "
+                                "(or use method='quads' to search a range)")
     lo, hi = request.focal_range or (request.camera.fx, request.camera.fx)
     tolerance = (hi / lo - 1.0) / 2.0
     if tolerance > PAIR_MAX_FOCAL_TOLERANCE:

@@ -1,0 +1,145 @@
+"""The catalog epoch of a solve: given, read from the image's header, or the default J2000.0.
+
+Star positions move (proper motion: up to 10 arcsec a year for the fastest Hipparcos stars, and
+tens of arcseconds over the 26 years since J2000.0 for a few hundred of them), so a photo is best
+solved against the catalog at the time it was taken. The time comes, in this order, from:
+
+1. ``CATEPOCH``: the catalog epoch (Julian year) startrack's simulator rendered a FITS frame at;
+2. ``DATE-OBS``: FITS start of the exposure, UTC, ISO 8601 (a date-only value takes ``TIME-OBS``
+   or ``UT``, as :func:`startrack.calibrate.ground.time_from_header` reads it);
+3. ``MJD-OBS``: FITS start of the exposure as a modified Julian date (UTC);
+4. ``DateTimeOriginal``: EXIF capture time, with ``OffsetTimeOriginal`` when the camera wrote it,
+   else taken as UTC: a camera clock's zone moves the epoch by at most 14 h, 0.0016 yr, a
+   millionth of an arcsecond of proper motion for most stars.
+
+A FITS time that cannot be read is refused (the header says something wrong about the image;
+``epoch=`` overrides it); an EXIF time that cannot be read (cameras write ``0000:00:00 00:00:00``
+when their clock was never set) is passed over, as the EXIF reader passes over a broken block.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from astropy.time import Time
+
+from ..errors import InvalidInputError
+
+DEFAULT_EPOCH_JYEAR = 2000.0
+"""The catalog epoch when nothing says when the image was taken."""
+
+EPOCH_RANGE_JYEAR = (1000.0, 3000.0)
+"""Epochs outside this range (exclusive) are refused as mistakes."""
+
+
+@dataclass(frozen=True)
+class Epoch:
+    """A catalog epoch and where it came from.
+
+    Attributes
+    ----------
+    jyear : float
+        Julian year (TDB), e.g. 2024.6.
+    source : str
+        ``"given"``, a header key (``"CATEPOCH"``, ``"DATE-OBS"``, ``"MJD-OBS"``,
+        ``"DateTimeOriginal"``) or ``"default"`` (J2000.0: nothing said when).
+    """
+
+    jyear: float
+    source: str
+
+
+def epoch_jyear(epoch) -> float:
+    """A catalog epoch as a Julian year (TDB): None gives J2000.0; accepts astropy Time or a year.
+
+    Raises
+    ------
+    InvalidInputError
+        For a year outside 1000-3000, a non-number, or a Time that is not a single instant.
+    """
+    if epoch is None:
+        return DEFAULT_EPOCH_JYEAR
+    if isinstance(epoch, Time):
+        if not epoch.isscalar:
+            raise InvalidInputError(f"epoch must be a single time, got an array of {epoch.size}")
+        return _checked(float(epoch.tdb.jyear), epoch)
+    if isinstance(epoch, bool | str):
+        raise InvalidInputError(f"epoch must be an astropy Time or a Julian year such as 2025.5, got {epoch!r}")
+    try:
+        value = float(epoch)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"epoch must be an astropy Time or a Julian year such as 2025.5, "
+                                f"got {epoch!r}") from None
+    return _checked(value, epoch)
+
+
+def _checked(value: float, given) -> float:
+    lo, hi = EPOCH_RANGE_JYEAR
+    if not (math.isfinite(value) and lo < value < hi):
+        raise InvalidInputError(f"epoch must be an astropy Time or a Julian year such as 2025.5 "
+                                f"(between {lo:g} and {hi:g}), got {given!r}")
+    return value
+
+
+def epoch_from_header(header: Mapping[str, Any]) -> Epoch | None:
+    """The epoch an image header states (module docstring for the order), or None.
+
+    Raises
+    ------
+    InvalidInputError
+        When ``CATEPOCH``, ``DATE-OBS`` or ``MJD-OBS`` is present but cannot be read, naming the
+        card and the value.
+    """
+    if "CATEPOCH" in header:
+        return Epoch(_card_number(header, "CATEPOCH", "a Julian year"), "CATEPOCH")
+    if "DATE-OBS" in header:
+        return Epoch(_header_time(header, "DATE-OBS"), "DATE-OBS")
+    if "MJD-OBS" in header:
+        mjd = _card_number(header, "MJD-OBS", "a modified Julian date")
+        return Epoch(_checked(float(Time(mjd, format="mjd", scale="utc").tdb.jyear), mjd), "MJD-OBS")
+    if "DateTimeOriginal" in header:
+        try:
+            return Epoch(_header_time(header, "DateTimeOriginal"), "DateTimeOriginal")
+        except InvalidInputError:
+            return None  # an unset camera clock: passed over, as broken EXIF is
+    return None
+
+
+def resolve_epoch(epoch, header: Mapping[str, Any] | None = None) -> Epoch:
+    """The epoch of a solve: ``epoch`` when given (a Time or a Julian year), else the header's
+    (:func:`epoch_from_header`), else J2000.0."""
+    if epoch is not None:
+        return Epoch(epoch_jyear(epoch), "given")
+    found = epoch_from_header(header or {})
+    return found if found is not None else Epoch(DEFAULT_EPOCH_JYEAR, "default")
+
+
+def _card_number(header: Mapping[str, Any], key: str, what: str) -> float:
+    value = header[key]
+    try:
+        number = float(value) if not isinstance(value, bool | str) else float(str(value).strip())
+    except (TypeError, ValueError):
+        number = math.nan
+    if not math.isfinite(number):
+        raise InvalidInputError(f"the image header's {key} = {value!r} is not {what}; "
+                                "give the epoch to override it")
+    return _checked(number, value) if key == "CATEPOCH" else number
+
+
+def _header_time(header: Mapping[str, Any], key: str) -> float:
+    """The Julian year of a DATE-OBS (with TIME-OBS / UT) or EXIF DateTimeOriginal (with its
+    zone, else as UTC), read by :func:`startrack.calibrate.ground.time_from_header`."""
+    from ..calibrate.ground import time_from_header
+
+    names = ("DATE-OBS", "TIME-OBS", "UT") if key == "DATE-OBS" else (
+        "DateTimeOriginal", "SubsecTimeOriginal", "OffsetTimeOriginal")
+    cards = {name: header[name] for name in names if name in header}
+    try:
+        when = time_from_header(cards, utc_offset_hours=0.0, mid_exposure=False)
+    except (InvalidInputError, ValueError) as exc:
+        raise InvalidInputError(f"the image header's {key} = {header[key]!r} is not a time ({exc}); "
+                                "give the epoch to override it") from None
+    return _checked(float(when.tdb.jyear), header[key])
