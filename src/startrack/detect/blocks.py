@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from ..results import Detections
 from .details import PER_DETECTION, DetectionDetails
+from .merge import brightest_first
 from .pipeline import detect_frame
 
 if TYPE_CHECKING:
@@ -57,16 +58,15 @@ def detect_in_strips(cfg: StarDetector, image: NDArray) -> DetectionDetails:
 
 def _merge(cfg: StarDetector, parts: list[tuple[DetectionDetails, int]], width: int, height: int,
            level: float, noise: float, k_sigma: float) -> DetectionDetails:
-    """Concatenate the strips' detections (y shifted to the frame), brightest first."""
+    """Concatenate the strips' detections (y shifted to the frame), merge the ones two strips
+    both kept (:mod:`.merge`), brightest first."""
     def cat(name: str, source: str = "detections") -> NDArray:
         arrays = [getattr(getattr(p, source) if source else p, name) for p, _ in parts]
         return np.concatenate(arrays)
     dets = {name: cat(name) for name in ("x", "flux", "sigma_px", "area_px", "peak",
-                                           "elongation")}
+                                           "elongation", "point_quality")}
     dets["y"] = np.concatenate([p.detections.y + lo for p, lo in parts])
-    order = np.argsort(-dets["flux"], kind="stable")[: cfg.max_stars]
-    detections = Detections(**{k: v[order] for k, v in dets.items()}, background=level,
-                            noise=noise, width=width, height=height)
-    extra = {name: cat(name, "")[order] for name in PER_DETECTION}
-    return DetectionDetails(detections=detections, **extra, k_sigma=k_sigma,
-                            centroid=cfg.centroid)
+    detections = Detections(**dets, background=level, noise=noise, width=width, height=height)
+    extra = {name: cat(name, "") for name in PER_DETECTION}
+    details = DetectionDetails(detections=detections, **extra, k_sigma=k_sigma, centroid=cfg.centroid)
+    return brightest_first(details, cfg.max_stars)

@@ -29,6 +29,8 @@ from .denoise import anisotropic_diffusion, gaussian_smooth
 from .details import DetectionDetails
 from .label import Regions, label_regions
 from .magnitude import instrument_magnitude
+from .merge import brightest_first
+from .point_source import core_shape, point_quality
 from .prefilters import packing, prefilter
 from .prepare import PreparedImage, prepare_image
 from .region_grow import grow_regions
@@ -208,8 +210,9 @@ def spot_filters(cfg: StarDetector, frame: Frame, regions: Regions, spots: SpotM
 
 def pack(cfg: StarDetector, frame: Frame, inputs: CentroidInputs, k_sigma: float,
          full_width: int) -> DetectionDetails:
-    """Centroid with the chosen method (falling back to the weighted sum where it fails), sort
-    brightest first, cut to ``max_stars``, and pack with the extra measurements."""
+    """Centroid with the chosen method (falling back to the weighted sum where it fails), merge
+    coincident detections (:mod:`.merge`), sort brightest first, cut to ``max_stars``, and pack
+    with the extra measurements."""
     spots, noise = inputs.spots, inputs.noise
     result = run_centroider(cfg.centroid, inputs, psf_sigma_px=cfg.psf_sigma_px,
                             half=cfg.window_half_px, gain_e_per_adu=cfg.gain_e_per_adu)
@@ -222,26 +225,36 @@ def pack(cfg: StarDetector, frame: Frame, inputs: CentroidInputs, k_sigma: float
         sigma = sigma_eq42(peak_snr)
     else:
         sigma = np.where(ok, result.sigma_px, centroid_sigma(spots, noise, "propagated"))
-    order = np.argsort(-flux, kind="stable")[: cfg.max_stars]
     shape = spot_shape(inputs.regions)
     psf = np.where(np.isfinite(result.psf_sigma_px), result.psf_sigma_px, spots.size_px)
     detections = Detections(
-        x=(x + frame.x_offset)[order], y=y[order], flux=flux[order], sigma_px=sigma[order],
-        area_px=spots.area_px.astype(np.int64)[order], peak=spots.peak[order],
-        elongation=spots.elongation[order], background=frame.model.level, noise=frame.noise_px,
-        width=full_width, height=frame.prepared.data.shape[0])
-    return DetectionDetails(
-        detections=detections, mag=instrument_magnitude(flux[order], cfg.mag_zero_point),
-        peak_snr=peak_snr[order], major_px=shape.major_px[order], minor_px=shape.minor_px[order],
-        angle_deg=shape.angle_deg[order], psf_sigma_px=psf[order], k_sigma=float(k_sigma),
-        centroid=cfg.centroid)
+        x=x + frame.x_offset, y=y, flux=flux, sigma_px=sigma, area_px=spots.area_px.astype(np.int64),
+        peak=spots.peak, elongation=spots.elongation, background=frame.model.level,
+        noise=frame.noise_px, width=full_width, height=frame.prepared.data.shape[0],
+        point_quality=point_quality_of(inputs, peak_snr))
+    details = DetectionDetails(
+        detections=detections, mag=instrument_magnitude(flux, cfg.mag_zero_point),
+        peak_snr=peak_snr, major_px=shape.major_px, minor_px=shape.minor_px,
+        angle_deg=shape.angle_deg, psf_sigma_px=psf, k_sigma=float(k_sigma), centroid=cfg.centroid)
+    return brightest_first(details, cfg.max_stars)
+
+
+def point_quality_of(inputs: CentroidInputs, peak_snr: NDArray) -> NDArray[np.float64]:
+    """Point-source quality of the spots (:mod:`.point_source`); spots clipped at the frame's
+    largest value (at least two pixels) are saturated."""
+    regions, raw = inputs.regions, inputs.raw
+    size, elongation = core_shape(regions, raw - inputs.level[regions.index], inputs.spots.peak)
+    top = float(np.nanmax(inputs.data)) if inputs.data.size else np.inf
+    with np.errstate(invalid="ignore"):
+        saturated = regions.sum((raw >= top).astype(np.float64)) >= 2
+    return point_quality(size, elongation, peak_snr, saturated)
 
 
 def empty_details(frame: Frame, full_width: int, cfg: StarDetector,
                   k_sigma: float | None = None) -> DetectionDetails:
     """No detection: the frame's background and noise only."""
     detections = Detections(background=frame.model.level, noise=frame.noise_px, width=full_width,
-                            height=frame.prepared.data.shape[0])
+                            height=frame.prepared.data.shape[0], point_quality=np.zeros(0))
     return DetectionDetails(detections=detections,
                             k_sigma=float(cfg.sigma if k_sigma is None else k_sigma),
                             centroid=cfg.centroid)
