@@ -21,3 +21,11 @@ class ImageReadError(StartrackError, ValueError):
 
 class CacheError(StartrackError):
     """A cache file could not be written."""
+
+
+class OutputError(StartrackError, OSError):
+    """An output could not be written (a full disk, no permission); the target was left unchanged."""
+
+
+class CacheWarning(UserWarning):
+    """The user cache could not be used (e.g. a read-only folder); startrack went on without it."""

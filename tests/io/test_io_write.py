@@ -129,30 +129,7 @@ def test_fits_bad_table(tmp_path):
         write_fits(tmp_path / "x.fits", GREY8, tables={"truth": {"x": [1, 2], "y": [1, 2, 3]}})
 
 
-# --- atomicity -------------------------------------------------------------------------------
-def _failing_after_partial_write(*args, **kwargs):
-    target = args[1] if len(args) > 1 else args[0]
-    with open(target, "wb") as fh:
-        fh.write(b"half")
-    raise OSError("disk full (simulated)")
-
-
-@pytest.mark.parametrize("writer", ["png", "fits"])
-def test_failed_write_leaves_nothing_and_keeps_old_file(tmp_path, monkeypatch, writer):
-    target = tmp_path / f"image.{writer}"
-    target.write_bytes(b"old content")
-    if writer == "png":
-        monkeypatch.setattr(PILImage.Image, "save", _failing_after_partial_write)
-        call = write_png
-    else:
-        monkeypatch.setattr(fits.HDUList, "writeto", _failing_after_partial_write)
-        call = write_fits
-    with pytest.raises(OSError, match="disk full"):
-        call(target, GREY8)
-    assert target.read_bytes() == b"old content"
-    assert [p.name for p in tmp_path.iterdir()] == [target.name]
-
-
+# --- atomicity (the failure cases are in test_io_outputs.py) ---------------------------------
 def test_overwrite_and_permissions(tmp_path):
     target = tmp_path / "image.tif"
     write_tiff(target, GREY8)

@@ -96,13 +96,82 @@ def fov_kwargs(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def epoch_option(args: argparse.Namespace) -> float | None:
-    """The checked --epoch (Julian year) or None."""
+    """The checked --epoch (Julian year) or None.
+
+    Every command that takes --epoch calls this before any work, so it also refuses what no
+    option of such a command may be: a NaN or infinite number in any float option
+    (:func:`check_finite_options`) and a --time that is not a time (:func:`time_option`).
+    """
+    check_finite_options(args)
+    time_option(args)
     if args.epoch is None:
         return None
     try:
         return epoch_jyear(args.epoch)
     except InvalidInputError:
         raise InvalidInputError(f"--epoch must be a Julian year such as 2025.5, got {args.epoch:g}") from None
+
+
+def _option_name(dest: str) -> str:
+    return "--" + dest.replace("_", "-")
+
+
+def _floats(value: Any) -> list[float]:
+    if isinstance(value, float):
+        return [value]
+    if isinstance(value, list | tuple):
+        return [v for v in value if isinstance(v, float)]
+    return []
+
+
+def check_finite_options(args: argparse.Namespace) -> None:
+    """Refuse NaN or an infinity given to any float option of a parsed command line.
+
+    Raises
+    ------
+    InvalidInputError
+        Naming the first such option (e.g. ``--max-mag must be a finite number, got nan``).
+    """
+    for dest, value in sorted(vars(args).items()):
+        bad = [v for v in _floats(value) if not np.isfinite(v)]
+        if bad:
+            raise InvalidInputError(f"{_option_name(dest)} must be a finite number, got {bad[0]:g}")
+
+
+def parse_utc_time(text: str, option: str = "--time"):
+    """An ISO 8601 UTC time (``2024-08-12T03:15:00``, a date, or ``2024-08-12 03:15:00``) as an
+    astropy Time; InvalidInputError naming ``option`` otherwise."""
+    from astropy.time import Time
+
+    try:
+        when = Time(str(text).strip(), scale="utc")
+    except (ValueError, TypeError):
+        when = None
+    if when is None or not when.isscalar or not np.isfinite(when.jd):
+        raise InvalidInputError(f"{option} must be an ISO 8601 UTC time such as 2024-08-12T03:15:00, got {text!r}")
+    return when
+
+
+def time_option(args: argparse.Namespace):
+    """The parsed --time of a command (an astropy Time), None when it has none or it is not given."""
+    text = getattr(args, "time", None)
+    return None if text is None else parse_utc_time(text, "--time")
+
+
+def add_max_pixels_option(parser: argparse.ArgumentParser) -> None:
+    """--max-pixels: the size limit of the images read (or rendered), see startrack.io.limits."""
+    from ..io.limits import DEFAULT_MAX_PIXELS, ENV_VAR
+
+    parser.add_argument("--max-pixels", type=positive_count, metavar="N",
+                        help=f"largest image accepted, width x height in pixels (default {DEFAULT_MAX_PIXELS:,}, "
+                             f"or ${ENV_VAR}); checked from the file header before decoding")
+
+
+def max_pixels_option(args: argparse.Namespace) -> int:
+    """The limit --max-pixels gives (or the one in force without it)."""
+    from ..io.limits import resolve_max_pixels
+
+    return resolve_max_pixels(getattr(args, "max_pixels", None))
 
 
 def print_json(data: dict[str, Any]) -> None:
@@ -162,6 +231,17 @@ def report(solution: AttitudeSolution, detections: Detections | None, as_json: b
 
 def _finite_or_none(value: float) -> float | None:
     return float(value) if np.isfinite(value) else None
+
+
+def positive_count(text: str) -> int:
+    """argparse type: a whole number >= 1 (underscores allowed: 400_000_000)."""
+    try:
+        value = int(text.replace("_", ""))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text}")
+    return value
 
 
 def positive_int(text: str) -> int:

@@ -16,6 +16,14 @@ class ProgressBar:
         self.label, self.width = label, width
         self.tty = sys.stderr.isatty()
         self._tenth = -1
+        self._open = False
+
+    def close(self) -> None:
+        """End a bar left part-drawn (a run stopped by an error), so the next line starts clean."""
+        if self._open:
+            sys.stderr.write("\n")
+            sys.stderr.flush()
+            self._open = False
 
     def __call__(self, done: int, total: int) -> None:
         if not self.tty:
@@ -26,7 +34,8 @@ class ProgressBar:
             return
         filled = int(self.width * done / max(total, 1))
         sys.stderr.write(f"\r{self.label} [{'#' * filled}{' ' * (self.width - filled)}] {done}/{total}")
-        if done >= total:
+        self._open = done < total
+        if not self._open:
             sys.stderr.write("\n")
         sys.stderr.flush()
 

@@ -27,13 +27,16 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from ..frames import radec_roll_from_rotation
-from ..io import write_fits, write_png, write_tiff
-from ..io.atomic import atomic_path
-from ..io.truth_files import check_frame_path, index_row, truth_to_dict, write_frame, write_index
+from ..io.atomic import open_output, write_output
+from ..io.fitsfile import fits_bytes
+from ..io.tiff import tiff_bytes
+from ..io.truth_files import check_frame_path, index_row, truth_to_dict, write_frame, write_index, write_with_sidecar
+from ..io.writers import png_bytes
 from ..simulate import ConstantRate, FrameTiming, load_profile, simulate_sequence
 from ..simulate.split_fov import SplitFieldFrame
-from .common import print_json
+from .common import add_max_pixels_option, check_finite_options, print_json, time_option
 from .progress import ProgressBar
+from .render_limits import check_render_options
 from .scene_options import (
     add_render_options,
     add_scene_options,
@@ -101,21 +104,30 @@ def main(argv: list[str]) -> int:
                                                    "exclusion")
     rig.add_argument("--altitude-km", type=float, default=500.0, help="with --time: dawn-dusk orbit altitude "
                                                                      "(default 500)")
+    add_max_pixels_option(parser)
     args = parser.parse_args(argv)
-    if args.rig is not None:
-        return _rig_frame(args)
+    check_finite_options(args)
+    time_option(args)
     if args.frames < 1:
         raise InvalidInputError(f"--frames must be a whole number >= 1, got {args.frames}")
+    check_render_options(args)
+    if args.rig is not None:
+        return _rig_frame(args)
     if args.frames == 1 and args.profile is None:
         return _one_frame(args)
     return _sequence(args)
 
 
+def _inputs(args: argparse.Namespace) -> list[str]:
+    """The files the command reads, which no output may replace."""
+    return [p for p in (args.profile, args.rig) if p is not None]
+
+
 def _one_frame(args: argparse.Namespace) -> int:
     out = Path(args.out or "startrack-sim.fits")
-    check_frame_path(out)
+    check_frame_path(out, inputs=_inputs(args))
     seed, sim = simulate_scene(args)
-    written = write_frame(out, sim.image, sim.truth)
+    written = write_frame(out, sim.image, sim.truth, inputs=_inputs(args))
     truth = truth_to_dict(sim.truth)
     if args.json:
         print_json({"seed": seed, "files": [str(p) for p in written], **truth})
@@ -149,7 +161,7 @@ def _sequence(args: argparse.Namespace) -> int:
     rows = []
     for sim in frames:
         path = folder / f"frame_{sim.truth.frame_index:05d}{SEQUENCE_FORMATS[args.format]}"
-        write_frame(path, sim.image, sim.truth)
+        write_frame(path, sim.image, sim.truth, inputs=_inputs(args))
         rows.append(index_row(sim.truth, path))
     index = write_index(folder / "frames.csv", rows)
     if args.json:
@@ -230,25 +242,24 @@ def _write_rig(folder: Path, rig, frame, fmt: str, seed: int, rate, epoch: float
               "rate_deg_s": [0.0, 0.0, 0.0] if rate is None else [math.degrees(v) for v in rate],
               "epoch_jyear": epoch, "time_utc": None if time is None else time.utc.isot, "heads": heads}
     truth_path = folder / "rig_truth.json"
-    with atomic_path(truth_path) as tmp:
-        tmp.write_text(json.dumps(report, indent=1, allow_nan=False))
+    write_output(truth_path, json.dumps(report, indent=1, allow_nan=False))
     return {**report, "files": [str(p) for p in [*files, truth_path]]}
 
 
 def _write_detector(path: Path, sim) -> list[Path]:
-    """One detector's image with its truth (a split detector's truth as a JSON sidecar)."""
+    """One detector's image with its truth (a split detector's truth as a JSON sidecar, written with
+    the image as one group: both files or neither)."""
     if not isinstance(sim, SplitFieldFrame):
         return write_frame(path, sim.image, sim.truth)
-    writer = {".fits": write_fits, ".png": write_png, ".tif": write_tiff}[path.suffix]
-    image = sim.image if path.suffix == ".fits" else np.clip(np.round(sim.image), 0, 65535).astype(np.uint16)
-    written = [writer(path, image)]
+    if path.suffix == ".fits":
+        blob = fits_bytes(sim.image)
+    else:
+        image = np.clip(np.round(sim.image), 0, 65535).astype(np.uint16)
+        blob = png_bytes(image) if path.suffix == ".png" else tiff_bytes(image)
     t = sim.truth
     stars = [{"hip": int(t.ids[i]), "x": float(t.x[i]), "y": float(t.y[i]), "mag": float(t.mag[i]),
               "electrons": float(t.electrons[i]), "field": str(t.field[i])} for i in range(len(t))]
-    sidecar = path.with_name(path.stem + ".truth.json")
-    with atomic_path(sidecar) as tmp:
-        tmp.write_text(json.dumps({"detector": t.detector, "stars": stars}, indent=1))
-    return [*written, sidecar]
+    return write_with_sidecar(path, blob, json.dumps({"detector": t.detector, "stars": stars}, indent=1))
 
 
 def _write_stars_csv(path: Path, sim, head: str) -> int:
@@ -259,7 +270,7 @@ def _write_stars_csv(path: Path, sim, head: str) -> int:
         keep = (t.field == head) & (t.x >= -0.5) & (t.y >= -0.5) & (t.x <= width - 0.5) & (t.y <= height - 0.5)
     else:
         keep = t.inside()
-    with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
+    with open_output(path, "w", newline="") as fh:
         writer = csv.writer(fh)
         writer.writerow(["x", "y", "mag"])
         writer.writerows(zip(t.x[keep].tolist(), t.y[keep].tolist(), t.mag[keep].tolist(), strict=True))

@@ -1,24 +1,43 @@
 """startrack track FOLDER: follow the attitude over a sequence of images (FITS, PNG, JPEG, TIFF
 files in a folder, taken in name order): lost-in-space on the first frame, then tracking from
-frame to frame, back to lost-in-space when tracking fails. Writes one CSV row per frame."""
+frame to frame, back to lost-in-space when tracking fails. Writes one CSV row per frame.
+
+A frame that cannot be used (an unreadable or corrupt file, a size other than the sequence's)
+gets a row with status "error" and the reason, and the run goes on. The rows are written as the
+frames are processed to a temporary file that replaces --out at the end (--out - writes them to
+standard output as they come); an interrupted run leaves the previous CSV as it was."""
 
 from __future__ import annotations
 
 import argparse
+import math
+import sys
+from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import InvalidInputError
-from ..io.track_csv import COLUMNS, track_row, write_track_csv
+from ..errors import InvalidInputError, StartrackError
+from ..io import read_image
+from ..io.limits import max_pixels_limit
+from ..io.targets import STDOUT, output_target
+from ..io.track_csv import COLUMNS, error_row, track_csv_writer, track_row
 from ..track import Tracker
-from .common import add_epoch_option, add_fov_options, epoch_option, fov_kwargs
+from .common import (
+    add_epoch_option,
+    add_fov_options,
+    add_max_pixels_option,
+    epoch_option,
+    fov_kwargs,
+    max_pixels_option,
+)
 from .progress import ProgressBar, ensure_database_for
 
 IMAGE_SUFFIXES = {".fits", ".fit", ".fts", ".png", ".jpg", ".jpeg", ".tif", ".tiff"}
 
 EPILOG = "CSV columns: " + ", ".join(COLUMNS) + (
-    ".\nmode is lost-in-space or tracking; status is ok, too_few_stars, no_match or timeout; the quaternion "
-    "(qw >= 0) is rot_cam_from_icrs; the rate is the camera's, in the camera frame.\n"
-    "Exit status: 0 when every frame has an attitude, 1 when some have none, 2 on bad input.")
+    ".\nmode is lost-in-space, tracking, or none for a frame that could not be used; status is ok, "
+    "too_few_stars, no_match, timeout, or error (an unreadable frame or one of another size; the reason "
+    "says which); the quaternion (qw >= 0) is rot_cam_from_icrs; the rate is the camera's, in the camera "
+    "frame.\nExit status: 0 when every frame has an attitude, 1 when some have none, 2 on bad input.")
 
 
 def _frames(source: Path) -> list[Path]:
@@ -32,38 +51,88 @@ def _frames(source: Path) -> list[Path]:
     return files
 
 
-def main(argv: list[str]) -> int:
+def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="startrack track", description=__doc__, epilog=EPILOG,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("source", help="a folder of images (name order = time order) or one image")
     add_fov_options(parser)
     parser.add_argument("--frame-interval-s", type=float, default=0.1, help="time between frames (default 0.1 s)")
-    parser.add_argument("--out", default="track.csv", help="CSV file to write (default track.csv)")
+    parser.add_argument("--out", default="track.csv", help="CSV file to write (default track.csv; - for "
+                                                           "standard output)")
     add_epoch_option(parser)
-    args = parser.parse_args(argv)
-    if not args.frame_interval_s > 0:
-        raise InvalidInputError(f"--frame-interval-s must be positive, got {args.frame_interval_s:g}")
+    add_max_pixels_option(parser)
+    return parser
+
+
+@dataclass
+class _Sequence:
+    """The tracker of a sequence, made from its first readable frame (or the camera)."""
+
+    options: dict
+    epoch: float | None
+    tracker: Tracker | None = None
+    size: tuple[int, int] | None = None
+    first: str = ""
+    unusable: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        camera = self.options["camera"]
+        if camera is not None:
+            self.tracker = Tracker(camera=camera, epoch=self.epoch)
+            self.size, self.first = (camera.width, camera.height), f"camera {camera.name or 'given'}"
+
+    def row(self, k: int, path: Path, t_s: float) -> list[str]:
+        """The CSV row of frame ``k``: its tracking step, or an error row naming the problem."""
+        try:
+            data = read_image(path).data
+            self._check_size(data.shape[1], data.shape[0], path)
+            step = self.tracker.update_image(data, t_s)
+        except (StartrackError, ValueError) as exc:
+            self.unusable.append(path.name)
+            return error_row(k, path.name, t_s, str(exc))
+        return track_row(k, path.name, step)
+
+    def _check_size(self, width: int, height: int, path: Path) -> None:
+        if self.size is None:
+            self.size, self.first = (width, height), path.name
+            self.tracker = Tracker(width=width, height=height, fov_deg=self.options["fov_deg"],
+                                   fov_range_deg=self.options["fov_range_deg"], epoch=self.epoch)
+        elif (width, height) != self.size:
+            raise InvalidInputError(
+                f"{path.name}: frame is {width} x {height} px but the sequence's frames are "
+                f"{self.size[0]} x {self.size[1]} px (from {self.first}); every frame must have one size")
+
+
+def main(argv: list[str]) -> int:
+    args = _parser().parse_args(argv)
+    epoch = epoch_option(args)
+    if not (math.isfinite(args.frame_interval_s) and args.frame_interval_s > 0):
+        raise InvalidInputError(f"--frame-interval-s must be a positive, finite number of seconds, "
+                                f"got {args.frame_interval_s:g}")
     files = _frames(Path(args.source))
+    output_target(args.out, files)  # refused before any work: an input frame, a folder, ...
     options = fov_kwargs(args)
-    tracker = _tracker(files[0], options, epoch_option(args))
-    ensure_database_for(options["fov_deg"], options["fov_range_deg"], options["camera"])
-    bar = ProgressBar("  frames")
-    rows, solved = [], 0
-    for k, path in enumerate(files):
-        step = tracker.update_image(path, k * args.frame_interval_s)
-        rows.append(track_row(k, path.name, step))
-        solved += bool(step.status)
-        bar(k + 1, len(files))
-    write_track_csv(args.out, rows)
-    print(f"{solved} of {len(files)} frames have an attitude; wrote {args.out}")
+    with max_pixels_limit(max_pixels_option(args)):
+        ensure_database_for(options["fov_deg"], options["fov_range_deg"], options["camera"])
+        sequence, solved = _Sequence(options, epoch), 0
+        bar = ProgressBar("  frames")
+        try:
+            with track_csv_writer(args.out, inputs=files) as write:
+                for k, path in enumerate(files):
+                    row = sequence.row(k, path, k * args.frame_interval_s)
+                    write(row)
+                    solved += row[COLUMNS.index("status")] == "ok"
+                    bar(k + 1, len(files))
+        finally:
+            bar.close()
+    _summary(solved, len(files), sequence.unusable, args.out)
     return 0 if solved == len(files) else 1
 
 
-def _tracker(first: Path, options: dict, epoch) -> Tracker:
-    from ..io import read_image
-
-    if options["camera"] is not None:
-        return Tracker(camera=options["camera"], epoch=epoch)
-    height, width = read_image(first).data.shape
-    return Tracker(width=width, height=height, fov_deg=options["fov_deg"], fov_range_deg=options["fov_range_deg"],
-                   epoch=epoch)
+def _summary(solved: int, total: int, unusable: list[str], out: str) -> None:
+    where = "standard output" if out == STDOUT else out
+    text = f"{solved} of {total} frames have an attitude"
+    if unusable:
+        names = ", ".join(unusable[:3]) + (", ..." if len(unusable) > 3 else "")
+        text += f"; {len(unusable)} could not be used ({names}: see the reason column)"
+    print(f"{text}; wrote {where}", file=sys.stderr if out == STDOUT else sys.stdout)

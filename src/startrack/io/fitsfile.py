@@ -7,9 +7,12 @@ FITS pixel (1, 1) (see :mod:`startrack.conventions`).
 
 from __future__ import annotations
 
+import gzip
+import io
 import os
 import warnings
-from collections.abc import Mapping
+import zlib
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -19,7 +22,8 @@ from astropy.table import Table
 from numpy.typing import NDArray
 
 from ..errors import ImageReadError, InvalidInputError
-from .atomic import atomic_path
+from .atomic import write_output
+from .limits import check_image_size
 
 _COMMENTARY = ("COMMENT", "HISTORY")
 _STRUCTURAL = ("SIMPLE", "XTENSION", "BITPIX", "NAXIS", "EXTEND", "BZERO", "BSCALE", "PCOUNT",
@@ -43,33 +47,77 @@ def header_to_dict(header: fits.Header) -> dict[str, Any]:
     return out
 
 
-def _image_hdu(hdus: fits.HDUList, path: Path) -> tuple[NDArray, fits.Header]:
+MAX_HEADER_BLOCKS = 2000
+"""Largest primary header read (2,880-byte blocks: 5.8 MB, 72,000 cards); a longer one is refused."""
+
+_BLOCK = 2880
+
+
+def _check_header_length(path: Path) -> None:
+    """Refuse a primary header with no END card in its first :data:`MAX_HEADER_BLOCKS` blocks.
+
+    Reads the (decompressed, for gzip) file block by block, so a huge or endless header costs at
+    most that much; astropy then parses only a header that is known to end.
+    """
+    with open(path, "rb") as raw:
+        gzipped = raw.read(2) == b"\x1f\x8b"
+    try:
+        with (gzip.open(path, "rb") if gzipped else open(path, "rb")) as fh:
+            for _ in range(MAX_HEADER_BLOCKS):
+                block = fh.read(_BLOCK)
+                if len(block) < _BLOCK or any(block[i:i + 8] == b"END     " for i in range(0, _BLOCK, 80)):
+                    return  # a short block: astropy reports the truncation
+    except (OSError, EOFError, zlib.error) as exc:
+        raise ImageReadError(f"{path}: not a readable FITS file ({exc})") from exc
+    raise ImageReadError(f"{path}: FITS header has no END card in its first {MAX_HEADER_BLOCKS} blocks "
+                         f"({MAX_HEADER_BLOCKS * _BLOCK // 1000:,} kB); not an image startrack reads")
+
+
+def _usable_shape(hdu) -> tuple[int, ...] | None:
+    """The data shape an image HDU's header declares, if it is 2-D or a (3, H, W) cube."""
+    shape = tuple(int(n) for n in getattr(hdu, "shape", ()) or ())
+    if len(shape) == 2 or (len(shape) == 3 and shape[0] == 3):
+        return shape
+    return None
+
+
+def _image_hdu(hdus: fits.HDUList, path: Path, max_pixels: int | None) -> tuple[NDArray, fits.Header]:
     """Data and header of the first HDU holding a 2-D image or a (3, H, W) colour cube.
 
-    The header is copied before the data are touched: astropy rewrites BITPIX and removes
-    BZERO / BSCALE in memory once it scales the data, and we report the file's own cards.
+    The size is checked from the header before the data are read. The header is copied before
+    the data are touched: astropy rewrites BITPIX and removes BZERO / BSCALE in memory once it
+    scales the data, and we report the file's own cards.
     """
     shapes = []
     for hdu in hdus:
         if not getattr(hdu, "is_image", False):
             continue
+        shape = _usable_shape(hdu)
+        shapes.append(tuple(getattr(hdu, "shape", ())))
+        if shape is None:
+            continue
+        check_image_size(shape[-1], shape[-2], max_pixels, path)
         header = hdu.header.copy()
         data = hdu.data
         if data is None:
             continue
-        shapes.append(data.shape)
-        if data.ndim == 2:
-            return data, header
-        if data.ndim == 3 and data.shape[0] == 3:
-            return np.moveaxis(data, 0, -1), header
+        return (data, header) if data.ndim == 2 else (np.moveaxis(data, 0, -1), header)
     raise ImageReadError(
         f"{path}: FITS file has no 2-D image (or (3, H, W) colour cube); image HDU shapes: "
-        f"{shapes or 'none'}"
+        f"{[s for s in shapes if s] or 'none'}"
     )
 
 
-def read_fits(path: Path) -> tuple[NDArray, dict[str, Any], int]:
+def read_fits(path: Path, max_pixels: int | None = None) -> tuple[NDArray, dict[str, Any], int]:
     """Read a FITS image.
+
+    Parameters
+    ----------
+    path : Path
+        A FITS file, plain or gzip-compressed.
+    max_pixels : int, optional
+        Largest width x height read (:mod:`startrack.io.limits`; None: the limit in force),
+        checked from the header before the data are read.
 
     Returns
     -------
@@ -84,17 +132,18 @@ def read_fits(path: Path) -> tuple[NDArray, dict[str, Any], int]:
     Raises
     ------
     ImageReadError
-        If the file is truncated, corrupt or holds no image.
+        If the file is truncated, corrupt, too large or holds no image.
     """
+    _check_header_length(path)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            with fits.open(path, memmap=False) as hdus:
-                data, header = _image_hdu(hdus, path)
+            with fits.open(path, memmap=False, lazy_load_hdus=True) as hdus:
+                data, header = _image_hdu(hdus, path, max_pixels)
                 data = np.array(data, dtype=data.dtype.newbyteorder("="))
         except ImageReadError:
             raise
-        except (OSError, ValueError, TypeError, IndexError) as exc:
+        except (OSError, ValueError, TypeError, IndexError, EOFError, zlib.error) as exc:
             raise ImageReadError(f"{path}: not a readable FITS file ({exc})") from exc
     if any("truncated" in str(w.message) for w in caught):
         raise ImageReadError(f"{path}: FITS file is truncated (shorter than its header says)")
@@ -136,13 +185,15 @@ def _table_hdu(name: str, table: Any) -> fits.BinTableHDU:
 
 
 def write_fits(path: str | os.PathLike, array: NDArray, header: Mapping | fits.Header | None = None,
-               tables: Mapping[str, Any] | None = None) -> Path:
+               tables: Mapping[str, Any] | None = None, *, inputs: Iterable[str | os.PathLike] = (),
+               leading: Sequence[fits.ImageHDU] = ()) -> Path:
     """Write a 2-D image as a FITS primary HDU, with optional binary-table extensions.
 
     Parameters
     ----------
     path : str or Path
-        The file to write; replaced atomically (temporary file in the same folder, then rename).
+        The file to write, by the rules of :mod:`startrack.io.atomic` (never over an input;
+        replaced only by a complete file; ``-``, devices and FIFOs written through).
     array : ndarray, shape (H, W)
         Integer or float pixel values, written as they are (uint16 is stored as BITPIX 16 with
         BZERO 32768, which astropy and every FITS reader turn back into uint16).
@@ -152,6 +203,10 @@ def write_fits(path: str | os.PathLike, array: NDArray, header: Mapping | fits.H
     tables : dict of name -> table, optional
         Each table (a dict of equal-length columns, a structured array or an astropy Table)
         becomes a binary-table extension with that EXTNAME, e.g. ``{"TRUTH": {...}}``.
+    inputs : iterable of paths
+        Files that must not be replaced.
+    leading : sequence of ImageHDU
+        Extensions written before the tables (see :mod:`startrack.io.truth_files`).
 
     Returns
     -------
@@ -163,6 +218,12 @@ def write_fits(path: str | os.PathLike, array: NDArray, header: Mapping | fits.H
     InvalidInputError
         If the array is not a 2-D numeric array or a table or header card is not valid.
     """
+    return write_output(path, fits_bytes(array, header, tables, leading), inputs=inputs)
+
+
+def fits_bytes(array: NDArray, header: Mapping | fits.Header | None = None, tables: Mapping[str, Any] | None = None,
+               leading: Sequence[fits.ImageHDU] = ()) -> bytes:
+    """The FITS file :func:`write_fits` writes, as bytes (same arguments and refusals)."""
     array = np.asarray(array)
     if array.ndim != 2 or array.dtype.kind not in "uif" or array.size == 0:
         raise InvalidInputError(
@@ -173,10 +234,10 @@ def write_fits(path: str | os.PathLike, array: NDArray, header: Mapping | fits.H
         primary = fits.PrimaryHDU(data=array, header=_clean_header(header))
     except (ValueError, TypeError, KeyError) as exc:
         raise InvalidInputError(f"FITS header is not valid: {exc}") from exc
-    hdus = fits.HDUList([primary, *(_table_hdu(k, v) for k, v in (tables or {}).items())])
-    with atomic_path(path) as tmp:
-        try:
-            hdus.writeto(tmp, output_verify="exception")
-        except fits.VerifyError as exc:
-            raise InvalidInputError(f"FITS header is not valid: {exc}") from exc
-    return Path(path)
+    hdus = fits.HDUList([primary, *leading, *(_table_hdu(k, v) for k, v in (tables or {}).items())])
+    buffer = io.BytesIO()
+    try:
+        hdus.writeto(buffer, output_verify="exception")
+    except fits.VerifyError as exc:
+        raise InvalidInputError(f"FITS header is not valid: {exc}") from exc
+    return buffer.getvalue()

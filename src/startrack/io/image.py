@@ -19,7 +19,9 @@ from numpy.typing import NDArray
 from ..errors import ImageReadError, InvalidInputError
 from .channels import channel_index, to_single_channel
 from .fitsfile import read_fits
+from .limits import check_image_size, resolve_max_pixels
 from .raster import identify_format, read_raster
+from .targets import note_input
 
 SUPPORTED_FORMATS = ("FITS", "PNG", "JPEG", "TIFF")
 _SIGNATURES = {
@@ -71,13 +73,59 @@ class Image:
         return int(self.data.shape[1])
 
 
-def _from_array(array: np.ndarray, channel: str | int | None) -> Image:
+MAX_ABS_VALUE = 1e30
+"""Largest magnitude of a finite pixel value: detection works in float32 (up to 3.4e38) and needs
+room for sums; an image with larger values is refused rather than overflowing."""
+
+
+def check_pixel_values(data: NDArray, source: object) -> None:
+    """Refuse a float image with a finite value beyond +-:data:`MAX_ABS_VALUE`.
+
+    NaN and infinite pixels are allowed (the detector ignores them as missing).
+
+    Raises
+    ------
+    ImageReadError
+        Naming ``source`` and the largest value found.
+    """
+    if data.dtype.kind != "f" or data.size == 0:
+        return
+    finite = np.isfinite(data)
+    hi = float(np.max(data, where=finite, initial=-np.inf))
+    lo = float(np.min(data, where=finite, initial=np.inf))
+    worst = max(abs(hi) if np.isfinite(hi) else 0.0, abs(lo) if np.isfinite(lo) else 0.0)
+    if worst > MAX_ABS_VALUE:
+        raise ImageReadError(f"{source}: pixel values reach {worst:.3g}; startrack reads values up to "
+                             f"+-{MAX_ABS_VALUE:g} (rescale the image, e.g. to counts)")
+
+
+def _unmasked(array: np.ndarray) -> np.ndarray:
+    """A masked array's data with the masked pixels as NaN (a float copy); other arrays as they are."""
+    if not isinstance(array, np.ma.MaskedArray):
+        return array
+    mask = np.ma.getmaskarray(array)
+    data = np.ma.getdata(array)
+    if not mask.any():
+        return data
+    wide = data.dtype.kind == "f" and data.dtype.itemsize >= 8 or data.dtype.itemsize > 2
+    out = data.astype(np.float64 if wide else np.float32)
+    out[mask] = np.nan
+    return out
+
+
+def _from_array(array: np.ndarray, channel: str | int | None, max_pixels: int | None) -> Image:
     if array.dtype.kind not in "uif":
         raise InvalidInputError(f"image array must be integer or float, got dtype {array.dtype}")
     if array.size == 0:
         raise InvalidInputError(f"image array must not be empty, got shape {array.shape}")
+    if array.ndim >= 2:
+        check_image_size(array.shape[1], array.shape[0], max_pixels, "image array")
+    bits = array.dtype.itemsize * 8
+    array = _unmasked(array)
     colour = array.ndim == 3 and array.shape[-1] >= 3
-    return Image(to_single_channel(array, channel), None, {}, array.dtype.itemsize * 8, colour)
+    data = to_single_channel(array, channel)
+    check_pixel_values(data, "image array")
+    return Image(data, None, {}, bits, colour)
 
 
 def _sniff(path: Path) -> str:
@@ -96,7 +144,7 @@ def _sniff(path: Path) -> str:
     for signature, name in _SIGNATURES.items():
         if head.startswith(signature):
             return name
-    other = identify_format(path.read_bytes())
+    other = identify_format(path)
     if other is not None:
         raise ImageReadError(
             f"{path}: unsupported image format {other}; supported: {', '.join(SUPPORTED_FORMATS)}"
@@ -118,7 +166,8 @@ def _raw_channel(channel: str | int | None) -> str | None:
 
 
 def read_image(
-    source: str | os.PathLike | np.ndarray, *, channel: str | int | None = None
+    source: str | os.PathLike | np.ndarray, *, channel: str | int | None = None,
+    max_pixels: int | None = None,
 ) -> Image:
     """Read an image file or wrap an array, reduced to a single channel.
 
@@ -133,24 +182,31 @@ def read_image(
         Colour rule: None sums R + G + B in a wider type (uint8 -> uint16, uint16 -> uint32,
         floats in their own precision); otherwise that plane is kept in its native dtype.
         Alpha is always ignored; grey images check ``channel`` and then ignore it.
+    max_pixels : int, optional
+        Largest width x height accepted, checked from the file's header before any pixel is
+        decoded (:mod:`startrack.io.limits`); None uses the limit in force (100 million pixels
+        unless ``--max-pixels`` or ``STARTRACK_MAX_PIXELS`` raised it).
 
     Returns
     -------
     Image
-        ``data`` of shape (H, W); the first 2-D image HDU for FITS.
+        ``data`` of shape (H, W); the first 2-D image HDU for FITS. The masked pixels of a
+        ``numpy.ma.MaskedArray`` become NaN (in a float copy), which detection leaves out.
 
     Raises
     ------
     ImageReadError
-        If the file is missing, empty, truncated, corrupt, not an image, or of an unsupported
-        format; the message names the file and the problem.
+        If the file is missing, empty, truncated, corrupt, not an image, of an unsupported
+        format, larger than ``max_pixels``, or has values beyond +-1e30; the message names the
+        file and the problem.
     InvalidInputError
-        If ``channel`` is not valid, or an array is empty, not integer / float, or not 2-D or
-        3-D with 1 to 4 channels.
+        If ``channel`` or ``max_pixels`` is not valid, or an array is empty, not integer /
+        float, or not 2-D or 3-D with 1 to 4 channels.
     """
     channel_index(channel)  # checked before any file is read
+    resolve_max_pixels(max_pixels)
     if isinstance(source, np.ndarray):
-        return _from_array(source, channel)
+        return _from_array(source, channel, max_pixels)
     if not isinstance(source, str | os.PathLike):
         raise InvalidInputError(
             f"source must be a file path or a numpy array, got {type(source).__name__}"
@@ -159,10 +215,15 @@ def read_image(
     if path.suffix.lower() in RAW_SUFFIXES:
         from .raw import read_raw  # needs rawpy (the "raw" extra); says so if it is missing
 
-        return read_raw(path, channel=_raw_channel(channel))
-    if _sniff(path) == "FITS":
-        data, header, bit_depth = read_fits(path)
+        note_input(path)
+        return read_raw(path, channel=_raw_channel(channel), max_pixels=max_pixels)
+    kind = _sniff(path)
+    note_input(path)
+    if kind == "FITS":
+        data, header, bit_depth = read_fits(path, max_pixels)
     else:
-        data, header, bit_depth = read_raster(path, path.read_bytes())
+        data, header, bit_depth = read_raster(path, max_pixels, kind=kind)
     colour = data.ndim == 3
-    return Image(to_single_channel(data, channel), path, header, bit_depth, colour)
+    single = to_single_channel(data, channel)
+    check_pixel_values(single, path)
+    return Image(single, path, header, bit_depth, colour)

@@ -26,7 +26,6 @@ the sensor's own row and column order.
 
 from __future__ import annotations
 
-import io
 import struct
 import threading
 import warnings
@@ -34,7 +33,7 @@ import zlib
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,6 +41,7 @@ from PIL import ExifTags, ImageFile, UnidentifiedImageError
 from PIL import Image as PILImage
 
 from ..errors import ImageReadError
+from .limits import check_image_size
 from .tiff import is_tiff16_colour, read_tiff16_colour
 
 SUPPORTED_PILLOW_FORMATS = ("PNG", "JPEG", "MPO", "TIFF")
@@ -58,22 +58,24 @@ _DECODE_ERRORS = (UnidentifiedImageError, OSError, SyntaxError, ValueError, EOFE
 
 
 @contextmanager
-def _strict_pillow() -> Iterator[None]:
+def _strict_pillow(metadata_warnings: bool = True) -> Iterator[None]:
     """Make Pillow raise on truncated data and turn its corruption warnings into exceptions.
 
     ``PIL.ImageFile.LOAD_TRUNCATED_IMAGES`` is forced off (and restored) whatever it was set to
-    elsewhere; Pillow's UserWarnings ("Corrupt EXIF data", "Truncated File Read") become
-    exceptions, except the DecompressionBombWarning for very large images, which is let through.
+    elsewhere; Pillow's UserWarnings ("Truncated File Read", ...) become exceptions. With
+    ``metadata_warnings=False`` (opening a JPEG or PNG, when Pillow parses EXIF for the resolution)
+    they are ignored instead: unparsable EXIF is left out, not an error. Pillow's own pixel limit
+    (``MAX_IMAGE_PIXELS``) is switched off: :mod:`startrack.io.limits` applies one limit to every
+    format, from the header.
     """
     with _truncation_lock, warnings.catch_warnings():
-        warnings.simplefilter("error", UserWarning)
-        warnings.simplefilter("default", PILImage.DecompressionBombWarning)
-        previous = ImageFile.LOAD_TRUNCATED_IMAGES
-        ImageFile.LOAD_TRUNCATED_IMAGES = False
+        warnings.simplefilter("error" if metadata_warnings else "ignore", UserWarning)
+        previous = ImageFile.LOAD_TRUNCATED_IMAGES, PILImage.MAX_IMAGE_PIXELS
+        ImageFile.LOAD_TRUNCATED_IMAGES, PILImage.MAX_IMAGE_PIXELS = False, None
         try:
             yield
         finally:
-            ImageFile.LOAD_TRUNCATED_IMAGES = previous
+            ImageFile.LOAD_TRUNCATED_IMAGES, PILImage.MAX_IMAGE_PIXELS = previous
 
 
 def _plain(value: Any) -> Any:
@@ -119,10 +121,10 @@ def _header(image: PILImage.Image) -> dict[str, Any]:
     return header
 
 
-def _declared_bits(image: PILImage.Image, raw: bytes) -> int | None:
+def _declared_bits(image: PILImage.Image, head: bytes) -> int | None:
     """Bits per sample the file declares (PNG IHDR or TIFF BitsPerSample), if known."""
-    if image.format == "PNG" and len(raw) > 25:
-        return raw[24]
+    if image.format == "PNG" and len(head) > 25:
+        return head[24]
     if image.format == "TIFF":
         bits = image.tag_v2.get(258)
         return int(max(bits) if isinstance(bits, tuple) else bits) if bits else None
@@ -157,17 +159,17 @@ def _to_array(image: PILImage.Image, declared_bits: int | None) -> tuple[NDArray
     raise ImageReadError(f"Pillow image mode {mode!r} is not supported")
 
 
-def _check_png16_colour(raw: bytes, path: Path) -> None:
-    if raw[:8] == b"\x89PNG\r\n\x1a\n" and len(raw) > 25 and raw[24] == 16 and raw[25] in (2, 4, 6):
+def _check_png16_colour(head: bytes, path: Path) -> None:
+    if head[:8] == b"\x89PNG\r\n\x1a\n" and len(head) > 25 and head[24] == 16 and head[25] in (2, 4, 6):
         raise ImageReadError(
             f"{path}: 16-bit colour PNG cannot be read without losing the low 8 bits (Pillow "
             "keeps only the high byte); save it as 16-bit greyscale PNG, 16-bit TIFF or FITS"
         )
 
 
-def _decode(image: PILImage.Image, raw: bytes, path: Path) -> tuple[NDArray, int]:
+def _decode(image: PILImage.Image, head: bytes, fh: BinaryIO, path: Path) -> tuple[NDArray, int]:
     if image.format == "TIFF" and is_tiff16_colour(image.tag_v2):
-        return read_tiff16_colour(path, raw, image.tag_v2), 16
+        return read_tiff16_colour(path, fh, image.tag_v2), 16
     try:
         with _strict_pillow():
             image.load()
@@ -176,24 +178,43 @@ def _decode(image: PILImage.Image, raw: bytes, path: Path) -> tuple[NDArray, int
             f"{path}: {image.format} file is truncated or corrupt ({exc})"
         ) from exc
     try:
-        return _to_array(image, _declared_bits(image, raw))
+        return _to_array(image, _declared_bits(image, head))
     except ImageReadError as exc:
         raise ImageReadError(f"{path}: {exc}") from exc
 
 
-def identify_format(raw: bytes) -> str | None:
-    """Pillow's name for the format of these bytes, or None if Pillow does not know it."""
+def identify_format(path: Path) -> str | None:
+    """Pillow's name for the format of a file (read from its first bytes), or None if unknown."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            with PILImage.open(io.BytesIO(raw)) as image:
+            with PILImage.open(path) as image:
                 return image.format
-    except _DECODE_ERRORS:
+    except (*_DECODE_ERRORS, PILImage.DecompressionBombError):
         return None
 
 
-def read_raster(path: Path, raw: bytes) -> tuple[NDArray, dict[str, Any], int]:
-    """Decode a PNG, JPEG or TIFF file's bytes.
+def _open(fh: BinaryIO, path: Path, strict_metadata: bool) -> PILImage.Image:
+    try:
+        with _strict_pillow(strict_metadata):
+            return PILImage.open(fh)
+    except _DECODE_ERRORS as exc:
+        raise ImageReadError(f"{path}: image header is truncated or corrupt ({exc})") from exc
+
+
+def read_raster(path: Path, max_pixels: int | None = None, *, kind: str | None = None
+                ) -> tuple[NDArray, dict[str, Any], int]:
+    """Decode a PNG, JPEG or TIFF file, refusing one over the size limit from its header.
+
+    Parameters
+    ----------
+    path : Path
+        The file; it is read as Pillow needs it, never whole up front.
+    max_pixels : int, optional
+        Largest width x height (:mod:`startrack.io.limits`; None: the limit in force).
+    kind : {"PNG", "JPEG", "TIFF"}, optional
+        The format its signature named; metadata warnings of a JPEG or PNG (broken EXIF) are
+        ignored, those of a TIFF (whose directory is the image's structure) are errors.
 
     Returns
     -------
@@ -208,20 +229,15 @@ def read_raster(path: Path, raw: bytes) -> tuple[NDArray, dict[str, Any], int]:
     Raises
     ------
     ImageReadError
-        If the file is truncated or corrupt, or its layout would lose bits.
+        If the file is truncated or corrupt, too large, or its layout would lose bits.
     """
-    _check_png16_colour(raw, path)
-    try:
-        with _strict_pillow():
-            image = PILImage.open(io.BytesIO(raw))
-    except PILImage.DecompressionBombError as exc:
-        raise ImageReadError(
-            f"{path}: {exc}; raise PIL.Image.MAX_IMAGE_PIXELS if you trust this file"
-        ) from exc
-    except _DECODE_ERRORS as exc:
-        raise ImageReadError(f"{path}: image header is truncated or corrupt ({exc})") from exc
-    with image:
-        if image.format not in SUPPORTED_PILLOW_FORMATS:
-            raise ImageReadError(f"{path}: unsupported image format {image.format}")
-        data, bit_depth = _decode(image, raw, path)
-        return data, _header(image), bit_depth
+    with open(path, "rb") as fh:
+        head = fh.read(32)
+        fh.seek(0)
+        _check_png16_colour(head, path)
+        with _open(fh, path, strict_metadata=kind not in ("JPEG", "PNG")) as image:
+            if image.format not in SUPPORTED_PILLOW_FORMATS:
+                raise ImageReadError(f"{path}: unsupported image format {image.format}")
+            check_image_size(image.width, image.height, max_pixels, path)
+            data, bit_depth = _decode(image, head, fh, path)
+            return data, _header(image), bit_depth

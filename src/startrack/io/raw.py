@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ImageReadError, InvalidInputError
 from .image import Image
+from .limits import check_image_size
 
 _COLOURS = {"r": (0,), "g": (1, 3), "b": (2,)}
 
@@ -78,7 +79,7 @@ def full_resolution_xy(x: ArrayLike, y: ArrayLike, origin_xy: tuple[float, float
     return 2.0 * np.asarray(x, float) + origin_xy[0], 2.0 * np.asarray(y, float) + origin_xy[1]
 
 
-def read_raw(path: str | os.PathLike, channel: str | None = None) -> Image:
+def read_raw(path: str | os.PathLike, channel: str | None = None, max_pixels: int | None = None) -> Image:
     """Read a camera RAW file as a cell-reduced single-channel :class:`~startrack.io.Image`.
 
     Parameters
@@ -87,6 +88,9 @@ def read_raw(path: str | os.PathLike, channel: str | None = None) -> Image:
         Any file LibRaw reads (CR2, NEF, ARW, DNG, ...) with a 2 x 2 Bayer mosaic.
     channel : {None, "r", "g", "b"}
         See :func:`bayer_cells`.
+    max_pixels : int, optional
+        Largest number of photosites (:mod:`startrack.io.limits`), checked from LibRaw's sizes
+        before the mosaic is converted (LibRaw itself unpacks the file when it opens it).
 
     Returns
     -------
@@ -102,6 +106,7 @@ def read_raw(path: str | os.PathLike, channel: str | None = None) -> Image:
         raise ImportError("RAW files need rawpy: pip install rawpy") from None
     try:
         with rawpy.imread(os.fspath(path)) as raw:
+            check_image_size(int(raw.sizes.width), int(raw.sizes.height), max_pixels, path)
             pattern = _bayer_pattern(raw, path)
             black = np.asarray(raw.black_level_per_channel, dtype=np.int64)[raw.raw_colors_visible]
             data = bayer_cells(raw.raw_image_visible.astype(np.int64) - black, pattern, channel)

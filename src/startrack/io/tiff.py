@@ -19,6 +19,7 @@ import struct
 import zlib
 from collections.abc import Mapping
 from pathlib import Path
+from typing import BinaryIO
 
 import numpy as np
 from numpy.typing import NDArray
@@ -111,8 +112,23 @@ def _as_tuple(value: object) -> tuple[int, ...]:
     return tuple(value) if isinstance(value, tuple | list) else (int(value),)
 
 
-def _strip_bytes(raw: bytes, tags: Mapping[int, object], path: Path) -> bytes:
-    """The concatenated, decompressed strips of a TIFF file's first image."""
+def _read_at(fh: BinaryIO, offset: int, count: int, size: int, path: Path) -> bytes:
+    if offset + count > size:
+        raise ImageReadError(f"{path}: TIFF file is truncated (a strip ends past the file end)")
+    fh.seek(offset)
+    return fh.read(count)
+
+
+def _inflate(chunk: bytes, limit: int, path: Path) -> bytes:
+    """Deflate-decompress at most ``limit`` bytes (a strip never needs more than the image)."""
+    try:
+        return zlib.decompressobj().decompress(chunk, max(limit, 1))
+    except zlib.error as exc:
+        raise ImageReadError(f"{path}: TIFF strip is truncated or corrupt ({exc})") from exc
+
+
+def _strip_bytes(fh: BinaryIO, tags: Mapping[int, object], expected: int, path: Path) -> bytes:
+    """The concatenated, decompressed strips of a TIFF file's first image, at most ``expected`` bytes."""
     compression = int(tags.get(259, 1))
     if compression != 1 and compression not in _DEFLATE:
         raise ImageReadError(
@@ -120,29 +136,29 @@ def _strip_bytes(raw: bytes, tags: Mapping[int, object], path: Path) -> bytes:
             "(only uncompressed or Deflate keep all 16 bits here); save it uncompressed, as "
             "16-bit greyscale, or as FITS"
         )
-    chunks = []
+    size = fh.seek(0, 2)
+    chunks, total = [], 0
     for offset, count in zip(_as_tuple(tags[273]), _as_tuple(tags[279]), strict=True):
-        if offset + count > len(raw):
-            raise ImageReadError(f"{path}: TIFF file is truncated (a strip ends past the file end)")
-        chunk = raw[offset:offset + count]
-        try:
-            chunks.append(zlib.decompress(chunk) if compression in _DEFLATE else chunk)
-        except zlib.error as exc:
-            raise ImageReadError(f"{path}: TIFF strip is truncated or corrupt ({exc})") from exc
+        if total >= expected:
+            break
+        chunk = _read_at(fh, offset, count, size, path)
+        chunk = _inflate(chunk, expected - total, path) if compression in _DEFLATE else chunk[:expected - total]
+        chunks.append(chunk)
+        total += len(chunk)
     return b"".join(chunks)
 
 
-def read_tiff16_colour(path: Path, raw: bytes, tags: Mapping[int, object]) -> NDArray[np.uint16]:
+def read_tiff16_colour(path: Path, fh: BinaryIO, tags: Mapping[int, object]) -> NDArray[np.uint16]:
     """Decode a 16-bit RGB(A) TIFF that Pillow would truncate to 8 bits.
 
     Parameters
     ----------
     path : Path
         The file, for error messages.
-    raw : bytes
-        The whole file.
+    fh : binary file
+        The file, open (only its strips are read).
     tags : mapping
-        Pillow's ``tag_v2`` of the first image.
+        Pillow's ``tag_v2`` of the first image (its size already checked against the limit).
 
     Returns
     -------
@@ -159,11 +175,12 @@ def read_tiff16_colour(path: Path, raw: bytes, tags: Mapping[int, object]) -> ND
             "save it with contiguous strips, as 16-bit greyscale, or as FITS"
         )
     width, height, spp = int(tags[256]), int(tags[257]), int(tags[277])
-    data = _strip_bytes(raw, tags, path)
     expected = width * height * spp * 2
+    data = _strip_bytes(fh, tags, expected, path)
     if len(data) < expected:
         raise ImageReadError(f"{path}: TIFF file is truncated ({len(data)} of {expected} bytes)")
-    dtype = np.dtype("<u2") if raw[:2] == b"II" else np.dtype(">u2")
+    fh.seek(0)
+    dtype = np.dtype("<u2") if fh.read(2) == b"II" else np.dtype(">u2")
     array = np.frombuffer(data[:expected], dtype=dtype).reshape(height, width, spp)
     if int(tags.get(317, 1)) == 2:  # horizontal differencing: undo by a wrapping running sum
         array = np.cumsum(array.astype(np.uint16), axis=1, dtype=np.uint16)

@@ -16,7 +16,9 @@ and mid, when known),
 FRAME; the camera FOCALPX, FOCALPY, CX0, CY0 (0-based px), K1, K2, K3, P1, P2, CAMERA; the
 sensor SENSOR, GAIN (e-/ADU), RDNOISE (e-), DARKCUR (e-/s), BIAS (ADU), FULLWELL (e-), BITDEPTH,
 QE, APAREA (m^2), PSFSIGMA (px), NOISE (the terms applied); a TAN WCS of the pinhole camera at the
-mid attitude (distortion left out); the stars in a ``TRUTH`` table, the satellites in ``RSOTRUTH``.
+mid attitude (distortion left out); the stars in a ``TRUTH`` table, the satellites in ``RSOTRUTH``,
+both after a header-only ``TRUTHDOC`` extension (astrometry.net takes a table with X and Y columns
+in extension 1 for a star list; DS9, astropy and solve-field read these files as images).
 """
 
 from __future__ import annotations
@@ -25,23 +27,29 @@ import csv
 import json
 import math
 import os
+from collections.abc import Iterable
 from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from astropy.io import fits
 from astropy.time import TimeDelta
 
 from ..errors import InvalidInputError
 from ..frames import radec_roll_from_rotation
-from .atomic import atomic_path
+from .atomic import atomic_group, open_output
 from .fitsfile import write_fits
-from .writers import write_png, write_tiff
+from .targets import output_target
+from .tiff import tiff_bytes
+from .writers import png_bytes
 
 IMAGE_SUFFIXES = {".fits": "fits", ".fit": "fits", ".fts": "fits", ".png": "png", ".tif": "tiff", ".tiff": "tiff"}
 STAR_COLUMNS = ("hip", "x", "y", "mag", "electrons", "x_start", "y_start", "x_end", "y_end", "b_v")
 RSO_COLUMNS = ("id", "x", "y", "x_start", "y_start", "x_end", "y_end", "mag", "electrons", "range_km", "lit",
                "rendered")
+TRUTH_NOTE_EXTNAME = "TRUTHDOC"
+"""EXTNAME of the header-only extension that precedes the truth tables in a FITS frame."""
 INDEX_COLUMNS = ("frame", "file", "t_mid_s", "time_mid", "ra_deg", "dec_deg", "roll_deg", "qx", "qy", "qz", "qw",
                  "rate_x_deg_s", "rate_y_deg_s", "rate_z_deg_s", "n_stars")
 
@@ -159,59 +167,88 @@ def _table(rows: list[dict[str, Any]], columns: tuple[str, ...], dtypes: dict[st
             for c in columns}
 
 
-def check_frame_path(path: str | os.PathLike) -> str:
+def check_frame_path(path: str | os.PathLike, *, inputs: Iterable[str | os.PathLike] = ()) -> str:
     """The kind of file ``path`` names ("fits", "png" or "tiff"), checked before any work is done.
+
+    The image and (for PNG / TIFF) its sidecar must both be writable targets
+    (:func:`startrack.io.targets.output_target`) and neither may be one of ``inputs``.
 
     Raises
     ------
     InvalidInputError
         If the suffix is not .fits / .fit / .fts / .png / .tif / .tiff, the folder does not exist,
-        or the path is a folder.
+        the path or its sidecar is a folder or an input.
     """
     path = Path(path)
     kind = IMAGE_SUFFIXES.get(path.suffix.lower())
     if kind is None:
         raise InvalidInputError(f"cannot write {str(path)!r}: use a .fits, .png or .tif path")
-    if path.is_dir():
-        raise InvalidInputError(f"cannot write {path}: it is a folder, give a file name")
-    if not path.parent.is_dir():
-        raise InvalidInputError(f"cannot write {path}: folder {path.parent} does not exist")
+    for target in frame_paths(path):
+        output_target(target, inputs)
     return kind
 
 
-def write_frame(path: str | os.PathLike, image: np.ndarray, truth) -> list[Path]:
+def frame_paths(path: str | os.PathLike) -> list[Path]:
+    """The files :func:`write_frame` writes for ``path``: the image, and a sidecar for PNG / TIFF."""
+    path = Path(path)
+    if IMAGE_SUFFIXES.get(path.suffix.lower()) == "fits":
+        return [path]
+    return [path, path.with_name(path.stem + ".truth.json")]
+
+
+def truth_note_hdu() -> fits.ImageHDU:
+    """The header-only extension written first after the image (see :func:`write_frame`)."""
+    hdu = fits.ImageHDU(name=TRUTH_NOTE_EXTNAME)
+    for text in ("Truth of a frame simulated by startrack: the stars in the TRUTH table,",
+                 "satellites in RSOTRUTH; x, y are 0-based pixel centres (add 1 for FITS).",
+                 "This header-only extension comes first so that readers that take a",
+                 "table with X and Y columns in extension 1 for a star list (astrometry.net's",
+                 "solve-field) read the file as the image it is."):
+        hdu.header.add_comment(text)
+    return hdu
+
+
+def write_frame(path: str | os.PathLike, image: np.ndarray, truth, *,
+                inputs: Iterable[str | os.PathLike] = ()) -> list[Path]:
     """Write an image and its truth; returns the files written.
 
-    ``.fits`` gets the truth as header cards and ``TRUTH`` (+ ``RSOTRUTH``) tables; ``.png`` /
-    ``.tif`` get a ``<stem>.truth.json`` file beside them. A float image (e.g. the noise-free
-    expectation) is kept as is in FITS and rounded and clipped to 0..65535 uint16 for PNG / TIFF.
-    Each file is written atomically, and the image is removed again if its sidecar cannot be
-    written, so an error leaves nothing behind.
+    ``.fits`` gets the truth as header cards and, after a header-only ``TRUTHDOC`` extension
+    (:func:`truth_note_hdu`; it keeps astrometry.net from reading the file as a star list), the
+    ``TRUTH`` (+ ``RSOTRUTH``) tables; ``.png`` / ``.tif`` get a ``<stem>.truth.json`` file beside
+    them. A float image (e.g. the noise-free expectation) is kept as is in FITS and rounded and
+    clipped to 0..65535 uint16 for PNG / TIFF. The image and its sidecar are written as one group
+    (:func:`startrack.io.atomic.atomic_group`): both are replaced, or neither.
 
     Raises
     ------
     InvalidInputError
         For a path :func:`check_frame_path` refuses, or an image the writer refuses.
+    OutputError
+        If writing fails; the files there before are then unchanged.
     """
     path = Path(path)
-    kind = check_frame_path(path)
+    kind = check_frame_path(path, inputs=inputs)
     data = truth_to_dict(truth)
     if kind == "fits":
         tables = {"TRUTH": _table(data["stars"], STAR_COLUMNS, {"hip": np.int64})}
         if data["rsos"]:
             tables["RSOTRUTH"] = _table(data["rsos"], RSO_COLUMNS, {"id": np.int64, "lit": bool, "rendered": bool})
-        return [write_fits(path, image, header=_fits_header(truth, data), tables=tables)]
-    sidecar = path.with_name(path.stem + ".truth.json")
+        return [write_fits(path, image, header=_fits_header(truth, data), tables=tables, inputs=inputs,
+                           leading=[truth_note_hdu()])]
     if np.asarray(image).dtype.kind == "f":
         image = np.clip(np.round(image), 0, np.iinfo(np.uint16).max).astype(np.uint16)
-    written = (write_png if kind == "png" else write_tiff)(path, image)
-    try:
-        with atomic_path(sidecar) as tmp:
-            tmp.write_text(json.dumps(data, indent=1, allow_nan=False))
-    except BaseException:
-        written.unlink(missing_ok=True)
-        raise
-    return [written, sidecar]
+    blob = png_bytes(image) if kind == "png" else tiff_bytes(np.asarray(image))
+    return write_with_sidecar(path, blob, json.dumps(data, indent=1, allow_nan=False), inputs=inputs)
+
+
+def write_with_sidecar(path: Path, blob: bytes, sidecar_text: str, *,
+                       inputs: Iterable[str | os.PathLike] = ()) -> list[Path]:
+    """Write an encoded image and its ``<stem>.truth.json`` together: both, or neither."""
+    paths = [path, path.with_name(path.stem + ".truth.json")]
+    with atomic_group(paths, inputs=inputs) as (image_tmp, sidecar_tmp):
+        image_tmp.write_bytes(blob)
+        sidecar_tmp.write_text(sidecar_text, encoding="utf-8")
+    return paths
 
 
 def index_row(truth, file: str | os.PathLike) -> dict[str, Any]:
@@ -226,8 +263,9 @@ def index_row(truth, file: str | os.PathLike) -> dict[str, Any]:
 
 
 def write_index(path: str | os.PathLike, rows: list[dict[str, Any]]) -> Path:
-    """Write a sequence index as CSV (atomically); quaternions scalar last, angles in degrees."""
-    with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
+    """Write a sequence index as CSV (:func:`startrack.io.atomic.open_output`); quaternions scalar
+    last, angles in degrees."""
+    with open_output(path, "w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=INDEX_COLUMNS)
         writer.writeheader()
         writer.writerows(rows)

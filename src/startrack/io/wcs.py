@@ -21,6 +21,7 @@ pixels unchanged), and so do ds9, astrometry.net and SIP-aware tools.
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -165,10 +166,15 @@ def solution_wcs(rot_cam_from_icrs: Rotation, camera: Camera, **kwargs) -> WCS:
     return WCS(wcs_header(rot_cam_from_icrs, camera, **kwargs))
 
 
-def write_wcs(path: str | os.PathLike, rot_cam_from_icrs: Rotation, camera: Camera, **kwargs) -> Path:
-    """Write a header-only FITS file (like astrometry.net's ``.wcs``) with the image's WCS."""
+def write_wcs(path: str | os.PathLike, rot_cam_from_icrs: Rotation, camera: Camera, *,
+              inputs: Iterable[str | os.PathLike] = (), **kwargs) -> Path:
+    """Write a header-only FITS file (like astrometry.net's ``.wcs``) with the image's WCS.
+
+    ``path`` is written by the rules of :mod:`startrack.io.atomic`: never over one of ``inputs``
+    (nor, in a ``startrack`` command, over a file it read), replaced only by a complete file.
+    """
     hdr = wcs_header(rot_cam_from_icrs, camera, **kwargs)
-    with atomic_path(path) as tmp:
+    with atomic_path(path, inputs=inputs) as tmp:
         fits.PrimaryHDU(header=hdr).writeto(tmp, overwrite=True)
     return Path(path)
 

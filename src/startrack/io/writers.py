@@ -3,13 +3,16 @@
 Both writers take the values as they are: no scaling, no clipping, no rounding. A float image
 must be converted by the caller with an explicit rule (e.g.
 ``np.clip(np.round(a), 0, 65535).astype(np.uint16)``); PNG refuses floats, TIFF accepts grey
-float32. Each file is written to a temporary file in the same folder and renamed, so nothing
-half-written remains if an error occurs. FITS is written by :func:`startrack.io.write_fits`.
+float32. Each file is written by the rules of :mod:`startrack.io.atomic`: never over an input, to
+a temporary file in the same folder renamed only once complete, so nothing half-written remains
+if an error occurs. FITS is written by :func:`startrack.io.write_fits`.
 """
 
 from __future__ import annotations
 
+import io
 import os
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +20,7 @@ from numpy.typing import NDArray
 from PIL import Image as PILImage
 
 from ..errors import InvalidInputError
-from .atomic import atomic_path
+from .atomic import write_output
 from .tiff import tiff_bytes
 
 
@@ -38,15 +41,18 @@ def _png_array(array: NDArray) -> NDArray:
     return np.ascontiguousarray(array, dtype=array.dtype.newbyteorder("="))
 
 
-def write_png(path: str | os.PathLike, array: NDArray) -> Path:
+def write_png(path: str | os.PathLike, array: NDArray, *, inputs: Iterable[str | os.PathLike] = ()) -> Path:
     """Write a PNG, 8-bit for uint8 and 16-bit for uint16.
 
     Parameters
     ----------
     path : str or Path
-        The file to write (replaced atomically).
+        The file to write, by the rules of :mod:`startrack.io.atomic` (replaced only by a
+        complete file; ``-``, devices and FIFOs written through).
     array : ndarray
         (H, W) uint8 or uint16 greyscale, or (H, W, 3) RGB / (H, W, 4) RGBA uint8.
+    inputs : iterable of paths
+        Files that must not be replaced.
 
     Returns
     -------
@@ -58,14 +64,20 @@ def write_png(path: str | os.PathLike, array: NDArray) -> Path:
     InvalidInputError
         For float arrays (convert explicitly first), other dtypes or shapes, or a missing folder.
     """
-    data = _png_array(np.asarray(array))
-    with atomic_path(path) as tmp:
-        PILImage.fromarray(data).save(tmp, format="PNG")
-    return Path(path)
+    return write_output(path, png_bytes(array), inputs=inputs)
 
 
-def write_tiff(path: str | os.PathLike, array: NDArray) -> Path:
+def png_bytes(array: NDArray) -> bytes:
+    """The PNG encoding of an image (the layouts of :func:`write_png`), or InvalidInputError."""
+    buffer = io.BytesIO()
+    PILImage.fromarray(_png_array(np.asarray(array))).save(buffer, format="PNG")
+    return buffer.getvalue()
+
+
+def write_tiff(path: str | os.PathLike, array: NDArray, *, inputs: Iterable[str | os.PathLike] = ()) -> Path:
     """Write an uncompressed TIFF: (H, W) uint8 / uint16 / float32, or (H, W, 3) uint8 / uint16.
+
+    ``path`` and ``inputs`` as for :func:`write_png`.
 
     Returns
     -------
@@ -77,7 +89,4 @@ def write_tiff(path: str | os.PathLike, array: NDArray) -> Path:
     InvalidInputError
         For other dtypes or shapes, or a missing folder.
     """
-    data = tiff_bytes(np.asarray(array))
-    with atomic_path(path) as tmp:
-        tmp.write_bytes(data)
-    return Path(path)
+    return write_output(path, tiff_bytes(np.asarray(array)), inputs=inputs)
