@@ -1,0 +1,357 @@
+"""The compiled loops of the streak path (numba): the blurred-arc model of one streak and its
+Levenberg-Marquardt fit to the pixels of a window, and the line filter of the segmentation.
+
+Kept apart so that importing startrack does not import numba; :mod:`.streak_fit` and
+:mod:`.streak_find` load this module on first use. Compiled functions are cached on disk
+(``cache=True``); every array is float64 (labels int32) and C-contiguous.
+
+The model (:func:`arc_pixel`) is the image of a star moving at a uniform pace along a parabolic
+arc for the whole exposure, blurred by a Gaussian of sigma ``s``: with the chord from
+``c - h`` to ``c + h`` (half-length ``H = |h|``, unit ``u = h / H``, normal ``n``), a pixel at
+``q = (x, y) - c`` has ``t = q . u`` along and ``d = q . n - sag (1 - t^2 / H^2)`` across the arc,
+and
+
+    I = b + a (1 + g t / H) exp(-d^2 / 2 s^2) [erf((t + H) / sqrt(2) s) - erf((t - H) / sqrt(2) s)] / 2
+
+Parameters ``p`` = (cx, cy, hx, hy, sag, a, g, b, s) (:data:`NPAR`): the arc's ends are
+``c -+ h`` exactly, ``sag`` is the arc's offset from the chord at its middle (px), ``g`` a linear
+change of brightness along it (a non-uniform pace: angular acceleration, or the projection), ``b``
+the local background. Pixel integration is not modelled: a box pixel adds 1/12 px^2 to the blur's
+variance in every direction, which ``s`` absorbs.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+NPAR = 9
+CX, CY, HX, HY, SAG, AMP, GRAD, BG, SIG = range(NPAR)
+SQRT2 = math.sqrt(2.0)
+SQRTPI = math.sqrt(math.pi)
+SIGMA_BOUNDS = (0.3, 6.0)
+"""The blur is kept in this range (px) during a fit."""
+
+FIT_OK, FIT_NOT_CONVERGED, FIT_TOO_FEW_PIXELS, FIT_SINGULAR = 0, 1, 2, 3
+"""Flags of :func:`fit_arcs`."""
+
+
+@njit(cache=True)
+def arc_pixel(x, y, p, jac):
+    """The model at pixel (x, y) (module docstring); fills ``jac`` (9,) with dI/dp; returns I."""
+    cx, cy, hx, hy, sag, amp, grad, bg, s = p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8]
+    half = math.sqrt(hx * hx + hy * hy)
+    ux, uy = hx / half, hy / half
+    nx, ny = -uy, ux
+    qx, qy = x - cx, y - cy
+    t = qx * ux + qy * uy
+    d0 = qx * nx + qy * ny
+    w = 1.0 - (t / half) ** 2
+    d = d0 - sag * w
+    scale = SQRT2 * s
+    zp, zm = (t + half) / scale, (t - half) / scale
+    across = math.exp(-0.5 * (d / s) ** 2)
+    lin = 1.0 + grad * t / half
+    amp_t = amp * lin
+    if zp > 4.5 and zm < -4.5:  # inside the arc, away from its ends: the along factor is 1 to 1e-9
+        along, e_t, e_h, e_s = 1.0, 0.0, 0.0, 0.0
+    else:
+        along = 0.5 * (math.erf(zp) - math.erf(zm))
+        ep, em = math.exp(-zp * zp), math.exp(-zm * zm)
+        c = 1.0 / (SQRTPI * scale)
+        e_t, e_h, e_s = c * (ep - em), c * (ep + em), (zp * ep - zm * em) / (SQRTPI * s)
+    core = across * along
+    di_dd = -amp_t * core * d / (s * s)
+    di_dt = amp * grad / half * core + di_dd * (2.0 * sag * t / (half * half)) + amp_t * across * e_t
+    di_dh = -amp * grad * t / (half * half) * core - di_dd * (2.0 * sag * t * t / half**3) + amp_t * across * e_h
+    jac[CX] = -di_dt * ux - di_dd * nx
+    jac[CY] = -di_dt * uy - di_dd * ny
+    jac[HX] = (di_dt * d0 - di_dd * t) / half * nx + di_dh * ux
+    jac[HY] = (di_dt * d0 - di_dd * t) / half * ny + di_dh * uy
+    jac[SAG] = -di_dd * w
+    jac[AMP] = lin * core
+    jac[GRAD] = amp * t / half * core
+    jac[BG] = 1.0
+    jac[SIG] = amp_t * (core * d * d / s**3 - across * e_s)
+    return bg + amp_t * core
+
+
+@njit(cache=True)
+def _inside(x, y, p, reach, band):
+    """Whether pixel (x, y) is near the arc of ``p``: within ``reach`` px beyond its ends and
+    ``band`` px across it."""
+    cx, cy, hx, hy, sag = p[0], p[1], p[2], p[3], p[4]
+    half = math.sqrt(hx * hx + hy * hy)
+    ux, uy = hx / half, hy / half
+    t = (x - cx) * ux + (y - cy) * uy
+    if abs(t) > half + reach:
+        return False
+    tc = min(abs(t), half)
+    d = -(x - cx) * uy + (y - cy) * ux - sag * (1.0 - (tc / half) ** 2)
+    return abs(d) <= band
+
+
+@njit(cache=True)
+def gather(image, labels, bin_px, own, p, reach, band, saturation, xs, ys, vs):
+    """Pixels of ``image`` (H, W) near the arc ``p`` into ``xs, ys, vs`` (their capacity bounds
+    the count); returns the count. A pixel whose label (``labels`` on a grid ``bin_px`` times
+    coarser; 0 = none) is another streak's, or at or above ``saturation``, is left out."""
+    height, width = image.shape
+    cx, cy, hx, hy = p[0], p[1], p[2], p[3]
+    half = math.sqrt(hx * hx + hy * hy)
+    extent = half + reach + abs(p[4]) + band
+    x0, x1 = max(int(math.floor(cx - extent)), 0), min(int(math.ceil(cx + extent)), width - 1)
+    y0, y1 = max(int(math.floor(cy - extent)), 0), min(int(math.ceil(cy + extent)), height - 1)
+    count, capacity = 0, xs.shape[0]
+    lh, lw = labels.shape
+    for y in range(y0, y1 + 1):
+        for x in range(x0, x1 + 1):
+            if count >= capacity:
+                return count
+            value = image[y, x]
+            if value >= saturation or not _inside(x, y, p, reach, band):
+                continue
+            ly, lx = y // bin_px, x // bin_px
+            if ly < lh and lx < lw:
+                lab = labels[ly, lx]
+                if lab != 0 and lab != own:
+                    continue
+            xs[count], ys[count], vs[count] = x, y, value
+            count += 1
+    return count
+
+
+@njit(cache=True, fastmath=True)
+def _system(p, xs, ys, vs, wts, n, jtj, jtr, jac):
+    """chi^2 of ``p`` over the n pixels (weights 1 / sigma^2), and J^T W J, J^T W r into jtj, jtr."""
+    jtj[:, :] = 0.0
+    jtr[:] = 0.0
+    chi2 = 0.0
+    for i in range(n):
+        r = vs[i] - arc_pixel(xs[i], ys[i], p, jac)
+        w = wts[i]
+        chi2 += w * r * r
+        for a in range(NPAR):
+            wa = w * jac[a]
+            jtr[a] += wa * r
+            for b in range(a, NPAR):
+                jtj[a, b] += wa * jac[b]
+    for a in range(NPAR):
+        for b in range(a):
+            jtj[a, b] = jtj[b, a]
+    return chi2
+
+
+@njit(cache=True, fastmath=True)
+def _chi2(p, xs, ys, vs, wts, n, jac):
+    total = 0.0
+    for i in range(n):
+        r = vs[i] - arc_pixel(xs[i], ys[i], p, jac)
+        total += wts[i] * r * r
+    return total
+
+
+@njit(cache=True)
+def _clamped(p):
+    """Keep the blur in :data:`SIGMA_BOUNDS`, the amplitude non-negative, the arc at least 0.5 px long."""
+    p[SIG] = min(max(p[SIG], SIGMA_BOUNDS[0]), SIGMA_BOUNDS[1])
+    p[AMP] = max(p[AMP], 0.0)
+    p[GRAD] = min(max(p[GRAD], -0.9), 0.9)
+    half = math.sqrt(p[HX] ** 2 + p[HY] ** 2)
+    if half < 0.25:
+        p[HX], p[HY] = p[HX] / max(half, 1e-9) * 0.25, p[HY] / max(half, 1e-9) * 0.25
+
+
+@njit(cache=True)
+def _weights(p, xs, ys, n, var_bg, shot, wts, jac):
+    """Weights 1 / (var_bg + shot * max(model - b, 0)) of the n pixels, the model taken at ``p``."""
+    for i in range(n):
+        signal = arc_pixel(xs[i], ys[i], p, jac) - p[BG]
+        wts[i] = 1.0 / (var_bg + shot * max(signal, 0.0))
+
+
+@njit(cache=True)
+def levenberg_marquardt(p, xs, ys, vs, wts, n, max_iter, tol_px, cov):
+    """Fit ``p`` (9,) in place to n pixels; ``cov`` (9, 9) gets (J^T W J)^-1 at the end.
+
+    Returns (chi^2, iterations, flag) with flag :data:`FIT_OK`, :data:`FIT_NOT_CONVERGED` or
+    :data:`FIT_SINGULAR`. Converged: a step moves no end, the sag or the blur by more than
+    ``tol_px`` or 3 % of the centre's precision (a lower bound of it, ``1 / sqrt(J^T W J)``)."""
+    jtj = np.zeros((NPAR, NPAR))
+    jtr = np.zeros(NPAR)
+    jac = np.zeros(NPAR)
+    trial = np.zeros(NPAR)
+    lam = 1e-3
+    chi2 = _system(p, xs, ys, vs, wts, n, jtj, jtr, jac)
+    flag = FIT_NOT_CONVERGED
+    iterations = 0
+    while iterations < max_iter:
+        iterations += 1
+        damped = jtj.copy()
+        for a in range(NPAR):
+            damped[a, a] += lam * max(jtj[a, a], 1e-12)
+        try:
+            step = np.linalg.solve(damped, jtr)
+        except Exception:  # noqa: BLE001 - numba raises a generic error on a singular system
+            flag = FIT_SINGULAR
+            break
+        trial[:] = p + step
+        _clamped(trial)
+        new = _chi2(trial, xs, ys, vs, wts, n, jac)
+        if new <= chi2:
+            moved = max(abs(step[CX]) + abs(step[HX]), abs(step[CY]) + abs(step[HY]))
+            moved = max(moved, max(abs(step[SAG]), abs(step[SIG])))
+            p[:] = trial
+            chi2 = _system(p, xs, ys, vs, wts, n, jtj, jtr, jac)
+            lam = max(lam / 3.0, 1e-9)
+            floor = 0.03 / math.sqrt(max(min(jtj[CX, CX], jtj[CY, CY]), 1e-300))  # 3 % of a lower bound of sigma
+            if moved < max(tol_px, floor):
+                flag = FIT_OK
+                break
+        else:
+            lam *= 4.0
+            if lam > 1e8:
+                flag = FIT_OK if chi2 > 0 else FIT_NOT_CONVERGED  # no step improves: at the minimum
+                break
+    try:
+        cov[:, :] = np.linalg.inv(jtj)
+    except Exception:  # noqa: BLE001
+        flag = FIT_SINGULAR
+    return chi2, iterations, flag
+
+
+@njit(cache=True)
+def fit_arcs(image, labels, bin_px, own, start, reach, band, saturation, var_bg, shot, max_iter,
+             tol_px, capacity, params, covs, stats):
+    """Fit K arcs to ``image`` (H, W): ``start`` (K, 9) the first guesses, ``own`` (K,) each one's
+    label (0: none), ``reach`` and ``band`` (K,) the window around each first guess (px beyond the
+    ends, px across). Results into ``params`` (K, 9), ``covs`` (K, 9, 9) and ``stats`` (K, 4):
+    chi^2, pixels used, iterations, flag.
+
+    Each pixel is weighted by 1 / (``var_bg`` + ``shot`` x signal), the signal being the first
+    guess's model above its background and ``shot`` the variance per unit of signal (1 / gain in
+    image units; 0: background noise only), so that a bright streak's photon noise is in its
+    covariance."""
+    xs, ys, vs, wts = np.empty(capacity), np.empty(capacity), np.empty(capacity), np.empty(capacity)
+    jac = np.zeros(NPAR)
+    cov = np.zeros((NPAR, NPAR))
+    for k in range(start.shape[0]):
+        p = start[k].copy()
+        n = gather(image, labels, bin_px, own[k], p, reach[k], band[k], saturation, xs, ys, vs)
+        stats[k, 1] = n
+        params[k] = p
+        if n < 4 * NPAR:
+            stats[k, 3] = FIT_TOO_FEW_PIXELS
+            continue
+        _weights(p, xs, ys, n, var_bg, shot, wts, jac)
+        chi2, iterations, flag = levenberg_marquardt(p, xs, ys, vs, wts, n, max_iter, tol_px, cov)
+        params[k] = p
+        covs[k] = cov
+        stats[k, 0], stats[k, 2], stats[k, 3] = chi2, iterations, flag
+
+
+@njit(cache=True)
+def shot_sums(image, labels, bin_px, own, fitted, reach, band, saturation, var_bg, capacity):
+    """(sum s (r^2 - var_bg), sum s^2) over the pixels of K fitted arcs (K, 9), s the model's
+    signal above its background and r the residual: their ratio estimates the photon-noise
+    variance per unit of signal (1 / gain)."""
+    xs, ys, vs = np.empty(capacity), np.empty(capacity), np.empty(capacity)
+    jac = np.zeros(NPAR)
+    num, den = 0.0, 0.0
+    for k in range(fitted.shape[0]):
+        p = fitted[k].copy()
+        n = gather(image, labels, bin_px, own[k], p, reach[k], band[k], saturation, xs, ys, vs)
+        for i in range(n):
+            model = arc_pixel(xs[i], ys[i], p, jac)
+            signal = model - p[BG]
+            if signal > 0.0:
+                r = vs[i] - model
+                num += signal * (r * r - var_bg)
+                den += signal * signal
+    return num, den
+
+
+@njit(cache=True)
+def profile_runs(image, cx, cy, ux, uy, t_lo, t_hi, band, background, smooth, min_run, runs):
+    """The pieces of a line where a streak lies: the mean signal per pixel of length along the
+    line through (cx, cy) with direction (ux, uy) (unit), over [t_lo, t_hi] px and ``band`` px
+    across it, smoothed over ``smooth`` px; its runs above half the plateau (the 75th percentile
+    of the smoothed profile) at least ``min_run`` px long (gaps under 3 px closed) go into
+    ``runs`` (M, 3) as (t_start, t_end, plateau); returns their number (at most M)."""
+    height, width = image.shape
+    n = int(t_hi - t_lo) + 1
+    total, count = np.zeros(n), np.zeros(n)
+    extent = max(abs(t_lo), abs(t_hi)) + band + 1.0
+    x0, x1 = max(int(cx - extent), 0), min(int(cx + extent) + 1, width - 1)
+    y0, y1 = max(int(cy - extent), 0), min(int(cy + extent) + 1, height - 1)
+    for y in range(y0, y1 + 1):
+        for x in range(x0, x1 + 1):
+            t = (x - cx) * ux + (y - cy) * uy
+            d = -(x - cx) * uy + (y - cy) * ux
+            if abs(d) > band or t < t_lo or t > t_hi:
+                continue
+            k = int(t - t_lo + 0.5)
+            if 0 <= k < n:
+                total[k] += image[y, x] - background
+                count[k] += 1.0
+    density = np.zeros(n)
+    for k in range(n):
+        if count[k] > 0:
+            density[k] = total[k] / count[k] * (2.0 * band + 1.0)
+    half = smooth // 2
+    level = np.zeros(n)
+    for k in range(n):
+        lo, hi = max(k - half, 0), min(k + half + 1, n)
+        level[k] = density[lo:hi].mean()
+    plateau = np.sort(level)[min(int(0.75 * n), n - 1)]
+    found = 0
+    k = 0
+    while k < n and found < runs.shape[0]:
+        if level[k] < 0.5 * plateau:
+            k += 1
+            continue
+        first = k
+        last = k
+        gap = 0
+        while k < n and gap < max(3, half):
+            if level[k] >= 0.5 * plateau:
+                last = k
+                gap = 0
+            else:
+                gap += 1
+            k += 1
+        if last - first + 1 >= min_run:
+            runs[found, 0], runs[found, 1], runs[found, 2] = t_lo + first - 0.5, t_lo + last + 0.5, plateau
+            found += 1
+    return found
+
+
+@njit(cache=True)
+def line_filter(image, length, orientations, out):
+    """Largest mean of ``image`` (H, W) over ``length`` pixels along a line through each pixel,
+    over ``orientations`` directions in [0, pi), into ``out`` (H, W) (taps at the nearest pixel;
+    pixels outside the image count as 0)."""
+    height, width = image.shape
+    half = (length - 1) // 2
+    for y in range(height):
+        for x in range(width):
+            out[y, x] = -np.inf
+    offsets = np.empty((length, 2), dtype=np.int64)
+    for k in range(orientations):
+        angle = math.pi * k / orientations
+        ca, sa = math.cos(angle), math.sin(angle)
+        for j in range(length):
+            offsets[j, 0] = int(round((j - half) * ca))
+            offsets[j, 1] = int(round((j - half) * sa))
+        for y in range(height):
+            for x in range(width):
+                total = 0.0
+                for j in range(length):
+                    xx, yy = x + offsets[j, 0], y + offsets[j, 1]
+                    if 0 <= xx < width and 0 <= yy < height:
+                        total += image[yy, xx]
+                mean = total / length
+                if mean > out[y, x]:
+                    out[y, x] = mean

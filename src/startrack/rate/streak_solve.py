@@ -1,0 +1,418 @@
+"""Lost-in-space on a streaked frame, then the attitude at mid-exposure and the rate from the
+whole frame (issue 19 items 1-2; seed 001 §5 item 9).
+
+1. The streaks are found (:mod:`.streak_find`) and the brightest ``lis_streaks`` fitted
+   (:mod:`.streak_fit`).
+2. Their light centroids, the stars' mean positions over the exposure (their positions at
+   mid-exposure to within the path's curvature), are identified lost-in-space
+   (:func:`startrack.solve_stars`) with a position tolerance that grows with the streak length
+   (:func:`centroid_sigma_px`).
+3. The catalog-free rotation most streaks agree with (:func:`.catalog_free.consensus`) is the
+   rate hypothesis; every identified streak must agree with the motion that the identified
+   attitude and this rate predict for its catalog star (its length and direction, both ends
+   within :func:`agreement_tolerance_px`): a streak that does not is a wrong identification,
+   and fewer than three agreeing streaks refuse the identification.
+4. The attitude at mid-exposure and the rate (and, with ``fit_alpha``, a constant angular
+   acceleration) are fitted jointly to those streaks (:mod:`.streak_model`); then every other
+   catalog star of the field bright enough is predicted, its streak fitted in a window around
+   the prediction (:mod:`.streak_predict`) and, where it agrees, added; the joint fit is done
+   again on all of them.
+5. Trust (as :mod:`.trust` for the catalog-free rate): the rate is reported (status OK) only
+   when at least :attr:`StreakOptions.min_streaks` streaks are used, the fit's Birge ratio is
+   at most :attr:`StreakOptions.max_birge` and the 3-sigma uncertainty of the rate vector is at
+   most :attr:`StreakOptions.max_rate_uncertainty` of the rate; otherwise the attitude stands
+   and the rate says why not.
+
+The catalog-free rate of :func:`.streak_rate.streak_rate` (OLAE, seed 001 ch. 4) stays the
+fallback when identification fails: the solution then carries it with status NO_MATCH for the
+attitude. One frame does not tell the time order: give ``prior_omega_rad_s`` (a gyro, the
+previous frame) to order it (``time_order_known``).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..attitude.covariance import roll_cross_boresight
+from ..camera import Camera
+from ..errors import InvalidInputError
+from ..frames import radec_roll_from_rotation
+from ..identify.field_stars import field_stars
+from ..results import AttitudeSolution, StarMatches, Status
+from ..units import DEG
+from .catalog_free import consensus
+from .estimate import RateEstimate, failed
+from .streak_find import StreakCandidates, find_streak_candidates
+from .streak_fit import StreakFits, first_guesses, fit_streaks
+from .streak_model import JointFit, Timing, fit_joint, predict
+from .streak_predict import field_catalog, fit_predicted
+from .trust import consensus_tolerance_px
+
+METHOD = "streak joint fit"
+
+
+@dataclass(frozen=True)
+class StreakOptions:
+    """Settings of the streak path.
+
+    Attributes
+    ----------
+    psf_sigma_px : float
+        First guess of the blur (px).
+    lis_streaks : int
+        Brightest candidate streaks fitted for the identification.
+    max_streaks : int
+        Most streaks in the joint fit (identified plus predicted).
+    catalog_max_mag : float
+        Faintest catalog star whose streak is predicted and fitted (V).
+    fit_alpha : bool
+        Fit a constant angular acceleration too.
+    min_streaks : int
+        Fewest streaks for an attitude, and for a rate.
+    max_rate_uncertainty : float
+        Largest 3-sigma uncertainty of the rate vector, as a fraction of the rate, for a rate
+        with status OK.
+    max_birge : float
+        Largest rms whitened residual of the joint fit for a rate with status OK.
+    gain_e_per_adu : float or None
+        The camera's gain, for the photon noise in the weights; None estimates it from the fits.
+    line_time_s : float
+        Rolling shutter: delay between the starts of consecutive rows (s); 0 for a global shutter.
+    pixel_aspect : float or None
+        As :func:`startrack.solve_stars`' (without a camera): square pixels (1.0) by default, since
+        an aspect fitted to the streaks' light centroids trades with the roll (a 0.13 % aspect
+        made a 95 arcsec roll error in a 12 deg field); None lets the identification fit it.
+    """
+
+    psf_sigma_px: float = 1.0
+    lis_streaks: int = 20
+    max_streaks: int = 40
+    catalog_max_mag: float = 7.5
+    fit_alpha: bool = False
+    min_streaks: int = 3
+    max_rate_uncertainty: float = 0.03
+    max_birge: float = 3.0
+    gain_e_per_adu: float | None = None
+    line_time_s: float = 0.0
+    pixel_aspect: float | None = 1.0
+
+    @property
+    def shot(self) -> float | None:
+        return None if self.gain_e_per_adu is None else 1.0 / self.gain_e_per_adu
+
+
+def _nan3() -> NDArray[np.float64]:
+    return np.full(3, np.nan)
+
+
+@dataclass(frozen=True)
+class StreakSolution(AttitudeSolution):
+    """An :class:`~startrack.results.AttitudeSolution` of a streaked frame (``mode`` "streak").
+
+    Extra attributes
+    ----------------
+    exposure_s, line_time_s : float
+        The exposure (NaN when unknown: the rate is then per exposure only, see ``turn_rad``) and
+        the rolling-shutter line time.
+    t_mid_s : float
+        When the attitude holds: the frame's mid-exposure, seconds after the start of row 0's
+        exposure (the middle row's mid-exposure with a rolling shutter).
+    time_mid : astropy.time.Time or None
+        The same as an absolute time, when the image header gives the start of the exposure.
+    rate : RateEstimate
+        The rate (camera frame, rad/s) with its covariance, or why it is not trusted.
+    alpha_rad_s2 : ndarray, shape (3,)
+        Fitted angular acceleration (zero when not fitted).
+    turn_rad : ndarray, shape (3,)
+        The rotation vector turned during the exposure, ``omega T`` (known without ``exposure_s``).
+    time_order_known : bool
+        The rate's sign was chosen by a prior rate; else one frame cannot tell it.
+    streaks : StreakFits or None
+        Every streak fitted (identification candidates, then predicted ones).
+    streak_index : ndarray of int, shape (K,)
+        Rows of ``streaks`` in the joint fit (``matches`` lists their stars, in the same order).
+    birge : float
+        Rms whitened residual of the joint fit per degree of freedom.
+    """
+
+    mode: str = "streak"
+    exposure_s: float = float("nan")
+    line_time_s: float = 0.0
+    t_mid_s: float = float("nan")
+    time_mid: object | None = None
+    rate: RateEstimate = field(default_factory=lambda: failed(Status.NO_MATCH, "no rate", METHOD))
+    alpha_rad_s2: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    turn_rad: NDArray[np.float64] = field(default_factory=_nan3)
+    time_order_known: bool = False
+    streaks: StreakFits | None = None
+    streak_index: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    birge: float = float("nan")
+
+    @property
+    def n_streaks(self) -> int:
+        return int(self.streak_index.size)
+
+    @property
+    def rate_sigma_roll_cross_deg_s(self) -> tuple[float, float]:
+        """1-sigma of the rate about the boresight (roll) and across it (rms of x, y), deg/s."""
+        cov = self.rate.covariance_rad2_s2
+        if cov is None:
+            return (math.nan, math.nan)
+        roll, cross = roll_cross_boresight(cov)
+        return float(roll / DEG), float(cross / DEG)
+
+
+def centroid_sigma_px(length_px: ArrayLike) -> float:
+    """The identification's position tolerance (1 sigma, px) for streaks of these lengths:
+    0.5 px plus 0.4 % of the median length (the light centroid departs from the mid-exposure
+    position with the path's curvature and speed changes, which grow with the length)."""
+    return 0.5 + 0.004 * float(np.median(length_px))
+
+
+def agreement_tolerance_px(length_px: ArrayLike) -> NDArray[np.float64]:
+    """How far (px) an identified streak's ends and centroid may lie from those the identified
+    attitude and the consensus rate predict: 2 px + 3 % of its length."""
+    return 2.0 + 0.03 * np.asarray(length_px, dtype=float)
+
+
+def solve_streaked(
+    image: ArrayLike,
+    *,
+    camera: Camera | None = None,
+    fov_deg: float | None = None,
+    fov_range_deg: tuple[float, float] | None = None,
+    exposure_s: float | None = None,
+    epoch=None,
+    prior_omega_rad_s: ArrayLike | None = None,
+    options: StreakOptions | None = None,
+    method: str = "quads",
+) -> StreakSolution:
+    """Lost-in-space attitude at mid-exposure and the rate of a streaked frame (module docstring).
+
+    Parameters
+    ----------
+    image : array_like, shape (H, W)
+        The frame (counts).
+    camera, fov_deg, fov_range_deg, epoch, method
+        As in :func:`startrack.solve_stars` (a camera fixes the focal length; otherwise it is
+        fitted by the identification).
+    exposure_s : float, optional
+        Exposure time (s); None gives the turn per exposure only (``turn_rad``).
+    prior_omega_rad_s : array_like, shape (3,), optional
+        A rough rate of the right sign (camera frame) that orders the exposure in time.
+    options : StreakOptions, optional
+
+    Returns
+    -------
+    StreakSolution
+        Status TOO_FEW_STARS (fewer than three clean streaks), NO_MATCH (not identified, or the
+        identification disagrees with the streaks' motion; ``rate`` then holds the catalog-free
+        rate) or OK, with ``rate`` OK or saying why the rate is not trusted.
+    """
+    opts = options or StreakOptions()
+    img = np.asarray(image)
+    t0 = time.perf_counter()
+    timing = _timing(exposure_s, opts.line_time_s, img.shape[0])
+    cand = find_streak_candidates(img)
+    fits = _lis_fits(img, cand, opts)
+    good = np.flatnonzero(fits.ok)
+    if good.size < opts.min_streaks:
+        return _failed(Status.TOO_FEW_STARS, f"{good.size} clean streaks ({opts.min_streaks} needed)", fits, timing,
+                       t0)
+    measured, cov = fits.measurements()
+    lis = _identify(fits, good, measured, img.shape, camera, fov_deg, fov_range_deg, epoch, method,
+                    opts.pixel_aspect)
+    omega0, agree0 = _consensus_rate(lis.camera or camera, fits, good, timing)
+    if not lis.solved:
+        return _failed(lis.status, lis.reason, fits, timing, t0, omega0 if agree0 >= 3 else None)
+    rows = good[lis.matches.det_index]
+    keep = _agreeing(lis, fits, rows, measured, omega0, timing)
+    if keep.sum() < opts.min_streaks:
+        return _failed(Status.NO_MATCH, f"only {keep.sum()} of {rows.size} identified streaks move as the frame's "
+                       "streaks do: the identification is not confirmed", fits, timing, t0, omega0)
+    fit_focal = camera is None
+    joint = fit_joint(lis.camera, lis.matches.cat_vectors[keep], measured[rows[keep]], cov[rows[keep]],
+                      lis.rot_cam_from_icrs, omega0, timing, fit_alpha=opts.fit_alpha, fit_focal=fit_focal)
+    stars, hips, rows = lis.matches.cat_vectors[keep], lis.matches.hip[keep], rows[keep]
+    fits, rows, stars, hips, joint = _extended(img, fits, cand, rows, stars, hips, joint, timing, opts,
+                                               lis.epoch_jyear, fit_focal)
+    return _solution(lis, fits, rows, stars, hips, joint, timing, opts, prior_omega_rad_s, exposure_s, t0)
+
+
+def _timing(exposure_s: float | None, line_time_s: float, height: int) -> Timing:
+    if exposure_s is None:
+        return Timing(1.0, 0.0, height)
+    if not (math.isfinite(exposure_s) and exposure_s > 0):
+        raise InvalidInputError(f"exposure_s must be a positive number of seconds, got {exposure_s!r}")
+    if not (math.isfinite(line_time_s) and line_time_s >= 0):
+        raise InvalidInputError(f"line_time_s must be zero or positive seconds, got {line_time_s!r}")
+    return Timing(float(exposure_s), float(line_time_s), int(height))
+
+
+def _lis_fits(img: NDArray, cand: StreakCandidates, opts: StreakOptions) -> StreakFits:
+    """Fits of the brightest ``lis_streaks`` first guesses of the candidates."""
+    start, own, reach, band = first_guesses(img, cand, opts.psf_sigma_px)
+    top = np.argsort(-start[:, 5] * np.hypot(start[:, 2], start[:, 3]), kind="stable")[: opts.lis_streaks]
+    return fit_streaks(img, start[top], reach[top], band[top], noise=cand.noise, labels=cand.labels,
+                       bin_px=cand.bin_px, own=own[top], shot=opts.shot)
+
+
+def _identify(fits, good, measured, shape, camera, fov_deg, fov_range_deg, epoch, method,
+              pixel_aspect) -> AttitudeSolution:
+    """solve_stars on the light centroids of the clean streaks, brightest first."""
+    from ..identify.quad_matcher import MatcherOptions
+    from ..solve import solve_stars
+
+    sigma = centroid_sigma_px(fits.length_px[good])
+    options = MatcherOptions(centroid_sigma_px=sigma, match_radius_px=max(2.0, 4.0 * sigma)) \
+        if method == "quads" else None
+    size = {} if camera is not None else {"width": int(shape[1]), "height": int(shape[0]),
+                                          "pixel_aspect": pixel_aspect}
+    xy = measured[good, 4:6]
+    return solve_stars(xy[:, 0], xy[:, 1], camera=camera, fov_deg=fov_deg, fov_range_deg=fov_range_deg,
+                       flux=fits.flux[good], epoch=epoch, method=method, options=options, **size)
+
+
+def _consensus_rate(camera: Camera | None, fits: StreakFits, good: NDArray, timing: Timing
+                    ) -> tuple[NDArray[np.float64], int]:
+    """The catalog-free rate most clean streaks agree with (sign arbitrary) and how many agree."""
+    if camera is None or good.size < 2:
+        return np.full(3, np.nan), 0
+    ends = fits.ends_xy[good]
+    va = camera.pixel_to_vector(ends[:, 0, 0], ends[:, 0, 1])
+    vb = camera.pixel_to_vector(ends[:, 1, 0], ends[:, 1, 1])
+    sigma = np.max(fits.end_sigma_px()[good], axis=1)
+    found = consensus(va, vb, consensus_tolerance_px(sigma) / camera.fx)
+    norm = np.linalg.norm(found.gibbs)
+    rotvec = found.gibbs * (2.0 * np.arctan(norm) / norm) if norm > 0 else np.zeros(3)
+    return -rotvec / timing.exposure_s, int(found.used.sum())
+
+
+def _agreeing(lis: AttitudeSolution, fits: StreakFits, rows: NDArray, measured: NDArray, omega0: NDArray,
+              timing: Timing) -> NDArray[np.bool_]:
+    """Identified streaks whose ends and centroid agree with the motion of their catalog star
+    under the identified attitude and the consensus rate (either time order)."""
+    if not np.all(np.isfinite(omega0)):
+        return np.zeros(rows.size, dtype=bool)
+    predicted = predict(lis.camera, lis.rot_cam_from_icrs, omega0, np.zeros(3), lis.matches.cat_vectors, timing)
+    m = measured[rows]
+    swapped = m[:, [2, 3, 0, 1, 4, 5]]
+
+    def worst(a):
+        return np.max(np.linalg.norm((a - predicted).reshape(-1, 3, 2), axis=2), axis=1)
+
+    return np.minimum(worst(m), worst(swapped)) <= agreement_tolerance_px(fits.length_px[rows])
+
+
+def _extended(img, fits, cand, rows, stars, hips, joint, timing, opts, epoch_jyear, fit_focal):
+    """Add the predicted streaks of the field's other catalog stars that agree, and fit again."""
+    camera = joint.camera
+    room = opts.max_streaks - rows.size
+    if room <= 0:
+        return fits, rows, stars, hips, joint
+    from ..catalog import load_catalog
+
+    catalog_stars = field_stars(opts.catalog_max_mag, epoch_jyear)
+    turn = float(np.linalg.norm(joint.omega_rad_s)) * timing.exposure_s
+    near = field_catalog(catalog_stars, camera, joint.rot_mid, turn)
+    near_hip = load_catalog().hip[catalog_stars.rows[near]]
+    near = near[~np.isin(near_hip, hips)]
+    blur = float(np.median(fits.blur_px[rows]))
+    index, more = fit_predicted(img, camera, catalog_stars.vectors[near], joint.rot_mid, joint.omega_rad_s,
+                                joint.alpha_rad_s2, timing, noise=cand.noise, background=cand.background,
+                                blur_px=blur, shot=fits.shot, slack_px=2.0, tolerance_px=3.0, limit=room)
+    if more is None or not np.any(more.ok):
+        return fits, rows, stars, hips, joint
+    new = index[more.ok]
+    combined = _concatenated(fits, more)
+    rows = np.concatenate([rows, len(fits) + np.flatnonzero(more.ok)])
+    stars = np.concatenate([stars, catalog_stars.vectors[near[new]]])
+    hips = np.concatenate([hips, load_catalog().hip[catalog_stars.rows[near[new]]]])
+    measured, cov = combined.measurements()
+    joint = fit_joint(camera, stars, measured[rows], cov[rows], joint.rot_mid, joint.omega_rad_s, timing,
+                      fit_alpha=opts.fit_alpha, fit_focal=fit_focal)
+    return combined, rows, stars, hips, joint
+
+
+def _concatenated(a: StreakFits, b: StreakFits) -> StreakFits:
+    """The fits of ``a`` then ``b`` (the frame's noise figures from ``a``)."""
+    return StreakFits(np.concatenate([a.params, b.params]), np.concatenate([a.cov, b.cov]),
+                      np.concatenate([a.chi2_red, b.chi2_red]), np.concatenate([a.n_pixels, b.n_pixels]),
+                      np.concatenate([a.ok, b.ok]), a.reasons + b.reasons, np.concatenate([a.label, b.label]),
+                      a.shot, a.noise, a.background)
+
+
+def _ordered_by(joint: JointFit, prior: ArrayLike | None) -> tuple[NDArray, bool]:
+    """(sign, known): the rate's sign that agrees with a prior rate."""
+    if prior is None:
+        return np.ones(1), False
+    prior = np.asarray(prior, dtype=float)
+    if prior.shape != (3,) or not np.all(np.isfinite(prior)):
+        raise InvalidInputError(f"prior_omega_rad_s must be 3 finite numbers (rad/s), got {prior!r}")
+    return np.array([1.0 if np.dot(joint.omega_rad_s, prior) >= 0 else -1.0]), True
+
+
+def rate_verdict(joint: JointFit, opts: StreakOptions, known_exposure: bool) -> tuple[Status, str]:
+    """Whether the joint fit's rate is trusted (module docstring, item 5)."""
+    used = int(joint.used.sum())
+    if used < opts.min_streaks:
+        return Status.TOO_FEW_STARS, f"{used} streaks in the fit ({opts.min_streaks} needed)"
+    if not known_exposure:
+        return Status.DEGENERATE, "the exposure time is unknown: the turn per exposure is in turn_rad"
+    if joint.birge > opts.max_birge:
+        return Status.DEGENERATE, f"the streaks misfit one rotation (rms {joint.birge:.1f} sigma > {opts.max_birge:g})"
+    relative = 3.0 * math.sqrt(float(np.trace(joint.rate_covariance))) / max(np.linalg.norm(joint.omega_rad_s), 1e-300)
+    if relative > opts.max_rate_uncertainty:
+        return Status.DEGENERATE, (f"rate uncertain by {100 * relative:.1f} % (3 sigma, > "
+                                   f"{100 * opts.max_rate_uncertainty:g} %): too few or too imprecise streaks")
+    return Status.OK, ""
+
+
+def _solution(lis, fits, rows, stars, hips, joint, timing, opts, prior, exposure_s, t0) -> StreakSolution:
+    sign, known = _ordered_by(joint, prior)
+    omega = sign[0] * joint.omega_rad_s
+    used = joint.used
+    status, reason = rate_verdict(joint, opts, exposure_s is not None)
+    rate = RateEstimate(status, reason, omega if status is Status.OK else np.full(3, np.nan),
+                        joint.rate_covariance, METHOD, used)
+    ra, dec, roll = radec_roll_from_rotation(joint.rot_mid)
+    matches = StarMatches(Status.OK, det_index=rows[used].astype(np.int64), hip=hips[used].astype(np.int64),
+                          cat_vectors=stars[used], false_match_prob=lis.false_match_prob)
+    return StreakSolution(
+        status=Status.OK, rot_cam_from_icrs=joint.rot_mid, covariance_rad2=joint.attitude_covariance,
+        ra_deg=math.degrees(ra), dec_deg=math.degrees(dec), roll_deg=math.degrees(roll), fov_deg=joint.camera.fov_deg,
+        camera=joint.camera, matches=matches, residuals_arcsec=_residuals_arcsec(joint, joint.camera),
+        false_match_prob=lis.false_match_prob, solve_time_s=time.perf_counter() - t0, epoch_jyear=lis.epoch_jyear,
+        epoch_source=lis.epoch_source, exposure_s=math.nan if exposure_s is None else float(exposure_s),
+        line_time_s=timing.line_time_s, t_mid_s=timing.mid_after_start_s if exposure_s is not None else math.nan,
+        rate=rate, alpha_rad_s2=joint.alpha_rad_s2, turn_rad=omega * timing.exposure_s, time_order_known=known,
+        streaks=fits, streak_index=rows[used].astype(np.int64), birge=joint.birge)
+
+
+def _residuals_arcsec(joint: JointFit, camera: Camera) -> NDArray[np.float64]:
+    """Each used streak's rms distance of its measured ends and centroid from the model (arcsec)."""
+    diff = (joint.measured - joint.predicted)[joint.used].reshape(-1, 3, 2)
+    return np.sqrt(np.mean(np.sum(diff**2, axis=2), axis=1)) * camera.pixel_scale_arcsec
+
+
+def _failed(status: Status, reason: str, fits: StreakFits, timing: Timing, t0: float,
+            omega: NDArray | None = None) -> StreakSolution:
+    """No attitude; the catalog-free consensus rate when there is one (status DEGENERATE: not
+    checked by the trust rules of :mod:`.trust`)."""
+    if omega is not None and np.all(np.isfinite(omega)):
+        rate = RateEstimate(Status.DEGENERATE, "catalog-free consensus rate, not identified: time order and "
+                            "uncertainty unknown", omega, None, "catalog-free consensus")
+    else:
+        rate = failed(status, reason, METHOD)
+    return StreakSolution(status=status, reason=reason, solve_time_s=time.perf_counter() - t0, rate=rate,
+                          streaks=fits, line_time_s=timing.line_time_s)
+
+
+def replace_rate(solution: StreakSolution, rate: RateEstimate) -> StreakSolution:
+    """The solution with another rate estimate (e.g. the catalog-free OLAE rate)."""
+    return replace(solution, rate=rate)
