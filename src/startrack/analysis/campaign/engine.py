@@ -7,7 +7,7 @@ loaded once per worker, including workers that join later; :mod:`.warm_plugin`).
 kilobytes) goes with every chunk: a scattered copy would be lost with the worker holding it.
 Chunks are gathered as they finish, each handed to ``on_chunk`` (which writes its part). A chunk
 whose worker dies is split into single trials and sent again; a single trial whose worker dies
-becomes a ``LOST`` row with the error, never a lost campaign.
+three times becomes a ``LOST`` row with the error, never a lost campaign.
 """
 
 from __future__ import annotations
@@ -33,11 +33,17 @@ LOCAL_CLUSTER_CONFIG = {
     # a local worker that dies was killed by its trial: no blind retries, the chunk is split into
     # single trials instead (run_dask)
     "distributed.scheduler.allowed-failures": 0,
+    # a task goes to a worker only when its thread is free, so none waits behind a trial that
+    # kills the worker
+    "distributed.scheduler.worker-saturation": 1.0,
     # one thread per library in each single-threaded worker, but not Dask's MALLOC_TRIM_THRESHOLD_
     # (see warm_plugin.undo_malloc_trim, which repairs it on workers started by others)
     "distributed.nanny.pre-spawn-environ": {"OMP_NUM_THREADS": 1, "MKL_NUM_THREADS": 1, "OPENBLAS_NUM_THREADS": 1},
 }
 """Dask settings of the local clusters this module starts."""
+
+SINGLE_TRIES = 3
+"""A single trial whose worker dies this many times is a ``LOST`` row."""
 Progress = Callable[[int, int], None]
 
 
@@ -105,20 +111,20 @@ def run_dask(client: Any, spec: CampaignSpec, chunks: list[Chunk], on_chunk: Chu
     t0 = time.perf_counter()
     client.register_plugin(WarmUp(spec), name=f"startrack-warm-{spec.name}")
     t1 = time.perf_counter()
-    pending = {client.submit(run_chunk, spec, chunk, pure=False): chunk for chunk in chunks}
+    pending = {client.submit(run_chunk, spec, chunk, pure=False): (chunk, 0) for chunk in chunks}
     total, done = sum(c.size for c in chunks), 0
     queue = as_completed(list(pending))
     for future in queue:
-        chunk = pending.pop(future)
+        chunk, tries = pending.pop(future)
         try:
             table = future.result()
         except Exception:  # the worker died (or the chunk could not be sent): retry trial by trial
-            if chunk.size > 1:
-                for k in range(chunk.start, chunk.stop):
-                    single = Chunk(chunk.cell, k, k + 1)
-                    retry = client.submit(run_chunk, spec, single, pure=False)
-                    pending[retry] = single
-                    queue.add(retry)
+            retries = _retries(chunk, tries)
+            for single, attempt in retries:
+                retry = client.submit(run_chunk, spec, single, pure=False)
+                pending[retry] = (single, attempt)
+                queue.add(retry)
+            if retries:
                 continue
             table = lost_table(spec, chunk, traceback.format_exc())
         future.release()
@@ -127,6 +133,15 @@ def run_dask(client: Any, spec: CampaignSpec, chunks: list[Chunk], on_chunk: Chu
         if progress is not None:
             progress(done, total)
     return {"warm_s": t1 - t0, "compute_s": time.perf_counter() - t1}
+
+
+def _retries(chunk: Chunk, tries: int) -> list[tuple[Chunk, int]]:
+    """What to send again after ``chunk`` failed: each of its trials alone, or, for a single
+    trial, itself until it has failed :data:`SINGLE_TRIES` times (a trial waiting on a worker
+    that another trial killed fails with it, through no fault of its own)."""
+    if chunk.size > 1:
+        return [(Chunk(chunk.cell, k, k + 1), 0) for k in range(chunk.start, chunk.stop)]
+    return [(chunk, tries + 1)] if tries + 1 < SINGLE_TRIES else []
 
 
 def workers_info(client: Any) -> dict[str, Any]:

@@ -52,6 +52,10 @@ def summary_text(out: str | Path) -> str:
     head = (f"campaign {manifest['name']} (level {manifest['level']}): {trials.num_rows} trials in "
             f"{len(manifest['cells'])} cells on {where}; status: {statuses}")
     parts = [head, cells_text(rows)]
+    if manifest.get("mode") == "budget":
+        from .budget_report import budget_text
+
+        parts.append(budget_text(out))
     reference = reference_text(out)
     if reference:
         parts.append(reference)

@@ -16,7 +16,6 @@ The module name starts with an underscore, so it is not taken for a level.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -27,21 +26,7 @@ from scipy.spatial.transform import Rotation
 
 from ....errors import InvalidInputError
 from ..outcome import NAN, truth_columns
-from ..params import Param, SpecError
-from .scene import frame_sensor
-
-APERTURE_PARAM = Param("aperture_area_m2", "float", None, "clear aperture area of the optics (m^2); auto: the sensor's",
-                       lo=1e-9, hi=100.0, optional=True)
-"""The one Optics field without a default, which the image level's generated parameters leave out."""
-
-
-def sensor_with_aperture(params: Mapping[str, Any]):
-    """The image level's sensor (:func:`.scene.frame_sensor`) with ``aperture_area_m2`` set."""
-    sensor = frame_sensor(params)
-    area = params["aperture_area_m2"]
-    if area is None:
-        return sensor
-    return dataclasses.replace(sensor, optics=dataclasses.replace(sensor.optics, aperture_area_m2=area))
+from ..params import SpecError
 
 
 def measurement_columns(*, status: str, correct: bool, n_stars: int, n_matched: int, time_s: float,

@@ -32,7 +32,7 @@ from scipy.spatial.transform import Rotation
 from ....simulate import read_out, render_gaussian_psf
 from ..params import Param, SpecError, params_by_name
 from . import Level, TrialOutput, register
-from ._measure import APERTURE_PARAM, check_builds, match_truth, measurement_columns, sensor_with_aperture
+from ._measure import check_builds, match_truth, measurement_columns
 from .scene import (
     DETECT_PARAMS,
     FRAME_PARAMS,
@@ -40,6 +40,7 @@ from .scene import (
     SENSOR_FIELD_PARAMS,
     frame_detector,
     frame_noise,
+    frame_sensor,
 )
 
 SENSOR_PARAMS = tuple(p for p in FRAME_PARAMS if p.name in ("sensor", "exposure_s"))
@@ -56,7 +57,7 @@ FIELD_PARAMS = (
     Param("match_px", "float", 3.0, "largest distance from a true star to its detection (px)", lo=0.1, hi=100.0),
 )
 
-PARAMS = params_by_name(FIELD_PARAMS, SENSOR_PARAMS, (APERTURE_PARAM,), SENSOR_FIELD_PARAMS, NOISE_PARAMS,
+PARAMS = params_by_name(FIELD_PARAMS, SENSOR_PARAMS, SENSOR_FIELD_PARAMS, NOISE_PARAMS,
                         DETECT_PARAMS)
 
 
@@ -78,7 +79,7 @@ def star_positions(params: Mapping[str, Any], rng: np.random.Generator) -> tuple
 
 def run(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generator, tolerance_px: float) -> TrialOutput:
     """Render, detect and centroid one image (``rot`` and ``tolerance_px`` are not used)."""
-    sensor = sensor_with_aperture(params)
+    sensor = frame_sensor(params)
     x, y = star_positions(params, rng)
     flux = float(sensor.electrons(params["mag_v"]))
     signal = render_gaussian_psf((params["height"], params["width"]), x, y, np.full(x.size, flux),
@@ -107,7 +108,7 @@ def check(params: Mapping[str, Any]) -> None:
         raise SpecError(f"stars_per_image ({params['stars_per_image']}) exceeds the {cells} cells of a "
                         f"{params['grid_px']} px grid in {params['width']} x {params['height']} px "
                         f"(margin {params['margin_px']} px)")
-    check_builds(params, sensor_with_aperture, frame_noise, frame_detector)
+    check_builds(params, frame_sensor, frame_noise, frame_detector)
 
 
 LEVEL = register(Level(

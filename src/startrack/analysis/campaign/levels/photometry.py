@@ -40,9 +40,9 @@ from ....simulate import magnitude_from_electrons, render_stars
 from ....simulate.radiometry import Sensor
 from ..params import Param, params_by_name
 from . import Level, TrialOutput, register
-from ._measure import APERTURE_PARAM, check_builds, measurement_columns, sensor_with_aperture
+from ._measure import check_builds, measurement_columns
 from .centroid import SENSOR_PARAMS
-from .scene import NOISE_PARAMS, SENSOR_FIELD_PARAMS, frame_noise
+from .scene import NOISE_PARAMS, SENSOR_FIELD_PARAMS, frame_noise, frame_sensor
 
 FIELD_PARAMS = (
     Param("camera", "str", "far-mst", "the camera preset whose image the stars are placed in",
@@ -53,7 +53,7 @@ FIELD_PARAMS = (
     Param("threshold_sigma", "float", 5.0, "threshold in units of the dark + read noise", lo=0.0, hi=1000.0),
 )
 
-PARAMS = params_by_name(FIELD_PARAMS, SENSOR_PARAMS, (APERTURE_PARAM,), SENSOR_FIELD_PARAMS, NOISE_PARAMS)
+PARAMS = params_by_name(FIELD_PARAMS, SENSOR_PARAMS, SENSOR_FIELD_PARAMS, NOISE_PARAMS)
 
 
 def threshold_adu(sensor: Sensor, k_sigma: float) -> float:
@@ -80,7 +80,7 @@ def weighted_sum_mags(image: NDArray, x: NDArray, y: NDArray, sensor: Sensor, k_
 
 def run(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generator, tolerance_px: float) -> TrialOutput:
     """One frame of equal stars, measured (``tolerance_px`` is not used)."""
-    camera, sensor = get_preset(params["camera"]), sensor_with_aperture(params)
+    camera, sensor = get_preset(params["camera"]), frame_sensor(params)
     n, m = params["stars_per_image"], params["margin_px"]
     x, y = rng.uniform(m, camera.width - m, n), rng.uniform(m, camera.height - m, n)
     mag = params["mag_v"]
@@ -101,7 +101,7 @@ def run(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generator, tole
 
 def check(params: Mapping[str, Any]) -> None:
     """Refuse settings the sensor or noise model refuse."""
-    check_builds(params, sensor_with_aperture, frame_noise)
+    check_builds(params, frame_sensor, frame_noise)
 
 
 LEVEL = register(Level(

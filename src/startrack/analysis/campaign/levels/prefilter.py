@@ -44,7 +44,8 @@ from .image import check as check_image
 from .image import render
 from .scene import frame_detector
 
-SOLVER_ONLY = ("fov_known", "fov_range_deg", "method", "calibrated")
+SOLVER_ONLY = ("fov_known", "fov_range_deg", "method", "calibrated", "solver_epoch_jyear", "distortion_known",
+               "timing_error_s", "frames_per_attitude", "attitudes_per_field", "dither_px")
 """Parameters of the image level that only tell the solver something (this level does not solve)."""
 PARAMS = params_by_name(tuple(p for p in IMAGE_PARAMS.values() if p.name not in SOLVER_ONLY), (
     Param("match_px", "float", 3.0, "largest distance from a true star to its detection (px)", lo=0.1, hi=100.0),

@@ -50,7 +50,7 @@ def dataclass_params(cls: type, prefix: str, doc: str, *, auto: bool, skip: tupl
     out = []
     for f in dataclasses.fields(cls):
         kind = _kind(str(f.type))
-        if kind is None or f.name in skip or f.default is dataclasses.MISSING:
+        if kind is None or f.name in skip or (f.default is dataclasses.MISSING and not auto):
             continue
         default = None if auto else f.default
         out.append(Param(prefix + f.name, kind[0], default, f"{doc}.{f.name}", optional=auto or kind[1]))

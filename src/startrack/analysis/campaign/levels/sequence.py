@@ -53,7 +53,10 @@ SEQUENCE_PARAMS = (
           lo=1e-3, hi=10000.0),
 )
 TRACKER_PARAMS = dataclass_params(TrackerOptions, "tracker_", "TrackerOptions", auto=False)
-PARAMS = params_by_name(CAMERA_PARAMS, FRAME_PARAMS, SENSOR_FIELD_PARAMS, NOISE_PARAMS, DETECT_PARAMS,
+RENDERED_ELSEWHERE = ("aberration_annual", "aberration_velocity_km_s")
+"""Frame parameters the sequence simulator does not render (the image level does)."""
+PARAMS = params_by_name(CAMERA_PARAMS, tuple(p for p in FRAME_PARAMS if p.name not in RENDERED_ELSEWHERE),
+                        SENSOR_FIELD_PARAMS, NOISE_PARAMS, DETECT_PARAMS,
                         SEQUENCE_PARAMS, TRACKER_PARAMS,
                         tuple(p for p in SOLVER_PARAMS if p.name != "method"))
 
