@@ -65,7 +65,8 @@ def result_dict(solution: AttitudeSolution, times_s: dict[str, float], extra: di
     n_det = 0 if det is None else len(det)
     out: dict[str, Any] = {"status": solution.status.value, "reason": solution.reason,
                            "failure": failure_words(solution, n_det), "n_detected": n_det,
-                           "n_matched": len(solution.matches) if solution.solved else 0}
+                           "n_matched": len(solution.matches) if solution.solved else 0,
+                           "epoch_jyear": num(solution.epoch_jyear), "epoch_source": solution.epoch_source}
     keys = ("ra_deg", "dec_deg", "roll_deg", "fov_deg", "qx", "qy", "qz", "qw", "false_match_prob",
             "residual_arcsec", "sigma_cross_boresight_arcsec", "sigma_roll_arcsec", "focal_px")
     out.update(dict.fromkeys(keys))
@@ -110,15 +111,16 @@ def matches_table(solution: AttitudeSolution) -> dict[str, list]:
 
 def detections_table(details: DetectionDetails, solution: AttitudeSolution) -> dict[str, list]:
     """Every kept detection with its measurements and the HIP number it was matched to."""
-    det = details.detections
+    det = solution.detections if solution.detections is not None else details.detections
     hip = np.full(len(det), -1, dtype=np.int64)
     if solution.solved:
         hip[solution.matches.det_index] = solution.matches.hip
     cols: dict[str, list] = {"index": list(range(len(det)))}
     for key in ("x", "y", "flux", "sigma_px", "area_px", "peak", "elongation"):
         cols[key] = getattr(det, key).tolist()
+    same = len(details) == len(det)  # the solve's detections are the detect stage's (deterministic)
     for key in ("mag", "peak_snr", "psf_sigma_px"):
-        cols[key] = getattr(details, key).tolist()
+        cols[key] = getattr(details, key).tolist() if same else [None] * len(det)
     cols["hip"] = [int(h) if h >= 0 else None for h in hip]
     return cols
 

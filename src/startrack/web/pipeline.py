@@ -5,7 +5,10 @@
                file (:func:`startrack.io.read_image`)
 ``detect``     the detector of the job's preset and settings (``auto``: from the image,
                :mod:`.presets`), detection with details, and the refused spots (:mod:`.rejects`)
-``identify``   lost-in-space identification and fit, :func:`startrack.solve_stars`
+``identify``   lost-in-space identification and fit: :func:`startrack.solve_image` with the job's
+               detector, exactly as ``startrack solve`` does (it detects again, deterministically
+               the same spots, so that the solver's own ordering of them and its reading of the
+               epoch from the header are the library's, not a copy of them)
 ``attitude``   the attitude as seen from the ground for a photo with a site and time
                (:func:`startrack.calibrate.ground_solve.solve_ground_photo`: apparent place and
                refraction, then altitude and azimuth; without the atmosphere correction only
@@ -25,6 +28,7 @@ out") followed by the solver's own sentence; the files are written in both cases
 
 from __future__ import annotations
 
+import math
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
@@ -44,7 +48,7 @@ from ..detect import StarDetector
 from ..errors import InvalidInputError
 from ..io import Image, read_image
 from ..results import AttitudeSolution
-from ..solve import DEFAULT_EPOCH_JYEAR, solve_stars
+from ..solve import DEFAULT_EPOCH_JYEAR, solve_image
 from .annotate import write_annotated
 from .jobs import SOLVE_STAGES, now_iso, read_json, update_state, write_json
 from .outputs import num, rerun_dict, result_dict, write_solution_files
@@ -89,10 +93,11 @@ def run_solve_job(folder: Path) -> None:
         details = detector.detect_details(image.data)
         rejects = rejected_spots(image.data, detector, details.detections)
     when, site = _when(opts, image), _site(opts)
-    epoch = float(when.tdb.jyear) if when is not None else (opts["epoch"] or DEFAULT_EPOCH_JYEAR)
+    epoch = opts["epoch"] if opts["epoch"] is not None else (None if opts["time"] is None else when)
     fov = _fov_kwargs(opts, image)
     with job.stage("identify"):
-        solution = _identify(details.detections, image, fov, epoch, opts["method"])
+        solution = _identify(image, detector, fov, epoch, opts["method"])
+    epoch = solution.epoch_jyear if math.isfinite(solution.epoch_jyear) else DEFAULT_EPOCH_JYEAR
     with job.stage("attitude"):
         solution, extra = _attitude(solution, image, detector, fov, when, site, opts)
     camera_fit = None
@@ -155,9 +160,9 @@ def _fov_kwargs(opts: dict[str, Any], image: Image) -> dict[str, Any]:
     return {"fov_deg": opts["fov_deg"], "fov_range_deg": fov_range, "camera": camera}
 
 
-def _identify(det, image: Image, fov: dict[str, Any], epoch: float, method: str) -> AttitudeSolution:
-    solution = solve_stars(det.x, det.y, width=image.width, height=image.height, epoch=epoch, method=method, **fov)
-    return replace(solution, detections=det)
+def _identify(image: Image, detector: StarDetector, fov: dict[str, Any], epoch, method: str) -> AttitudeSolution:
+    """:func:`startrack.solve_image` of the job (epoch None: from the header, else J2000.0)."""
+    return solve_image(image, detector=detector, epoch=epoch, method=method, **fov)
 
 
 def _attitude(solution: AttitudeSolution, image: Image, detector: StarDetector, fov: dict[str, Any],
@@ -208,7 +213,7 @@ def _refine(solution, image, detector, fov, epoch, when, site, opts):
     if not cal.status:
         return solution, _attitude(solution, image, detector, fov, when, site, opts)[1], info, fov
     new_fov = {"fov_deg": None, "fov_range_deg": None, "camera": cal.camera}
-    again = _identify(solution.detections, image, new_fov, epoch, opts["method"])
+    again = _identify(image, detector, new_fov, epoch, opts["method"])
     info.update(matches_after=len(again.matches) if again.solved else 0, fov_deg=num(cal.camera.fov_deg),
                 k1=num(cal.camera.k1), k2=num(cal.camera.k2))
     if not (again.solved and len(again.matches) >= len(solution.matches)):

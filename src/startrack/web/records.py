@@ -29,7 +29,7 @@ from .jobs import read_json
 FORMAT_VERSION = 1
 _DET_ARRAYS = ("x", "y", "flux", "sigma_px", "area_px", "peak", "elongation")
 _DET_SCALARS = ("background", "noise", "width", "height")
-_SCALARS = ("ra_deg", "dec_deg", "roll_deg", "fov_deg", "false_match_prob", "solve_time_s")
+_SCALARS = ("ra_deg", "dec_deg", "roll_deg", "fov_deg", "false_match_prob", "solve_time_s", "epoch_jyear")
 
 
 def save_solution(path: Path, solution: AttitudeSolution, extra: dict[str, Any] | None = None) -> None:
@@ -49,7 +49,7 @@ def save_solution(path: Path, solution: AttitudeSolution, extra: dict[str, Any] 
         arrays["covariance_rad2"] = solution.covariance_rad2
     meta = {"version": FORMAT_VERSION, "status": solution.status.value, "reason": solution.reason,
             "matches_status": m.status.value, "matches_reason": m.reason, "matches_fmp": m.false_match_prob,
-            "has_detections": solution.detections is not None,
+            "has_detections": solution.detections is not None, "epoch_source": solution.epoch_source,
             "detections": {k: float(getattr(det, k)) for k in _DET_SCALARS},
             "camera": None if solution.camera is None else _camera_fields(solution.camera),
             **{k: _plain(getattr(solution, k)) for k in _SCALARS}, "extra": extra or {}}
@@ -87,7 +87,7 @@ def load_solution(path: Path) -> tuple[AttitudeSolution, dict[str, Any]]:
         covariance_rad2=arrays.get("covariance_rad2"),
         **{k: _nan(meta[k]) for k in _SCALARS},
         camera=None if meta["camera"] is None else Camera(**meta["camera"]), matches=matches,
-        residuals_arcsec=arrays["residuals_arcsec"],
+        residuals_arcsec=arrays["residuals_arcsec"], epoch_source=meta["epoch_source"],
         detections=detections if meta["has_detections"] else None)
     return solution, meta["extra"]
 
