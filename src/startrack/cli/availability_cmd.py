@@ -16,7 +16,9 @@ from pathlib import Path
 from ..camera import Camera, get_preset
 from ..catalog import load_catalog, thin_uniform
 from ..errors import InvalidInputError
-from .common import print_json
+from ..io.atomic import open_output
+from ..io.targets import output_target
+from .common import check_finite_options, positive_count, print_json, time_option
 from .progress import ProgressBar
 
 
@@ -26,6 +28,31 @@ def _camera(args) -> Camera:
     if args.fov_deg is None:
         raise InvalidInputError("give --camera PRESET or --fov-deg F (with --width and --height)")
     return Camera.from_fov(args.width, args.height, args.fov_deg)
+
+
+MAX_POINTINGS = 10_000_000
+"""Most random pointings (the counts of 10^7 pointings take about a minute and some 100 MB)."""
+
+
+def _check(args) -> None:
+    """Refuse option values that no run can use, before any work (NaN, inf, a bad time, ...)."""
+    check_finite_options(args)
+    time_option(args)
+    if args.plot is not None and Path(args.plot).suffix.lower() != ".png" and args.plot != "-":
+        raise InvalidInputError(f"--plot writes a PNG: give a .png file name, got {args.plot}")
+    if args.plot is not None:
+        output_target(args.plot)
+    if args.pointings > MAX_POINTINGS:
+        raise InvalidInputError(f"--pointings must be at most {MAX_POINTINGS:,}, got {args.pointings:,}")
+    if not -2.0 <= args.max_mag <= 20.0:
+        raise InvalidInputError(f"--max-mag must be a V magnitude from -2 to 20, got {args.max_mag:g}")
+    if not 0.0 < args.altitude_km <= 1e6:
+        raise InvalidInputError(f"--altitude-km must be above 0 and at most 1e6 km, got {args.altitude_km:g}")
+    for name in ("min_stars", "min_joint_stars", "reduced_per_fov", "seed"):
+        value = getattr(args, name)
+        if value is not None and value < (0 if name == "seed" else 1):
+            raise InvalidInputError(f"--{name.replace('_', '-')} must be a whole number >= "
+                                    f"{0 if name == 'seed' else 1}, got {value}")
 
 
 def main(argv: list[str]) -> int:
@@ -39,10 +66,11 @@ def main(argv: list[str]) -> int:
                "Exit status: 0 done, 2 on bad input.")
     parser.add_argument("--camera", help="camera preset")
     parser.add_argument("--fov-deg", type=float, help="pinhole camera: horizontal FOV")
-    parser.add_argument("--width", type=int, default=1024)
-    parser.add_argument("--height", type=int, default=1024)
+    parser.add_argument("--width", type=positive_count, default=1024)
+    parser.add_argument("--height", type=positive_count, default=1024)
     parser.add_argument("--max-mag", type=float, default=6.0, help="catalog limit, V (default 6.0)")
-    parser.add_argument("--pointings", type=int, default=100_000, help="random pointings (seed 002 used 10^6)")
+    parser.add_argument("--pointings", type=positive_count, default=100_000,
+                        help=f"random pointings (seed 002 used 10^6; at most {MAX_POINTINGS:,})")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--plot", help="write the histogram to this PNG")
     parser.add_argument("--reduced-per-fov", type=int, metavar="N",
@@ -57,6 +85,7 @@ def main(argv: list[str]) -> int:
     rig.add_argument("--altitude-km", type=float, default=500.0, help="dawn-dusk orbit altitude (default 500)")
     rig.add_argument("--no-exclusion", action="store_true", help="ignore the Sun, the Earth and the Moon")
     args = parser.parse_args(argv)
+    _check(args)
     if args.rig is not None:
         return _rig(args)
     from ..analysis.availability import star_counts
@@ -75,7 +104,8 @@ def main(argv: list[str]) -> int:
     if args.plot:
         from ..analysis.plots import plot_star_counts
 
-        plot_star_counts(result, Path(args.plot))
+        with open_output(args.plot, "wb") as fh:  # the rules of startrack.io.atomic; PNG as the help says
+            plot_star_counts(result, fh)
     if args.json:
         print_json(report)
     else:

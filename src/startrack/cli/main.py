@@ -60,14 +60,23 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _run(name: str, argv: list[str]) -> int:
+    from .run_context import Terminated, command_context, memory_message
+
     module = importlib.import_module(SUBCOMMANDS[name][0])
     try:
-        return module.main(argv)
+        with command_context(name):  # inputs protected, SIGTERM raises Terminated, one-line warnings
+            return module.main(argv)
+    except Terminated as exc:  # outputs already cleaned up by their finally blocks
+        print(f"startrack {name}: terminated", file=sys.stderr)
+        return exc.code
     except SystemExit as exc:  # argparse: --help (0) or a usage error (2, already printed)
         return exc.code if isinstance(exc.code, int) else int(exc.code is not None)
     except BrokenPipeError:  # e.g. `startrack solve x.fits --json | head`: stop quietly, as on SIGPIPE
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 141
+    except MemoryError as exc:
+        print(f"startrack {name}: error: {memory_message(exc)}", file=sys.stderr)
+        return 2
     except (StartrackError, ValueError, OSError) as exc:
         print(f"startrack {name}: error: {one_line(exc)}", file=sys.stderr)
         return 2

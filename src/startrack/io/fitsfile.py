@@ -155,6 +155,8 @@ def _clean_header(header: Mapping[str, Any] | fits.Header | None) -> fits.Header
     out = fits.Header()
     if header is None:
         return out
+    if not isinstance(header, Mapping | fits.Header):
+        raise InvalidInputError(f"header must be a dict of cards or an astropy Header, got {type(header).__name__}")
     if isinstance(header, fits.Header):
         items = [(c.keyword, c.value if c.keyword in _COMMENTARY else (c.value, c.comment))
                  for c in header.cards]
@@ -234,6 +236,8 @@ def fits_bytes(array: NDArray, header: Mapping | fits.Header | None = None, tabl
         primary = fits.PrimaryHDU(data=array, header=_clean_header(header))
     except (ValueError, TypeError, KeyError) as exc:
         raise InvalidInputError(f"FITS header is not valid: {exc}") from exc
+    if tables is not None and not isinstance(tables, Mapping):
+        raise InvalidInputError(f"tables must be a dict of name -> table, got {type(tables).__name__}")
     hdus = fits.HDUList([primary, *leading, *(_table_hdu(k, v) for k, v in (tables or {}).items())])
     buffer = io.BytesIO()
     try:

@@ -5,12 +5,14 @@ are matched without regard to case or surrounding spaces; lines starting with ``
 comments. Required columns ``x`` and ``y`` are 0-based pixel-centre coordinates (x = column,
 y = row; see :mod:`startrack.conventions`; subtract 1 from FITS / astrometry.net positions).
 Optional columns ``flux`` (any linear unit) and ``mag`` are read when present; other columns are
-ignored. Every value read must be a finite number.
+ignored. Every value read must be a finite number. Lines are read one at a time, at most
+:data:`MAX_LINE_CHARS` characters each, and at most :data:`MAX_STARS` rows.
 """
 
 from __future__ import annotations
 
 import csv
+import itertools
 import math
 import os
 from pathlib import Path
@@ -19,25 +21,55 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InvalidInputError
+from .targets import note_input
 
 REQUIRED_COLUMNS = ("x", "y")
 OPTIONAL_COLUMNS = ("flux", "mag")
 
 
+MAX_LINE_CHARS = 4096
+"""Longest line read (a row of numbers needs far less); a longer one is refused, not parsed."""
+
+MAX_STARS = 1_000_000
+"""Most data rows read; a longer list is refused."""
+
+
+def _lines(path: Path) -> list[tuple[int, str]]:
+    """The (line number, text) of the non-blank, non-comment lines, each at most MAX_LINE_CHARS long."""
+    lines: list[tuple[int, str]] = []
+    with open(path, newline="", encoding="utf-8-sig") as fh:
+        for number in itertools.count(1):
+            line = fh.readline(MAX_LINE_CHARS + 1)
+            if not line:
+                return lines
+            if len(line) > MAX_LINE_CHARS or (len(line) == MAX_LINE_CHARS and not line.endswith("\n")):
+                raise InvalidInputError(f"star list {path}, line {number}: longer than {MAX_LINE_CHARS} "
+                                        "characters; a row holds x, y and a few numbers")
+            if line.strip() and not line.lstrip().startswith("#"):
+                lines.append((number, line))
+                if len(lines) > MAX_STARS + 1:
+                    raise InvalidInputError(f"star list {path} has more than {MAX_STARS:,} rows")
+    return lines
+
+
 def _rows(path: Path) -> tuple[list[str], list[tuple[int, list[str]]]]:
     """Header names (lower case) and the (line number, fields) of each data row."""
-    if not path.is_file():
-        raise InvalidInputError(f"star list {path} does not exist or is not a file")
+    note_input(path)
     try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            lines = [(n, line) for n, line in enumerate(fh, start=1)
-                     if line.strip() and not line.lstrip().startswith("#")]
+        lines = _lines(path)
     except UnicodeDecodeError as exc:
         raise InvalidInputError(f"star list {path} is not a UTF-8 text CSV file (undecodable byte at offset "
                                 f"{exc.start})") from None
+    except OSError as exc:
+        raise InvalidInputError(f"star list {path} cannot be read ({exc.strerror or exc})") from None
     if not lines:
         raise InvalidInputError(f"star list {path} is empty: expected a header row with x, y")
-    parsed = list(csv.reader(line for _, line in lines))
+    try:
+        parsed = list(csv.reader(line for _, line in lines))
+    except csv.Error as exc:
+        raise InvalidInputError(f"star list {path} is not a valid CSV file ({exc})") from None
+    if len(parsed) != len(lines):
+        raise InvalidInputError(f"star list {path}: a quoted field runs over several lines; give one star per line")
     names = [name.strip().lower() for name in parsed[0]]
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates:
@@ -80,7 +112,11 @@ def read_star_list(path: str | os.PathLike) -> dict[str, NDArray[np.float64]]:
         If the file is missing or empty, lacks x or y, has a row of the wrong length, or holds
         a value that is not a finite number; the message names the file, line and column.
     """
+    if not isinstance(path, str | os.PathLike):
+        raise InvalidInputError(f"path must be a file name (str or os.PathLike), got {type(path).__name__}")
     path = Path(path)
+    if not path.is_file():
+        raise InvalidInputError(f"star list {path} does not exist or is not a file")
     names, rows = _rows(path)
     missing = [c for c in REQUIRED_COLUMNS if c not in names]
     if missing:

@@ -135,7 +135,12 @@ def output_target(path: str | os.PathLike, inputs: Iterable[str | os.PathLike] =
         For a folder, a missing folder, a block device, a socket, a missing path under /dev or
         /proc, or an input.
     """
+    if not isinstance(path, str | os.PathLike):
+        raise InvalidInputError(f"output path must be a file name (str or os.PathLike) or '-' for standard output, "
+                                f"got {type(path).__name__}")
     given = os.fspath(path)
+    if isinstance(given, bytes):
+        given = os.fsdecode(given)
     if given == STDOUT:
         return OutputTarget(given, None, True)
     if not given:

@@ -94,6 +94,11 @@ def _sensor(truth) -> dict[str, Any]:
 
 def truth_to_dict(truth) -> dict[str, Any]:
     """A JSON-ready dictionary of a :class:`startrack.simulate.Truth` (stars inside the image)."""
+    from ..simulate import Truth
+
+    if not isinstance(truth, Truth):
+        raise InvalidInputError(f"truth must be a startrack.simulate.Truth (sim.truth of a simulated frame), "
+                                f"got {type(truth).__name__}")
     ra, dec, roll = (float(np.degrees(a)) for a in radec_roll_from_rotation(truth.rot_cam_from_icrs))
     qx, qy, qz, qw = (float(q) for q in truth.rot_cam_from_icrs.as_quat())
     cam = truth.camera

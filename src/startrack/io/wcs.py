@@ -20,6 +20,7 @@ pixels unchanged), and so do ds9, astrometry.net and SIP-aware tools.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -88,6 +89,12 @@ def fit_sip(camera: Camera, max_residual_px: float = 0.01, order: int | None = N
     order : int, optional
         Use this order instead of choosing one.
     """
+    _check_camera(camera)
+    if not (isinstance(max_residual_px, int | float) and math.isfinite(max_residual_px) and max_residual_px > 0):
+        raise InvalidInputError(f"max_residual_px must be a positive number of pixels, got {max_residual_px!r}")
+    if order is not None and not (isinstance(order, int) and not isinstance(order, bool)
+                                  and 2 <= order <= MAX_SIP_ORDER):
+        raise InvalidInputError(f"order must be None or a whole number from 2 to {MAX_SIP_ORDER}, got {order!r}")
     x, y = _grid(camera)
     v = camera.pixel_to_vector(x, y)
     u, w = x - camera.cx, y - camera.cy
@@ -100,6 +107,19 @@ def fit_sip(camera: Camera, max_residual_px: float = 0.01, order: int | None = N
             (ap, bp), _ = _fit_poly(up, wp, np.stack([u - up, w - wp], axis=1), n, scale)
             return SipFit(order=n, a=a, b=b, ap=ap, bp=bp, max_residual_px=residual)
     raise AssertionError("unreachable")  # pragma: no cover
+
+
+def _check_camera(camera: Camera) -> None:
+    if not isinstance(camera, Camera):
+        raise InvalidInputError(f"camera must be a startrack.Camera, got {type(camera).__name__}")
+
+
+def _date_obs(date_obs: str) -> Time:
+    try:
+        return Time(date_obs, scale="utc")
+    except (ValueError, TypeError):
+        raise InvalidInputError(f"date_obs must be an ISO 8601 UTC time such as 2024-08-12T03:15:00, "
+                                f"got {date_obs!r}") from None
 
 
 def _cd_matrix(rot_cam_from_icrs: Rotation, camera: Camera, ra: float, dec: float) -> NDArray:
@@ -126,6 +146,8 @@ def wcs_header(rot_cam_from_icrs: Rotation, camera: Camera, *, date_obs: str | N
     """
     if not isinstance(rot_cam_from_icrs, Rotation) or not rot_cam_from_icrs.single:
         raise InvalidInputError("rot_cam_from_icrs must be a single scipy Rotation")
+    _check_camera(camera)
+    time = None if date_obs is None else _date_obs(date_obs)
     axis = rot_cam_from_icrs.inv().apply([0.0, 0.0, 1.0])
     ra, dec = (float(a) for a in vector_to_radec(axis))
     cd = _cd_matrix(rot_cam_from_icrs, camera, ra, dec)
@@ -143,8 +165,7 @@ def wcs_header(rot_cam_from_icrs: Rotation, camera: Camera, *, date_obs: str | N
              ("IMAGEW", camera.width, "image width, px"), ("IMAGEH", camera.height, "image height, px")]
     for key, value, comment in cards:
         hdr[key] = (value, comment)
-    if date_obs is not None:
-        time = Time(date_obs, scale="utc")
+    if time is not None:
         hdr["DATE-OBS"] = (time.isot, "UTC")
         hdr["MJD-OBS"] = (time.mjd, "UTC")
     if sip:

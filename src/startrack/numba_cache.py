@@ -1,0 +1,126 @@
+"""Where numba keeps startrack's compiled loops, and clearing a damaged copy (docs/io.md, "Caches").
+
+startrack's kernels (:mod:`startrack.identify.quad_kernel`, :mod:`startrack.identify.pose_kernel`)
+are compiled by numba on first use and cached on disk (``cache=True``). Left to itself numba writes
+that cache into ``__pycache__`` beside the installed package (read-only in a system install, shared
+by every user) and trusts what it finds there: a damaged index or data file stops every later run
+with an UnpicklingError. So:
+
+* :func:`configure` points numba at ``<startrack cache>/numba`` (``$STARTRACK_CACHE_DIR/numba`` or
+  the platform's user cache), unless the user set ``NUMBA_CACHE_DIR`` themselves. It runs when
+  :mod:`startrack.cache` is imported, which every path to a kernel does before numba is imported;
+  if numba was imported earlier, its ``config.CACHE_DIR`` is set instead.
+* :func:`heal` checks every file of that folder once per process, before the first solve: an index
+  (``.nbi``) must unpickle, a data file (``.nbc``) must be a complete pickle stream (its opcodes
+  are walked without building anything); a file that fails is deleted, and numba compiles that
+  function again (a few seconds) and rewrites it. Temporary files of killed writers
+  (``*.tmp.*`` older than an hour) are removed too. A data file whose bytes are damaged inside
+  the compiled code itself is beyond what can be checked without loading it.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import pickle
+import pickletools
+import sys
+import time
+from pathlib import Path
+
+NUMBA_ENV_VAR = "NUMBA_CACHE_DIR"
+STALE_TEMP_S = 3600.0
+"""A numba temporary file untouched for this long belongs to a killed writer."""
+
+_HEALED: set[Path] = set()
+
+
+def numba_cache_dir(root: Path) -> Path:
+    """startrack's numba folder inside the cache folder ``root``."""
+    return root / "numba"
+
+
+_CONFIGURED: list[Path] = []
+
+
+def configured_dir() -> Path | None:
+    """The folder :func:`configure` chose (None before, or when the user set NUMBA_CACHE_DIR)."""
+    return _CONFIGURED[0] if _CONFIGURED else None
+
+
+def configure(root: Path) -> Path | None:
+    """Send numba's cache to ``numba_cache_dir(root)``; returns it, or None if the user chose one.
+
+    Only the first call of a process decides (numba reads the setting when it compiles).
+    """
+    if _CONFIGURED:
+        return _CONFIGURED[0]
+    if os.environ.get(NUMBA_ENV_VAR):
+        return None
+    folder = numba_cache_dir(root)
+    _CONFIGURED.append(folder)
+    if "numba" in sys.modules:
+        from numba.core import config
+
+        config.CACHE_DIR = str(folder)
+    os.environ[NUMBA_ENV_VAR] = str(folder)
+    return folder
+
+
+def _index_ok(data: bytes) -> bool:
+    stream = io.BytesIO(data)
+    try:
+        pickle.load(stream)  # numba's version string
+        pickle.loads(stream.read())  # (source stamp, {signature: data file name})
+    except Exception:  # noqa: BLE001 - any failure to unpickle means a damaged index
+        return False
+    return True
+
+
+def _data_ok(data: bytes) -> bool:
+    try:
+        opcodes = [op.name for op, _, _ in pickletools.genops(data)]
+    except Exception:  # noqa: BLE001 - a truncated or garbled stream
+        return False
+    return bool(opcodes) and opcodes[-1] == "STOP"
+
+
+def _check(path: Path) -> bool:
+    """True if the cache file looks whole (see the module docstring)."""
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return True  # unreadable now: numba will say so itself
+    return _index_ok(data) if path.suffix == ".nbi" else _data_ok(data)
+
+
+def heal(folder: Path | None) -> list[Path]:
+    """Delete the damaged and stale files of startrack's numba cache (once per process per folder).
+
+    Returns the files removed; never raises.
+    """
+    if folder is None or folder in _HEALED or not folder.is_dir():
+        return []
+    _HEALED.add(folder)
+    removed, now = [], time.time()
+    for path in folder.rglob("*"):
+        stale_temp = ".tmp." in path.name and _age_s(path, now) > STALE_TEMP_S
+        damaged = path.suffix in (".nbi", ".nbc") and not _check(path)
+        if (stale_temp or damaged) and _unlink(path):
+            removed.append(path)
+    return removed
+
+
+def _age_s(path: Path, now: float) -> float:
+    try:
+        return now - path.stat().st_mtime
+    except OSError:
+        return 0.0
+
+
+def _unlink(path: Path) -> bool:
+    try:
+        path.unlink()
+    except OSError:
+        return False
+    return True
