@@ -29,7 +29,7 @@ import numpy as np
 
 from . import numba_cache
 from .errors import CacheError, CacheWarning
-from .io.atomic import remove_stale_temps, temp_name
+from .io.atomic import discard, remove_stale_temps, temp_name
 
 ENV_VAR = "STARTRACK_CACHE_DIR"
 FORMAT = 2
@@ -122,7 +122,7 @@ def save(kind: str, version: int, params: Mapping, arrays: Mapping[str, np.ndarr
         raise CacheError(f"cannot write the cache file {path}: {exc.strerror or exc}; set {ENV_VAR} "
                          "to a writable folder") from None
     finally:
-        tmp.unlink(missing_ok=True)
+        discard(tmp)
     return path
 
 

@@ -10,7 +10,9 @@ standard output as they come); an interrupted run leaves the previous CSV as it 
 from __future__ import annotations
 
 import argparse
+import io
 import math
+import os
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -129,10 +131,22 @@ def main(argv: list[str]) -> int:
     return 0 if solved == len(files) else 1
 
 
+def _is_stdout(out: str) -> bool:
+    """True when --out is standard output (``-``, or a name of the same file such as /dev/stdout)."""
+    if out == STDOUT:
+        return True
+    try:
+        return os.path.samestat(os.stat(out), os.fstat(sys.stdout.fileno()))
+    except (OSError, ValueError, io.UnsupportedOperation):
+        return False
+
+
 def _summary(solved: int, total: int, unusable: list[str], out: str) -> None:
+    """The one-line summary, on standard error when the CSV went to standard output."""
+    to_stdout = _is_stdout(out)
     where = "standard output" if out == STDOUT else out
     text = f"{solved} of {total} frames have an attitude"
     if unusable:
         names = ", ".join(unusable[:3]) + (", ..." if len(unusable) > 3 else "")
         text += f"; {len(unusable)} could not be used ({names}: see the reason column)"
-    print(f"{text}; wrote {where}", file=sys.stderr if out == STDOUT else sys.stdout)
+    print(f"{text}; wrote {where}", file=sys.stderr if to_stdout else sys.stdout)

@@ -90,6 +90,14 @@ def remove_stale_temps(folder: Path, name: str | None = None) -> int:
     return removed
 
 
+def discard(path: Path) -> None:
+    """Remove a temporary file if it is there; never raises."""
+    try:
+        path.unlink(missing_ok=True)
+    except OSError:
+        pass
+
+
 def _fsync(path: Path) -> None:
     fd = os.open(path, os.O_RDONLY)
     try:
@@ -205,7 +213,7 @@ def atomic_group(paths: Sequence[str | os.PathLike], *,
         finally:
             for tmp, target in zip(tmps, targets, strict=True):
                 if not target.through:
-                    tmp.unlink(missing_ok=True)
+                    discard(tmp)
 
 
 def _backup(target: OutputTarget) -> Path | None:
@@ -244,7 +252,7 @@ def _replace_all(regular: list[tuple[OutputTarget, Path]]) -> None:
     finally:
         for backup in backups:
             if backup is not None:
-                backup.unlink(missing_ok=True)
+                discard(backup)
 
 
 def _commit_group(targets: list[OutputTarget], tmps: list[Path]) -> None:

@@ -120,11 +120,16 @@ def _read_at(fh: BinaryIO, offset: int, count: int, size: int, path: Path) -> by
 
 
 def _inflate(chunk: bytes, limit: int, path: Path) -> bytes:
-    """Deflate-decompress at most ``limit`` bytes (a strip never needs more than the image)."""
+    """Deflate-decompress a strip, refusing one that inflates past ``limit`` bytes (what the rest
+    of the image can hold) before more than one byte past it is produced."""
     try:
-        return zlib.decompressobj().decompress(chunk, max(limit, 1))
+        data = zlib.decompressobj().decompress(chunk, limit + 1)
     except zlib.error as exc:
         raise ImageReadError(f"{path}: TIFF strip is truncated or corrupt ({exc})") from exc
+    if len(data) > limit:
+        raise ImageReadError(f"{path}: a TIFF strip inflates past the image's size as its header gives it; "
+                             "the file is corrupt or not what it claims")
+    return data
 
 
 def _strip_bytes(fh: BinaryIO, tags: Mapping[int, object], expected: int, path: Path) -> bytes:
