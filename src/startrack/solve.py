@@ -43,6 +43,9 @@ def _solution(problem: SolveRequest, stars: FieldStars, cand: Candidate, t0: flo
     fit = settle_matches(problem.x, problem.y, stars, cand, problem.focal_range, fit_aspect=problem.fit_aspect)
     camera, img, rows, ref, res_px = fit.camera, fit.image_index, fit.catalog_rows, fit.ref_icrs, fit.residual_px
     observed = camera.pixel_to_vector(problem.x[img], problem.y[img])
+    usable = np.isfinite(observed).all(axis=1)  # a star where a fitted wide lens cannot be inverted: left out
+    if not usable.all():
+        img, rows, ref, res_px, observed = img[usable], rows[usable], ref[usable], res_px[usable], observed[usable]
     n = len(img)
     sigma_rad = max(math.sqrt(float(res_px @ res_px) / n), 0.05) / math.sqrt(camera.fx * camera.fy)
     quat, matrix = wahba_equal_weights(observed, ref)

@@ -3,8 +3,9 @@ lost-in-space matcher (see :mod:`.verify` for the false-match probability).
 
 The candidate is tested at the tight match radius. If it falls short, its matches at a loose
 radius (``LOOSE_RADIUS_FACTOR`` times wider) are used to refit the attitude (and the focal length
-when it is free), and it is tested again at the tight radius: a pattern fitted on a few close
-stars can be off by more than the tight radius at the far side of the image. For a lens that is
+when it is free), and it is tested again at the tight radius, counting only the stars the fit
+did not use beyond those it had already matched (:meth:`Confirmer.confirm`): a pattern fitted
+on a few close stars can be off by more than the tight radius at the far side of the image. For a lens that is
 not calibrated the refit also takes the radial distortion k1 (and, when the pixel aspect is
 searched, the aspect), and the loose pass is made twice: a wide lens bends the far side of the
 image by tens of pixels, which a pinhole fit to a pattern near the centre cannot predict.
@@ -33,6 +34,12 @@ MIN_EXTRA_MATCHES = 2
 
 LOOSE_ROUNDS_DISTORTED = 2
 """Loose passes for a lens whose distortion is fitted (one otherwise)."""
+
+MIN_EXTRA_FOR_LENS = 6
+"""The loose refit frees k1 and the pixel aspect only with at least this many stars beyond the
+pattern: with fewer, the extra freedom pulls the loose matches of a wrong candidate in under
+the tight radius, and the test at that radius would count them as evidence (one false match in
+about 300 wide-field solves before this rule)."""
 
 
 @dataclass(frozen=True)
@@ -83,36 +90,47 @@ class Confirmer:
                 n_trials: int, pool_end: int = 0) -> Candidate | None:
         """A verified :class:`Candidate`, or None (see the module docstring). ``pool_end``: one past
         the faintest star rank the patterns are drawn from; the test covers
-        :attr:`verify_stars` stars, more when the pool reaches deeper (half as many again beyond it)."""
+        :attr:`verify_stars` stars, more when the pool reaches deeper (half as many again beyond it).
+
+        After a loose refit, the stars that only the loose radius had matched are fitted, not
+        found: the test counts the stars the candidate matched at the tight radius before any
+        refit and those the refit newly brings in, not the ones it pulled in (a refit with a free
+        focal length can pull a wrong candidate's chance loose matches under the tight radius:
+        one false match in about 300 wide-field solves before this rule)."""
         n = min(len(self.x), max(self.verify_stars, pool_end + self.verify_stars // 2))
-        found = self._verify(stars, rot, camera, pattern_img, n_trials, n)
-        rounds = LOOSE_ROUNDS_DISTORTED if self.fit_distortion else 1
-        for _ in range(rounds):
+        found, tight = self._verify(stars, rot, camera, pattern_img, n_trials, n, np.zeros(0, np.int64))
+        fitted = np.zeros(0, np.int64)
+        for _ in range(LOOSE_ROUNDS_DISTORTED if self.fit_distortion else 1):
             if found is not None:
                 return found
             proj = project_stars(stars.tree, stars.vectors, rot, camera, stars.keep)
             img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y,
                                          LOOSE_RADIUS_FACTOR * self.radius_px)
-            if np.count_nonzero(_not_in(img_i, pattern_img)) < MIN_EXTRA_MATCHES:
+            extra = np.count_nonzero(_not_in(img_i, pattern_img))
+            if extra < MIN_EXTRA_MATCHES:
                 return None
-            ref = stars.vectors[proj.star[cat_i]]
-            rot, camera, _ = refine_pointing(rot, camera, ref, self.x[img_i], self.y[img_i], fit_focal=self.fit_focal,
-                                             fit_k1=self.fit_distortion, fit_aspect=self.fit_aspect)
-            found = self._verify(stars, rot, camera, pattern_img, n_trials, n)
+            fitted = np.union1d(fitted, img_i[_not_in(img_i, tight) & _not_in(img_i, pattern_img)])
+            lens = extra >= MIN_EXTRA_FOR_LENS
+            rot, camera, _ = refine_pointing(rot, camera, stars.vectors[proj.star[cat_i]], self.x[img_i],
+                                             self.y[img_i], fit_focal=self.fit_focal,
+                                             fit_k1=self.fit_distortion and lens, fit_aspect=self.fit_aspect and lens)
+            found, _ = self._verify(stars, rot, camera, pattern_img, n_trials, n, fitted)
         return found
 
-    def _verify(self, stars: StarSet, rot, camera, pattern_img, n_trials: int, n: int) -> Candidate | None:
-        """The candidate if its tight-radius matches among the first ``n`` stars make a false
-        match unlikely enough."""
+    def _verify(self, stars: StarSet, rot, camera, pattern_img, n_trials: int, n: int,
+                fitted: NDArray) -> tuple[Candidate | None, NDArray[np.int64]]:
+        """The candidate if its tight-radius matches among the first ``n`` stars, other than the
+        pattern's and the ``fitted`` ones, make a false match unlikely enough (else None); and
+        the image stars matched at the tight radius."""
         proj = project_stars(stars.tree, stars.vectors, rot, camera, stars.keep)
         img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y, self.radius_px)
-        extra = _not_in(img_i, pattern_img)
+        extra = _not_in(img_i, pattern_img) & _not_in(img_i, fitted)
         d2 = (self.x[img_i[extra]] - proj.x[cat_i[extra]]) ** 2 + (self.y[img_i[extra]] - proj.y[cat_i[extra]]) ** 2
-        prob = false_match_bound(d2, n - len(pattern_img), proj.star.size, self.radius_px,
+        prob = false_match_bound(d2, n - len(pattern_img) - len(fitted), proj.star.size, self.radius_px,
                                  camera.width, camera.height, n_trials)
         if prob > self.max_false_match_prob:
-            return None
-        return Candidate(rot, camera, img_i, stars.catalog_rows[proj.star[cat_i]], prob)
+            return None, img_i
+        return Candidate(rot, camera, img_i, stars.catalog_rows[proj.star[cat_i]], prob), img_i
 
 
 def _not_in(values: NDArray, few: NDArray) -> NDArray[np.bool_]:

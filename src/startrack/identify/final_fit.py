@@ -55,8 +55,10 @@ webcam, a wide lens) is fitted with k1 at every round of the re-match, not only 
 far side is bent by tens of pixels, beyond the re-match radius of a pinhole fit), and with k2 as
 well once MIN_STARS_FOR_K2 stars are matched."""
 
-MIN_STARS_FOR_ASPECT = 12
-"""The pixel aspect (fy / fx), when not known, is fitted once this many stars are matched."""
+MIN_STARS_FOR_ASPECT = 6
+"""The pixel aspect (fy / fx), when not known, is fitted once this many stars are matched: from
+the first round, since 3 % of aspect moves the edge of a 1024 px image by 15 px, beyond the
+re-match radius of a fit that holds the aspect fixed."""
 
 DEPTH_FACTOR = 5.0
 """The re-match considers only the catalog stars that are bright enough for the image: the
@@ -133,6 +135,27 @@ def _free(field: _Field, n_stars: int) -> dict[str, bool]:
             "fit_k2": field.fit_k2 and n_stars >= MIN_STARS_FOR_K2}
 
 
+def lens_folds(camera: Camera, x: NDArray, y: NDArray) -> bool:
+    """Whether the camera's lens model cannot be inverted at some of the image points ``x``,
+    ``y`` (pixels, (N,)): its distortion folds back before them, so they map to no direction. A
+    fit to the stars of a wide lens can reach such a model where it has no stars; it is then
+    refitted with fewer terms."""
+    return not bool(np.all(np.isfinite(camera.pixel_to_vector(x, y))))
+
+
+def _fit_lens(field: _Field, matrix: NDArray, camera: Camera, ref: NDArray, img: NDArray):
+    """:func:`.refine.fit_pose` with the field's free parameters for ``img.size`` stars, dropping
+    k2 and then k1 when the fitted lens folds (:func:`lens_folds`): (matrix, camera, residual_px)."""
+    free = _free(field, img.size)
+    x, y = field.x[img], field.y[img]
+    for drop in ((), ("fit_k2",), ("fit_k2", "fit_k1")):
+        flags = {**free, **{key: False for key in drop}}
+        fitted = fit_pose(matrix, camera, ref, x, y, **flags)
+        if not (flags["fit_k1"] or flags["fit_k2"]) or not lens_folds(fitted[1], field.x, field.y):
+            return fitted
+    return fitted
+
+
 def field_solid_angle_sr(camera: Camera) -> float:
     """Solid angle (sr) of the pinhole image rectangle: 4 asin(sin(a / 2) sin(b / 2)) for full
     angular width a and height b."""
@@ -163,6 +186,17 @@ class _Catalog:
     camera: Camera
     rows: NDArray[np.int64]
     vectors: NDArray[np.float64]
+
+    @classmethod
+    def whole_field(cls, field: _Field, matrix: NDArray, camera: Camera) -> _Catalog:
+        """Every catalog star (to the field's depth) within 1.2 times the pinhole half diagonal of
+        the boresight: a selection that serves any lens bend the k1 scan tries."""
+        half_diagonal = math.atan(math.hypot(camera.width / camera.fx, camera.height / camera.fy) / 2.0)
+        near = np.sort(field.stars.near(matrix[2], min(1.2 * half_diagonal, math.radians(89.0))))
+        if field.depth is not None:
+            near = near[near < field.depth]
+        near = near[field.stars.brighter_neighbour_rad[near] >= BLEND_PX / camera.fx]
+        return cls(matrix, camera, field.stars.rows[near], field.stars.vectors[near])
 
     @classmethod
     def chosen(cls, field: _Field, matrix: NDArray, camera: Camera) -> _Catalog:
@@ -200,11 +234,14 @@ def _turn_rad(matrix_a: NDArray, matrix_b: NDArray) -> float:
 
 
 def _pose_shift_px(matrix_a: NDArray, cam_a: Camera, matrix_b: NDArray, cam_b: Camera) -> float:
-    """Largest shift (pixels) of an image point between two attitudes (matrices (3, 3)) and focal lengths."""
+    """Largest shift (pixels) of an image point between two attitudes (matrices (3, 3)) and
+    cameras (focal lengths, pixel aspect, k1, k2)."""
     half_diagonal_px = 0.5 * math.hypot(cam_a.width, cam_a.height)
-    focal_change = abs(cam_a.fx / cam_b.fx - 1.0)
+    focal_change = abs(cam_a.fx / cam_b.fx - 1.0) + abs(cam_a.fy / cam_b.fy - 1.0)
+    reach2 = (half_diagonal_px / min(cam_b.fx, cam_b.fy)) ** 2  # squared pinhole radius of the corner
+    bend = abs(cam_a.k1 - cam_b.k1) * reach2 + abs(cam_a.k2 - cam_b.k2) * reach2**2
     turn = _turn_rad(matrix_a, matrix_b)
-    return turn * cam_b.fx * (1.0 + (half_diagonal_px / cam_b.fx) ** 2) + focal_change * half_diagonal_px
+    return turn * cam_b.fx * (1.0 + (half_diagonal_px / cam_b.fx) ** 2) + (focal_change + bend) * half_diagonal_px
 
 
 def _settle(field: _Field, matrix: NDArray, camera: Camera, img: NDArray, rows: NDArray, ref: NDArray,
@@ -215,7 +252,7 @@ def _settle(field: _Field, matrix: NDArray, camera: Camera, img: NDArray, rows: 
     moved beyond the margin of ``catalog``, or when it is None)."""
     for round_ in range(MAX_REFINE_ROUNDS):
         before = (matrix, camera)
-        matrix, camera, res = fit_pose(matrix, camera, ref, field.x[img], field.y[img], **_free(field, img.size))
+        matrix, camera, res = _fit_lens(field, matrix, camera, ref, img)
         if round_ == MAX_REFINE_ROUNDS - 1 or (round_ > 0 and _pose_shift_px(*before, matrix, camera) < SETTLED_PX):
             break
         if catalog is None or not catalog.serves(matrix, camera):
@@ -226,6 +263,30 @@ def _settle(field: _Field, matrix: NDArray, camera: Camera, img: NDArray, rows: 
             break
         img, rows, ref = new_img, new_rows, new_ref
     return FinalFit(matrix, camera, img, rows, ref, res), catalog
+
+
+K1_SCAN = np.linspace(-0.3, 0.3, 25)
+"""Radial distortions k1 tried on a wide field's candidate before it settles (:func:`_scan_k1`),
+in steps of 0.025: each moves the corner of a 90 deg field by about 2 % of its radius from the
+next, inside the re-match radius of a fit that then frees k1."""
+
+
+def _scan_k1(field: _Field, matrix: NDArray, camera: Camera, img: NDArray,
+             ref: NDArray) -> tuple[NDArray, Camera, tuple[NDArray, NDArray, NDArray]]:
+    """The k1 of :data:`K1_SCAN` under which the candidate's stars (image indices ``img``, ICRS
+    vectors ``ref``), refitted, re-match the most image stars: (attitude matrix, camera, and
+    the re-match (image index, catalog row, ICRS vector)). A wide lens bends its far side by
+    tens of pixels, so a candidate verified near the centre with a pinhole fit re-matches only
+    there, too few stars to fit k1 from; the scan finds the bend first (smallest |k1| on a tie)."""
+    best = (-1, matrix, camera, (img, np.zeros(0, np.int64), ref))
+    catalog = _Catalog.whole_field(field, matrix, camera)
+    for k1 in K1_SCAN[np.argsort(np.abs(K1_SCAN), kind="stable")]:
+        trial = camera.with_distortion(k1=float(k1), k2=0.0)
+        m, trial, _ = fit_pose(matrix, trial, ref, field.x[img], field.y[img], fit_focal=field.fit_focal)
+        found = rematch(field, catalog, m, trial)
+        if found[0].size > best[0]:
+            best = (found[0].size, m, trial, found)
+    return best[1], best[2], best[3]
 
 
 def _without_worst(field: _Field, fit: FinalFit, catalog: _Catalog | None) -> tuple[FinalFit, _Catalog | None] | None:
@@ -275,9 +336,11 @@ def settle_matches(x: NDArray, y: NDArray, stars: FieldStars, cand: Candidate,
     fit_k1 = wide or (fit_focal and (focal_range[1] > focal_range[0] * (1 + K1_FOCAL_SPAN) or cand.camera.k1 != 0))
     field = _Field(x, y, stars, fit_focal, fit_aspect and fit_focal, wide, wide,
                    depth_limit(len(x), cand.camera, len(stars.rows)))
-    rows = cand.catalog_rows
-    fit, catalog = _settle(field, cand.rot_cam_from_icrs.as_matrix(), cand.camera, cand.image_index, rows,
-                           stars.vectors_of(rows), None)
+    matrix, camera, img, rows = cand.rot_cam_from_icrs.as_matrix(), cand.camera, cand.image_index, cand.catalog_rows
+    ref = stars.vectors_of(rows)
+    if wide:
+        matrix, camera, (img, rows, ref) = _scan_k1(field, matrix, camera, img, ref)
+    fit, catalog = _settle(field, matrix, camera, img, rows, ref, None)
     for _ in range(MAX_LEFT_OUT):
         better = _without_worst(field, fit, catalog) if fit.image_index.size >= MIN_STARS_TO_CHECK else None
         if better is None:
@@ -287,5 +350,6 @@ def settle_matches(x: NDArray, y: NDArray, stars: FieldStars, cand: Candidate,
         img = fit.image_index
         matrix, camera, res = fit_pose(fit.matrix_cam_from_icrs, fit.camera, fit.ref_icrs, x[img], y[img],
                                        **{**_free(field, img.size), "fit_k1": True})
-        fit = FinalFit(matrix, camera, img, fit.catalog_rows, fit.ref_icrs, res)
+        if not lens_folds(camera, x, y):
+            fit = FinalFit(matrix, camera, img, fit.catalog_rows, fit.ref_icrs, res)
     return fit

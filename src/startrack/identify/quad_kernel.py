@@ -19,6 +19,12 @@ from .pose_kernel import q_method
 COARSE_STRIDE = 8
 """Grid points between the evaluations of a pattern's ratios when its trials are chosen."""
 
+DISTORTION_SHAPE_CAP = 0.01
+"""The lens term of a look-up tolerance stops at this relative stretch: beyond it a pattern's box
+holds so many random catalog patterns that confirming them costs more than a lens that bends
+that much is worth (measured in ``docs/identification.md``); such lenses are matched from the
+patterns near the image centre."""
+
 FITTED_FOCAL_STEP_SHARE = 0.25
 """Share of the focal step kept in the rotation-fit tolerance once the focal length is corrected."""
 
@@ -304,7 +310,7 @@ def search(u, w, quads, grid, focal_nominal, short_px, sigma_px, step, max_toler
             largest = _sorted_ratios(angles, ordered, ratios)
             trial_focal = focal_nominal / scale
             r2_lo, r2_hi = radius2_range(u, w, quad, scale)
-            shape = shape_floor + shape_bound(distortion, r2_lo, r2_hi)
+            shape = shape_floor + min(DISTORTION_SHAPE_CAP, shape_bound(distortion, r2_lo, r2_hi))
             worst_tol = ratio_tolerances(ordered, ratios, step, noise, trial_focal, shape, tol)
             if worst_tol > max_tolerance:
                 continue

@@ -240,7 +240,7 @@ def aspect_trials(aspect_range: tuple[float, float]) -> NDArray[np.float64]:
 def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatabase,
                         focal_range_px: tuple[float, float] | None = None,
                         options: MatcherOptions | None = None,
-                        aspect_range: tuple[float, float] | None = None) -> MatchOutcome:
+                        aspect_range: tuple[float, float] | None = None, fit_aspect: bool = False) -> MatchOutcome:
     """Identify image stars with no prior attitude.
 
     Parameters
@@ -256,6 +256,9 @@ def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatab
     options : MatcherOptions or None
     aspect_range : (float, float) or None
         Range of pixel aspects fx / fy to search (:func:`aspect_trials`); None: the camera's.
+    fit_aspect : bool
+        The camera's pixel aspect is a guess: the confirmation refits it (always when a range
+        is searched).
 
     Returns
     -------
@@ -269,7 +272,7 @@ def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatab
                             f"lost-in-space identification needs at least 4 stars, got {len(x)}", None, 0)
     x, y, trials = np.asarray(x, float), np.asarray(y, float), [0]
     if aspect_range is None:
-        searches = [_Search(x, y, camera, focal_range_px, db, options, trials)]
+        searches = [_Search(x, y, camera, focal_range_px, db, options, trials, fit_aspect=fit_aspect)]
     else:
         searches = [_Search(x, y, camera.with_focal(camera.fx, camera.fx / a), focal_range_px, db, options, trials,
                             ASPECT_TOLERANCE, True) for a in aspect_trials(aspect_range)]

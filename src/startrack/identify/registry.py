@@ -60,6 +60,7 @@ class MatchRequest(Protocol):
     prior_rot: Rotation | None
     prior_sigma_deg: float
     aspect_range: tuple[float, float] | None
+    fit_aspect: bool
 
 
 Matcher = Callable[[object | None], MatchOutcome]
@@ -86,7 +87,7 @@ def _quads(request: MatchRequest) -> tuple[Matcher, FieldStars]:
 
     def run(options):
         return match_lost_in_space(request.x, request.y, request.camera, db, request.focal_range, options,
-                                   aspect_range=request.aspect_range)
+                                   aspect_range=request.aspect_range, fit_aspect=request.fit_aspect)
 
     return run, field_stars(db.settings.max_mag, request.epoch_jyear)
 
