@@ -86,19 +86,22 @@ def random_field(folder: Path) -> Path:
 
 
 def rss_mb(server: WebServer) -> dict[str, float]:
-    """Resident memory of the server, the fork server and the workers, MB."""
+    """Resident memory of the server, the fork server and the workers (RSS, and for the workers
+    also USS: the pages no other process shares, what a worker costs beyond the fork server), MB."""
     main = psutil.Process(server.process.pid)
     workers = {w["pid"] for w in server.client.get("/api/status").json()["workers"]}
-    out = {"server": main.memory_info().rss / 1e6, "fork server": 0.0, "workers": 0.0}
+    out = {"server": main.memory_info().rss / 1e6, "fork server": 0.0, "workers": 0.0, "workers uss": 0.0}
     for child in main.children(recursive=True):
         try:
-            rss = child.memory_info().rss / 1e6
+            info = child.memory_full_info()
+            cmdline = " ".join(child.cmdline())
         except psutil.NoSuchProcess:
             continue
         if child.pid in workers:
-            out["workers"] += rss
-        elif "forkserver" in " ".join(child.cmdline()):
-            out["fork server"] += rss
+            out["workers"] += info.rss / 1e6
+            out["workers uss"] += info.uss / 1e6
+        elif "forkserver" in cmdline:
+            out["fork server"] += info.rss / 1e6
     return out
 
 
@@ -112,9 +115,10 @@ def memory_table(server: WebServer, folder: Path) -> None:
     for job_id in [*queued, slow]:
         server.client.delete(f"/api/jobs/{job_id}")
     print(f"\nresident memory, MB (psutil RSS); {status['queued']} jobs queued and 1 running in the second row")
-    print(f"{'':<22}{'server':>9}{'fork server':>13}{'workers':>9}")
+    print(f"{'':<22}{'server':>9}{'fork server':>13}{'workers':>9}{'workers USS':>13}")
     for label, mem in (("idle", idle), ("10 queued + 1 running", busy)):
-        print(f"{label:<22}{mem['server']:>9.1f}{mem['fork server']:>13.1f}{mem['workers']:>9.1f}")
+        print(f"{label:<22}{mem['server']:>9.1f}{mem['fork server']:>13.1f}{mem['workers']:>9.1f}"
+              f"{mem['workers uss']:>13.1f}")
 
 
 def main() -> int:

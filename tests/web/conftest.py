@@ -58,17 +58,40 @@ def web_root(tmp_path_factory, real_images) -> Path:
     return root
 
 
+IN_PROCESS = ("test_pipeline.py",)
+"""Test files that need no server: they run first, while the session's server warms up."""
+
+
+def pytest_collection_modifyitems(items):
+    items.sort(key=lambda item: item.path.name not in IN_PROCESS)  # stable: the order within each kept
+
+
 @pytest.fixture(scope="session")
-def server(tmp_path_factory, web_root) -> WebServer:
-    """One server for the session: 1 worker, 8 MB uploads, 3 queued jobs at most, folder mode."""
+def started_server(tmp_path_factory, web_root):
+    """The session's server process, started (not yet warm): 1 worker, 8 MB uploads, 3 queued
+    jobs at most, folder mode under :func:`web_root`."""
     data = tmp_path_factory.mktemp("web") / "data"
     srv = WebServer(data, "--max-upload-mb", str(MAX_UPLOAD_MB), "--max-queued", str(MAX_QUEUED),
                     "--root", str(web_root), "--time-limit-s", "60")
     try:
-        srv.wait_ready()
         yield srv
     finally:
         srv.stop()
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _start_the_server_early(request):
+    """Start the session's server at the beginning (if any test of the session uses it), so that
+    its worker warms up while the in-process tests run."""
+    if any("server" in item.fixturenames or "idle_server" in item.fixturenames for item in request.session.items):
+        request.getfixturevalue("started_server")
+
+
+@pytest.fixture(scope="session")
+def server(started_server) -> WebServer:
+    """The session's server with its worker ready."""
+    started_server.wait_ready()
+    return started_server
 
 
 @pytest.fixture()

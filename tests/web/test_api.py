@@ -109,6 +109,10 @@ def test_the_listing_the_page_and_deleting_a_finished_job(idle_server, real_imag
     assert page.status_code == 200 and "crappy.jpg" in page.text and "annotated.png" in page.text
     assert client.delete(f"/api/jobs/{job_id}").json() == {"id": job_id, "deleted": True}
     assert client.get(f"/api/jobs/{job_id}").status_code == 404
+    again = idle_server.wait_job(idle_server.submit(real_images["crappy.jpg"]).json()["id"])
+    removed = client.post(f"/jobs/{again['id']}/remove")  # the page's button
+    assert removed.status_code == 303 and removed.headers["location"] == "/jobs"
+    assert client.get(f"/api/jobs/{again['id']}").status_code == 404
 
 
 def test_status_options_and_openapi(idle_server):
@@ -120,6 +124,8 @@ def test_status_options_and_openapi(idle_server):
     assert "night" in options["folders"] and "link_dir" not in options["folders"]
     assert any(c["name"] == "aptina-mt9p031" and c["distortion"] for c in options["cameras"])
     assert {a["name"] for a in options["analyses"]} >= {"histograms", "radial", "compare", "sweep"}
+    analyses = client.get("/api/analyses").json()["analyses"]
+    assert analyses == options["analyses"] and analyses[0]["params"] is not None
     doc = client.get("/api/openapi.json").json()
     assert doc["openapi"].startswith("3.1")
     assert {"/api/jobs", "/api/jobs/{job_id}", "/api/jobs/{job_id}/files/{name}", "/api/batches",
@@ -141,6 +147,9 @@ def test_a_camera_profile_is_saved_and_fixes_the_focal_length(idle_server, real_
     job = idle_server.wait_job(idle_server.submit(real_images["roof.jpg"], {"camera": "roof-cam"}).json()["id"])
     assert job["state"] == "done", job["error"]
     assert job["result"]["focal_px"] == pytest.approx(focal, rel=1e-9)  # a camera fixes the focal length
+    bad = client.post("/api/cameras", json={"name": "bad-cam", "width": 507, "height": 507, "fx": -3})
+    assert bad.status_code == 422 and "focal length" in bad.json()["error"]
+    assert client.post("/api/cameras", json={"name": "far-mst", "width": 9, "height": 9, "fx": 3}).status_code == 422
     wrong = idle_server.wait_job(idle_server.submit(real_images["img3.png"], {"camera": "roof-cam"}).json()["id"])
     assert wrong["state"] == "failed" and "507 x 507 px but the image is 1392 x 1040 px" in wrong["error"]
 

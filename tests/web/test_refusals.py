@@ -76,6 +76,16 @@ def test_415_from_the_content_not_the_name(server, content, name, said):
     still_serving(server)
 
 
+def test_a_page_form_refusal_is_an_error_page_with_the_same_status(server):
+    response = server.client.post("/upload", files={"file": ("notes.png", b"just some text")})
+    assert response.status_code == 415 and "text/html" in response.headers["content-type"]
+    assert "is not FITS, PNG, JPEG, TIFF or camera RAW" in response.text
+    response = server.client.post("/upload", files={"file": ("roof.jpg", b"\xff\xd8\xff")},
+                                  data={"fov_mode": "fov", "fov_deg": "ten"})
+    assert response.status_code == 422 and "options.fov_deg" in response.text
+    still_serving(server)
+
+
 def test_415_for_a_body_that_is_not_multipart(server):
     response = server.client.post("/api/jobs", json={"file": "roof.jpg"})
     assert response.status_code == 415 and "multipart/form-data" in response.json()["error"]

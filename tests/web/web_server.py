@@ -55,7 +55,7 @@ class WebServer:
         deadline = time.monotonic() + STARTUP_S
         while time.monotonic() < deadline:
             status = self.client.get("/api/status").json()
-            if all(w["ready"] for w in status["workers"]):
+            if not status["starting"] and all(w["ready"] for w in status["workers"]):
                 return status
             time.sleep(0.1)
         raise RuntimeError(f"workers not ready after {STARTUP_S} s: {status}")

@@ -43,6 +43,16 @@ TEMPLATES = Jinja2Templates(directory=str(Path(__file__).parent / "templates"))
 TEMPLATES.env.globals["version"] = __version__
 
 
+def _significant(value: Any, digits: int = 6) -> str:
+    """A number to ``digits`` significant figures for the pages (text and ints unchanged)."""
+    if isinstance(value, float):
+        return f"{value:.{digits}g}"
+    return "" if value is None else str(value)
+
+
+TEMPLATES.env.filters["sig"] = _significant
+
+
 def render(request: Request, name: str, status_code: int = 200, **context: Any) -> HTMLResponse:
     return TEMPLATES.TemplateResponse(request, name, context, status_code=status_code)
 

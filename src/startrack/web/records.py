@@ -85,9 +85,9 @@ def load_solution(path: Path) -> tuple[AttitudeSolution, dict[str, Any]]:
         status=Status(meta["status"]), reason=meta["reason"],
         rot_cam_from_icrs=None if quat is None else Rotation.from_quat(quat),
         covariance_rad2=arrays.get("covariance_rad2"),
-        **{k: _nan(meta[k]) for k in _SCALARS},
+        **{k: _nan(meta.get(k)) for k in _SCALARS},
         camera=None if meta["camera"] is None else Camera(**meta["camera"]), matches=matches,
-        residuals_arcsec=arrays["residuals_arcsec"], epoch_source=meta["epoch_source"],
+        residuals_arcsec=arrays["residuals_arcsec"], epoch_source=meta.get("epoch_source", ""),
         detections=detections if meta["has_detections"] else None)
     return solution, meta["extra"]
 

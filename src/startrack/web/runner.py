@@ -83,18 +83,19 @@ class WorkerPool:
 
     # --- life cycle ---------------------------------------------------------------------------
     def start(self, queued: list[str] | tuple[str, ...] = ()) -> None:
-        """Start the workers and the dispatcher; ``queued`` are jobs left waiting by an earlier server."""
+        """Start the dispatcher, which starts the workers; ``queued`` are jobs left waiting by an
+        earlier server. Returns at once: the server answers while the first workers warm up (the
+        fork server's preload takes seconds), and jobs wait in the queue until a worker is ready."""
         with self._lock:
             self._queue.extend(queued)
-            self._workers = [self._spawn() for _ in range(self.n_workers)]
         self._thread = threading.Thread(target=self._loop, name="startrack-dispatcher", daemon=True)
         self._thread.start()
 
     def stop(self) -> None:
         """Stop the dispatcher and the workers; jobs still running end as failed (server stopped)."""
         self._stop.set()
-        if self._thread is not None:
-            self._thread.join(JOIN_S)
+        if self._thread is not None:  # a dispatcher still starting the workers kills them itself
+            self._thread.join(JOIN_S if self._workers else TICK_S)
         with self._lock:
             for worker in self._workers:
                 if worker.job_id is not None:
@@ -153,7 +154,8 @@ class WorkerPool:
         """Workers (pid, ready, job), queue length and restarts, for the status endpoint."""
         with self._lock:
             return {"workers": [{"pid": w.process.pid, "ready": w.ready, "job": w.job_id} for w in self._workers],
-                    "queued": len(self._queue), "max_queued": self.max_queued,
+                    "starting": len(self._workers) < self.n_workers, "queued": len(self._queue),
+                    "max_queued": self.max_queued,
                     "time_limit_s": self.time_limit_s, "restarts": self.restarts}
 
     def queue_position(self, job_id: str) -> int | None:
@@ -163,6 +165,13 @@ class WorkerPool:
 
     # --- the dispatcher -----------------------------------------------------------------------
     def _loop(self) -> None:
+        started = [self._spawn() for _ in range(self.n_workers)]  # outside the lock: the first one
+        with self._lock:                                           # waits for the fork server's preload
+            if self._stop.is_set():  # the server stopped meanwhile
+                for worker in started:
+                    self._kill(worker)
+                return
+            self._workers = started
         while not self._stop.wait(TICK_S):
             with self._lock:
                 for worker in list(self._workers):
