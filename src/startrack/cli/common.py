@@ -174,6 +174,14 @@ def max_pixels_option(args: argparse.Namespace) -> int:
     return resolve_max_pixels(getattr(args, "max_pixels", None))
 
 
+def apply_max_pixels_option(args: argparse.Namespace) -> None:
+    """Make --max-pixels the limit of every image the rest of the command reads (the command's
+    context, :func:`startrack.cli.run_context.command_context`, undoes it when the command ends)."""
+    from ..io.limits import set_max_pixels
+
+    set_max_pixels(getattr(args, "max_pixels", None))
+
+
 def print_json(data: dict[str, Any]) -> None:
     """Standard JSON (no NaN: callers put None for undefined values) on standard output."""
     json.dump(data, sys.stdout, indent=2, allow_nan=False)

@@ -2,6 +2,8 @@
 
 * The files the command reads are protected: no output may replace one
   (:func:`startrack.io.targets.protect_inputs`).
+* A ``--max-pixels`` limit set by the command lasts until it returns
+  (:func:`startrack.io.limits.max_pixels_limit`).
 * SIGTERM raises :class:`Terminated` in the main thread, so that the outputs' ``finally`` blocks
   run (temporary files removed, old files kept) as for Ctrl-C; the exit status is 143.
 * A warning is printed as one line ``startrack <cmd>: warning: ...`` (e.g. a cache folder that
@@ -19,6 +21,7 @@ import warnings
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
 
+from ..io.limits import max_pixels_limit
 from ..io.targets import protect_inputs
 
 
@@ -58,9 +61,11 @@ def _one_line_warnings(name: str) -> Iterator[None]:
 
 @contextmanager
 def command_context(name: str) -> Iterator[None]:
-    """Inputs protected, SIGTERM as an exception, one-line warnings, for the command ``name``."""
+    """Inputs protected, SIGTERM as an exception, one-line warnings, for the command ``name``; a
+    --max-pixels the command applies (:func:`.common.apply_max_pixels_option`) ends with it."""
     with ExitStack() as stack:
         stack.enter_context(protect_inputs())
+        stack.enter_context(max_pixels_limit(None))
         stack.enter_context(_sigterm_raises())
         stack.enter_context(_one_line_warnings(name))
         yield

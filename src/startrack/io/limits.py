@@ -70,6 +70,13 @@ def max_pixels_limit(max_pixels: int | None) -> Iterator[None]:
         _LIMIT.reset(token)
 
 
+def set_max_pixels(max_pixels: int | None) -> None:
+    """Use ``max_pixels`` from now on in this context (None keeps the one in force); the commands
+    call it for ``--max-pixels`` inside :func:`max_pixels_limit`, which undoes it at the end."""
+    if max_pixels is not None:
+        _LIMIT.set(check_max_pixels(max_pixels))
+
+
 def check_image_size(width: int, height: int, max_pixels: int | None, source: object) -> None:
     """Refuse an image of ``width`` x ``height`` above the limit, before it is decoded.
 
