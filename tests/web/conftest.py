@@ -58,7 +58,7 @@ def web_root(tmp_path_factory, real_images) -> Path:
     return root
 
 
-IN_PROCESS = ("test_pipeline.py",)
+IN_PROCESS = ("test_uploads.py",)
 """Test files that need no server: they run first, while the session's server warms up."""
 
 

@@ -1,12 +1,12 @@
-"""A solve job run in this process (no server): the auto preset and camera fit on a real image,
-the solution kept on disk and the analysis record made from it, a ground photo's altitude and
-azimuth against astropy, and the spots the detector refused with their reasons."""
+"""What a solve job computes, checked on the job's own folder: the auto preset and camera fit on a
+real image, the solution kept on disk and the analysis record made from it, a ground photo's
+altitude and azimuth against astropy, a blank frame's failure in words; and, without a server,
+the spots the detector refused with their reasons."""
 
 from __future__ import annotations
 
 import csv
 import json
-import shutil
 import warnings
 
 import astropy.units as u
@@ -19,29 +19,20 @@ from astropy.utils import iers
 from startrack.calibrate.sites import get_site
 from startrack.detect import StarDetector
 from startrack.frames import angle_between, radec_to_vector
+from startrack.io import write_png
 from startrack.results import AttitudeSolution, Status
 from startrack.units import ARCSEC, DEG
 from startrack.web.annotate import grid_step_deg, residual_gain
-from startrack.web.jobs import JobStore, read_json
-from startrack.web.options import validate_options
+from startrack.web.jobs import read_json
 from startrack.web.outputs import failure_words
-from startrack.web.pipeline import run_solve_job
 from startrack.web.records import job_record, load_solution
 from startrack.web.rejects import rejected_spots
 
 
-@pytest.fixture(scope="module")
-def store(tmp_path_factory) -> JobStore:
-    return JobStore(tmp_path_factory.mktemp("pipeline") / "jobs")
-
-
-def make_job(store: JobStore, source, options: dict):
-    """A queued solve job of ``source`` as the server makes one (same store, same options check)."""
-    job_id, folder = store.reserve()
-    shutil.copy(source, folder / f"input{source.suffix}")
-    store.create("solve", {"label": source.name, "input": f"input{source.suffix}", "options":
-                           validate_options(options, store.root.parent / "cameras")}, job_id)
-    return folder
+def run_job(server, source, options: dict | None = None):
+    """Solve ``source`` on the session's server; the job's folder (on this machine)."""
+    job = server.wait_job(server.submit(source, options).json()["id"])
+    return server.data_dir / "jobs" / job["id"]
 
 
 def centre_error_px(solution: AttitudeSolution, row: dict) -> float:
@@ -54,10 +45,8 @@ def centre_error_px(solution: AttitudeSolution, row: dict) -> float:
 
 
 @pytest.fixture(scope="module")
-def auto_job(store, real_images):
-    folder = make_job(store, real_images["img3.png"], {"detection_preset": "auto"})
-    run_solve_job(folder)
-    return folder
+def auto_job(server, real_images):
+    return run_job(server, real_images["img3.png"], {"detection_preset": "auto"})
 
 
 def test_auto_preset_sets_the_detector_from_the_image_and_fits_the_camera(auto_job, truth_table):
@@ -89,10 +78,9 @@ def test_the_solution_on_disk_rebuilds_the_analysis_record(auto_job):
     assert extra["epoch_jyear"] == 2000.0
 
 
-def test_a_ground_photo_has_the_altitude_and_azimuth_astropy_gives(store, real_images):
+def test_a_ground_photo_has_the_altitude_and_azimuth_astropy_gives(server, real_images):
     when, site = "2021-02-01T04:00:00", get_site("logan-ut")
-    folder = make_job(store, real_images["roof.jpg"], {"site": "logan-ut", "time": when})
-    run_solve_job(folder)
+    folder = run_job(server, real_images["roof.jpg"], {"site": "logan-ut", "time": when})
     result = read_json(folder / "result.json")
     assert result["status"] == "ok" and result["site"] == "logan-ut" and result["time_utc"].startswith(when)
     location = EarthLocation(lat=site.latitude_deg * u.deg, lon=site.longitude_deg * u.deg, height=site.height_m * u.m)
@@ -104,6 +92,16 @@ def test_a_ground_photo_has_the_altitude_and_azimuth_astropy_gives(store, real_i
     assert seen.alt.deg > 30
     assert result["altitude_deg"] == pytest.approx(seen.alt.deg, abs=0.01)
     assert result["azimuth_deg"] == pytest.approx(seen.az.deg, abs=0.01 / np.cos(np.radians(seen.alt.deg)))
+
+
+def test_a_blank_frame_fails_saying_no_stars_were_found(server, tmp_path):
+    blank = tmp_path / "blank.png"
+    write_png(blank, np.full((120, 160), 200, dtype=np.uint16))
+    folder = run_job(server, blank)
+    state, result = read_json(folder / "state.json"), read_json(folder / "result.json")
+    assert state["state"] == "failed" and state["error"].startswith("no stars found: ")
+    assert result["status"] == "too_few_stars" and result["failure"] == "no stars found"
+    assert (folder / "annotated.png").is_file() and not (folder / "solution.wcs").exists()
 
 
 def test_refused_spots_carry_the_filter_that_refused_them():

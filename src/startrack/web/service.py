@@ -8,7 +8,6 @@ every request it will not do; the API turns them into JSON, the pages into an er
 from __future__ import annotations
 
 import json
-from pathlib import Path
 from typing import Any
 
 from starlette.concurrency import run_in_threadpool
@@ -17,7 +16,7 @@ from starlette.datastructures import UploadFile
 from .analysis_jobs import validate_request
 from .batches import BatchStore, clean_name, folder_images
 from .config import WebConfig
-from .jobs import TERMINAL, JobStore, new_id
+from .jobs import TERMINAL, JobStore, new_id, write_json
 from .options import PROFILE_NAME, OptionError, camera_from_json, camera_to_json
 from .refusals import Refusal
 from .runner import QueueFullError, WorkerPool
@@ -77,7 +76,7 @@ class Service:
 
     async def _store_all(self, uploads: list[UploadFile], options: dict, batch: str | None) -> list[str]:
         """Store every upload in its own job folder; if one is refused, none is kept."""
-        done: list[tuple[str, StoredImage]] = []
+        done: list[tuple[str, StoredImage | None]] = []
         try:
             for upload in uploads:
                 job_id, folder = self.jobs.reserve()
@@ -210,6 +209,5 @@ class Service:
             camera = camera_from_json({**fields, "name": name}, "camera")
         except OptionError as exc:
             raise option_refusal(exc) from None
-        path: Path = self.config.cameras_dir / f"{name}.json"
-        path.write_text(json.dumps(camera_to_json(camera), indent=1))
+        write_json(self.config.cameras_dir / f"{name}.json", camera_to_json(camera))
         return {"name": name, "camera": camera_to_json(camera)}

@@ -45,6 +45,8 @@ SIGNATURES: tuple[tuple[bytes, str], ...] = (
 """Leading bytes of each accepted format (RAW: Olympus ORF, Panasonic RW2, Fuji RAF; CR3 is an
 ISO media file, ``ftypcrx`` at offset 4; DNG, NEF, CR2, ARW, PEF and SRW are TIFF containers)."""
 EXTENSIONS = {"fits": ".fits", "png": ".png", "jpeg": ".jpg", "tiff": ".tif"}
+RAW_SIGNATURE_SUFFIXES = ((b"IIRO", ".orf"), (b"IIRS", ".orf"), (b"MMOR", ".orf"), (b"IIU\x00", ".rw2"),
+                          (b"FUJIFILMCCD-RAW", ".raf"))
 FITS_BLOCK = 2880
 FITS_MAX_BLOCKS = 200
 FITS_MAX_HDUS = 8
@@ -128,13 +130,22 @@ def sniff(head: bytes, label: str) -> str:
                        f"(it starts with {shown!r})", "file")
 
 
+def raw_suffix(head: bytes, label: str) -> str:
+    """The RAW file name suffix the decoder needs: from the signature when it names the maker's
+    format, else the client's (a TIFF-based RAW, whose suffix :func:`sniff` has checked)."""
+    for signature, suffix in RAW_SIGNATURE_SUFFIXES:
+        if head.startswith(signature):
+            return suffix
+    return ".cr3" if head[4:12] == b"ftypcrx " else Path(label).suffix.lower()
+
+
 def store_upload(upload: UploadFile, folder: Path, stem: str, max_pixels: int) -> StoredImage:
     """Copy a file part into ``folder`` as ``<stem><ext>``, checked (module docstring)."""
     label = display_label(upload.filename)
     upload.file.seek(0)
     head = upload.file.read(32)
     kind = sniff(head, label)
-    suffix = Path(label).suffix.lower() if kind == "raw" else EXTENSIONS[kind]
+    suffix = raw_suffix(head, label) if kind == "raw" else EXTENSIONS[kind]
     path = folder / f"{stem}{suffix}"
     digest, n_bytes = hashlib.sha256(), 0
     upload.file.seek(0)
