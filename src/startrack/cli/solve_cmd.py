@@ -1,6 +1,9 @@
 """startrack solve IMAGE: lost-in-space attitude of an image (FITS, PNG, JPEG or TIFF, 8 or
 16 bit, grey or colour). Stars are detected and identified against Hipparcos with no prior
-attitude; give the field of view if you know it (faster, more robust), else a range is searched."""
+attitude; give the field of view if you know it (faster, more robust), else 3 to 100 deg are
+searched. The catalog epoch is --epoch, else the time of --time, else the time the image's header
+states (FITS CATEPOCH, DATE-OBS or MJD-OBS, EXIF DateTimeOriginal), else J2000.0; the solution
+says which (epoch_jyear, epoch_source)."""
 
 from __future__ import annotations
 
@@ -19,11 +22,11 @@ from .common import (
     add_epoch_option,
     add_fov_options,
     add_method_option,
-    epoch_option,
     fov_kwargs,
     report,
 )
 from .progress import ensure_database_for
+from .solve_stars_cmd import add_aspect_option, aspect_option, solver_epoch, time_option
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -35,6 +38,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--channel", choices=("r", "g", "b"),
                         help="colour channel to use (default: the mean of R, G and B)")
     add_epoch_option(parser)
+    add_aspect_option(parser)
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--wcs", metavar="OUT",
                         help="when solved, write the image's FITS WCS (TAN-SIP, FITS 1-based pixels) to OUT")
@@ -44,7 +48,9 @@ def _parser() -> argparse.ArgumentParser:
     ground.add_argument("--latitude-deg", type=float, help="site latitude, north positive")
     ground.add_argument("--longitude-deg", type=float, help="site longitude, east positive")
     ground.add_argument("--height-m", type=float, default=0.0, help="site height (default 0 m)")
-    ground.add_argument("--time", help="UTC time of the photo, ISO 8601 (default: from the EXIF / FITS header)")
+    ground.add_argument("--time", metavar="UTC",
+                        help="UTC time of the photo, ISO 8601 (default: from the EXIF / FITS header); also the "
+                             "catalog epoch unless --epoch is given, with or without a site")
     ground.add_argument("--utc-offset-hours", type=float, help="offset of a local EXIF time from UTC")
     return parser
 
@@ -64,7 +70,8 @@ def _site(args):
 
 def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
-    solver_options = {**fov_kwargs(args), "epoch": epoch_option(args), "method": args.method}
+    solver_options = {**fov_kwargs(args), "epoch": solver_epoch(args), "method": args.method,
+                      "pixel_aspect": aspect_option(args)}
     image = read_image(args.image, channel=args.channel)
     ensure_database_for(solver_options["fov_deg"], solver_options["fov_range_deg"], solver_options["camera"])
     site = _site(args)
@@ -83,19 +90,10 @@ def main(argv: list[str]) -> int:
 
 
 def _solve_ground(image, site, args, solver_options):
-    from astropy.time import Time
-
     from ..calibrate.ground_solve import solve_ground_photo
 
-    when = None
-    if args.time:
-        try:
-            when = Time(args.time, scale="utc")
-        except ValueError as exc:
-            raise InvalidInputError(f"--time must be an ISO 8601 UTC time such as 2024-08-12T03:15:00, "
-                                    f"got {args.time!r}") from exc
     options = {k: v for k, v in solver_options.items() if k != "epoch"}
-    return solve_ground_photo(image, site, time=when, utc_offset_hours=args.utc_offset_hours, **options)
+    return solve_ground_photo(image, site, time=time_option(args), utc_offset_hours=args.utc_offset_hours, **options)
 
 
 def _explain_blank(solution: AttitudeSolution, detections: Detections, image: Image) -> AttitudeSolution:

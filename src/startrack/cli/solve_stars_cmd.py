@@ -4,7 +4,8 @@ The CSV has a header row with at least the columns x and y (0-based pixel centre
 x = column; subtract 1 from FITS / astrometry.net positions); an optional flux (larger is
 brighter) or mag column orders the stars, otherwise they are taken brightest first as listed.
 Lines starting with # are comments. --width and --height give the image size (not needed with
---camera, whose size is used).
+--camera, whose size is used). The catalog epoch is --epoch, else the year of --time, else
+J2000.0; the solution says which (epoch_jyear, epoch_source).
 """
 
 from __future__ import annotations
@@ -12,6 +13,8 @@ from __future__ import annotations
 import argparse
 
 from ..errors import InvalidInputError
+from ..identify.image_epoch import parse_utc
+from ..identify.request import check_pixel_aspect
 from ..io import read_star_list
 from ..solve import solve_stars
 from .common import (
@@ -36,8 +39,38 @@ def _parser() -> argparse.ArgumentParser:
     add_fov_options(parser)
     add_method_option(parser)
     add_epoch_option(parser)
+    add_aspect_option(parser)
+    parser.add_argument("--time", metavar="UTC", help="when the stars were observed, ISO 8601 UTC: its year is the "
+                                                      "catalog epoch unless --epoch is given")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     return parser
+
+
+def add_aspect_option(parser: argparse.ArgumentParser) -> None:
+    """--pixel-aspect A, or LO HI to search (shared with ``startrack solve``)."""
+    parser.add_argument("--pixel-aspect", type=float, nargs="+", metavar="A",
+                        help="height of a pixel on the sky over its width (fx / fy; default: square, refined in the "
+                             "fit), or LO HI to search that range (slower); not with --camera")
+
+
+def aspect_option(args: argparse.Namespace) -> float | tuple[float, float] | None:
+    """The checked --pixel-aspect: a number, a (lo, hi) range, or None."""
+    if args.pixel_aspect is None:
+        return None
+    values = args.pixel_aspect
+    check_pixel_aspect(values, "--pixel-aspect")
+    return values[0] if len(values) == 1 else (values[0], values[1])
+
+
+def time_option(args: argparse.Namespace):
+    """The checked --time (astropy Time, UTC) or None."""
+    return None if args.time is None else parse_utc(args.time, "--time")
+
+
+def solver_epoch(args: argparse.Namespace):
+    """The epoch the solve is asked for: --epoch (a Julian year), else --time, else None."""
+    epoch, when = epoch_option(args), time_option(args)
+    return epoch if epoch is not None else when
 
 
 def main(argv: list[str]) -> int:
@@ -45,7 +78,8 @@ def main(argv: list[str]) -> int:
     args = parser.parse_args(argv)
     if args.camera is None and (args.width is None or args.height is None):
         parser.error("--width and --height are required unless --camera gives them")
-    solver_options = {**fov_kwargs(args), "epoch": epoch_option(args), "method": args.method}
+    solver_options = {**fov_kwargs(args), "epoch": solver_epoch(args), "method": args.method,
+                      "pixel_aspect": aspect_option(args)}
     _check_size(args, solver_options["camera"])
     stars = read_star_list(args.starlist)
     flux = stars.get("flux")

@@ -84,6 +84,22 @@ def _checked(value: float, given) -> float:
     return value
 
 
+def parse_utc(text: str, name: str = "time") -> Time:
+    """An ISO 8601 UTC time (``2024-08-12T03:15:00``, a date, or with a space for the T), or an
+    InvalidInputError naming ``name`` and what would be valid."""
+    try:
+        when = Time(str(text).strip(), scale="utc")
+        jyear = float(when.tdb.jyear)
+    except (ValueError, TypeError):
+        raise InvalidInputError(f"{name} must be an ISO 8601 UTC time such as 2024-08-12T03:15:00, "
+                                f"got {text!r}") from None
+    lo, hi = EPOCH_RANGE_JYEAR
+    if not (when.isscalar and lo < jyear < hi):
+        raise InvalidInputError(f"{name} must be one ISO 8601 UTC time between the years {lo:g} and {hi:g}, "
+                                f"got {text!r}")
+    return when
+
+
 def epoch_from_header(header: Mapping[str, Any]) -> Epoch | None:
     """The epoch an image header states (module docstring for the order), or None.
 

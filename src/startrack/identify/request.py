@@ -90,9 +90,9 @@ def check_fov_deg(fov: float, name: str) -> float:
     return fov
 
 
-def check_pixel_aspect(pixel_aspect) -> tuple[float | None, tuple[float, float] | None]:
+def check_pixel_aspect(pixel_aspect, name: str = "pixel_aspect") -> tuple[float | None, tuple[float, float] | None]:
     """(fixed aspect, aspect range to search) from a ``pixel_aspect`` argument: None, a number
-    or a pair (lo, hi); either may be None. Raises InvalidInputError naming ``pixel_aspect``."""
+    or a pair (lo, hi); either may be None. Raises InvalidInputError naming ``name``."""
     if pixel_aspect is None:
         return None, None
     values = np.atleast_1d(np.asarray(pixel_aspect, dtype=object)).ravel()
@@ -102,12 +102,12 @@ def check_pixel_aspect(pixel_aspect) -> tuple[float | None, tuple[float, float] 
     except (TypeError, ValueError):
         numbers = []
     if len(numbers) != values.size or values.size not in (1, 2) or not all(lo <= v <= hi for v in numbers):
-        raise InvalidInputError(f"pixel_aspect must be a pixel's height over its width (fx / fy, {lo:g} to {hi:g}) "
+        raise InvalidInputError(f"{name} must be a pixel's height over its width (fx / fy, {lo:g} to {hi:g}) "
                                 f"or a range (low, high) of them to search, got {pixel_aspect!r}")
     if len(numbers) == 1:
         return numbers[0], None
     if numbers[0] > numbers[1]:
-        raise InvalidInputError(f"pixel_aspect range must be (low, high) with low <= high, got {pixel_aspect!r}")
+        raise InvalidInputError(f"{name} range must be (low, high) with low <= high, got {pixel_aspect!r}")
     return None, (numbers[0], numbers[1])
 
 
