@@ -120,8 +120,8 @@ def test_track_pipes_its_csv_through_dev_stdout_and_dash(sequence, tmp_path):
     (one / "frame_00000.fits").symlink_to(sequence / "frame_00000.fits")
     proc = subprocess.run([*STARTRACK, "track", str(one), "--fov-deg", "15", "--out", "/dev/stdout"],
                           capture_output=True, text=True, timeout=300)
-    code, stdout, err = run("track", one, "--fov-deg", 15, "--out", "-")
-    for code, stdout, err in ((proc.returncode, proc.stdout, proc.stderr), (code, stdout, err)):
+    in_process = run("track", one, "--fov-deg", 15, "--out", "-")
+    for code, stdout, err in ((proc.returncode, proc.stdout, proc.stderr), in_process):
         assert code == 0, err
         rows = _rows(stdout)
         assert len(rows) == 1 and rows[0]["status"] == "ok" and rows[0]["file"] == "frame_00000.fits"
