@@ -236,3 +236,25 @@ def test_undistort_never_returns_a_silently_wrong_vector():
     x2, y2 = cam.vector_to_pixel(v)
     error = np.hypot(x2 - x, y2 - y)
     assert np.all(np.isnan(error) | (error < ROUND_TRIP_TOL))
+
+
+def test_pixel_aspect_is_fx_over_fy_everywhere():
+    """A sensor whose rows are 1.9 pixel widths apart: fy = fx / 1.9, and a star 100 rows off
+    the centre is 1.9 times as far off axis as one 100 columns off."""
+    cam = Camera.from_fov(1024, 1024, 20.0, pixel_aspect=1.9)
+    assert cam.pixel_aspect == pytest.approx(1.9)
+    assert cam.fov_deg == pytest.approx(20.0)
+    v = cam.pixel_to_vector([cam.cx + 100.0, cam.cx], [cam.cy, cam.cy + 100.0])
+    assert v[1, 1] / v[1, 2] == pytest.approx(1.9 * v[0, 0] / v[0, 2], rel=1e-12)
+    assert cam.with_pixel_aspect(1.0).fy == cam.fx
+    assert cam.with_focal(2 * cam.fx).pixel_aspect == pytest.approx(1.9)  # fx and fy scale together
+
+
+@pytest.mark.parametrize(("kwargs", "word"), [({"pixel_pitch_um": -2.0}, "pixel_pitch_um"),
+                                              ({"pixel_pitch_um": float("nan")}, "pixel_pitch_um"),
+                                              ({"fy": -5.0}, "fy")])
+def test_nonsense_camera_values_are_refused(kwargs, word):
+    with pytest.raises(InvalidInputError, match=word):
+        Camera(width=100, height=100, fx=500.0, **kwargs)
+    with pytest.raises(InvalidInputError, match="pixel_aspect"):
+        Camera.from_fov(100, 100, 10.0, pixel_aspect=0.0)

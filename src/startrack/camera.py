@@ -55,7 +55,9 @@ class Camera:
     width, height : int
         Image size in pixels.
     fx, fy : float
-        Focal lengths in pixels (``fy`` defaults to ``fx``).
+        Focal lengths in pixels (``fy`` defaults to ``fx``). Their ratio is the pixel aspect,
+        :attr:`pixel_aspect` = fx / fy: how many pixel widths one pixel's height spans on the
+        sky (1 for square pixels, about 1.9 for a sensor whose rows are 1.9 widths apart).
     cx, cy : float
         Principal point in our pixel convention; defaults to the image centre
         ((width - 1) / 2, (height - 1) / 2).
@@ -100,18 +102,30 @@ class Camera:
         for key in ("cx", "cy", "k1", "k2", "k3", "p1", "p2"):
             if not math.isfinite(float(getattr(self, key))):
                 raise InvalidInputError(f"camera parameter {key} must be finite, got {getattr(self, key)!r}")
+        pitch = self.pixel_pitch_um
+        number = isinstance(pitch, int | float | np.number) and not isinstance(pitch, bool)
+        if pitch is not None and not (number and math.isfinite(pitch) and pitch > 0):
+            raise InvalidInputError(f"camera pixel_pitch_um must be None or a positive number of micrometres, "
+                                    f"got {pitch!r}")
 
     # --- construction -----------------------------------------------------------------------
     @classmethod
-    def from_fov(cls, width: int, height: int, fov_deg: float, **kwargs) -> Camera:
-        """A pinhole camera whose horizontal field of view (edge to edge) is ``fov_deg``."""
+    def from_fov(cls, width: int, height: int, fov_deg: float, *, pixel_aspect: float = 1.0, **kwargs) -> Camera:
+        """A pinhole camera whose horizontal field of view (edge to edge) is ``fov_deg``, with
+        pixels ``pixel_aspect`` times as high as they are wide on the sky (fy = fx / pixel_aspect)."""
         try:
             fov = float(fov_deg)
         except (TypeError, ValueError):
             raise InvalidInputError(f"fov_deg must be a number of degrees, got {fov_deg!r}") from None
         if not 0.0 < fov < 180.0:
             raise InvalidInputError(f"fov_deg must be between 0 and 180 deg, got {fov_deg!r}")
-        return cls(width=width, height=height, fx=focal_px_from_fov(width, math.radians(fov)), **kwargs)
+        aspect = _checked_aspect(pixel_aspect)
+        fx = focal_px_from_fov(width, math.radians(fov))
+        return cls(width=width, height=height, fx=fx, fy=fx / aspect, **kwargs)
+
+    def with_pixel_aspect(self, pixel_aspect: float) -> Camera:
+        """The same camera with fy = fx / ``pixel_aspect`` (fx kept)."""
+        return self.with_focal(self.fx, self.fx / _checked_aspect(pixel_aspect))
 
     def with_focal(self, fx: float, fy: float | None = None) -> Camera:
         """The same camera with other focal lengths (fy keeps the fx / fy ratio if not given)."""
@@ -155,6 +169,11 @@ class Camera:
         half_w = (self.width / 2.0) / self.fx
         half_h = (self.height / 2.0) / self.fy
         return math.degrees(2.0 * math.atan(math.hypot(half_w, half_h)))
+
+    @property
+    def pixel_aspect(self) -> float:
+        """fx / fy: a pixel's height on the sky over its width (1 for square pixels)."""
+        return self.fx / self.fy
 
     @property
     def pixel_scale_arcsec(self) -> float:
@@ -289,6 +308,17 @@ class Camera:
         lo = -0.5 + margin_px
         with np.errstate(invalid="ignore"):
             return (x >= lo) & (y >= lo) & (x <= self.width - 0.5 - margin_px) & (y <= self.height - 0.5 - margin_px)
+
+
+def _checked_aspect(pixel_aspect: float) -> float:
+    try:
+        aspect = float(pixel_aspect)
+    except (TypeError, ValueError):
+        aspect = math.nan
+    if not (math.isfinite(aspect) and aspect > 0):
+        raise InvalidInputError(f"pixel_aspect must be a positive number (a pixel's height over its width), "
+                                f"got {pixel_aspect!r}")
+    return aspect
 
 
 # --- presets from the seeds ------------------------------------------------------------------
