@@ -57,9 +57,9 @@ def configure(root: Path) -> Path | None:
     """
     if _CONFIGURED:
         return _CONFIGURED[0]
-    if os.environ.get(NUMBA_ENV_VAR):
-        return None
     folder = numba_cache_dir(root)
+    if os.environ.get(NUMBA_ENV_VAR) not in (None, "", str(folder)):  # the user's own choice
+        return None
     _CONFIGURED.append(folder)
     if "numba" in sys.modules:
         from numba.core import config
