@@ -77,6 +77,18 @@ def _read(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
         return meta, {name: npz[name] for name in npz.files if name != _META}
 
 
+def is_current(kind: str, version: int, params: Mapping) -> bool:
+    """True if a cache file for these inputs exists in the current layout (only its header is read;
+    :func:`load` still checks the arrays). Lets a caller announce a rebuild before it starts."""
+    key = input_key(kind, version, params)
+    try:
+        with np.load(_path(kind, key), allow_pickle=False) as npz:
+            meta = json.loads(str(npz[_META]))
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError, json.JSONDecodeError, zlib.error):
+        return False
+    return (meta.get("key"), meta.get("version"), meta.get("format")) == (key, version, FORMAT)
+
+
 def load(kind: str, version: int, params: Mapping) -> dict[str, np.ndarray] | None:
     """The cached arrays for these inputs, or None if absent, damaged, incomplete or stale."""
     numba_cache.heal(numba_cache.configured_dir())

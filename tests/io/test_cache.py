@@ -65,8 +65,10 @@ def test_a_file_whose_arrays_were_replaced_or_of_the_old_layout_is_rebuilt(folde
         arrays["b"] = arrays["b"].astype(np.int64)
     else:
         meta = {k: meta[k] for k in ("key", "version", "kind")}
+    assert cache.is_current("t", 1, {})
     _rewrite(path, arrays, meta)
     assert cache.load("t", 1, {}) is None
+    assert cache.is_current("t", 1, {}) == (change != "format 1")
 
 
 def test_an_unwritable_cache_folder_means_no_cache_and_one_warning(tmp_path, monkeypatch):
