@@ -17,16 +17,13 @@ import argparse
 import sys
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from astropy.time import Time
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from astropy.time import Time  # noqa: E402
-
-from ..camera import Camera  # noqa: E402
-from ..frames import rotation_from_radec_roll, vector_to_radec  # noqa: E402
-from ..simulate import (  # noqa: E402
+from ..camera import Camera
+from ..frames import rotation_from_radec_roll, vector_to_radec
+from ..simulate import (
     RSO,
     FrameTiming,
     KeplerElements,
@@ -37,9 +34,9 @@ from ..simulate import (  # noqa: E402
     get_sensor_preset,
     simulate_frame,
 )
-from ..simulate.orbits import MU_EARTH_KM3_S2  # noqa: E402
-from ..units import DEG  # noqa: E402
-from .plots import display_stretch  # noqa: E402
+from ..simulate.orbits import MU_EARTH_KM3_S2
+from ..units import DEG
+from .plots import display_stretch
 
 DEFAULT_OUT = Path("docs") / "gallery"
 CAMERA = Camera.from_fov(1024, 768, 14.0, name="gallery")
@@ -49,7 +46,8 @@ EPOCH = Time("2026-09-23T20:00:00", scale="utc")
 
 def _axes(image: np.ndarray, title: str):
     height, width = image.shape
-    fig, ax = plt.subplots(figsize=(9, 9 * height / width + 0.6), dpi=90)
+    fig = Figure(figsize=(9, 9 * height / width + 0.6), dpi=90)
+    ax = fig.subplots()
     ax.imshow(display_stretch(image), cmap="gray", origin="upper",
               extent=(-0.5, width - 0.5, height - 0.5, -0.5))
     ax.set_xlim(-0.5, width - 0.5)
@@ -63,7 +61,6 @@ def _axes(image: np.ndarray, title: str):
 def _save(fig, path: Path) -> Path:
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
     return path
 
 

@@ -7,13 +7,10 @@ from __future__ import annotations
 
 import os
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..results import AttitudeSolution, Detections  # noqa: E402
+from ..results import AttitudeSolution, Detections
 
 
 def display_stretch(image: np.ndarray) -> np.ndarray:
@@ -33,7 +30,8 @@ def plot_solution(image: np.ndarray, detections: Detections, solution: AttitudeS
     """Save a PNG of the image with detections (grey), identified stars (green, HIP numbers) and,
     optionally, the true star positions (red crosses)."""
     height, width = np.asarray(image).shape[:2]
-    fig, ax = plt.subplots(figsize=(8, 8 * height / width), dpi=110)
+    fig = Figure(figsize=(8, 8 * height / width), dpi=110)
+    ax = fig.subplots()
     ax.imshow(display_stretch(image), cmap="gray", origin="upper", extent=(-0.5, width - 0.5, height - 0.5, -0.5))
     ax.scatter(detections.x, detections.y, s=90, facecolors="none", edgecolors="0.6", linewidths=0.8)
     if truth_xy is not None:
@@ -51,7 +49,6 @@ def plot_solution(image: np.ndarray, detections: Detections, solution: AttitudeS
     ax.set_ylabel("y (px)")
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
 
 
 def _title(solution: AttitudeSolution) -> str:
@@ -64,7 +61,8 @@ def _title(solution: AttitudeSolution) -> str:
 def plot_star_counts(availability, path: str | os.PathLike, *, title: str = "") -> None:
     """Save a histogram of stars in the field over random pointings (seed 002 Fig. 5-1)."""
     hist = availability.histogram
-    fig, ax = plt.subplots(figsize=(7, 4), dpi=110)
+    fig = Figure(figsize=(7, 4), dpi=110)
+    ax = fig.subplots()
     ax.bar(np.arange(hist.size), hist / hist.sum(), width=0.9, color="tab:blue")
     ax.set_xlabel("stars in the image")
     ax.set_ylabel("fraction of pointings")
@@ -73,4 +71,3 @@ def plot_star_counts(availability, path: str | os.PathLike, *, title: str = "") 
                  fontsize=9)
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
