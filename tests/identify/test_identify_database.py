@@ -15,8 +15,8 @@ from startrack.identify.database import (
     largest_to_stored,
     pattern_key,
 )
-from startrack.identify.registry import database_settings_for
 from startrack.identify.patterns import edge_ratios, pair_angles
+from startrack.identify.registry import database_settings_for
 
 SMALL = DatabaseSettings(fov_min_deg=20.0, fov_max_deg=30.0, max_mag=7.0)
 

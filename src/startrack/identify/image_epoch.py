@@ -20,11 +20,13 @@ when their clock was never set) is passed over, as the EXIF reader passes over a
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from astropy.time import Time
+from erfa import ErfaWarning
 
 from ..errors import InvalidInputError
 
@@ -33,6 +35,9 @@ DEFAULT_EPOCH_JYEAR = 2000.0
 
 EPOCH_RANGE_JYEAR = (1000.0, 3000.0)
 """Epochs outside this range (exclusive) are refused as mistakes."""
+
+J2000_MJD = 51544.5
+"""Modified Julian date of J2000.0."""
 
 
 @dataclass(frozen=True)
@@ -52,6 +57,14 @@ class Epoch:
     source: str
 
 
+def _jyear_tdb(when: Time) -> float:
+    """Julian year (TDB) of a time; a UTC year outside the leap-second table (before 1960 or far
+    ahead) is converted without ERFA's "dubious year" warning: the epoch needs days, not seconds."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ErfaWarning)
+        return float(when.tdb.jyear)
+
+
 def epoch_jyear(epoch) -> float:
     """A catalog epoch as a Julian year (TDB): None gives J2000.0; accepts astropy Time or a year.
 
@@ -65,7 +78,7 @@ def epoch_jyear(epoch) -> float:
     if isinstance(epoch, Time):
         if not epoch.isscalar:
             raise InvalidInputError(f"epoch must be a single time, got an array of {epoch.size}")
-        return _checked(float(epoch.tdb.jyear), epoch)
+        return _checked(_jyear_tdb(epoch), epoch)
     if isinstance(epoch, bool | str):
         raise InvalidInputError(f"epoch must be an astropy Time or a Julian year such as 2025.5, got {epoch!r}")
     try:
@@ -88,8 +101,10 @@ def parse_utc(text: str, name: str = "time") -> Time:
     """An ISO 8601 UTC time (``2024-08-12T03:15:00``, a date, or with a space for the T), or an
     InvalidInputError naming ``name`` and what would be valid."""
     try:
-        when = Time(str(text).strip(), scale="utc")
-        jyear = float(when.tdb.jyear)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ErfaWarning)
+            when = Time(str(text).strip(), scale="utc")
+        jyear = _jyear_tdb(when)
     except (ValueError, TypeError):
         raise InvalidInputError(f"{name} must be an ISO 8601 UTC time such as 2024-08-12T03:15:00, "
                                 f"got {text!r}") from None
@@ -115,7 +130,12 @@ def epoch_from_header(header: Mapping[str, Any]) -> Epoch | None:
         return Epoch(_header_time(header, "DATE-OBS"), "DATE-OBS")
     if "MJD-OBS" in header:
         mjd = _card_number(header, "MJD-OBS", "a modified Julian date")
-        return Epoch(_checked(float(Time(mjd, format="mjd", scale="utc").tdb.jyear), mjd), "MJD-OBS")
+        lo, hi = EPOCH_RANGE_JYEAR
+        jyear = 2000.0 + (mjd - J2000_MJD) / 365.25  # near enough to refuse a date ERFA cannot take
+        if not lo < jyear < hi:
+            raise InvalidInputError(f"the image header's MJD-OBS = {mjd!r} is not a modified Julian date "
+                                    f"between the years {lo:g} and {hi:g}; give the epoch to override it")
+        return Epoch(_jyear_tdb(Time(mjd, format="mjd", scale="utc")), "MJD-OBS")
     if "DateTimeOriginal" in header:
         try:
             return Epoch(_header_time(header, "DateTimeOriginal"), "DateTimeOriginal")
@@ -154,8 +174,10 @@ def _header_time(header: Mapping[str, Any], key: str) -> float:
         "DateTimeOriginal", "SubsecTimeOriginal", "OffsetTimeOriginal")
     cards = {name: header[name] for name in names if name in header}
     try:
-        when = time_from_header(cards, utc_offset_hours=0.0, mid_exposure=False)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ErfaWarning)
+            when = time_from_header(cards, utc_offset_hours=0.0, mid_exposure=False)
     except (InvalidInputError, ValueError) as exc:
         raise InvalidInputError(f"the image header's {key} = {header[key]!r} is not a time ({exc}); "
                                 "give the epoch to override it") from None
-    return _checked(float(when.tdb.jyear), header[key])
+    return _checked(_jyear_tdb(when), header[key])
