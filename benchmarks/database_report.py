@@ -11,7 +11,10 @@ in its own environment by ``peers/cedar_runner.py``.
 
 Usage::
 
-    python benchmarks/database_report.py [--fov-range 5 35] [--no-peer]
+    python benchmarks/database_report.py [--fov-range 3 100] [--no-peer]
+
+The default range is startrack's default search (3-100 deg); ``--fov-range 5 35`` reports the
+database the earlier default used.
 """
 
 from __future__ import annotations
@@ -79,7 +82,7 @@ def _run_worker(kind: str, fov_range_deg: tuple[float, float], cache: Path) -> d
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def report_database(fov_range_deg: tuple[float, float] = (5.0, 35.0)) -> dict:
+def report_database(fov_range_deg: tuple[float, float] = (3.0, 100.0)) -> dict:
     """Build our pattern database for ``fov_range_deg`` in a fresh cache, load it, measure both.
 
     Returns a dict with ``build_s``, ``catalog_s``, ``file_bytes``, ``n_patterns``, ``n_stars``,
@@ -117,6 +120,7 @@ def print_report(ours: dict | None, cedar: dict | None) -> None:
               f"{ours['rss_delta_bytes'] / mib:>8.1f} {ours['array_bytes'] / mib:>10.1f} "
               f"{ours['n_patterns']:>9} {ours['n_stars']:>7}")
         print(f"  (catalog read {ours['catalog_s']:.2f} s, not in the build time)")
+        print("  levels (FOV deg: patterns): " + ", ".join(f"{fov:.1f}: {n}" for fov, n in ours.get("levels", [])))
     if cedar is not None:
         fov = f"{cedar['min_fov']:g}-{cedar['max_fov']:g}"
         print(f"{'cedar-solve default_database':<28} {fov:>9} {'shipped':>8} "
@@ -129,7 +133,7 @@ def print_report(ours: dict | None, cedar: dict | None) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--fov-range", type=float, nargs=2, default=[5.0, 35.0],
+    parser.add_argument("--fov-range", type=float, nargs=2, default=[3.0, 100.0],
                         metavar=("LO", "HI"))
     parser.add_argument("--no-peer", action="store_true")
     parser.add_argument("--no-ours", action="store_true")

@@ -3,7 +3,9 @@
 For each field of view, ``--trials`` star lists are generated (:mod:`starlists`: random
 attitudes, centroid noise 0.1-0.5 px, 0-20 % missing stars, 0-6 false stars, magnitude noise) and
 solved by both methods in the same run, first with the FOV known, then with only a FOV range
-(``--fov-range``). Printed per method and condition: success rate, false-solve rate, median and
+(``--fov-range``), and with ``--no-hint`` also with nothing said about the FOV (each solver's
+default search: startrack's 3-100 deg, cedar-solve's whole database). Printed per method and
+condition: success rate, false-solve rate, median and
 95th-percentile solve time, and for startrack the ratio of its times to cedar-solve's. The
 methods take turns on chunks of ``--interleave`` lists, so a drift of the machine's speed during
 a long run (seen on shared VMs) does not favour whichever ran first.
@@ -12,7 +14,7 @@ Results (the table and per-trial arrays) are saved as JSON under ``benchmarks/re
 Usage::
 
     python benchmarks/lis_benchmark.py [--trials 300] [--seed 1] [--fov-deg 10 15 20]
-                                       [--fov-range 5 35] [--no-range] [--no-peer]
+                                       [--fov-range 5 35] [--no-range] [--no-hint] [--no-peer]
                                        [--interleave 1000]
 """
 
@@ -62,7 +64,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
                         metavar=("LO", "HI"),
                         help="FOV range given to the solvers in the unknown-FOV runs (deg)")
     parser.add_argument("--no-range", action="store_true", help="only run with the FOV known")
-    parser.add_argument("--no-known", action="store_true", help="only run with the FOV range")
+    parser.add_argument("--no-known", action="store_true", help="do not run with the FOV known")
+    parser.add_argument("--no-hint", action="store_true",
+                        help="also run with no FOV given (the solvers' default search)")
     parser.add_argument("--no-peer", action="store_true", help="do not run cedar-solve")
     parser.add_argument("--no-ours", action="store_true", help="do not run startrack")
     parser.add_argument("--matchers", nargs="+", default=["quads"], choices=LIS_MATCHERS,
@@ -82,6 +86,8 @@ def knowledge_list(fov_deg: float, args: argparse.Namespace) -> list[FovKnowledg
     out = [] if args.no_known else [FovKnowledge(fov_deg=fov_deg)]
     if not args.no_range:
         out.append(FovKnowledge(fov_range_deg=(args.fov_range[0], args.fov_range[1])))
+    if args.no_hint:
+        out.append(FovKnowledge())
     return out
 
 

@@ -285,7 +285,7 @@ def pattern_key(quantised_ratios: NDArray) -> NDArray[np.int64]:
     so one range query per pair of bins returns only patterns whose three smallest
     ratios are all near the image's.
     """
-    q = np.asarray(quantised_ratios, dtype=np.int64)
+    q = np.asarray(quantised_ratios)[..., :3].astype(np.int64)  # the two other ratios are not in the key
     return (ratio_bin(q[..., 0]) * KEY_BINS + ratio_bin(q[..., 1])) * 65536 + q[..., 2]
 
 
@@ -361,8 +361,9 @@ def database_path(settings: DatabaseSettings | None = None):
     return cache.cache_dir() / f"{DB_KIND}-{cache.input_key(DB_KIND, DB_VERSION, asdict(settings))}.npz"
 
 
-def database_report(settings: DatabaseSettings | None = None) -> dict[str, float]:
-    """Build (if needed) and load a database, and say what it costs: seconds, bytes, counts.
+def database_report(settings: DatabaseSettings | None = None) -> dict[str, float | list]:
+    """Build (if needed) and load a database, and say what it costs: seconds, bytes, counts,
+    and per level (``levels``: [FOV deg, patterns] pairs, narrowest first).
 
     ``build_s`` is NaN when a valid cache file was already there.
     """
@@ -378,4 +379,6 @@ def database_report(settings: DatabaseSettings | None = None) -> dict[str, float
     load_s = time.perf_counter() - t0
     return {"build_s": build_s, "load_s": load_s, "file_bytes": database_path(settings).stat().st_size,
             "memory_bytes": db.nbytes, "n_patterns": db.n_patterns, "n_stars": len(db.hip),
-            "n_levels": len(db.level_fov_rad)}
+            "n_levels": len(db.level_fov_rad),
+            "levels": [[float(np.degrees(f)), int(n)] for f, n in zip(db.level_fov_rad, np.diff(db.level_offsets),
+                                                                      strict=True)]}

@@ -1,0 +1,203 @@
+"""Solving real photos and wide or narrow simulated frames from pixels, with no hint.
+
+Part 1, the eight real images of ``../shared/realdata`` (see its README): each is solved by
+``startrack.solve_image`` with nothing said about the field of view (the default search, 3 to
+100 deg) and, for comparison, with the earlier default range of 5 to 35 deg. Printed per image:
+solved or not, the error against astrometry.net's solution (the direction of the image centre
+in pixels of its plate scale, and the roll in degrees), the stars detected among astrometry.net's
+genuine matches (``detect_realdata.reference``: its ``.corr`` rows, chance coincidences left out)
+and among them the ones our solution matched to a catalog star, and the time (detection and
+identification, ``solve_time_s``) and, apart, that of the detection alone (a separate run of
+the default detector on the same image).
+
+Part 2, simulated frames (``startrack.simulate.simulate_frame``, the generic CMOS sensor, noise
+on) of cameras nobody calibrated, at random attitudes, solved by ``solve_image`` with no hint:
+
+============  ===========  =========================  ===========================================
+camera        size (px)    lens                       stands for
+============  ===========  =========================  ===========================================
+3 deg         1024 x 1024  pinhole                    a small telescope, stars to V 10
+50 deg        1640 x 1232  k1 -0.03 (2 % at corner)   a Raspberry Pi camera module, stars to V 6.5
+70 deg        1920 x 1080  k1 -0.06, k2 +0.01 (5 %)   a webcam, stars to V 6.5
+90 deg        1600 x 1200  k1 -0.05 (7 % at corner)   a wide lens, stars to V 6
+============  ===========  =========================  ===========================================
+
+(The lens coefficients are plausible barrel distortions for such lenses, chosen here; they are not
+calibrations of particular lenses.) Printed per camera: solved within 2 px (the largest
+displacement of the image centre and corners between the true and solved attitudes, through the
+true camera), solved farther off (false), not solved, the median and 95th-percentile time of
+detection and identification, and the median of identification alone (that time less the
+detector's on the same frame, timed apart).
+
+Usage::
+
+    .venv/bin/python benchmarks/realdata_benchmark.py [--frames 20] [--seed 1] [--no-real] [--no-sim]
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from detect_realdata import REALDATA, reference, score  # noqa: E402
+
+from startrack import Camera, solve_image  # noqa: E402
+from startrack.detect import StarDetector  # noqa: E402
+from startrack.frames import angle_between, radec_to_vector, random_rotations  # noqa: E402
+from startrack.io import read_image  # noqa: E402
+from startrack.simulate import get_sensor_preset, simulate_frame  # noqa: E402
+from startrack.units import ARCSEC, DEG  # noqa: E402
+
+
+@dataclass(frozen=True)
+class SimCamera:
+    """A simulated camera of part 2: name, size, horizontal FOV, lens and magnitude limit."""
+
+    name: str
+    width: int
+    height: int
+    fov_deg: float
+    k1: float
+    k2: float
+    max_mag: float
+
+    def camera(self) -> Camera:
+        return Camera.from_fov(self.width, self.height, self.fov_deg).with_distortion(k1=self.k1, k2=self.k2)
+
+
+SIM_CAMERAS = (
+    SimCamera("3 deg", 1024, 1024, 3.0, 0.0, 0.0, 10.0),
+    SimCamera("50 deg", 1640, 1232, 50.0, -0.03, 0.0, 6.5),
+    SimCamera("70 deg", 1920, 1080, 70.0, -0.06, 0.01, 6.5),
+    SimCamera("90 deg", 1600, 1200, 90.0, -0.05, 0.0, 6.0),
+)
+
+
+# --- part 1: the real images ------------------------------------------------------------------
+def _truth_rows() -> list[dict[str, str]]:
+    with open(REALDATA / "truth.csv", newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def real_row(row: dict[str, str], fov_range_deg: tuple[float, float] | None) -> dict:
+    """Solve one real image (no hint, or the given range) and compare with astrometry.net."""
+    image = read_image(REALDATA / row["set"] / row["file"])
+    detect_s = _detect_s(image.data)
+    solution = solve_image(image, fov_range_deg=fov_range_deg)
+    ref = reference(row["file"])
+    found = solution.detections
+    out = {"file": row["file"], "solved": solution.solved, "status": solution.status.value,
+           "time_ms": solution.solve_time_s * 1e3, "detect_ms": detect_s * 1e3, "an_matched": int(ref.x.size),
+           "detected": score(found.x, found.y, ref).found, "identified": 0,
+           "centre_err_px": float("nan"), "roll_err_deg": float("nan"), "fov_deg": float("nan")}
+    if not solution.solved:
+        return out
+    width, height = int(row["width"]), int(row["height"])
+    centre = solution.rot_cam_from_icrs.inv().apply(solution.camera.pixel_to_vector((width - 1) / 2, (height - 1) / 2))
+    truth = radec_to_vector(float(row["ra_center_deg"]) * DEG, float(row["dec_center_deg"]) * DEG)
+    matched = solution.matches.det_index
+    out.update(centre_err_px=float(angle_between(centre, truth) / (float(row["pixscale_arcsec"]) * ARCSEC)),
+               roll_err_deg=float((solution.roll_deg - float(row["roll_tetra3_deg"]) + 180.0) % 360.0 - 180.0),
+               fov_deg=solution.fov_deg, identified=score(found.x[matched], found.y[matched], ref).found)
+    return out
+
+
+def _detect_s(data: np.ndarray) -> float:
+    """Seconds the default detector takes on an image (one run)."""
+    t0 = time.perf_counter()
+    StarDetector().detect(data)
+    return time.perf_counter() - t0
+
+
+def print_real(rows: list[dict], label: str) -> None:
+    print(f"\nReal images, {label}")
+    print(f"{'image':<16} {'status':<14} {'centre px':>9} {'roll deg':>8} {'FOV deg':>8} "
+          f"{'a.net stars':>11} {'detected':>8} {'identified':>10} {'time ms':>8} {'detect ms':>9}")
+    for r in rows:
+        print(f"{r['file']:<16} {r['status']:<14} {r['centre_err_px']:>9.2f} {r['roll_err_deg']:>8.3f} "
+              f"{r['fov_deg']:>8.3f} {r['an_matched']:>11d} {r['detected']:>8d} {r['identified']:>10d} "
+              f"{r['time_ms']:>8.1f} {r['detect_ms']:>9.1f}")
+    solved = [r for r in rows if r["solved"]]
+    within = sum(r["centre_err_px"] < 2.0 and abs(r["roll_err_deg"]) < 0.2 for r in solved)
+    print(f"solved {len(solved)} of {len(rows)}, {within} within 2 px and 0.2 deg of astrometry.net; "
+          f"median time {np.median([r['time_ms'] for r in rows]):.1f} ms")
+
+
+# --- part 2: simulated frames -----------------------------------------------------------------
+def error_px(truth, solution, camera: Camera) -> float:
+    """Largest displacement (pixels, through the true camera) of the image centre and corners
+    between the true and the solved attitude."""
+    x = np.array([camera.cx, 0.0, camera.width - 1.0, 0.0, camera.width - 1.0])
+    y = np.array([camera.cy, 0.0, 0.0, camera.height - 1.0, camera.height - 1.0])
+    sky = truth.inv().apply(camera.pixel_to_vector(x, y))
+    px, py = camera.vector_to_pixel(solution.rot_cam_from_icrs.apply(sky))
+    return float(np.max(np.hypot(px - x, py - y)))
+
+
+def sim_camera_run(spec: SimCamera, frames: int, seed: int) -> dict:
+    """Render and solve ``frames`` frames of one simulated camera."""
+    camera, sensor = spec.camera(), get_sensor_preset("generic-cmos")
+    rng = np.random.default_rng([seed, int(spec.fov_deg)])
+    ok = false = 0
+    times, identify, errors = [], [], []
+    for truth in random_rotations(frames, rng=rng):
+        sim = simulate_frame(camera, truth, max_mag=spec.max_mag, sensor=sensor, epoch_jyear=2000.0, rng=rng)
+        detect_s = _detect_s(sim.image)
+        solution = solve_image(sim.image)
+        times.append(solution.solve_time_s)
+        identify.append(solution.solve_time_s - detect_s)
+        if solution.solved:
+            err = error_px(truth, solution, camera)
+            errors.append(err)
+            ok, false = ok + (err < 2.0), false + (err >= 2.0)
+    return {"camera": spec.name, "frames": frames, "ok": ok, "false": false, "unsolved": frames - ok - false,
+            "median_err_px": float(np.median(errors)) if errors else float("nan"),
+            "median_ms": float(np.median(times)) * 1e3, "p95_ms": float(np.percentile(times, 95)) * 1e3,
+            "identify_median_ms": float(np.median(identify)) * 1e3}
+
+
+def print_sim(rows: list[dict]) -> None:
+    print("\nSimulated frames, no hint (default search 3-100 deg), lens not calibrated")
+    print(f"{'camera':<8} {'frames':>6} {'within 2 px':>11} {'false':>5} {'unsolved':>8} {'median err px':>13} "
+          f"{'median ms':>9} {'p95 ms':>8} {'identify ms':>11}")
+    for r in rows:
+        print(f"{r['camera']:<8} {r['frames']:>6d} {r['ok']:>11d} {r['false']:>5d} {r['unsolved']:>8d} "
+              f"{r['median_err_px']:>13.3f} {r['median_ms']:>9.1f} {r['p95_ms']:>8.1f} "
+              f"{r['identify_median_ms']:>11.1f}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--frames", type=int, default=20, help="simulated frames per camera (default 20)")
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--no-real", action="store_true", help="skip the real images")
+    parser.add_argument("--no-sim", action="store_true", help="skip the simulated frames")
+    args = parser.parse_args(argv)
+    load = os.getloadavg()[0]
+    t0 = time.perf_counter()
+    solve_image(np.zeros((64, 64)))  # load the database and the compiled search before timing
+    if not args.no_real:
+        if not (REALDATA / "truth.csv").is_file():
+            print(f"real images: {REALDATA} is absent, skipped")
+        else:
+            rows = _truth_rows()
+            print_real([real_row(r, None) for r in rows], "no hint (default search 3-100 deg)")
+            print_real([real_row(r, (5.0, 35.0)) for r in rows], "FOV range 5-35 deg (the earlier default)")
+    if not args.no_sim:
+        print_sim([sim_camera_run(spec, args.frames, args.seed) for spec in SIM_CAMERAS])
+    print(f"\nwall {time.perf_counter() - t0:.0f} s; load average {load:.2f} before, {os.getloadavg()[0]:.2f} after "
+          f"on {os.cpu_count()} cores")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
