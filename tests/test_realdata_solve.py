@@ -1,4 +1,5 @@
-"""The eight real sky images solve from pixels, given only a 5-35 deg FOV range.
+"""The eight real sky images solve from pixels, given only a 5-35 deg FOV range or nothing at all
+(the default search, 3-100 deg).
 
 Truth: astrometry.net (../shared/realdata/truth.csv). Its RA/Dec is the direction of the image
 centre ((W - 1) / 2, (H - 1) / 2) in our 0-based convention, and its ``roll_tetra3_deg`` is the
@@ -28,10 +29,11 @@ def _names() -> list[str]:
 NAMES = _names()
 
 
+@pytest.mark.parametrize("fov_range_deg", [(5.0, 35.0), None], ids=["5-35 deg", "no hint"])
 @pytest.mark.parametrize("name", NAMES)
-def test_real_image_solves_within_two_pixels_and_a_fifth_of_a_degree(name, truth_table, realdata_dir):
+def test_real_image_solves_within_two_pixels_and_a_fifth_of_a_degree(name, fov_range_deg, truth_table, realdata_dir):
     row = next(r for r in truth_table if r["file"] == name)
-    solution = solve_image(realdata_dir / row["set"] / name, fov_range_deg=(5.0, 35.0))
+    solution = solve_image(realdata_dir / row["set"] / name, fov_range_deg=fov_range_deg)
     detections = solution.detections
     assert solution.solved, f"{name}: {solution.reason}"
     width, height = int(row["width"]), int(row["height"])
