@@ -85,7 +85,7 @@ class StreakCandidates:
         return int(self.label.shape[0])
 
 
-def robust_level(image: NDArray, step: int = 4) -> tuple[float, float]:
+def robust_level(image: NDArray, step: int = 8) -> tuple[float, float]:
     """Median and MAD-based sigma of every ``step``-th pixel in each direction."""
     sample = np.asarray(image[::step, ::step], dtype=np.float64)
     centre = float(np.median(sample))
@@ -137,7 +137,7 @@ def find_streak_candidates(image: ArrayLike, *, bin_px: int = BIN_PX, line_bins:
     blocks = binned(img, bin_px) - background * bin_px**2
     filtered = np.empty_like(blocks)
     kernel().line_filter(blocks, line_bins, ORIENTATIONS, filtered)
-    centre, spread = robust_level(filtered, 1)
+    centre, spread = robust_level(filtered, 2)
     labels, count = ndimage.label(filtered > centre + threshold_sigma * spread, structure=_EIGHT)
     labels = labels.astype(np.int32)
     if count == 0:

@@ -31,7 +31,9 @@ NPAR = 9
 CAPACITY = 200_000
 """Most pixels one window may hold."""
 MAX_ITER = 25
-TOL_PX = 2e-3
+TOL_PX = 0.01
+FIRST_TOL_PX = 0.05
+"""The first pass stops at this step: the second, on every pixel of a tight window, refines it."""
 BLUR_RANGE_PX = (0.45, 4.5)
 """A fitted blur outside this range is not one star's streak."""
 MIN_FLUX_SNR = 8.0
@@ -116,8 +118,8 @@ class StreakFits:
         """1-sigma (K, 2) of each end along its arc (px)."""
         _, cov = self.measurements()
         u = self.params[:, 2:4] / np.hypot(self.params[:, 2], self.params[:, 3])[:, None]
-        return np.stack([np.sqrt(np.einsum("ki,kij,kj->k", u, cov[:, s, s], u)) for s in (slice(0, 2), slice(2, 4))],
-                        axis=1)
+        var = [np.einsum("ki,kij,kj->k", u, cov[:, s, s], u) for s in (slice(0, 2), slice(2, 4))]
+        return np.sqrt(np.maximum(np.stack(var, axis=1), 0.0))
 
 
 def measurement(params: NDArray) -> NDArray[np.float64]:
@@ -209,9 +211,9 @@ def _smoothing(candidates: StreakCandidates, k: int, band: float) -> int:
 
 
 def tight_window(params: NDArray) -> tuple[NDArray, NDArray]:
-    """Reach and band (K,) of the second pass: 4 blurs + 2 px beyond the ends, 3.5 blurs + 1.5 px across."""
+    """Reach and band (K,) of the second pass: 4 blurs + 2 px beyond the ends, 3 blurs + 1.5 px across."""
     s = np.clip(params[:, 8], *BLUR_RANGE_PX)
-    return 4.0 * s + 2.0, 3.5 * s + 1.5
+    return 4.0 * s + 2.0, 3.0 * s + 1.5
 
 
 def fit_streaks(
@@ -226,6 +228,7 @@ def fit_streaks(
     own: ArrayLike | None = None,
     shot: float | None = None,
     saturation: float | None = None,
+    passes: int = 2,
 ) -> StreakFits:
     """Fit arcs to a frame from first guesses (module docstring).
 
@@ -243,9 +246,13 @@ def fit_streaks(
         Blob labels on a grid ``bin_px`` times coarser and each guess's own label: pixels of
         other blobs are left out of a window.
     shot : float, optional
-        Photon-noise variance per unit of signal (1 / gain); None estimates it.
+        Photon-noise variance per unit of signal (1 / gain); None estimates it from the first
+        pass (with one pass: background noise only).
     saturation : float, optional
         Pixels at or above it are left out; None: :func:`saturation_level`.
+    passes : int
+        2 (module docstring) or 1: only the second pass, in the tight window around ``start``
+        (a first guess within a pixel or so, such as a prediction), its weights from ``start``.
 
     Returns
     -------
@@ -263,31 +270,52 @@ def fit_streaks(
     var_bg = float(noise) ** 2
     if not var_bg > 0:
         raise InvalidInputError(f"noise must be a positive sigma, got {noise!r}")
-    first = _run(img, labels, bin_px, own, start, np.asarray(reach, float), np.asarray(band, float), sat, var_bg,
-                 0.0 if shot is None else float(shot))
-    tight_reach, tight_band = tight_window(first[0])
+    reach, band = np.asarray(reach, dtype=float), np.asarray(band, dtype=float)
+    if passes == 1:
+        params, cov, stats = _run(img, labels, bin_px, own, start, reach, band, sat, var_bg, shot or 0.0, False, TOL_PX)
+        return _judged(params, cov, stats, img.shape, own, shot or 0.0, float(noise), _median_bg(start))
+    params, cov, stats = _run(img, labels, bin_px, own, start, reach, band, sat, var_bg, shot or 0.0, True,
+                              FIRST_TOL_PX)
+    # a first pass that ran out of steps may still be a streak: its background-only weights make a
+    # bright streak's photon noise look like misfit, which the second pass's weights remove
+    flags = np.where(stats[:, 3] == 1, 0, stats[:, 3]).astype(int)
+    promising = np.array([not verdict(params[i], cov[i], flags[i], img.shape) for i in range(k)], dtype=bool)
+    tight_reach, tight_band = tight_window(params)
     if shot is None:
-        shot = estimate_shot(img, labels, bin_px, own, first[0], tight_reach, tight_band, sat, var_bg, first[2])
-    params, cov, stats = _run(img, labels, bin_px, own, first[0], tight_reach, tight_band, sat, var_bg, shot)
-    return _judged(params, cov, stats, img.shape, own, shot, float(noise), float(np.median(start[:, 7])) if k else 0.0)
+        shot = estimate_shot(img, labels, bin_px, own, params, tight_reach, tight_band, sat, var_bg, promising)
+    again = np.flatnonzero(promising)
+    if again.size:
+        second = _run(img, labels, bin_px, own[again], params[again], tight_reach[again], tight_band[again], sat,
+                      var_bg, shot, False, TOL_PX)
+        params[again], cov[again], stats[again] = second
+    return _judged(params, cov, stats, img.shape, own, shot, float(noise), _median_bg(start))
 
 
-def _run(img, labels, bin_px, own, start, reach, band, sat, var_bg, shot):
+def _median_bg(start: NDArray) -> float:
+    return float(np.median(start[:, 7])) if len(start) else 0.0
+
+
+def _run(img, labels, bin_px, own, start, reach, band, sat, var_bg, shot, half, tol_px):
     k = len(start)
     params, covs, stats = np.zeros((k, NPAR)), np.zeros((k, NPAR, NPAR)), np.zeros((k, 4))
-    kernel().fit_arcs(img, labels, int(bin_px), own, start, np.ascontiguousarray(reach, dtype=np.float64),
-                      np.ascontiguousarray(band, dtype=np.float64), sat, var_bg, float(shot), MAX_ITER, TOL_PX,
-                      CAPACITY, params, covs, stats)
+    kernel().fit_arcs(img, labels, int(bin_px), own, np.ascontiguousarray(start, dtype=np.float64),
+                      np.ascontiguousarray(reach, dtype=np.float64), np.ascontiguousarray(band, dtype=np.float64),
+                      sat, var_bg, float(shot), bool(half), MAX_ITER, float(tol_px), CAPACITY, params, covs, stats)
     return params, covs, stats
 
 
-def estimate_shot(img, labels, bin_px, own, fitted, reach, band, sat, var_bg, stats) -> float:
-    """Photon-noise variance per unit of signal from the residuals of the converged fits (>= 0)."""
-    good = stats[:, 3] == 0
-    if not np.any(good):
+SHOT_STREAKS = 6
+"""The photon noise is estimated from the residuals of this many of the brightest clean first fits."""
+
+
+def estimate_shot(img, labels, bin_px, own, fitted, reach, band, sat, var_bg, good) -> float:
+    """Photon-noise variance per unit of signal from the residuals of the brightest clean fits (>= 0)."""
+    index = np.flatnonzero(good)
+    if index.size == 0:
         return 0.0
-    num, den = kernel().shot_sums(img, labels, int(bin_px), own[good], np.ascontiguousarray(fitted[good]),
-                                  np.ascontiguousarray(reach[good]), np.ascontiguousarray(band[good]), sat, var_bg,
+    index = index[np.argsort(-fitted[index, 5], kind="stable")][:SHOT_STREAKS]
+    num, den = kernel().shot_sums(img, labels, int(bin_px), own[index], np.ascontiguousarray(fitted[index]),
+                                  np.ascontiguousarray(reach[index]), np.ascontiguousarray(band[index]), sat, var_bg,
                                   CAPACITY)
     return max(num / den, 0.0) if den > 0 else 0.0
 

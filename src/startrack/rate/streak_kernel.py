@@ -38,44 +38,86 @@ FIT_OK, FIT_NOT_CONVERGED, FIT_TOO_FEW_PIXELS, FIT_SINGULAR = 0, 1, 2, 3
 """Flags of :func:`fit_arcs`."""
 
 
+NGEO = 12
+"""Derived constants of one arc (:func:`geometry`): cx, cy, ux, uy, H, 1/H, sag, a, g, b, s, 1/s."""
+
+
 @njit(cache=True)
-def arc_pixel(x, y, p, jac):
-    """The model at pixel (x, y) (module docstring); fills ``jac`` (9,) with dI/dp; returns I."""
-    cx, cy, hx, hy, sag, amp, grad, bg, s = p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8]
-    half = math.sqrt(hx * hx + hy * hy)
-    ux, uy = hx / half, hy / half
+def geometry(p, geo):
+    """Fill ``geo`` (:data:`NGEO`,) with the per-arc constants of parameters ``p`` (9,)."""
+    half = math.sqrt(p[HX] * p[HX] + p[HY] * p[HY])
+    geo[0], geo[1] = p[CX], p[CY]
+    geo[2], geo[3] = p[HX] / half, p[HY] / half
+    geo[4], geo[5] = half, 1.0 / half
+    geo[6], geo[7], geo[8], geo[9] = p[SAG], p[AMP], p[GRAD], p[BG]
+    geo[10], geo[11] = p[SIG], 1.0 / p[SIG]
+
+
+@njit(cache=True, fastmath=True)
+def arc_value(x, y, geo):
+    """The model at pixel (x, y) from the arc's constants ``geo`` (no derivatives)."""
+    ux, uy, half, inv_half, inv_s = geo[2], geo[3], geo[4], geo[5], geo[11]
+    qx, qy = x - geo[0], y - geo[1]
+    t = qx * ux + qy * uy
+    d = -qx * uy + qy * ux - geo[6] * (1.0 - (t * inv_half) ** 2)
+    zs = d * inv_s
+    along = 1.0
+    k = inv_s / SQRT2
+    zp, zm = (t + half) * k, (t - half) * k
+    if not (zp > 4.5 and zm < -4.5):
+        along = 0.5 * (math.erf(zp) - math.erf(zm))
+    return geo[9] + geo[7] * (1.0 + geo[8] * t * inv_half) * math.exp(-0.5 * zs * zs) * along
+
+
+@njit(cache=True, fastmath=True)
+def arc_jacobian(x, y, geo, jac):
+    """The model at pixel (x, y) from the arc's constants ``geo``; fills ``jac`` (9,) with dI/dp."""
+    ux, uy, half, inv_half = geo[2], geo[3], geo[4], geo[5]
+    sag, amp, grad, inv_s = geo[6], geo[7], geo[8], geo[11]
     nx, ny = -uy, ux
-    qx, qy = x - cx, y - cy
+    qx, qy = x - geo[0], y - geo[1]
     t = qx * ux + qy * uy
     d0 = qx * nx + qy * ny
-    w = 1.0 - (t / half) ** 2
+    tr = t * inv_half
+    w = 1.0 - tr * tr
     d = d0 - sag * w
-    scale = SQRT2 * s
-    zp, zm = (t + half) / scale, (t - half) / scale
-    across = math.exp(-0.5 * (d / s) ** 2)
-    lin = 1.0 + grad * t / half
+    zs = d * inv_s
+    across = math.exp(-0.5 * zs * zs)
+    lin = 1.0 + grad * tr
     amp_t = amp * lin
+    k = inv_s / SQRT2
+    zp, zm = (t + half) * k, (t - half) * k
     if zp > 4.5 and zm < -4.5:  # inside the arc, away from its ends: the along factor is 1 to 1e-9
         along, e_t, e_h, e_s = 1.0, 0.0, 0.0, 0.0
     else:
         along = 0.5 * (math.erf(zp) - math.erf(zm))
         ep, em = math.exp(-zp * zp), math.exp(-zm * zm)
-        c = 1.0 / (SQRTPI * scale)
-        e_t, e_h, e_s = c * (ep - em), c * (ep + em), (zp * ep - zm * em) / (SQRTPI * s)
+        c = k / SQRTPI
+        e_t, e_h, e_s = c * (ep - em), c * (ep + em), (zp * ep - zm * em) * inv_s / SQRTPI
     core = across * along
-    di_dd = -amp_t * core * d / (s * s)
-    di_dt = amp * grad / half * core + di_dd * (2.0 * sag * t / (half * half)) + amp_t * across * e_t
-    di_dh = -amp * grad * t / (half * half) * core - di_dd * (2.0 * sag * t * t / half**3) + amp_t * across * e_h
+    di_dd = -amp_t * core * zs * inv_s
+    di_dt = amp * grad * inv_half * core + di_dd * (2.0 * sag * tr * inv_half) + amp_t * across * e_t
+    di_dh = -amp * grad * tr * inv_half * core - di_dd * (2.0 * sag * tr * tr * inv_half) + amp_t * across * e_h
+    cross = (di_dt * d0 - di_dd * t) * inv_half
     jac[CX] = -di_dt * ux - di_dd * nx
     jac[CY] = -di_dt * uy - di_dd * ny
-    jac[HX] = (di_dt * d0 - di_dd * t) / half * nx + di_dh * ux
-    jac[HY] = (di_dt * d0 - di_dd * t) / half * ny + di_dh * uy
+    jac[HX] = cross * nx + di_dh * ux
+    jac[HY] = cross * ny + di_dh * uy
     jac[SAG] = -di_dd * w
     jac[AMP] = lin * core
-    jac[GRAD] = amp * t / half * core
+    jac[GRAD] = amp * tr * core
     jac[BG] = 1.0
-    jac[SIG] = amp_t * (core * d * d / s**3 - across * e_s)
-    return bg + amp_t * core
+    jac[SIG] = amp_t * (core * zs * zs * inv_s - across * e_s)
+    return geo[9] + amp_t * core
+
+
+@njit(cache=True)
+def arc_pixel(x, y, p, jac):
+    """The model at pixel (x, y) of parameters ``p`` (module docstring); fills ``jac`` (9,) with
+    dI/dp; returns I."""
+    geo = np.empty(NGEO)
+    geometry(p, geo)
+    return arc_jacobian(x, y, geo, jac)
 
 
 @njit(cache=True)
@@ -94,10 +136,11 @@ def _inside(x, y, p, reach, band):
 
 
 @njit(cache=True)
-def gather(image, labels, bin_px, own, p, reach, band, saturation, xs, ys, vs):
+def gather(image, labels, bin_px, own, p, reach, band, saturation, checkerboard, xs, ys, vs):
     """Pixels of ``image`` (H, W) near the arc ``p`` into ``xs, ys, vs`` (their capacity bounds
     the count); returns the count. A pixel whose label (``labels`` on a grid ``bin_px`` times
-    coarser; 0 = none) is another streak's, or at or above ``saturation``, is left out."""
+    coarser; 0 = none) is another streak's, or at or above ``saturation``, is left out; with
+    ``checkerboard``, so is every other pixel (a first pass at half the cost)."""
     height, width = image.shape
     cx, cy, hx, hy = p[0], p[1], p[2], p[3]
     half = math.sqrt(hx * hx + hy * hy)
@@ -110,6 +153,8 @@ def gather(image, labels, bin_px, own, p, reach, band, saturation, xs, ys, vs):
         for x in range(x0, x1 + 1):
             if count >= capacity:
                 return count
+            if checkerboard and (x + y) % 2 == 1:
+                continue
             value = image[y, x]
             if value >= saturation or not _inside(x, y, p, reach, band):
                 continue
@@ -126,11 +171,13 @@ def gather(image, labels, bin_px, own, p, reach, band, saturation, xs, ys, vs):
 @njit(cache=True, fastmath=True)
 def _system(p, xs, ys, vs, wts, n, jtj, jtr, jac):
     """chi^2 of ``p`` over the n pixels (weights 1 / sigma^2), and J^T W J, J^T W r into jtj, jtr."""
+    geo = np.empty(NGEO)
+    geometry(p, geo)
     jtj[:, :] = 0.0
     jtr[:] = 0.0
     chi2 = 0.0
     for i in range(n):
-        r = vs[i] - arc_pixel(xs[i], ys[i], p, jac)
+        r = vs[i] - arc_jacobian(xs[i], ys[i], geo, jac)
         w = wts[i]
         chi2 += w * r * r
         for a in range(NPAR):
@@ -145,10 +192,12 @@ def _system(p, xs, ys, vs, wts, n, jtj, jtr, jac):
 
 
 @njit(cache=True, fastmath=True)
-def _chi2(p, xs, ys, vs, wts, n, jac):
+def _chi2(p, xs, ys, vs, wts, n):
+    geo = np.empty(NGEO)
+    geometry(p, geo)
     total = 0.0
     for i in range(n):
-        r = vs[i] - arc_pixel(xs[i], ys[i], p, jac)
+        r = vs[i] - arc_value(xs[i], ys[i], geo)
         total += wts[i] * r * r
     return total
 
@@ -165,10 +214,12 @@ def _clamped(p):
 
 
 @njit(cache=True)
-def _weights(p, xs, ys, n, var_bg, shot, wts, jac):
+def _weights(p, xs, ys, n, var_bg, shot, wts):
     """Weights 1 / (var_bg + shot * max(model - b, 0)) of the n pixels, the model taken at ``p``."""
+    geo = np.empty(NGEO)
+    geometry(p, geo)
     for i in range(n):
-        signal = arc_pixel(xs[i], ys[i], p, jac) - p[BG]
+        signal = arc_value(xs[i], ys[i], geo) - p[BG]
         wts[i] = 1.0 / (var_bg + shot * max(signal, 0.0))
 
 
@@ -178,7 +229,7 @@ def levenberg_marquardt(p, xs, ys, vs, wts, n, max_iter, tol_px, cov):
 
     Returns (chi^2, iterations, flag) with flag :data:`FIT_OK`, :data:`FIT_NOT_CONVERGED` or
     :data:`FIT_SINGULAR`. Converged: a step moves no end, the sag or the blur by more than
-    ``tol_px`` or 3 % of the centre's precision (a lower bound of it, ``1 / sqrt(J^T W J)``)."""
+    ``tol_px`` or 20 % of the centre's precision (a lower bound of it, ``1 / sqrt(J^T W J)``)."""
     jtj = np.zeros((NPAR, NPAR))
     jtr = np.zeros(NPAR)
     jac = np.zeros(NPAR)
@@ -199,14 +250,14 @@ def levenberg_marquardt(p, xs, ys, vs, wts, n, max_iter, tol_px, cov):
             break
         trial[:] = p + step
         _clamped(trial)
-        new = _chi2(trial, xs, ys, vs, wts, n, jac)
+        new = _chi2(trial, xs, ys, vs, wts, n)
         if new <= chi2:
             moved = max(abs(step[CX]) + abs(step[HX]), abs(step[CY]) + abs(step[HY]))
             moved = max(moved, max(abs(step[SAG]), abs(step[SIG])))
             p[:] = trial
             chi2 = _system(p, xs, ys, vs, wts, n, jtj, jtr, jac)
             lam = max(lam / 3.0, 1e-9)
-            floor = 0.03 / math.sqrt(max(min(jtj[CX, CX], jtj[CY, CY]), 1e-300))  # 3 % of a lower bound of sigma
+            floor = 0.2 / math.sqrt(max(min(jtj[CX, CX], jtj[CY, CY]), 1e-300))  # 20 % of a lower bound of sigma
             if moved < max(tol_px, floor):
                 flag = FIT_OK
                 break
@@ -223,7 +274,7 @@ def levenberg_marquardt(p, xs, ys, vs, wts, n, max_iter, tol_px, cov):
 
 
 @njit(cache=True)
-def fit_arcs(image, labels, bin_px, own, start, reach, band, saturation, var_bg, shot, max_iter,
+def fit_arcs(image, labels, bin_px, own, start, reach, band, saturation, var_bg, shot, checkerboard, max_iter,
              tol_px, capacity, params, covs, stats):
     """Fit K arcs to ``image`` (H, W): ``start`` (K, 9) the first guesses, ``own`` (K,) each one's
     label (0: none), ``reach`` and ``band`` (K,) the window around each first guess (px beyond the
@@ -233,23 +284,46 @@ def fit_arcs(image, labels, bin_px, own, start, reach, band, saturation, var_bg,
     Each pixel is weighted by 1 / (``var_bg`` + ``shot`` x signal), the signal being the first
     guess's model above its background and ``shot`` the variance per unit of signal (1 / gain in
     image units; 0: background noise only), so that a bright streak's photon noise is in its
-    covariance."""
+    covariance; ``checkerboard`` fits every other pixel only (:func:`gather`). An arc whose end
+    moves more than half of ``reach`` from the window's is fitted again in a window around its
+    new ends (at most :data:`MAX_WINDOWS` windows), so that a first guess too short finds the
+    ends."""
     xs, ys, vs, wts = np.empty(capacity), np.empty(capacity), np.empty(capacity), np.empty(capacity)
-    jac = np.zeros(NPAR)
     cov = np.zeros((NPAR, NPAR))
     for k in range(start.shape[0]):
         p = start[k].copy()
-        n = gather(image, labels, bin_px, own[k], p, reach[k], band[k], saturation, xs, ys, vs)
+        window = p.copy()
+        iterations, chi2, flag, n = 0, 0.0, FIT_TOO_FEW_PIXELS, 0
+        for _ in range(MAX_WINDOWS):
+            n = gather(image, labels, bin_px, own[k], window, reach[k], band[k], saturation, checkerboard, xs, ys, vs)
+            if n < 4 * NPAR:
+                flag = FIT_TOO_FEW_PIXELS
+                break
+            _weights(window, xs, ys, n, var_bg, shot, wts)
+            chi2, more, flag = levenberg_marquardt(p, xs, ys, vs, wts, n, max_iter, tol_px, cov)
+            iterations += more
+            if flag == FIT_SINGULAR or _end_shift(p, window) < 0.5 * reach[k]:
+                break
+            window[:] = p  # an end walked to the window's edge: gather again around the new arc
         stats[k, 1] = n
-        params[k] = p
-        if n < 4 * NPAR:
-            stats[k, 3] = FIT_TOO_FEW_PIXELS
-            continue
-        _weights(p, xs, ys, n, var_bg, shot, wts, jac)
-        chi2, iterations, flag = levenberg_marquardt(p, xs, ys, vs, wts, n, max_iter, tol_px, cov)
         params[k] = p
         covs[k] = cov
         stats[k, 0], stats[k, 2], stats[k, 3] = chi2, iterations, flag
+
+
+MAX_WINDOWS = 3
+"""Windows one fit may move through (an end that reaches the edge of its window starts another)."""
+
+
+@njit(cache=True)
+def _end_shift(p, window):
+    """Largest distance (px) of the arc's ends from those of the window it was gathered for."""
+    worst = 0.0
+    for sign in (-1.0, 1.0):
+        dx = (p[CX] + sign * p[HX]) - (window[CX] + sign * window[HX])
+        dy = (p[CY] + sign * p[HY]) - (window[CY] + sign * window[HY])
+        worst = max(worst, math.sqrt(dx * dx + dy * dy))
+    return worst
 
 
 @njit(cache=True)
@@ -258,13 +332,14 @@ def shot_sums(image, labels, bin_px, own, fitted, reach, band, saturation, var_b
     signal above its background and r the residual: their ratio estimates the photon-noise
     variance per unit of signal (1 / gain)."""
     xs, ys, vs = np.empty(capacity), np.empty(capacity), np.empty(capacity)
-    jac = np.zeros(NPAR)
+    geo = np.empty(NGEO)
     num, den = 0.0, 0.0
     for k in range(fitted.shape[0]):
         p = fitted[k].copy()
-        n = gather(image, labels, bin_px, own[k], p, reach[k], band[k], saturation, xs, ys, vs)
+        n = gather(image, labels, bin_px, own[k], p, reach[k], band[k], saturation, False, xs, ys, vs)
+        geometry(p, geo)
         for i in range(n):
-            model = arc_pixel(xs[i], ys[i], p, jac)
+            model = arc_value(xs[i], ys[i], geo)
             signal = model - p[BG]
             if signal > 0.0:
                 r = vs[i] - model

@@ -63,46 +63,61 @@ class Timing:
 
 def rotate(vectors: NDArray, theta: NDArray) -> NDArray[np.float64]:
     """``exp(-[theta x]) v`` for vectors (..., 3) and rotation vectors theta (..., 3) (Rodrigues)."""
-    angle = np.linalg.norm(theta, axis=-1, keepdims=True)
-    safe = np.where(angle > 0, angle, 1.0)
-    k = -theta / safe
+    angle = np.sqrt(np.sum(theta * theta, axis=-1, keepdims=True))
+    k = -theta / np.where(angle > 0, angle, 1.0)
     cos, sin = np.cos(angle), np.sin(angle)
-    cross = np.cross(k, vectors)
-    dot = np.sum(k * vectors, axis=-1, keepdims=True)
+    kx, ky, kz = k[..., 0], k[..., 1], k[..., 2]
+    vx, vy, vz = vectors[..., 0], vectors[..., 1], vectors[..., 2]
+    cross = np.stack([ky * vz - kz * vy, kz * vx - kx * vz, kx * vy - ky * vx], axis=-1)
+    dot = (kx * vx + ky * vy + kz * vz)[..., None]
     return vectors * cos + cross * sin + k * dot * (1.0 - cos)
 
 
-def positions(camera: Camera, v_mid: NDArray, omega: NDArray, alpha: NDArray, t: NDArray) -> NDArray:
-    """Pixel positions (N, m, 2) of camera vectors at mid time (N, 3) at times t (N, m)."""
-    theta = omega[None, None, :] * t[..., None] + 0.5 * alpha[None, None, :] * t[..., None] ** 2
-    v = rotate(np.broadcast_to(v_mid[:, None, :], t.shape + (3,)), theta)
+def positions(camera: Camera, v_mid: NDArray, omega: NDArray, alpha: NDArray, t: NDArray,
+              log_scale: NDArray | None = None) -> NDArray:
+    """Pixel positions (B, N, m, 2) of camera vectors at mid time (B, N, 3) at times t (B, N, m),
+    for B parameter sets omega, alpha (B, 3) and focal-length log-scales (B,) (0: the camera's)."""
+    theta = omega[:, None, None, :] * t[..., None] + 0.5 * alpha[:, None, None, :] * t[..., None] ** 2
+    v = rotate(v_mid[:, :, None, :], theta)
     x, y = camera.vector_to_pixel(v.reshape(-1, 3))
-    return np.stack([x, y], axis=-1).reshape(t.shape + (2,))
+    xy = np.stack([x, y], axis=-1).reshape(t.shape + (2,))
+    if log_scale is None or not np.any(log_scale):
+        return xy
+    centre = np.array([camera.cx, camera.cy])
+    return centre + (xy - centre) * np.exp(log_scale)[:, None, None, None]
 
 
-def end_times(camera: Camera, v_mid: NDArray, omega: NDArray, alpha: NDArray, timing: Timing
-              ) -> tuple[NDArray, NDArray]:
-    """Times (N,) at which each star's light starts and stops reaching its rows (module docstring)."""
+def end_times(camera: Camera, v_mid: NDArray, omega: NDArray, alpha: NDArray, timing: Timing,
+              log_scale: NDArray | None = None) -> tuple[NDArray, NDArray]:
+    """Times (B, N) at which each star's light starts and stops reaching its rows (module docstring)."""
     half = 0.5 * timing.exposure_s
-    t = np.stack([np.full(len(v_mid), -half), np.full(len(v_mid), half)], axis=1)
+    t = np.broadcast_to(np.array([-half, half]), v_mid.shape[:2] + (2,)).copy()
     if timing.line_time_s > 0:
         for _ in range(ROW_TIME_ITERATIONS):
-            y = positions(camera, v_mid, omega, alpha, t)[..., 1]
-            t = timing.row_mid_s(y) + np.array([-half, half])[None, :]
-    return t[:, 0], t[:, 1]
+            y = positions(camera, v_mid, omega, alpha, t, log_scale)[..., 1]
+            t = timing.row_mid_s(y) + np.array([-half, half])
+    return t[..., 0], t[..., 1]
+
+
+def predict_batch(camera: Camera, v_mid: NDArray, omega: NDArray, alpha: NDArray, log_scale: NDArray,
+                  timing: Timing) -> NDArray[np.float64]:
+    """Predicted (start x, y, end x, y, light centroid x, y) (B, N, 6) of mid-time camera
+    vectors (B, N, 3) under B parameter sets (omega, alpha (B, 3), log_scale (B,))."""
+    ta, tb = end_times(camera, v_mid, omega, alpha, timing, log_scale)
+    nodes = 0.5 * (ta + tb)[..., None] + 0.5 * (tb - ta)[..., None] * GAUSS_NODES
+    times = np.concatenate([ta[..., None], tb[..., None], nodes], axis=-1)
+    p = positions(camera, v_mid, omega, alpha, times, log_scale)
+    centroid = 0.5 * np.einsum("k,bnkd->bnd", GAUSS_WEIGHTS, p[:, :, 2:])
+    return np.concatenate([p[:, :, 0], p[:, :, 1], centroid], axis=-1)
 
 
 def predict(camera: Camera, rot_mid: Rotation, omega: ArrayLike, alpha: ArrayLike, stars_icrs: NDArray,
             timing: Timing) -> NDArray[np.float64]:
     """Predicted (start x, y, end x, y, light centroid x, y) (N, 6) of stars (N, 3) (module docstring)."""
-    omega, alpha = np.asarray(omega, dtype=float), np.asarray(alpha, dtype=float)
-    v_mid = rot_mid.apply(stars_icrs).reshape(-1, 3)
-    ta, tb = end_times(camera, v_mid, omega, alpha, timing)
-    nodes = 0.5 * (ta + tb)[:, None] + 0.5 * (tb - ta)[:, None] * GAUSS_NODES[None, :]
-    times = np.concatenate([ta[:, None], tb[:, None], nodes], axis=1)
-    p = positions(camera, v_mid, omega, alpha, times)
-    centroid = 0.5 * np.einsum("k,nkd->nd", GAUSS_WEIGHTS, p[:, 2:])
-    return np.concatenate([p[:, 0], p[:, 1], centroid], axis=1)
+    v_mid = rot_mid.apply(stars_icrs).reshape(1, -1, 3)
+    omega = np.asarray(omega, dtype=float).reshape(1, 3)
+    alpha = np.asarray(alpha, dtype=float).reshape(1, 3)
+    return predict_batch(camera, v_mid, omega, alpha, np.zeros(1), timing)[0]
 
 
 def whitening(cov: NDArray, floor_px: float = MODEL_FLOOR_PX) -> NDArray[np.float64]:
@@ -158,25 +173,35 @@ class _Problem:
     """What one joint fit holds fixed: the camera, the stars, the whitened measurements' parts."""
 
     camera: Camera
-    stars: NDArray[np.float64]
+    v0: NDArray[np.float64]
+    """The stars' camera vectors (K, 3) at the first-guess attitude ``rot0``."""
     white: NDArray[np.float64]
     rot0: Rotation
     timing: Timing
     free: NDArray[np.bool_]
     """Which of the 10 parameters (rotvec 3, omega 3, alpha 3, ln f) are fitted."""
 
+    def full(self, q: NDArray) -> NDArray[np.float64]:
+        """Parameter sets (B, P) as the 10 of every set (B, 10)."""
+        out = np.zeros(q.shape[:-1] + (10,))
+        out[..., self.free] = q
+        return out
+
     def state(self, q: NDArray) -> tuple[Rotation, NDArray, NDArray, Camera]:
-        full = np.zeros(10)
-        full[self.free] = q
+        full = self.full(q)
         camera = self.camera if full[9] == 0 else self.camera.with_focal(self.camera.fx * math.exp(full[9]))
         return Rotation.from_rotvec(full[0:3]) * self.rot0, full[3:6], full[6:9], camera
 
     def predicted(self, q: NDArray, index=slice(None)) -> NDArray[np.float64]:
-        rot, omega, alpha, camera = self.state(q)
-        return predict(camera, rot, omega, alpha, self.stars[index], self.timing)
+        """Predictions (B, K', 6) of parameter sets q (B, P) for the streaks ``index``."""
+        full = self.full(np.atleast_2d(q))
+        v_mid = rotate(self.v0[index][None, :, :], -full[:, None, 0:3])  # exp([delta x]) v0
+        return predict_batch(self.camera, v_mid, full[:, 3:6], full[:, 6:9], full[:, 9], self.timing)
 
     def residuals(self, q: NDArray, meas: NDArray, index=slice(None)) -> NDArray[np.float64]:
-        return np.einsum("kij,kj->ki", self.white[index], meas[index] - self.predicted(q, index))
+        """Whitened residuals (B, K', 6) of parameter sets q (B, P)."""
+        diff = meas[index][None] - self.predicted(q, index)
+        return np.einsum("kij,bkj->bki", self.white[index], diff)
 
     def steps(self) -> NDArray[np.float64]:
         """Finite-difference steps: 1e-6 rad of attitude, of turn over the exposure, of
@@ -197,13 +222,14 @@ def fit_joint(camera: Camera, stars_icrs: NDArray, measured: NDArray, cov: NDArr
     one at a time, worst first, while at least three remain.
     """
     free = np.array([True] * 6 + [fit_alpha] * 3 + [fit_focal])
-    problem = _Problem(camera, np.asarray(stars_icrs, dtype=float), whitening(cov), rot0, timing, free)
+    v0 = rot0.apply(np.asarray(stars_icrs, dtype=float)).reshape(-1, 3)
+    problem = _Problem(camera, v0, whitening(cov), rot0, timing, free)
     q = np.zeros(int(free.sum()))
     q[3:6] = np.asarray(omega0, dtype=float)
     used = np.ones(len(measured), dtype=bool)
     for _ in range(len(measured)):
         q, meas = _gauss_newton(problem, measured, q, used)
-        chi2 = np.sum(problem.residuals(q, meas) ** 2, axis=1)
+        chi2 = np.sum(problem.residuals(q, meas)[0] ** 2, axis=1)
         worst = int(np.argmax(np.where(used, chi2, -np.inf)))
         if chi2[worst] <= outlier_chi2 or used.sum() <= 3:
             break
@@ -212,26 +238,24 @@ def fit_joint(camera: Camera, stars_icrs: NDArray, measured: NDArray, cov: NDArr
 
 
 def _jacobian(problem: _Problem, meas: NDArray, q: NDArray, used: NDArray) -> tuple[NDArray, NDArray]:
-    """Whitened residuals (K', 6) of the streaks ``used`` and their derivatives (K', 6, P)."""
-    r0 = problem.residuals(q, meas, used)
-    jac = np.empty(r0.shape + (len(q),))
-    for j, h in enumerate(problem.steps()):
-        dq = np.zeros(len(q))
-        dq[j] = h
-        jac[..., j] = (problem.residuals(q + dq, meas, used) - problem.residuals(q - dq, meas, used)) / (2.0 * h)
-    return r0, jac
+    """Whitened residuals (K', 6) of the streaks ``used`` and their derivatives (K', 6, P), by
+    forward differences evaluated in one batch."""
+    steps = problem.steps()
+    sets = q[None, :] + np.vstack([np.zeros(len(q)), np.diag(steps)])
+    r = problem.residuals(sets, meas, used)
+    return r[0], np.moveaxis((r[1:] - r[0][None]) / steps[:, None, None], 0, -1)
 
 
 def _gauss_newton(problem: _Problem, measured: NDArray, q: NDArray, used: NDArray):
     """Iterate to convergence on the streaks ``used``; returns q and the time-ordered measurements."""
     for _ in range(MAX_ITERATIONS):
-        meas = ordered(measured, problem.predicted(q), problem.white)
+        meas = ordered(measured, problem.predicted(q)[0], problem.white)
         r, jac = _jacobian(problem, meas, q, used)
         step = np.linalg.lstsq(jac.reshape(-1, len(q)), -r.ravel(), rcond=None)[0]
         q = q + step
-        if np.all(np.abs(step) < 1e-3 * problem.steps()):
+        if np.all(np.abs(step) < 1e-2 * problem.steps()):
             break
-    return q, ordered(measured, problem.predicted(q), problem.white)
+    return q, ordered(measured, problem.predicted(q)[0], problem.white)
 
 
 def _result(problem: _Problem, meas: NDArray, q: NDArray, used: NDArray, chi2: NDArray) -> JointFit:
@@ -241,4 +265,4 @@ def _result(problem: _Problem, meas: NDArray, q: NDArray, used: NDArray, chi2: N
     cov = np.zeros((10, 10))
     cov[np.ix_(problem.free, problem.free)] = np.linalg.pinv(a.T @ a) * max(birge, 1.0) ** 2
     rot, omega, alpha, camera = problem.state(q)
-    return JointFit(rot, omega, alpha, cov, used, chi2, birge, meas, problem.predicted(q), camera)
+    return JointFit(rot, omega, alpha, cov, used, chi2, birge, meas, problem.predicted(q)[0], camera)

@@ -50,7 +50,7 @@ from .estimate import RateEstimate, failed
 from .streak_find import StreakCandidates, find_streak_candidates
 from .streak_fit import StreakFits, first_guesses, fit_streaks
 from .streak_model import JointFit, Timing, fit_joint, predict
-from .streak_predict import field_catalog, fit_predicted
+from .streak_predict import Field, Identified, concatenated, fit_predicted, v_mags, zero_point
 from .trust import consensus_tolerance_px
 
 METHOD = "streak joint fit"
@@ -90,7 +90,7 @@ class StreakOptions:
     """
 
     psf_sigma_px: float = 1.0
-    lis_streaks: int = 20
+    lis_streaks: int = 12
     max_streaks: int = 40
     catalog_max_mag: float = 7.5
     fit_alpha: bool = False
@@ -138,6 +138,8 @@ class StreakSolution(AttitudeSolution):
         Rows of ``streaks`` in the joint fit (``matches`` lists their stars, in the same order).
     birge : float
         Rms whitened residual of the joint fit per degree of freedom.
+    stage_s, stage_cpu_s : dict
+        Wall and process time (s) of each stage: "find", "fit", "identify", "joint", "predicted".
     """
 
     mode: str = "streak"
@@ -152,6 +154,8 @@ class StreakSolution(AttitudeSolution):
     streaks: StreakFits | None = None
     streak_index: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     birge: float = float("nan")
+    stage_s: dict = field(default_factory=dict)
+    stage_cpu_s: dict = field(default_factory=dict)
 
     @property
     def n_streaks(self) -> int:
@@ -165,6 +169,20 @@ class StreakSolution(AttitudeSolution):
             return (math.nan, math.nan)
         roll, cross = roll_cross_boresight(cov)
         return float(roll / DEG), float(cross / DEG)
+
+
+def header_exposure_s(header) -> float | None:
+    """The exposure time an image header states (FITS ``EXPTIME`` or ``EXPOSURE``, EXIF
+    ``ExposureTime``; seconds), or None."""
+    for key in ("EXPTIME", "EXPOSURE", "ExposureTime"):
+        value = header.get(key) if header else None
+        try:
+            seconds = float(value)
+        except (TypeError, ValueError):
+            continue
+        if math.isfinite(seconds) and seconds > 0:
+            return seconds
+    return None
 
 
 def centroid_sigma_px(length_px: ArrayLike) -> float:
@@ -216,32 +234,64 @@ def solve_streaked(
     """
     opts = options or StreakOptions()
     img = np.asarray(image)
-    t0 = time.perf_counter()
+    clock = Stages()
     timing = _timing(exposure_s, opts.line_time_s, img.shape[0])
     cand = find_streak_candidates(img)
-    fits = _lis_fits(img, cand, opts)
-    good = np.flatnonzero(fits.ok)
-    if good.size < opts.min_streaks:
-        return _failed(Status.TOO_FEW_STARS, f"{good.size} clean streaks ({opts.min_streaks} needed)", fits, timing,
-                       t0)
+    clock.mark("find")
+    guesses = _ordered_guesses(img, cand, opts)
+    fits, lis, good = None, None, np.zeros(0, dtype=np.int64)
+    for attempt in range(LIS_ATTEMPTS):  # more of the fainter candidates when the brightest do not identify
+        fits = _lis_fits(img, cand, guesses, opts.lis_streaks * (attempt + 1), fits, opts)
+        clock.mark("fit")
+        good = np.flatnonzero(fits.ok & typical(fits))
+        if good.size < opts.min_streaks:
+            continue
+        lis = _identify(fits, good, fits.measurements()[0], img.shape, camera, fov_deg, fov_range_deg, epoch, method,
+                        opts.pixel_aspect)
+        clock.mark("identify")
+        if lis.solved or len(fits) >= len(guesses[0]):
+            break
+    if lis is None:
+        return failed_solution(Status.TOO_FEW_STARS, f"{good.size} clean streaks ({opts.min_streaks} needed)", fits,
+                               timing, clock)
     measured, cov = fits.measurements()
-    lis = _identify(fits, good, measured, img.shape, camera, fov_deg, fov_range_deg, epoch, method,
-                    opts.pixel_aspect)
     omega0, agree0 = _consensus_rate(lis.camera or camera, fits, good, timing)
     if not lis.solved:
-        return _failed(lis.status, lis.reason, fits, timing, t0, omega0 if agree0 >= 3 else None)
+        return failed_solution(lis.status, lis.reason, fits, timing, clock, omega0 if agree0 >= 3 else None)
     rows = good[lis.matches.det_index]
     keep = _agreeing(lis, fits, rows, measured, omega0, timing)
     if keep.sum() < opts.min_streaks:
-        return _failed(Status.NO_MATCH, f"only {keep.sum()} of {rows.size} identified streaks move as the frame's "
-                       "streaks do: the identification is not confirmed", fits, timing, t0, omega0)
+        return failed_solution(Status.NO_MATCH, f"only {keep.sum()} of {rows.size} identified streaks move as the "
+                               "frame's streaks do: the identification is not confirmed", fits, timing, clock, omega0)
     fit_focal = camera is None
     joint = fit_joint(lis.camera, lis.matches.cat_vectors[keep], measured[rows[keep]], cov[rows[keep]],
                       lis.rot_cam_from_icrs, omega0, timing, fit_alpha=opts.fit_alpha, fit_focal=fit_focal)
-    stars, hips, rows = lis.matches.cat_vectors[keep], lis.matches.hip[keep], rows[keep]
-    fits, rows, stars, hips, joint = _extended(img, fits, cand, rows, stars, hips, joint, timing, opts,
-                                               lis.epoch_jyear, fit_focal)
-    return _solution(lis, fits, rows, stars, hips, joint, timing, opts, prior_omega_rad_s, exposure_s, t0)
+    clock.mark("joint")
+    found = Identified(fits, rows[keep], lis.matches.cat_vectors[keep], lis.matches.hip[keep])
+    found, joint = _extended(img, found, cand, joint, timing, opts, lis.epoch_jyear, fit_focal, clock)
+    return streak_solution(found, joint, timing, opts, prior_omega_rad_s, exposure_s, clock,
+                           false_match_prob=lis.false_match_prob, epoch_jyear=lis.epoch_jyear,
+                           epoch_source=lis.epoch_source)
+
+
+class Stages:
+    """Wall and process (CPU) time of each stage of a solve (s): :meth:`mark` ends the current one."""
+
+    def __init__(self) -> None:
+        self.start = self._last = time.perf_counter()
+        self._last_cpu = time.process_time()
+        self.times: dict[str, float] = {}
+        self.cpu: dict[str, float] = {}
+
+    def mark(self, name: str) -> None:
+        now, cpu = time.perf_counter(), time.process_time()
+        self.times[name] = self.times.get(name, 0.0) + now - self._last
+        self.cpu[name] = self.cpu.get(name, 0.0) + cpu - self._last_cpu
+        self._last, self._last_cpu = now, cpu
+
+    @property
+    def total_s(self) -> float:
+        return time.perf_counter() - self.start
 
 
 def _timing(exposure_s: float | None, line_time_s: float, height: int) -> Timing:
@@ -254,12 +304,58 @@ def _timing(exposure_s: float | None, line_time_s: float, height: int) -> Timing
     return Timing(float(exposure_s), float(line_time_s), int(height))
 
 
-def _lis_fits(img: NDArray, cand: StreakCandidates, opts: StreakOptions) -> StreakFits:
-    """Fits of the brightest ``lis_streaks`` first guesses of the candidates."""
+LIS_ATTEMPTS = 2
+"""Identification attempts: the brightest ``lis_streaks`` candidates, then twice as many."""
+TYPICAL_LENGTH = (1.25, 3.0)
+TYPICAL_BLUR = 1.25
+
+
+def typical(fits: StreakFits) -> NDArray[np.bool_]:
+    """Clean fits (K,) whose length is at most 1.25 x the median + 3 px and whose blur at most 1.25
+    x the median: a longer or wider one is usually two streaks in line, or side by side, fitted as
+    one (its light centroid is then between two stars); they stay out of the identification."""
+    out = np.zeros(len(fits), dtype=bool)
+    if not np.any(fits.ok):
+        return out
+    length, blur = fits.length_px, fits.blur_px
+    out = fits.ok & (length <= TYPICAL_LENGTH[0] * np.median(length[fits.ok]) + TYPICAL_LENGTH[1])
+    return out & (blur <= TYPICAL_BLUR * np.median(blur[fits.ok])) & ~duplicates(fits)
+
+
+DUPLICATE_PX = 3.0
+
+
+def duplicates(fits: StreakFits) -> NDArray[np.bool_]:
+    """Fits (K,) whose light centroid is within :data:`DUPLICATE_PX` of a brighter clean fit's:
+    two first guesses (pieces of one faint streak) that grew into the same streak."""
+    centroid = fits.measurements()[0][:, 4:6]
+    order = np.argsort(-fits.flux, kind="stable")
+    out = np.zeros(len(fits), dtype=bool)
+    for rank, i in enumerate(order):
+        if not fits.ok[i]:
+            continue
+        brighter = order[:rank]
+        brighter = brighter[fits.ok[brighter] & ~out[brighter]]
+        out[i] = bool(np.any(np.linalg.norm(centroid[brighter] - centroid[i], axis=1) < DUPLICATE_PX))
+    return out
+
+
+def _ordered_guesses(img: NDArray, cand: StreakCandidates, opts: StreakOptions):
+    """The candidates' first guesses, brightest first (light per guess: amplitude x length)."""
     start, own, reach, band = first_guesses(img, cand, opts.psf_sigma_px)
-    top = np.argsort(-start[:, 5] * np.hypot(start[:, 2], start[:, 3]), kind="stable")[: opts.lis_streaks]
-    return fit_streaks(img, start[top], reach[top], band[top], noise=cand.noise, labels=cand.labels,
-                       bin_px=cand.bin_px, own=own[top], shot=opts.shot)
+    order = np.argsort(-start[:, 5] * np.hypot(start[:, 2], start[:, 3]), kind="stable")
+    return start[order], own[order], reach[order], band[order]
+
+
+def _lis_fits(img: NDArray, cand: StreakCandidates, guesses, count: int, done: StreakFits | None,
+              opts: StreakOptions) -> StreakFits:
+    """Fits of the first ``count`` guesses (those of ``done`` kept, the others fitted now)."""
+    start, own, reach, band = guesses
+    first = 0 if done is None else len(done)
+    new = slice(first, min(count, len(start)))
+    fits = fit_streaks(img, start[new], reach[new], band[new], noise=cand.noise, labels=cand.labels,
+                       bin_px=cand.bin_px, own=own[new], shot=opts.shot if done is None else done.shot)
+    return fits if done is None else concatenated(done, fits)
 
 
 def _identify(fits, good, measured, shape, camera, fov_deg, fov_range_deg, epoch, method,
@@ -309,42 +405,37 @@ def _agreeing(lis: AttitudeSolution, fits: StreakFits, rows: NDArray, measured: 
     return np.minimum(worst(m), worst(swapped)) <= agreement_tolerance_px(fits.length_px[rows])
 
 
-def _extended(img, fits, cand, rows, stars, hips, joint, timing, opts, epoch_jyear, fit_focal):
-    """Add the predicted streaks of the field's other catalog stars that agree, and fit again."""
-    camera = joint.camera
-    room = opts.max_streaks - rows.size
+def extend(img: NDArray, found: Identified, joint: JointFit, timing: Timing, field: Field, *, noise: float,
+           background: float, opts: StreakOptions, fit_focal: bool) -> tuple[Identified, JointFit]:
+    """Add the predicted streaks of the field's other catalog stars that agree with the joint
+    fit (one tight pass each, :func:`.streak_predict.fit_predicted`), and fit again."""
+    room = opts.max_streaks - found.rows.size
     if room <= 0:
-        return fits, rows, stars, hips, joint
-    from ..catalog import load_catalog
-
-    catalog_stars = field_stars(opts.catalog_max_mag, epoch_jyear)
-    turn = float(np.linalg.norm(joint.omega_rad_s)) * timing.exposure_s
-    near = field_catalog(catalog_stars, camera, joint.rot_mid, turn)
-    near_hip = load_catalog().hip[catalog_stars.rows[near]]
-    near = near[~np.isin(near_hip, hips)]
-    blur = float(np.median(fits.blur_px[rows]))
-    index, more = fit_predicted(img, camera, catalog_stars.vectors[near], joint.rot_mid, joint.omega_rad_s,
-                                joint.alpha_rad_s2, timing, noise=cand.noise, background=cand.background,
-                                blur_px=blur, shot=fits.shot, slack_px=2.0, tolerance_px=3.0, limit=room)
+        return found, joint
+    blur = float(np.median(found.fits.blur_px[found.rows]))
+    zero = zero_point(found.fits.flux[found.rows], v_mags(found.hips))
+    index, more = fit_predicted(img, joint.camera, field.vectors, joint.rot_mid, joint.omega_rad_s, joint.alpha_rad_s2,
+                                timing, noise=noise, background=background, blur_px=blur, shot=found.fits.shot,
+                                slack_px=1.0, tolerance_px=3.0, limit=room, flux=field.flux(zero),
+                                wanted=~np.isin(field.hips, found.hips))
     if more is None or not np.any(more.ok):
-        return fits, rows, stars, hips, joint
-    new = index[more.ok]
-    combined = _concatenated(fits, more)
-    rows = np.concatenate([rows, len(fits) + np.flatnonzero(more.ok)])
-    stars = np.concatenate([stars, catalog_stars.vectors[near[new]]])
-    hips = np.concatenate([hips, load_catalog().hip[catalog_stars.rows[near[new]]]])
-    measured, cov = combined.measurements()
-    joint = fit_joint(camera, stars, measured[rows], cov[rows], joint.rot_mid, joint.omega_rad_s, timing,
+        return found, joint
+    found = found.joined(more, field.vectors[index], field.hips[index])
+    measured, cov = found.measurements()
+    joint = fit_joint(joint.camera, found.stars, measured, cov, joint.rot_mid, joint.omega_rad_s, timing,
                       fit_alpha=opts.fit_alpha, fit_focal=fit_focal)
-    return combined, rows, stars, hips, joint
+    return found, joint
 
 
-def _concatenated(a: StreakFits, b: StreakFits) -> StreakFits:
-    """The fits of ``a`` then ``b`` (the frame's noise figures from ``a``)."""
-    return StreakFits(np.concatenate([a.params, b.params]), np.concatenate([a.cov, b.cov]),
-                      np.concatenate([a.chi2_red, b.chi2_red]), np.concatenate([a.n_pixels, b.n_pixels]),
-                      np.concatenate([a.ok, b.ok]), a.reasons + b.reasons, np.concatenate([a.label, b.label]),
-                      a.shot, a.noise, a.background)
+def _extended(img, found, cand, joint, timing, opts, epoch_jyear, fit_focal, clock):
+    """:func:`extend` with the catalog stars of the field around the joint fit's attitude."""
+    stars = field_stars(opts.catalog_max_mag, epoch_jyear)
+    turn = float(np.linalg.norm(joint.omega_rad_s)) * timing.exposure_s
+    field = Field.around(stars, joint.camera, joint.rot_mid, turn)
+    found, joint = extend(img, found, joint, timing, field, noise=cand.noise, background=cand.background, opts=opts,
+                          fit_focal=fit_focal)
+    clock.mark("predicted")
+    return found, joint
 
 
 def _ordered_by(joint: JointFit, prior: ArrayLike | None) -> tuple[NDArray, bool]:
@@ -373,7 +464,9 @@ def rate_verdict(joint: JointFit, opts: StreakOptions, known_exposure: bool) -> 
     return Status.OK, ""
 
 
-def _solution(lis, fits, rows, stars, hips, joint, timing, opts, prior, exposure_s, t0) -> StreakSolution:
+def streak_solution(found: Identified, joint: JointFit, timing: Timing, opts: StreakOptions, prior: ArrayLike | None,
+                    exposure_s: float | None, clock: Stages, **extra) -> StreakSolution:
+    """The StreakSolution of a joint fit to identified streaks (``extra``: more solution fields)."""
     sign, known = _ordered_by(joint, prior)
     omega = sign[0] * joint.omega_rad_s
     used = joint.used
@@ -381,17 +474,18 @@ def _solution(lis, fits, rows, stars, hips, joint, timing, opts, prior, exposure
     rate = RateEstimate(status, reason, omega if status is Status.OK else np.full(3, np.nan),
                         joint.rate_covariance, METHOD, used)
     ra, dec, roll = radec_roll_from_rotation(joint.rot_mid)
-    matches = StarMatches(Status.OK, det_index=rows[used].astype(np.int64), hip=hips[used].astype(np.int64),
-                          cat_vectors=stars[used], false_match_prob=lis.false_match_prob)
+    rows = found.rows[used].astype(np.int64)
+    matches = StarMatches(Status.OK, det_index=rows, hip=found.hips[used].astype(np.int64),
+                          cat_vectors=found.stars[used], false_match_prob=extra.get("false_match_prob", 1.0))
     return StreakSolution(
         status=Status.OK, rot_cam_from_icrs=joint.rot_mid, covariance_rad2=joint.attitude_covariance,
         ra_deg=math.degrees(ra), dec_deg=math.degrees(dec), roll_deg=math.degrees(roll), fov_deg=joint.camera.fov_deg,
         camera=joint.camera, matches=matches, residuals_arcsec=_residuals_arcsec(joint, joint.camera),
-        false_match_prob=lis.false_match_prob, solve_time_s=time.perf_counter() - t0, epoch_jyear=lis.epoch_jyear,
-        epoch_source=lis.epoch_source, exposure_s=math.nan if exposure_s is None else float(exposure_s),
+        solve_time_s=clock.total_s, exposure_s=math.nan if exposure_s is None else float(exposure_s),
         line_time_s=timing.line_time_s, t_mid_s=timing.mid_after_start_s if exposure_s is not None else math.nan,
         rate=rate, alpha_rad_s2=joint.alpha_rad_s2, turn_rad=omega * timing.exposure_s, time_order_known=known,
-        streaks=fits, streak_index=rows[used].astype(np.int64), birge=joint.birge)
+        streaks=found.fits, streak_index=rows, birge=joint.birge, stage_s=dict(clock.times),
+        stage_cpu_s=dict(clock.cpu), **extra)
 
 
 def _residuals_arcsec(joint: JointFit, camera: Camera) -> NDArray[np.float64]:
@@ -400,7 +494,7 @@ def _residuals_arcsec(joint: JointFit, camera: Camera) -> NDArray[np.float64]:
     return np.sqrt(np.mean(np.sum(diff**2, axis=2), axis=1)) * camera.pixel_scale_arcsec
 
 
-def _failed(status: Status, reason: str, fits: StreakFits, timing: Timing, t0: float,
+def failed_solution(status: Status, reason: str, fits: StreakFits, timing: Timing, clock: Stages,
             omega: NDArray | None = None) -> StreakSolution:
     """No attitude; the catalog-free consensus rate when there is one (status DEGENERATE: not
     checked by the trust rules of :mod:`.trust`)."""
@@ -409,8 +503,9 @@ def _failed(status: Status, reason: str, fits: StreakFits, timing: Timing, t0: f
                             "uncertainty unknown", omega, None, "catalog-free consensus")
     else:
         rate = failed(status, reason, METHOD)
-    return StreakSolution(status=status, reason=reason, solve_time_s=time.perf_counter() - t0, rate=rate,
-                          streaks=fits, line_time_s=timing.line_time_s)
+    return StreakSolution(status=status, reason=reason, solve_time_s=clock.total_s, rate=rate,
+                          streaks=fits, line_time_s=timing.line_time_s, stage_s=dict(clock.times),
+                          stage_cpu_s=dict(clock.cpu))
 
 
 def replace_rate(solution: StreakSolution, rate: RateEstimate) -> StreakSolution:

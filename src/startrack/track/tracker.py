@@ -16,6 +16,17 @@ attitude with :meth:`Tracker.update_rig` (:class:`startrack.multihead.tracking.R
 head's windows predicted from the joint attitude and rate, tracking while at least one head sees
 ``min_stars`` stars, and each step says which heads contributed.
 
+Streaked frames (:meth:`Tracker.update_image` with an exposure time, given or read from the image
+header): the mode switches automatically between point stars and streaks (seed 001 notes §5 item
+9) by the length a star smears during the exposure, from the rate (the gyro's or the tracker's,
+``T (f |omega_xy| + r |omega_z|)`` with r the half-diagonal) or, before there is one, measured in
+the image; with hysteresis, streak mode from :attr:`TrackerOptions.streak_on_px` and point mode
+again below :attr:`TrackerOptions.streak_off_px`. In streak mode a frame is solved from its streaks
+(:mod:`startrack.rate.streak_track`: every streak predicted from the previous attitude and rate
+and fitted in a window; lost-in-space on the streaks, :func:`startrack.rate.streak_solve.
+solve_streaked`, when that fails), which gives the attitude at mid-exposure and the rate; a frame
+streak mode cannot solve is tried in point mode, and the other way round.
+
 A tracking step keeps its attitude as a quaternion and predicts, fits and differences attitudes
 with :mod:`.quaternions` (the same kinematics as :func:`startrack.attitude.propagation.propagate`
 and :func:`startrack.rate.from_attitudes.rate_between`, without scipy's per-call overhead); the
@@ -43,6 +54,9 @@ from .windows import WindowMatcher
 
 LOST_IN_SPACE = "lost-in-space"
 TRACKING = "tracking"
+STREAK_LOST_IN_SPACE = "streak lost-in-space"
+STREAK_TRACKING = "streak tracking"
+POINT_MODE, STREAK_MODE = "point", "streak"
 
 
 @dataclass(frozen=True)
@@ -70,6 +84,12 @@ class TrackerOptions:
     target_stars : int or None
         For :meth:`Tracker.update_image`: detect with the dynamic threshold aiming at this many
         stars (None: the detector's default k-sigma threshold).
+    streak_on_px, streak_off_px : float
+        Mode switching of :meth:`Tracker.update_image` (module docstring): streak mode from a
+        smear of ``streak_on_px`` (px), point mode again below ``streak_off_px``.
+    streak : StreakOptions or None
+        Settings of the streak path (None: the defaults of
+        :class:`startrack.rate.streak_solve.StreakOptions`).
     """
 
     min_stars: int = 5
@@ -81,6 +101,14 @@ class TrackerOptions:
     rate_gain: float = 0.5
     catalog_max_mag: float = 9.5
     target_stars: int | None = None
+    streak_on_px: float = 12.0
+    streak_off_px: float = 8.0
+    streak: object | None = None
+
+    def __post_init__(self) -> None:
+        if not 0 < self.streak_off_px <= self.streak_on_px:
+            raise InvalidInputError(f"streak_off_px must be positive and at most streak_on_px (hysteresis), got "
+                                    f"{self.streak_off_px!r} and {self.streak_on_px!r}")
 
 
 @dataclass(frozen=True)
@@ -144,6 +172,8 @@ class Tracker:
         self._rate: NDArray | None = None
         self._epoch = epoch
         self._matcher: WindowMatcher | None = None
+        self._mode = POINT_MODE
+        self._streak_memory: dict = {}
 
     # --- public ---------------------------------------------------------------------------------
     def update(self, x: ArrayLike, y: ArrayLike, t_s: float, *, flux: ArrayLike | None = None,
@@ -164,43 +194,159 @@ class Tracker:
         return _with_time(step, time.perf_counter() - t0)
 
     def update_image(self, image, t_s: float, *, detector=None, gyro_rate_rad_s=None,
-                     streak_exposure_s: float | None = None, streak_bias_px: float = 0.0) -> TrackStep:
-        """Detect the stars of an image (array or path) and :meth:`update` with them.
+                     streak_exposure_s: float | None = None, streak_bias_px: float | None = None) -> TrackStep:
+        """Detect the stars of an image (array or path) and :meth:`update` with them, or, when
+        the stars smear, solve it from its streaks (module docstring).
 
-        With ``streak_exposure_s`` (s) and a known camera, a streaked image (``choose_mode``)
-        gives its own rate (:func:`startrack.rate.streak_rate.streak_rate` with Harris endpoints,
-        which take a fraction of a second where the fitted segments of the default can take
-        seconds on long streaks; ends corrected by ``streak_bias_px``; a rate its consistency
-        checks refuse is not used), ordered in time by ``gyro_rate_rad_s`` or
-        the tracker's rate; it replaces the gyro rate for this frame. Without an order, or if it
-        fails, the gyro rate (if any) is used.
+        ``t_s`` is the frame's time tag: its mid-exposure (seed 004 eq. 6), which the attitude
+        of a streaked frame refers to. The exposure ``streak_exposure_s`` (s; default: the image
+        header's ``EXPTIME``, ``EXPOSURE`` or EXIF ``ExposureTime``) enables the mode switching;
+        without one every frame is processed as point stars. The step's ``extra`` holds
+        ``streak_px`` (the smear that chose the mode), ``switched`` (the mode changed at this
+        frame) and, in streak mode, ``rate_status``, ``n_streaks`` and ``t_mid_s``.
+
+        With ``streak_bias_px`` (the seed's corner-detector path, kept as it was): a streaked
+        image (``choose_mode``) with a known camera gives its own rate
+        (:func:`startrack.rate.streak_rate.streak_rate` with Harris ends corrected by
+        ``streak_bias_px``; a rate its consistency checks refuse is not used), ordered in time by
+        ``gyro_rate_rad_s`` or the tracker's rate; it replaces the gyro rate for this frame and
+        the stars are tracked as points.
 
         Without a ``detector``, stars are detected with :attr:`TrackerOptions.target_stars`:
         None uses the default k-sigma threshold, a number the dynamic threshold that adapts to
         reach that many stars (seed 000 §8.2.3).
         """
-        from ..detect import StarDetector
         from ..io import read_image
+        from ..rate.streak_solve import header_exposure_s
 
-        data = read_image(image).data
-        if streak_exposure_s is not None:
+        img = read_image(image)
+        data = img.data
+        if streak_exposure_s is not None and streak_bias_px is not None:
             gyro_rate_rad_s = self._streak_rate(data, streak_exposure_s, streak_bias_px, gyro_rate_rad_s)
+            return self._point_image(data, t_s, detector, gyro_rate_rad_s)
+        exposure = streak_exposure_s if streak_exposure_s is not None else header_exposure_s(img.header)
+        if exposure is None or not exposure > 0:
+            return self._point_image(data, t_s, detector, gyro_rate_rad_s)
+        return self._switching(data, t_s, float(exposure), detector, gyro_rate_rad_s)
+
+    def _point_image(self, data: NDArray, t_s: float, detector, gyro_rate_rad_s) -> TrackStep:
+        """Point-star processing: detect, then :meth:`update`."""
+        from ..detect import StarDetector
+
         if detector is None:
             target = self.options.target_stars
             detector = StarDetector() if target is None else StarDetector(threshold="dynamic", target_stars=target)
         found = detector.detect(data)
         return self.update(found.x, found.y, t_s, gyro_rate_rad_s=gyro_rate_rad_s)
 
-    def _streak_rate(self, data: NDArray, exposure_s: float, bias_px: float, gyro_rate_rad_s) -> NDArray | None:
-        """The rate of a streaked frame (time-ordered by the gyro or tracker rate), else the gyro's."""
-        from ..rate.streak_rate import choose_mode, streak_rate
+    def _switching(self, data: NDArray, t_s: float, exposure_s: float, detector, gyro_rate_rad_s) -> TrackStep:
+        """One frame with automatic mode switching (module docstring)."""
+        t0 = time.perf_counter()
+        if gyro_rate_rad_s is not None:
+            self._rate = _checked_rate(gyro_rate_rad_s)
+        smear = self._smear_px(data, exposure_s)
+        previous = self._mode
+        if smear >= self.options.streak_on_px or (previous == STREAK_MODE and smear > self.options.streak_off_px):
+            self._mode = STREAK_MODE
+        else:
+            self._mode = POINT_MODE
+        streak = self._mode == STREAK_MODE
+        step = self._streak_image(data, t_s, exposure_s) if streak else self._point_image(data, t_s, detector, None)
+        if not step.status and smear > self.options.streak_off_px:  # the other mode may still solve it
+            step = self._point_image(data, t_s, detector, None) if streak else self._streak_image(data, t_s, exposure_s)
+        extra = {**step.extra, "streak_px": smear, "switched": self._mode != previous}
+        return replace(step, extra=extra, time_s=time.perf_counter() - t0)
 
-        prior = gyro_rate_rad_s if gyro_rate_rad_s is not None else self._rate
-        if self._camera is None or prior is None or choose_mode(data).mode != "streak":
-            return gyro_rate_rad_s
-        found = streak_rate(data, self._camera, exposure_s, detector="harris", bias_px=bias_px,
-                            prior_omega_rad_s=prior)
-        return found.rate.omega_rad_s if found.rate.ok and found.time_order_known else gyro_rate_rad_s
+    def _smear_px(self, data: NDArray, exposure_s: float) -> float:
+        """How far (px) a star smears in the exposure: from the rate when there is one, else the
+        median moment length of the image's brightest streak-like blobs."""
+        if self._rate is not None:
+            camera = self._camera or self._nominal_camera(data)
+            omega = self._rate
+            half_diagonal = 0.5 * math.hypot(camera.width, camera.height)
+            return exposure_s * (camera.fx * math.hypot(omega[0], omega[1]) + abs(omega[2]) * half_diagonal)
+        from ..rate.streak_find import find_streak_candidates
+
+        found = find_streak_candidates(data)
+        return float(np.median(found.length_px[:10])) if len(found) else 0.0
+
+    def _nominal_camera(self, data: NDArray) -> Camera:
+        """A pinhole camera of the tracker's FOV (or the middle of its FOV range) for the image size."""
+        kw = self._lis_kwargs
+        fov = kw["fov_deg"] if kw["fov_deg"] is not None else float(np.mean(kw["fov_range_deg"] or (5.0, 35.0)))
+        return Camera.from_fov(data.shape[1], data.shape[0], fov)
+
+    def _streak_image(self, data: NDArray, t_s: float, exposure_s: float) -> TrackStep:
+        """Streak processing: tracking from the prediction, else lost-in-space on the streaks."""
+        t0 = time.perf_counter()
+        solution = self._streak_tracked(data, t_s, exposure_s) if self._rot is not None and \
+            self._camera is not None and self._rate is not None else None
+        mode = STREAK_TRACKING
+        if solution is None or not solution.solved:
+            solution, mode = self._streak_lost(data, exposure_s), STREAK_LOST_IN_SPACE
+        if not solution.solved:
+            return TrackStep(t_s, mode, solution.status, solution.reason, time_s=time.perf_counter() - t0)
+        self._take_streak(solution, t_s)
+        extra = {"rate_status": solution.rate.status.name, "n_streaks": solution.n_streaks,
+                 "t_mid_s": solution.t_mid_s, "time_order_known": solution.time_order_known}
+        rms = float(np.sqrt(np.mean(solution.residuals_arcsec**2)) / solution.camera.pixel_scale_arcsec)
+        return TrackStep(t_s, mode, Status.OK, "", solution.rot_cam_from_icrs, self._rate_copy(), solution.n_streaks,
+                         rms, extra=extra)
+
+    def _streak_options(self):
+        from ..rate.streak_solve import StreakOptions
+
+        return self.options.streak or StreakOptions()
+
+    def _streak_tracked(self, data: NDArray, t_s: float, exposure_s: float):
+        """The frame's streaks predicted from the last attitude and rate (either sign when the
+        rate's time order is not known yet)."""
+        from ..rate.streak_track import prediction_slack_px, track_streaks
+
+        dt = t_s - self._t
+        memory = self._streak_memory
+        signs = (1.0,) if memory.get("order_known", True) else (1.0, -1.0)
+        solution = None
+        for sign in signs:
+            omega = sign * self._rate
+            rot = Rotation.from_quat(quat_product(rotvec_quat(-omega * dt), self._quat))
+            slack = prediction_slack_px(self._camera, omega, dt, self.options.rate_error_fraction, 2.0)
+            solution = track_streaks(data, self._camera, rot, omega, exposure_s, epoch_jyear=epoch_jyear(self._epoch),
+                                     slack_px=slack, options=self._streak_options(),
+                                     zero_point=memory.get("zero_point", 0.0), blur_px=memory.get("blur_px", 1.0),
+                                     shot=memory.get("shot"))
+            if solution.solved:
+                memory["order_known"] = True
+                break
+        return solution
+
+    def _streak_lost(self, data: NDArray, exposure_s: float):
+        """Lost-in-space on the streaks (the tracker's rate, if any, orders the exposure in time)."""
+        from ..rate.streak_solve import solve_streaked
+
+        kwargs = {"camera": self._camera} if self._camera is not None else \
+            {"fov_deg": self._lis_kwargs["fov_deg"], "fov_range_deg": self._lis_kwargs["fov_range_deg"]}
+        return solve_streaked(data, exposure_s=exposure_s, epoch=self._epoch, prior_omega_rad_s=self._rate,
+                              options=self._streak_options(), **kwargs)
+
+    def _take_streak(self, solution, t_s: float) -> None:
+        """Adopt a streak solution: its attitude, and its rate when it is trusted (else the rate
+        from the attitudes, as in point mode); remember the frame's photometry for the next one."""
+        from ..rate.streak_predict import v_mags, zero_point
+
+        self._camera = self._camera or solution.camera
+        fits, rows = solution.streaks, solution.streak_index
+        self._streak_memory.update(blur_px=float(np.median(fits.blur_px[rows])), shot=fits.shot,
+                                   zero_point=zero_point(fits.flux[rows], v_mags(solution.matches.hip)))
+        differenced = self._quat is not None and self._t is not None and t_s > self._t
+        self._advance(solution.rot_cam_from_icrs, t_s)
+        known = solution.time_order_known or differenced
+        if solution.rate.ok:
+            omega = solution.rate.omega_rad_s.copy()
+            if not solution.time_order_known and differenced and np.dot(omega, self._rate) < 0:
+                omega = -omega  # the attitudes of two frames tell the time order one frame cannot
+            self._rate = omega
+        self._streak_memory["order_known"] = known
 
     def update_rig(self, stars, t_s: float, *, gyro_rate_rad_s: ArrayLike | None = None):
         """Process one frame of a rig: head name to ``(x, y)`` or ``(x, y, flux)`` star arrays, taken
@@ -213,6 +359,7 @@ class Tracker:
     def reset(self) -> None:
         """Forget the attitude and rate (the next frame is solved lost-in-space)."""
         self._rot, self._quat, self._t, self._rate = None, None, None, None
+        self._streak_memory = {}
         if self._rig is not None:
             self._rig.reset()
 
