@@ -18,7 +18,7 @@ from pathlib import Path
 from ..analysis.postprocess import ANALYSES, check_params, get_info, parse_param, records_from_images, run_analysis
 from ..analysis.postprocess.core import AnalysisInfo
 from ..errors import InvalidInputError
-from .common import add_fov_options, fov_kwargs
+from .common import add_fov_options, add_max_pixels_option, apply_max_pixels_option, fov_kwargs
 from .progress import ProgressBar, ensure_database_for
 
 EPILOG = """\
@@ -41,6 +41,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--channel", choices=("r", "g", "b"), help="colour channel (default R + G + B)")
     parser.add_argument("--utc-offset-hours", type=float,
                         help="offset of the cameras' EXIF clock from UTC, for image times without a zone")
+    add_max_pixels_option(parser)
     return parser
 
 
@@ -75,6 +76,7 @@ def _set_names(paths: list[str]) -> list[str]:
 def main(argv: list[str]) -> int:
     """``startrack analyse``: list, or run one analysis over the PATHs (exit 0; misuse raises and exits 2)."""
     args = _parser().parse_args(argv)
+    apply_max_pixels_option(args)
     if args.name == "list":
         print(list_text())
         return 0
@@ -97,7 +99,11 @@ def main(argv: list[str]) -> int:
 
 def _solve(path: str, name: str, options: dict):
     progress = ProgressBar(f"solving {name}") if sys.stderr.isatty() else None
-    return records_from_images([path], solve_options=options, progress=progress, name=name)
+    result = records_from_images([path], solve_options=options, progress=progress, name=name)
+    for record in result.records:  # say why an image gives nothing (unreadable, too large, not solved)
+        if not record.solution.solved:
+            print(f"{record.name}: {record.solution.status.name.lower()}: {record.solution.reason}", file=sys.stderr)
+    return result
 
 
 def _summary_text(result, sets, written) -> str:

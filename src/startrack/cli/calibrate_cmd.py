@@ -19,7 +19,15 @@ from ..errors import InvalidInputError
 from ..io import read_image
 from ..io.atomic import atomic_path
 from ..solve import solve_image
-from .common import add_epoch_option, add_fov_options, epoch_option, fov_kwargs, print_json
+from .common import (
+    add_epoch_option,
+    add_fov_options,
+    add_max_pixels_option,
+    apply_max_pixels_option,
+    epoch_option,
+    fov_kwargs,
+    print_json,
+)
 
 PARAMETERS = ("f", "aspect", "cx", "cy", "k1", "k2", "k3", "p1", "p2")
 
@@ -57,6 +65,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--square-mm", type=float, default=25.0, help="checkerboard square size (default 25)")
     parser.add_argument("--out", metavar="CAMERA.json", help="write the calibrated camera as JSON")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    add_max_pixels_option(parser)
     return parser
 
 
@@ -158,6 +167,7 @@ def _table(report: dict[str, Any]) -> str:
 
 def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
+    apply_max_pixels_option(args)
     report = _from_checkerboard(args) if args.checkerboard else _from_stars(args)
     if args.out and report["status"] == "ok":
         with atomic_path(args.out) as tmp:

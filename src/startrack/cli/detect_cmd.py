@@ -17,7 +17,7 @@ from ..detect.centroiders import CENTROIDERS
 from ..detect.details import DetectionDetails
 from ..detect.detector import THRESHOLDS
 from ..io import read_image
-from .common import positive_int, print_json
+from .common import add_max_pixels_option, apply_max_pixels_option, positive_int, print_json
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -34,6 +34,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--max-stars", type=positive_int, metavar="N",
                         help="print only the N brightest")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    add_max_pixels_option(parser)
     return parser
 
 
@@ -54,6 +55,7 @@ def table(details: DetectionDetails) -> str:
 
 def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
+    apply_max_pixels_option(args)
     image = read_image(args.image)
     dark = None if args.dark is None else read_image(args.dark).data
     detector = StarDetector(centroid=args.method, threshold=args.threshold, sigma=args.sigma,

@@ -22,7 +22,7 @@ from ..rate import RateEstimate, match_frames, rate_from_vectors
 from ..rate.streak_detect import find_streaks
 from ..rate.streak_rate import METHODS, SEGMENT, StreakRate, streak_rate
 from ..units import DEG
-from .common import print_json
+from .common import add_max_pixels_option, apply_max_pixels_option, print_json
 
 EPILOG = """\
 output: status, rate (deg/s), axis (camera frame, unit), omega_deg_s (x, y, z), and for one image
@@ -48,6 +48,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--max-motion-deg", type=float, default=1.0,
                         help="largest star motion between two images, deg (pair matching gate)")
     parser.add_argument("--json", action="store_true", help="print a JSON object")
+    add_max_pixels_option(parser)
     return parser
 
 
@@ -111,6 +112,7 @@ def _print_table(out: dict) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    apply_max_pixels_option(args)
     if len(args.images) > 2:
         raise InvalidInputError(f"give one streaked image or two images, got {len(args.images)}")
     images = [np.asarray(read_image(path).data, dtype=float) for path in args.images]

@@ -23,7 +23,14 @@ from ..multihead.solve import check_method, solve_head_stars
 from ..multihead.stars import HeadStars
 from ..rig import CameraRig
 from ..solve import epoch_jyear
-from .common import add_epoch_option, add_method_option, epoch_option, print_json
+from .common import (
+    add_epoch_option,
+    add_max_pixels_option,
+    add_method_option,
+    apply_max_pixels_option,
+    epoch_option,
+    print_json,
+)
 from .progress import ensure_database_for
 
 OUTPUT_FORMATS = """\
@@ -61,6 +68,7 @@ def _parser() -> argparse.ArgumentParser:
     add_method_option(parser)
     add_epoch_option(parser)
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    add_max_pixels_option(parser)
     return parser
 
 
@@ -101,6 +109,7 @@ def _head_stars(name: str, path: Path, rig: CameraRig) -> dict[str, HeadStars]:
 
 def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
+    apply_max_pixels_option(args)
     check_method(args.method)
     epoch = epoch_option(args)
     rig = CameraRig.load(args.rig)

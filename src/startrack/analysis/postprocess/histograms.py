@@ -63,7 +63,7 @@ def _spot_histograms(sets, spots, bins: int, axes) -> dict[str, list]:
                 counts, _ = np.histogram(values[np.isfinite(values)], bins=edges)
                 ax.stairs(counts, edges, color=colour(i), linestyle=style, label=f"{s.name} {kind}")
                 _extend(out, s.name, key, kind, edges, counts)
-        ax.set_xscale("log" if log else "linear")
+        ax.set_xscale("log" if log and edges[0] > 0 else "linear")
         ax.set_xlabel(label)
         ax.set_ylabel("spots")
         ax.legend(fontsize=7)
@@ -94,7 +94,8 @@ def _image_histogram(sets, bins: int, ax) -> dict[str, list]:
         out["bin_low"] += list(edges[:-1])
         out["bin_high"] += list(edges[1:])
         out["count"] += [int(c) for c in counts]
-    ax.set_yscale("log")
+    if any(c > 0 for c in out["count"]):  # a log axis needs a positive count (no pixels: none)
+        ax.set_yscale("log")
     ax.set_xlabel("pixel value, counts")
     ax.set_ylabel("pixels")
     ax.legend(fontsize=7)
