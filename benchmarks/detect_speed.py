@@ -1,6 +1,8 @@
 """Detection speed and accuracy beside SEP and photutils' DAOStarFinder, on the same frames.
 
-Frames: 1024 x 1024 uint16, 30 stars each (PSF sigma 1.5 px, integrated SNR log-uniform in
+Also the default without its full-resolution pass (``fine_sigma=None``, the detector of
+before issue 17), for what that pass costs. Frames: 1024 x 1024 uint16, 30 stars each (PSF sigma
+1.5 px, integrated SNR log-uniform in
 10-300, 100 e- sky, 5 e- read noise; ``detect_frames.py``). Per method: the median time per frame
 (median over ``--repeats`` runs of each frame, then over frames), the completeness and the false
 detections per frame against the truth (2 px), the RMS centroid error over the stars it found
@@ -35,6 +37,12 @@ from startrack.simulate import render_gaussian_psf  # noqa: E402
 SHAPE = (1024, 1024)
 PSF_SIGMA_PX = 1.5
 N_STARS = 30
+
+
+def _without_fine_pass() -> StarDetector:
+    """The default detector without its full-resolution pass (``fine_sigma=None``): the cost of
+    that pass, which finds sharp and blended stars that these frames do not have."""
+    return StarDetector(fine_sigma=None)
 
 
 def make_frames(n: int, seed: int) -> list:
@@ -163,6 +171,7 @@ def main(argv: list[str] | None = None) -> int:
     frames = make_frames(args.frames, args.seed)
     rows = {
         "startrack (default)": time_ours(StarDetector(), frames, args.repeats),
+        "startrack, no fine pass": time_ours(_without_fine_pass(), frames, args.repeats),
         "startrack weighted": time_ours(StarDetector(centroid="weighted"), frames, args.repeats),
         "startrack mle": time_ours(StarDetector(centroid="mle"), frames, args.repeats),
     }

@@ -50,7 +50,8 @@ class StarDetector:
     Threshold (:mod:`.threshold`, :mod:`.prefilters`)
         threshold : {"ksigma", "dynamic", "prefilter-window", "prefilter-grid"}.
         sigma -- k of the detection image (the lowest k of "dynamic"); grow_sigma -- the
-        level spots are grown to; target_stars, max_sigma -- the dynamic threshold's target
+        level spots are grown to; fine_sigma -- k of the full-resolution pass for sharp stars
+        (:mod:`.fine_pass`; None: off); target_stars, max_sigma -- the dynamic threshold's target
         count and highest k; pixel_sigma, prefilter_count -- single-pixel k and the count of
         25 of seed 000's 5 x 5 pre-filters (which work on full-resolution pixels).
     Grouping (:mod:`.label`, :mod:`.region_grow`)
@@ -89,6 +90,7 @@ class StarDetector:
     threshold: str = "ksigma"
     sigma: float = 5.0
     grow_sigma: float = 3.0
+    fine_sigma: float | None = 6.5
     target_stars: int = 30
     max_sigma: float = 1000.0
     pixel_sigma: float = 2.0
@@ -123,7 +125,7 @@ class StarDetector:
         checks.check_positive(self, ("sigma", "grow_sigma", "denoise_sigma_px",
                                      "diffusion_kappa_sigma", "max_sigma", "pixel_sigma",
                                      "smear_tolerance_px", "smear_angle_deg"))
-        checks.check_positive(self, ("max_elongation", "max_peak_fraction", "max_clutter",
+        checks.check_positive(self, ("fine_sigma", "max_elongation", "max_peak_fraction", "max_clutter",
                                      "psf_sigma_px", "gain_e_per_adu", "max_axis_difference_px"),
                               optional=True)
         checks.check_int(self, ("binning", "kernel_px", "tile_px", "min_area_px", "jump_px",

@@ -18,7 +18,9 @@ From seed 003 §II.B (notes ``seed-003.md``, "Noise-removal techniques" 5-7) and
   that of the clean sky (lit leaves, roof texture: structure, not stars; stars do not raise
   the lower half);
 * **edge** -- the cluster's core (its pixels above the detection threshold) touches the image
-  border, so part of the star may be cut off and the centroid pulled inwards.
+  border, so part of the star may be cut off and the centroid pulled inwards; the detector
+  keeps a small spot whose peak is inside (:func:`peak_away_from_edge`): a star whose centre is
+  two pixels inside is measured well.
 
 Each function returns a boolean "keep" array of shape (N,); the detector ANDs them.
 """
@@ -119,3 +121,18 @@ def away_from_edge(regions: Regions, shape: tuple[int, int], core: NDArray[np.bo
     if core is not None:
         on_border &= core
     return regions.max(on_border.astype(np.int8)) == 0
+
+
+def peak_away_from_edge(regions: Regions, values: NDArray, shape: tuple[int, int], margin: int,
+                        core: NDArray[np.bool_], max_core_px: int) -> NDArray[np.bool_]:
+    """The edge filter of the detector: a region is rejected when its core touches the border of
+    ``shape`` (:func:`away_from_edge`) and either its highest pixel (of ``values``, shape (M,))
+    lies within ``margin`` pixels of it or the core has more than ``max_core_px`` pixels. A
+    star whose centre is a few pixels inside keeps its measurable centroid; a glow, a limb or
+    a bright star cut by the border does not."""
+    h, w = shape
+    top = regions.argmax(values)
+    y, x = regions.y[top], regions.x[top]
+    inside = (y >= margin) & (x >= margin) & (y < h - margin) & (x < w - margin)
+    small = regions.sum(core.astype(np.int64)) <= max_core_px
+    return away_from_edge(regions, shape, core) | (inside & small)

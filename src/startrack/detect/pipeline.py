@@ -17,20 +17,30 @@ from . import filters
 from .background import (
     BackgroundModel,
     global_background,
+    low_side_clipped,
     pixel_noise,
     tiled_background,
     with_noise_floor,
 )
-from .centroid import SpotMeasurements, centroid_sigma, measure_spots, sigma_eq42, take_spots
+from .centroid import SpotMeasurements, centroid_sigma, measure_spots, sigma_eq42
 from .centroiders import CentroidInputs, run_centroider
 from .dark import subtract_dark, subtract_row_reference
 from .deblend import split_regions
 from .denoise import anisotropic_diffusion, gaussian_smooth
 from .details import DetectionDetails
+from .fine_pass import (
+    BLEND_RING_PX,
+    MAX_BLEND_RING_NOISE,
+    MAX_RING_NOISE,
+    add_new_regions,
+    fine_regions,
+    ring_noise_ratio,
+    touches,
+)
 from .label import Regions, label_regions
 from .magnitude import instrument_magnitude
 from .merge import brightest_first
-from .point_source import core_shape, point_quality
+from .point_source import core_shape, point_quality, saturated_spots
 from .prefilters import packing, prefilter
 from .prepare import PreparedImage, prepare_image
 from .region_grow import grow_regions
@@ -40,6 +50,18 @@ from .threshold import significance
 
 if TYPE_CHECKING:
     from .detector import StarDetector
+
+EDGE_MARGIN_PX = 2
+"""A spot whose peak is closer than this to the border (full-resolution px) is cut off."""
+
+SHARP_CORE_PX, SHARP_MIN_SNR = 1.3, 10.0
+"""The fine pass runs on frames whose significant spots (peak over pixel noise at least 10)
+have a median half-maximum size (Gaussian-equivalent sd) under 1.3 px: small JPEGs and the
+openstartracker frames (0.5-1.0 px), not stars of 1.5 px sd that the binned image matches."""
+
+EDGE_CORE_PX = 64
+"""... and so is one whose core (above the threshold) touches the border and covers more than
+this (full-resolution px): a glow, a limb, a bright star cut in half."""
 
 NOISE_FLOOR_FRACTION = 1e-6
 """Noise floor relative to the largest absolute value, for noise-free (simulated) images."""
@@ -51,6 +73,7 @@ class Frame:
 
     prepared: PreparedImage
     model: BackgroundModel
+    skewed: bool
     noise_px: float
     binning: int
     x_offset: int
@@ -61,12 +84,14 @@ def detect_frame(cfg: StarDetector, image: NDArray, dark: NDArray | None) -> Det
     prepared, x_offset = preprocess(cfg, image, dark)
     binning = min(cfg.binning, *prepared.data.shape)
     det = detection_image(prepared.data, binning, cfg.kernel, cfg.kernel_px, prepared.invalid)
-    model = background_model(cfg, det, binning)
+    skewed = low_side_clipped(np.asarray(image))  # the raw frame: a dark frame shifts the zero
+    model = background_model(cfg, det, binning, skewed)
     noise_px = pixel_noise(prepared.data, model) or noise_floor(prepared.data, model.level)
-    frame = Frame(prepared, model, noise_px, binning, x_offset)
+    frame = Frame(prepared, model, skewed, noise_px, binning, x_offset)
     if model.noise <= 0:  # a constant image
         return empty_details(frame, image.shape[1], cfg)
     regions, k_sigma = find_regions(cfg, frame, det)
+    regions = with_fine_pass(cfg, frame, filter_spots(cfg, frame, regions), regions, k_sigma)
     if len(regions) == 0:
         return empty_details(frame, image.shape[1], cfg, k_sigma)
     return measure(cfg, frame, regions, k_sigma, image.shape[1])
@@ -97,13 +122,14 @@ def preprocess(cfg: StarDetector, image: NDArray, dark: NDArray | None
     return PreparedImage(data, invalid), x_offset
 
 
-def background_model(cfg: StarDetector, det: NDArray, binning: int) -> BackgroundModel:
-    """Background of the detection image, tile centres in full-resolution pixels."""
+def background_model(cfg: StarDetector, det: NDArray, binning: int, skewed: bool = False) -> BackgroundModel:
+    """Background of the detection image, tile centres in full-resolution pixels; ``skewed``:
+    the frame's low side is clipped (:func:`.background.low_side_clipped`)."""
     if cfg.background == "global":
         model = global_background(det)
     else:
         tile = max(1, cfg.tile_px // binning)
-        model = tiled_background(det, tile, scale=binning, offset=(binning - 1) / 2)
+        model = tiled_background(det, tile, scale=binning, offset=(binning - 1) / 2, skewed=skewed)
     return with_noise_floor(model, noise_floor(det, model.level)) if model.noise <= 0 else model
 
 
@@ -137,9 +163,64 @@ def find_regions(cfg: StarDetector, frame: Frame, det: NDArray) -> tuple[Regions
     if cfg.deblend and len(regions):
         regions = split_regions(regions, snr, k_sigma)
     if cfg.reject_edge and len(regions):
-        core = snr[regions.y, regions.x] > k_sigma
-        regions = regions.select(filters.away_from_edge(regions, det.shape, core))
+        values = snr[regions.y, regions.x]
+        regions = regions.select(filters.peak_away_from_edge(regions, values, det.shape, EDGE_MARGIN_PX // binning,
+                                                             values > k_sigma, EDGE_CORE_PX // binning**2))
     return regions.upsample(binning), k_sigma
+
+
+def with_fine_pass(cfg: StarDetector, frame: Frame, regions: Regions, found: Regions, k_sigma: float
+                   ) -> Regions:
+    """``regions`` (the binned pass's spots that passed the filters, out of all it ``found``)
+    plus the filtered spots of the full-resolution pass (:mod:`.fine_pass`) that share no pixel
+    with any it found, the blends it separates split (with ``deblend``); unchanged when the
+    pass is off (no binning, ``fine_sigma`` None, a threshold other than "ksigma": the dynamic
+    one targets a count of the binned pass's spots) or not needed (:func:`stars_are_sharp`)."""
+    if cfg.fine_sigma is None or frame.binning == 1 or cfg.threshold != "ksigma" or \
+            not stars_are_sharp(frame, regions):
+        return regions
+    data = frame.prepared.data
+    fine = fine_regions(data, frame.prepared.invalid, cfg.kernel, cfg.kernel_px, cfg.tile_px,
+                        max(cfg.fine_sigma, k_sigma), cfg.grow_sigma, 1 if cfg.reject_edge else 0, cfg.deblend,
+                        frame.skewed)
+    base = spot_measurements(frame, regions)[0]
+    unsplit = saturated_spots(regions, data[regions.y, regions.x].astype(np.float64), data) | (not cfg.deblend)
+    unsplit |= ring_noise_ratio(data, base.x, base.y, frame.noise_px, BLEND_RING_PX) > MAX_BLEND_RING_NOISE
+    fine = filter_spots(cfg, frame, fine)
+    spots = spot_measurements(frame, fine)[0]
+    quiet = ring_noise_ratio(data, spots.x, spots.y, frame.noise_px) <= MAX_RING_NOISE
+    taken = np.zeros(data.shape, dtype=bool)
+    taken[found.y, found.x] = True
+    # a saturated star the binned pass left out was cut by the border or rejected for its shape;
+    # an extended spot is structure, not the sharp star this pass is for
+    quiet &= ~touches(fine, taken) & ~saturated_spots(fine, data[fine.y, fine.x].astype(np.float64), data)
+    quiet &= point_like(frame, regions, fine)
+    return add_new_regions(regions, fine, data, unsplit, quiet)
+
+
+def point_like(frame: Frame, base: Regions, extra: Regions) -> NDArray[np.bool_]:
+    """Shape (K,): which regions of ``extra`` are point sources (:mod:`.point_source`) against
+    the frame's reference taken from ``base`` and ``extra`` together."""
+    both = [(r, region_signal(frame, r)) for r in (base, extra)]
+    shapes = [core_shape(r, signal, r.max(signal)) for r, signal in both]
+    size = np.concatenate([sz for sz, _ in shapes])
+    elongation = np.concatenate([el for _, el in shapes])
+    snr = np.concatenate([r.max(signal) for r, signal in both]) / frame.noise_px
+    quality = point_quality(size, elongation, snr, np.zeros(size.size, dtype=bool))
+    return quality[len(base):] >= Detections.POINT_SOURCE_MIN_QUALITY
+
+
+def stars_are_sharp(frame: Frame, regions: Regions) -> bool:
+    """Whether the frame's significant spots (peak SNR at least 10) have a median half-maximum
+    core (:func:`.point_source.core_shape`) under :data:`SHARP_CORE_PX`, or the frame has fewer
+    than three such spots to tell: the stars the binned image spreads out and blends."""
+    if len(regions) == 0:
+        return True
+    signal = region_signal(frame, regions)
+    peak = regions.max(signal)
+    size, _ = core_shape(regions, signal, peak)
+    significant = np.isfinite(size) & (peak >= SHARP_MIN_SNR * frame.noise_px)
+    return significant.sum() < 3 or float(np.median(size[significant])) < SHARP_CORE_PX
 
 
 def dynamic_sigma(peak_snr: NDArray, cfg: StarDetector) -> float:
@@ -169,22 +250,40 @@ def _prefiltered_regions(cfg: StarDetector, frame: Frame) -> Regions:
 
 # --- measurement, filters, centroid ------------------------------------------------------------
 
-def measure(cfg: StarDetector, frame: Frame, regions: Regions, k_sigma: float,
-            full_width: int) -> DetectionDetails:
-    """Measure the spots, filter them, centroid the survivors and pack the result."""
-    data, invalid, model = frame.prepared.data, frame.prepared.invalid, frame.model
-    level, _ = model.at(regions.x, regions.y)
+def region_signal(frame: Frame, regions: Regions) -> NDArray[np.float64]:
+    """Background-subtracted value of every region pixel, shape (M,) (0 where invalid)."""
+    data, invalid = frame.prepared.data, frame.prepared.invalid
+    level, _ = frame.model.at(regions.x, regions.y)
     signal = data[regions.y, regions.x].astype(np.float64) - level
     if invalid is not None:
         signal[invalid[regions.y, regions.x]] = 0.0
-    spots = measure_spots(regions, signal)
+    return signal
+
+
+def spot_measurements(frame: Frame, regions: Regions) -> tuple[SpotMeasurements, NDArray, NDArray]:
+    """The spots' weighted-sum measurements, and the background level and pixel noise at their
+    peaks, shape (N,) each."""
+    model = frame.model
+    spots = measure_spots(regions, region_signal(frame, regions))
     peak_level, peak_noise = model.at(spots.peak_x, spots.peak_y)
-    local_noise = frame.noise_px * peak_noise / model.noise
-    keep = spot_filters(cfg, frame, regions, spots, local_noise, peak_level)
-    regions, spots = regions.select(keep), take_spots(spots, keep)
+    return spots, peak_level, frame.noise_px * peak_noise / model.noise
+
+
+def filter_spots(cfg: StarDetector, frame: Frame, regions: Regions) -> Regions:
+    """The regions that pass every spot filter (:func:`spot_filters`)."""
+    if len(regions) == 0:
+        return regions
+    spots, peak_level, local_noise = spot_measurements(frame, regions)
+    return regions.select(spot_filters(cfg, frame, regions, spots, local_noise, peak_level))
+
+
+def measure(cfg: StarDetector, frame: Frame, regions: Regions, k_sigma: float,
+            full_width: int) -> DetectionDetails:
+    """Measure the (filtered) spots, centroid them and pack the result."""
+    spots, peak_level, local_noise = spot_measurements(frame, regions)
+    data = frame.prepared.data
     raw = data[regions.y, regions.x].astype(np.float64)
-    inputs = CentroidInputs(data, invalid, regions, spots, raw, peak_level[keep],
-                            local_noise[keep])
+    inputs = CentroidInputs(data, frame.prepared.invalid, regions, spots, raw, peak_level, local_noise)
     return pack(cfg, frame, inputs, k_sigma, full_width)
 
 
@@ -244,10 +343,7 @@ def point_quality_of(inputs: CentroidInputs, peak_snr: NDArray) -> NDArray[np.fl
     largest value (at least two pixels) are saturated."""
     regions, raw = inputs.regions, inputs.raw
     size, elongation = core_shape(regions, raw - inputs.level[regions.index], inputs.spots.peak)
-    top = float(np.nanmax(inputs.data)) if inputs.data.size else np.inf
-    with np.errstate(invalid="ignore"):
-        saturated = regions.sum((raw >= top).astype(np.float64)) >= 2
-    return point_quality(size, elongation, peak_snr, saturated)
+    return point_quality(size, elongation, peak_snr, saturated_spots(regions, raw, inputs.data))
 
 
 def empty_details(frame: Frame, full_width: int, cfg: StarDetector,

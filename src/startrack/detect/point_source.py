@@ -79,6 +79,22 @@ def core_shape(regions: Regions, signal: NDArray, peak: NDArray
     return np.sqrt(area / HALF_MAX_AREA), elongation
 
 
+def saturated_spots(regions: Regions, raw: NDArray, data: NDArray) -> NDArray[np.bool_]:
+    """Spots with at least two pixels at the frame's largest value (clipped cores), shape (N,).
+
+    Parameters
+    ----------
+    regions : Regions
+    raw : ndarray, shape (M,)
+        Value of every region pixel in ``data`` (NaN where missing).
+    data : ndarray, shape (H, W)
+        The frame.
+    """
+    top = float(np.nanmax(data)) if data.size else np.inf
+    with np.errstate(invalid="ignore"):
+        return regions.sum((raw >= top).astype(np.float64)) >= 2
+
+
 def point_quality(size: NDArray, elongation: NDArray, peak_snr: NDArray,
                   saturated: NDArray[np.bool_]) -> NDArray[np.float64]:
     """Point-source quality in [0, 1] of N spots from their sizes and elongations (module
