@@ -80,7 +80,7 @@ def test_misuse_exits_2_with_one_line(tmp_path, simulated):
     assert_misuse(run("solve-rig", tmp_path / "split.json", f"left={sim / 'a.fits'}"), "solve-rig", "split=IMAGE")
     assert_misuse(run("simulate", "--rig", folder / "rig.json", "--fov-deg", 10, "--out", tmp_path / "x"),
                   "simulate", "--fov-deg")
-    assert_misuse(run("availability", "--rig", folder / "rig.json", "--time", "noon"), "availability", "ISO time")
+    assert_misuse(run("availability", "--rig", folder / "rig.json", "--time", "noon"), "availability", "ISO 8601")
 
 
 def test_availability_of_a_rig(simulated):

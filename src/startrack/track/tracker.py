@@ -239,6 +239,17 @@ class Tracker:
         found = detector.detect(data)
         return self.update(found.x, found.y, t_s, gyro_rate_rad_s=gyro_rate_rad_s)
 
+    def _streak_rate(self, data: NDArray, exposure_s: float, bias_px: float, gyro_rate_rad_s) -> NDArray | None:
+        """The rate of a streaked frame (time-ordered by the gyro or tracker rate), else the gyro's."""
+        from ..rate.streak_rate import choose_mode, streak_rate
+
+        prior = gyro_rate_rad_s if gyro_rate_rad_s is not None else self._rate
+        if self._camera is None or prior is None or choose_mode(data).mode != "streak":
+            return gyro_rate_rad_s
+        found = streak_rate(data, self._camera, exposure_s, detector="harris", bias_px=bias_px,
+                            prior_omega_rad_s=prior)
+        return found.rate.omega_rad_s if found.rate.ok and found.time_order_known else gyro_rate_rad_s
+
     def _switching(self, data: NDArray, t_s: float, exposure_s: float, detector, gyro_rate_rad_s) -> TrackStep:
         """One frame with automatic mode switching (module docstring)."""
         t0 = time.perf_counter()
