@@ -29,9 +29,16 @@ true camera), solved farther off (false), not solved, the median and 95th-percen
 detection and identification, and the median of identification alone (that time less the
 detector's on the same frame, timed apart).
 
+Part 3 (``--lens-term``), the lens term of the pattern tolerance measured: star lists (the 60
+brightest catalog stars to V 7.5 through the lens, 0.3 px centroid noise, 0.2 mag of magnitude
+noise, 4 false stars among the first 14) of 1600 x 1200 cameras at 50, 70 and 90 deg with k1 of
+-0.1, -0.05, +0.05 and +0.1, solved with no hint, with the lens term off
+(``MatcherOptions(max_distortion=0)``) and at its default.
+
 Usage::
 
     .venv/bin/python benchmarks/realdata_benchmark.py [--frames 20] [--seed 1] [--no-real] [--no-sim]
+                                                      [--lens-term] [--lists 30]
 """
 
 from __future__ import annotations
@@ -53,6 +60,7 @@ from detect_realdata import REALDATA, reference, score  # noqa: E402
 from startrack import Camera, solve_image  # noqa: E402
 from startrack.detect import StarDetector  # noqa: E402
 from startrack.frames import angle_between, radec_to_vector, random_rotations  # noqa: E402
+from startrack.identify import MatcherOptions  # noqa: E402
 from startrack.io import read_image  # noqa: E402
 from startrack.simulate import get_sensor_preset, simulate_frame  # noqa: E402
 from startrack.units import ARCSEC, DEG  # noqa: E402
@@ -175,12 +183,72 @@ def print_sim(rows: list[dict]) -> None:
               f"{r['identify_median_ms']:>11.1f}")
 
 
+# --- part 3: the lens term, on star lists ----------------------------------------------------
+def lens_list(camera: Camera, truth, rng: np.random.Generator, vectors: np.ndarray, mag: np.ndarray):
+    """Part 3's star list of one attitude: (x, y), brightest first, 4 false stars among the first 14."""
+    v = vectors @ truth.as_matrix().T
+    front = v[:, 2] > 0.2
+    x, y = camera.vector_to_pixel(v[front])
+    inside = camera.in_image(x, y, margin_px=1.0)
+    order = np.argsort(mag[front][inside] + rng.normal(0.0, 0.2, inside.sum()))[:60]
+    x, y = x[inside][order] + rng.normal(0, 0.3, order.size), y[inside][order] + rng.normal(0, 0.3, order.size)
+    fx, fy = rng.uniform(0, camera.width - 1, 4), rng.uniform(0, camera.height - 1, 4)
+    x, y = np.concatenate([x[:10], fx, x[10:]]), np.concatenate([y[:10], fy, y[10:]])
+    return np.clip(x, 0, camera.width - 1), np.clip(y, 0, camera.height - 1)
+
+
+def _lens_case(camera: Camera, lists: list, options: MatcherOptions | None) -> dict:
+    """Solve part 3's lists of one lens with these options: within 2 px, false, CPU times."""
+    from startrack.solve import solve_stars
+
+    ok = false = 0
+    times = []
+    for truth, (x, y) in lists:
+        t0 = time.thread_time()
+        solution = solve_stars(x, y, width=camera.width, height=camera.height, options=options)
+        times.append(time.thread_time() - t0)
+        if solution.solved:
+            good = error_px(truth, solution, camera) < 2.0
+            ok, false = ok + good, false + (not good)
+    return {"ok": ok, "false": false, "n": len(lists), "median_ms": float(np.median(times)) * 1e3,
+            "p95_ms": float(np.percentile(times, 95)) * 1e3}
+
+
+def lens_term_rows(n_lists: int, seed: int) -> list[dict]:
+    """Part 3: every lens, with the lens term off and at its default."""
+    from startrack.catalog import load_catalog
+
+    stars = load_catalog().brighter_than(7.5)
+    vectors, mag = stars.vectors(2000.0), stars.v_mag
+    rows = []
+    for fov in (50.0, 70.0, 90.0):
+        for k1 in (-0.1, -0.05, 0.05, 0.1):
+            camera = Camera.from_fov(1600, 1200, fov).with_distortion(k1=k1)
+            rng = np.random.default_rng([seed, int(fov), int(round(k1 * 100)) + 50])
+            lists = [(t, lens_list(camera, t, rng, vectors, mag)) for t in random_rotations(n_lists, rng=rng)]
+            for label, options in (("off", MatcherOptions(max_distortion=0.0)), ("default", None)):
+                rows.append({"fov": fov, "k1": k1, "term": label, **_lens_case(camera, lists, options)})
+    return rows
+
+
+def print_lens_term(rows: list[dict]) -> None:
+    default = MatcherOptions().max_distortion
+    print(f"\nLens term of the look-up tolerance: off, or |k1| <= {default:g} (default); star lists, no hint; "
+          "CPU time of the solving thread")
+    print(f"{'FOV':>5} {'k1':>6} {'term':<8} {'within 2 px':>11} {'false':>5} {'median ms':>9} {'p95 ms':>8}")
+    for r in rows:
+        print(f"{r['fov']:>5.0f} {r['k1']:>+6.2f} {r['term']:<8} {r['ok']:>8d}/{r['n']:<2d} {r['false']:>5d} "
+              f"{r['median_ms']:>9.1f} {r['p95_ms']:>8.1f}")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=20, help="simulated frames per camera (default 20)")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--no-real", action="store_true", help="skip the real images")
     parser.add_argument("--no-sim", action="store_true", help="skip the simulated frames")
+    parser.add_argument("--lens-term", action="store_true", help="also measure the lens term on star lists")
+    parser.add_argument("--lists", type=int, default=30, help="star lists per lens of --lens-term (default 30)")
     args = parser.parse_args(argv)
     load = os.getloadavg()[0]
     t0 = time.perf_counter()
@@ -194,6 +262,8 @@ def main(argv: list[str] | None = None) -> int:
             print_real([real_row(r, (5.0, 35.0)) for r in rows], "FOV range 5-35 deg (the earlier default)")
     if not args.no_sim:
         print_sim([sim_camera_run(spec, args.frames, args.seed) for spec in SIM_CAMERAS])
+    if args.lens_term:
+        print_lens_term(lens_term_rows(args.lists, args.seed))
     print(f"\nwall {time.perf_counter() - t0:.0f} s; load average {load:.2f} before, {os.getloadavg()[0]:.2f} after "
           f"on {os.cpu_count()} cores")
     return 0

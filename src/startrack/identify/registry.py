@@ -41,6 +41,11 @@ DEFAULT_FOV_RANGE_DEG: tuple[float, float] = (3.0, 100.0)
 """Searched when no field of view is given: telescopes' finder fields, star trackers, camera
 lenses, phones and webcams (the range of the default pattern database)."""
 
+NARROW_MAX_MAG = 12.5
+"""A database reaching below the default range (fields under 3 deg, given with a hint or a
+camera) takes every Hipparcos star (the catalog ends near V 12): a 1 deg field holds three of
+them on average, and it needs four in a pattern and more to confirm it."""
+
 PAIR_MAX_FOCAL_TOLERANCE = 0.05
 """The pair-directory matchers need the focal length to within this fraction."""
 
@@ -72,13 +77,15 @@ def database_settings_for(fov_range_deg: tuple[float, float] = DEFAULT_FOV_RANGE
 
     The default database covers :data:`DEFAULT_FOV_RANGE_DEG`; a range reaching outside it
     gets a database of its own that covers just that range, 3 % wider on each side (built on
-    first use; below 3 deg the Hipparcos stars thin out and so do the patterns).
+    first use; below 3 deg it takes every Hipparcos star, :data:`NARROW_MAX_MAG`, and still the
+    stars thin out and so do the patterns).
     """
     lo, hi = fov_range_deg
     default = DatabaseSettings()
     if default.fov_min_deg <= lo and hi <= default.fov_max_deg:
         return default
-    return DatabaseSettings(fov_min_deg=max(lo * 0.97, 0.4), fov_max_deg=min(hi * 1.03, DB_MAX_FOV_DEG))
+    depth = {"max_mag": NARROW_MAX_MAG} if lo < default.fov_min_deg else {}
+    return DatabaseSettings(fov_min_deg=max(lo * 0.97, 0.4), fov_max_deg=min(hi * 1.03, DB_MAX_FOV_DEG), **depth)
 
 
 def _quads(request: MatchRequest) -> tuple[Matcher, FieldStars]:
