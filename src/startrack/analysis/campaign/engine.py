@@ -39,6 +39,12 @@ LOCAL_CLUSTER_CONFIG = {
     # one thread per library in each single-threaded worker, but not Dask's MALLOC_TRIM_THRESHOLD_
     # (see warm_plugin.undo_malloc_trim, which repairs it on workers started by others)
     "distributed.nanny.pre-spawn-environ": {"OMP_NUM_THREADS": 1, "MKL_NUM_THREADS": 1, "OPENBLAS_NUM_THREADS": 1},
+    # the statistical profiler samples the trial thread's stack every 10 ms, taking the GIL from
+    # it; campaigns time their own trials
+    "distributed.worker.profile.enabled": False,
+    # the event loop's latency probe wakes every 20 ms by default and takes the GIL from the trial
+    # thread each time: star-list trials on one worker took 1.33x their in-process time (measured)
+    "distributed.admin.tick.interval": "1000ms",
 }
 """Dask settings of the local clusters this module starts."""
 

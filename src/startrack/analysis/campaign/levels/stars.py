@@ -82,4 +82,4 @@ def run(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generator, tole
 
 LEVEL = register(Level(
     name="stars", doc=" ".join(__doc__.split("\n\n")[0].split()), params=PARAMS, run=run, check=check_solver,
-    columns={"max_mag_used": pa.float64(), "n_false": pa.int32()}, chunk_trials=100))
+    columns={"max_mag_used": pa.float64(), "n_false": pa.int32()}, chunk_trials=250))
