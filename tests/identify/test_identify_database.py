@@ -76,6 +76,17 @@ def test_corrupt_database_file_is_rebuilt(tmp_path, monkeypatch):
     assert database_report(SMALL)["build_s"] > 0
 
 
+def test_is_cached_is_false_for_a_file_that_would_be_rebuilt(tmp_path, monkeypatch):
+    from startrack.identify.database import database_path, is_cached
+
+    monkeypatch.setenv(cache.ENV_VAR, str(tmp_path))
+    assert not is_cached(SMALL)
+    database_path(SMALL).write_bytes(b"not a database")
+    assert not is_cached(SMALL)  # present but damaged: a rebuild would happen, so announce it
+    database_report(SMALL)
+    assert is_cached(SMALL)
+
+
 def test_bad_settings_are_refused():
     with pytest.raises(InvalidInputError, match="FOV range"):
         DatabaseSettings(fov_min_deg=30.0, fov_max_deg=10.0)

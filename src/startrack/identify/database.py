@@ -350,9 +350,14 @@ _LOADED: dict[DatabaseSettings, PatternDatabase] = {}
 
 
 def is_cached(settings: DatabaseSettings | None = None) -> bool:
-    """True when the database for these settings is loaded or its cache file exists."""
+    """True when the database for these settings is loaded or its cache file is current.
+
+    The file's header is read (:func:`startrack.cache.is_current`), not just its existence: a
+    damaged, stale or old-layout file is rebuilt by :func:`load_database`, so it counts as not
+    cached and a caller that announces a rebuild announces it only when one happens.
+    """
     settings = settings or DatabaseSettings()
-    return settings in _LOADED or database_path(settings).exists()
+    return settings in _LOADED or cache.is_current(DB_KIND, DB_VERSION, asdict(settings))
 
 
 def database_path(settings: DatabaseSettings | None = None):
