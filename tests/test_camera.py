@@ -258,3 +258,21 @@ def test_nonsense_camera_values_are_refused(kwargs, word):
         Camera(width=100, height=100, fx=500.0, **kwargs)
     with pytest.raises(InvalidInputError, match="pixel_aspect"):
         Camera.from_fov(100, 100, 10.0, pixel_aspect=0.0)
+
+
+@pytest.mark.parametrize(("key", "value"), [
+    ("fx", None), ("fx", "500"), ("fx", np.array([500.0, 510.0])), ("fy", "abc"), ("fy", True),
+    ("cx", "49.5"), ("cy", [49.5]), ("k1", None), ("k2", np.zeros(3)), ("k3", "0"), ("p1", b"0"),
+    ("p2", {"p2": 0.0}),
+])
+def test_a_field_that_is_not_a_number_is_refused_by_name(key, value):
+    args = {"width": 100, "height": 100, "fx": 500.0} | {key: value}
+    with pytest.raises(InvalidInputError, match=rf"camera {key} must be a real number \(") as info:
+        Camera(**args)
+    assert type(value).__name__ in str(info.value)
+
+
+def test_numpy_and_integer_fields_are_stored_as_floats():
+    cam = Camera(width=100, height=100, fx=np.float32(500.0), fy=510, cx=np.int64(50), k1=np.float64(-0.1))
+    assert all(type(getattr(cam, key)) is float for key in ("fx", "fy", "cx", "cy", "k1", "k2"))
+    assert (cam.fx, cam.fy, cam.cx, cam.k1) == (500.0, 510.0, 50.0, -0.1)

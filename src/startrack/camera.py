@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import copy
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -95,12 +96,14 @@ class Camera:
             object.__setattr__(self, "cx", (self.width - 1) / 2.0)
         if self.cy is None:
             object.__setattr__(self, "cy", (self.height - 1) / 2.0)
+        for key in _FLOAT_FIELDS:
+            object.__setattr__(self, key, _checked_number(key, getattr(self, key)))
         for key in ("fx", "fy"):
-            value = float(getattr(self, key))
+            value = getattr(self, key)
             if not (math.isfinite(value) and value > 0):
                 raise InvalidInputError(f"camera focal length {key} must be positive and finite, got {value!r} px")
         for key in ("cx", "cy", "k1", "k2", "k3", "p1", "p2"):
-            if not math.isfinite(float(getattr(self, key))):
+            if not math.isfinite(getattr(self, key)):
                 raise InvalidInputError(f"camera parameter {key} must be finite, got {getattr(self, key)!r}")
         pitch = self.pixel_pitch_um
         number = isinstance(pitch, int | float | np.number) and not isinstance(pitch, bool)
@@ -308,6 +311,28 @@ class Camera:
         lo = -0.5 + margin_px
         with np.errstate(invalid="ignore"):
             return (x >= lo) & (y >= lo) & (x <= self.width - 0.5 - margin_px) & (y <= self.height - 0.5 - margin_px)
+
+
+_FLOAT_FIELDS = ("fx", "fy", "cx", "cy", "k1", "k2", "k3", "p1", "p2")
+"""The Camera fields that hold one real number each (checked by :func:`_checked_number`)."""
+
+_FIELD_MEANING = {"fx": "a focal length in pixels", "fy": "a focal length in pixels",
+                  "cx": "a principal point column in pixels", "cy": "a principal point row in pixels"}
+
+
+def _checked_number(key: str, value: object) -> float:
+    """``value`` as a float if it is one real number (int, float or NumPy scalar, not a bool, a
+    string, None or an array); otherwise an InvalidInputError naming the field and what is valid."""
+    if isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_):
+        return float(value)
+    meaning = _FIELD_MEANING.get(key, "a distortion coefficient (dimensionless)")
+    raise InvalidInputError(f"camera {key} must be a real number ({meaning}), got {type(value).__name__} "
+                            f"{_short_repr(value)}")
+
+
+def _short_repr(value: object) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _checked_aspect(pixel_aspect: float) -> float:
