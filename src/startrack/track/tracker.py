@@ -182,9 +182,10 @@ class Tracker:
         if self._rig is not None:
             raise InvalidInputError("this Tracker follows a rig: give each head's stars to update_rig")
         t0 = time.perf_counter()
-        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        t_s = _checked_time(t_s)
+        x, y = _checked_stars(x, y)
         if flux is not None:
-            order = np.argsort(-np.asarray(flux, dtype=float), kind="stable")
+            order = np.argsort(-_checked_flux(flux, x.shape), kind="stable")
             x, y = x[order], y[order]
         if gyro_rate_rad_s is not None:
             self._rate = _checked_rate(gyro_rate_rad_s)
@@ -219,6 +220,9 @@ class Tracker:
         from ..io import read_image
         from ..rate.streak_solve import header_exposure_s
 
+        t_s = _checked_time(t_s)
+        if gyro_rate_rad_s is not None:
+            gyro_rate_rad_s = _checked_rate(gyro_rate_rad_s)
         img = read_image(image)
         data = img.data
         if streak_exposure_s is not None and streak_bias_px is not None:
@@ -443,6 +447,43 @@ def _checked_rate(rate_rad_s: ArrayLike) -> NDArray[np.float64]:
     if rate.shape != (3,) or not np.all(np.isfinite(rate)):
         raise InvalidInputError(f"gyro_rate_rad_s must be 3 finite numbers (rad/s, camera frame), got {rate_rad_s!r}")
     return rate
+
+
+def _checked_time(t_s: float) -> float:
+    """The frame time as a float; NaN, an infinity or a non-number is refused."""
+    try:
+        value = float(t_s)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"t_s must be a finite number of seconds, got {t_s!r}") from None
+    if not math.isfinite(value):
+        raise InvalidInputError(f"t_s must be a finite number of seconds, got {t_s!r}")
+    return value
+
+
+def _checked_stars(x: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Star positions (N,) each, finite and of one shape (px)."""
+    try:
+        xs, ys = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInputError("x and y must be arrays of pixel positions (numbers)") from None
+    if xs.ndim != 1 or xs.shape != ys.shape:
+        raise InvalidInputError(f"x and y must be 1-D arrays of one length, got shapes {xs.shape} and {ys.shape}")
+    for name, values in (("x", xs), ("y", ys)):
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            raise InvalidInputError(f"{name} must hold finite pixel positions; entry {int(bad[0])} is "
+                                    f"{values[bad[0]]!r} ({bad.size} not finite)")
+    return xs, ys
+
+
+def _checked_flux(flux: ArrayLike, shape: tuple[int, ...]) -> NDArray[np.float64]:
+    """Star fluxes of the stars' shape, finite."""
+    values = np.asarray(flux, dtype=float)
+    if values.shape != shape:
+        raise InvalidInputError(f"flux must have one entry per star, shape {shape}, got {values.shape}")
+    if not np.all(np.isfinite(values)):
+        raise InvalidInputError("flux must be finite numbers (NaN or infinity given)")
+    return values
 
 
 def _with_time(step: TrackStep, seconds: float) -> TrackStep:
