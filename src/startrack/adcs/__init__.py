@@ -24,9 +24,18 @@ plots           the figures of a run
 
 from __future__ import annotations
 
-from .cubesat import CubeSat
-from .loop import LoopConfig, RunRecord, run_loop
-from .metrics import StepMetrics, run_metrics
-from .scenario import Scenario
+from .. import _lazy_exports
+
+_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
+    "CubeSat": ".cubesat",
+    "LoopConfig": ".loop",
+    "RunRecord": ".loop",
+    "run_loop": ".loop",
+    "StepMetrics": ".metrics",
+    "run_metrics": ".metrics",
+    "Scenario": ".scenario",
+}
 
 __all__ = ["CubeSat", "LoopConfig", "RunRecord", "Scenario", "StepMetrics", "run_loop", "run_metrics"]
+
+__getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS)

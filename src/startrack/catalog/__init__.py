@@ -1,12 +1,20 @@
 """Hipparcos-2 star catalog: loading, epoch propagation, magnitude filter, double stars, uniform
 thinning and cone search (DESIGN.md §2; seed 000 §5.5.4, seed 002 §5.2)."""
 
-from .cone import ConeIndex, cone_search
-from .doubles import flag_doubles, merge_doubles
-from .hipparcos import load_catalog
-from .propagation import propagate
-from .star_catalog import StarCatalog
-from .thinning import thin_uniform
+from __future__ import annotations
+
+from .. import _lazy_exports
+
+_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
+    "ConeIndex": ".cone",
+    "cone_search": ".cone",
+    "flag_doubles": ".doubles",
+    "merge_doubles": ".doubles",
+    "load_catalog": ".hipparcos",
+    "propagate": ".propagation",
+    "StarCatalog": ".star_catalog",
+    "thin_uniform": ".thinning",
+}
 
 __all__ = [
     "ConeIndex",
@@ -18,3 +26,5 @@ __all__ = [
     "propagate",
     "thin_uniform",
 ]
+
+__getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS)

@@ -29,14 +29,23 @@ are sorted brightest (largest flux) first.
 
 from __future__ import annotations
 
-from .channels import to_single_channel
-from .crb import crb_sigma_px, flux_for_snr, integrated_snr
-from .dark import median_frame, subtract_dark
-from .denoise import stack_frames
-from .details import DetectionDetails
-from .detector import StarDetector, detect
-from .magnitude import calibrate_zero_point, instrument_magnitude
-from .predictive import WindowDetections
+from .. import _lazy_exports
+
+_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
+    "to_single_channel": ".channels",
+    "crb_sigma_px": ".crb",
+    "flux_for_snr": ".crb",
+    "integrated_snr": ".crb",
+    "median_frame": ".dark",
+    "subtract_dark": ".dark",
+    "stack_frames": ".denoise",
+    "DetectionDetails": ".details",
+    "StarDetector": ".detector",
+    "detect": ".detector",
+    "calibrate_zero_point": ".magnitude",
+    "instrument_magnitude": ".magnitude",
+    "WindowDetections": ".predictive",
+}
 
 __all__ = [
     "DetectionDetails",
@@ -53,3 +62,5 @@ __all__ = [
     "subtract_dark",
     "to_single_channel",
 ]
+
+__getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS)

@@ -7,10 +7,19 @@ database of :mod:`.database`.
 
 from __future__ import annotations
 
-from .candidate import Candidate, MatchOutcome
-from .database import DatabaseSettings, PatternDatabase, database_report, load_database
-from .kvector import KVector
-from .quad_matcher import MatcherOptions, match_lost_in_space
+from .. import _lazy_exports
+
+_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
+    "Candidate": ".candidate",
+    "MatchOutcome": ".candidate",
+    "DatabaseSettings": ".database",
+    "PatternDatabase": ".database",
+    "database_report": ".database",
+    "load_database": ".database",
+    "KVector": ".kvector",
+    "MatcherOptions": ".quad_matcher",
+    "match_lost_in_space": ".quad_matcher",
+}
 
 __all__ = [
     "Candidate",
@@ -23,3 +32,5 @@ __all__ = [
     "load_database",
     "match_lost_in_space",
 ]
+
+__getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS)

@@ -23,14 +23,29 @@ report       a RigSolution as JSON values and a table (``startrack solve-rig``)
 
 from __future__ import annotations
 
-from .availability import RigAvailability, rig_availability
-from .exclusion import BrightBodies, dawn_dusk_bodies
-from .images import solve_rig_images
-from .mounting import MountingEstimate, calibrate_mountings, recalibrated
-from .solution import IDENTIFIED_BY_HEAD, IDENTIFIED_JOINTLY, RigOptions, RigSolution
-from .solve import consistency_chi2, solve_rig
-from .split_fov import FieldClassification, classify_fields, spot_moments
-from .tracking import RigTracker, RigTrackStep
+from .. import _lazy_exports
+
+_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
+    "RigAvailability": ".availability",
+    "rig_availability": ".availability",
+    "BrightBodies": ".exclusion",
+    "dawn_dusk_bodies": ".exclusion",
+    "solve_rig_images": ".images",
+    "MountingEstimate": ".mounting",
+    "calibrate_mountings": ".mounting",
+    "recalibrated": ".mounting",
+    "IDENTIFIED_BY_HEAD": ".solution",
+    "IDENTIFIED_JOINTLY": ".solution",
+    "RigOptions": ".solution",
+    "RigSolution": ".solution",
+    "consistency_chi2": ".solve",
+    "solve_rig": ".solve",
+    "FieldClassification": ".split_fov",
+    "classify_fields": ".split_fov",
+    "spot_moments": ".split_fov",
+    "RigTracker": ".tracking",
+    "RigTrackStep": ".tracking",
+}
 
 __all__ = [
     "IDENTIFIED_BY_HEAD",
@@ -53,3 +68,5 @@ __all__ = [
     "solve_rig_images",
     "spot_moments",
 ]
+
+__getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS)

@@ -7,10 +7,20 @@ components (``rot_cam_from_icrs(t + dt) = exp(-[omega x] dt) rot_cam_from_icrs(t
 chain of seed 001 chapters 3-4.
 """
 
-from .estimate import RateEstimate, axis_error_rad
-from .filter import FilterState, RateFilter
-from .from_attitudes import rate_between, rate_from_attitudes
-from .from_vectors import match_frames, rate_from_vectors
+from __future__ import annotations
+
+from .. import _lazy_exports
+
+_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
+    "RateEstimate": ".estimate",
+    "axis_error_rad": ".estimate",
+    "FilterState": ".filter",
+    "RateFilter": ".filter",
+    "rate_between": ".from_attitudes",
+    "rate_from_attitudes": ".from_attitudes",
+    "match_frames": ".from_vectors",
+    "rate_from_vectors": ".from_vectors",
+}
 
 __all__ = [
     "FilterState",
@@ -22,3 +32,5 @@ __all__ = [
     "rate_from_attitudes",
     "rate_from_vectors",
 ]
+
+__getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS)

@@ -31,48 +31,63 @@ Example
 
 from __future__ import annotations
 
-from .background import SkyBackground, zodiacal_mag_arcsec2
-from .detector import PixelMaps, pixel_maps
-from .motion import (
-    ConstantRate,
-    RecordedProfile,
-    Slew,
-    VaryingRate,
-    inertial_hold,
-    tumble,
-)
-from .noise import NoiseModel, read_out
-from .orbits import KeplerElements, Orbit, in_earth_shadow, sun_moon_km
-from .passband import PASSBANDS, Passband
-from .profile_file import load_profile, save_profile
-from .psf import render_gaussian_psf
-from .radiometry import (
-    SEED000_EQ34_ZERO_POINT_PHOTONS_S_M2,
-    SENSOR_PRESETS,
-    V_MAG0_PHOTONS_S_M2,
-    Detector,
-    Optics,
-    Sensor,
-    electrons_from_magnitude,
-    get_sensor_preset,
-    magnitude_from_electrons,
-    photon_flux_from_magnitude,
-)
-from .rso import RSO, BrightBodyFlags, OrbitalScene, Snapshot
-from .scene import (
-    FrameTiming,
-    SimulatedImage,
-    Truth,
-    field_radius_rad,
-    project_stars,
-    random_attitude,
-    render_stars,
-)
-from .sequence import frame_rng, simulate_sequence
-from .sky import DEFAULT_MAX_MAG, SkyModel, simulate_frame
-from .snr import limiting_magnitude, max_rate_rad_s, peak_snr, star_snr
-from .starcount import expected_star_count
-from .truth import RSOTruth
+from .. import _lazy_exports
+
+_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
+    "SkyBackground": ".background",
+    "zodiacal_mag_arcsec2": ".background",
+    "PixelMaps": ".detector",
+    "pixel_maps": ".detector",
+    "ConstantRate": ".motion",
+    "RecordedProfile": ".motion",
+    "Slew": ".motion",
+    "VaryingRate": ".motion",
+    "inertial_hold": ".motion",
+    "tumble": ".motion",
+    "NoiseModel": ".noise",
+    "read_out": ".noise",
+    "KeplerElements": ".orbits",
+    "Orbit": ".orbits",
+    "in_earth_shadow": ".orbits",
+    "sun_moon_km": ".orbits",
+    "PASSBANDS": ".passband",
+    "Passband": ".passband",
+    "load_profile": ".profile_file",
+    "save_profile": ".profile_file",
+    "render_gaussian_psf": ".psf",
+    "SEED000_EQ34_ZERO_POINT_PHOTONS_S_M2": ".radiometry",
+    "SENSOR_PRESETS": ".radiometry",
+    "V_MAG0_PHOTONS_S_M2": ".radiometry",
+    "Detector": ".radiometry",
+    "Optics": ".radiometry",
+    "Sensor": ".radiometry",
+    "electrons_from_magnitude": ".radiometry",
+    "get_sensor_preset": ".radiometry",
+    "magnitude_from_electrons": ".radiometry",
+    "photon_flux_from_magnitude": ".radiometry",
+    "RSO": ".rso",
+    "BrightBodyFlags": ".rso",
+    "OrbitalScene": ".rso",
+    "Snapshot": ".rso",
+    "FrameTiming": ".scene",
+    "SimulatedImage": ".scene",
+    "Truth": ".scene",
+    "field_radius_rad": ".scene",
+    "project_stars": ".scene",
+    "random_attitude": ".scene",
+    "render_stars": ".scene",
+    "frame_rng": ".sequence",
+    "simulate_sequence": ".sequence",
+    "DEFAULT_MAX_MAG": ".sky",
+    "SkyModel": ".sky",
+    "simulate_frame": ".sky",
+    "limiting_magnitude": ".snr",
+    "max_rate_rad_s": ".snr",
+    "peak_snr": ".snr",
+    "star_snr": ".snr",
+    "expected_star_count": ".starcount",
+    "RSOTruth": ".truth",
+}
 
 __all__ = [
     "DEFAULT_MAX_MAG",
@@ -129,3 +144,5 @@ __all__ = [
     "tumble",
     "zodiacal_mag_arcsec2",
 ]
+
+__getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS)

@@ -4,9 +4,18 @@ lost-in-space when tracking fails). DESIGN.md §1; seed 004 §2.2, seed 002 §4,
 
 from __future__ import annotations
 
-from .relative import RelativeMatch, rate_match, triangle_match
-from .tracker import Tracker, TrackerOptions, TrackStep
-from .windows import WindowMatch, match_in_windows
+from .. import _lazy_exports
+
+_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
+    "RelativeMatch": ".relative",
+    "rate_match": ".relative",
+    "triangle_match": ".relative",
+    "Tracker": ".tracker",
+    "TrackerOptions": ".tracker",
+    "TrackStep": ".tracker",
+    "WindowMatch": ".windows",
+    "match_in_windows": ".windows",
+}
 
 __all__ = [
     "RelativeMatch",
@@ -18,3 +27,5 @@ __all__ = [
     "rate_match",
     "triangle_match",
 ]
+
+__getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS)
