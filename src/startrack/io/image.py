@@ -18,7 +18,6 @@ from numpy.typing import NDArray
 
 from ..errors import ImageReadError, InvalidInputError
 from .channels import channel_index, to_single_channel
-from .fitsfile import read_fits
 from .limits import check_image_size, resolve_max_pixels
 from .raster import identify_format, read_raster
 from .targets import note_input
@@ -220,6 +219,8 @@ def read_image(
     kind = _sniff(path)
     note_input(path)
     if kind == "FITS":
+        from .fitsfile import read_fits  # astropy.io.fits: loaded only for FITS files
+
         data, header, bit_depth = read_fits(path, max_pixels)
     else:
         data, header, bit_depth = read_raster(path, max_pixels, kind=kind)
