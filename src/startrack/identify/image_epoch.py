@@ -23,12 +23,12 @@ import math
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
-
-from astropy.time import Time
-from erfa import ErfaWarning
+from typing import TYPE_CHECKING, Any
 
 from ..errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from astropy.time import Time
 
 DEFAULT_EPOCH_JYEAR = 2000.0
 """The catalog epoch when nothing says when the image was taken."""
@@ -60,6 +60,8 @@ class Epoch:
 def _jyear_tdb(when: Time) -> float:
     """Julian year (TDB) of a time; a UTC year outside the leap-second table (before 1960 or far
     ahead) is converted without ERFA's "dubious year" warning: the epoch needs days, not seconds."""
+    from erfa import ErfaWarning
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ErfaWarning)
         return float(when.tdb.jyear)
@@ -75,6 +77,8 @@ def epoch_jyear(epoch) -> float:
     """
     if epoch is None:
         return DEFAULT_EPOCH_JYEAR
+    from astropy.time import Time  # astropy.time and erfa (about 0.4 s) only when an epoch is given
+
     if isinstance(epoch, Time):
         if not epoch.isscalar:
             raise InvalidInputError(f"epoch must be a single time, got an array of {epoch.size}")
@@ -100,6 +104,9 @@ def _checked(value: float, given) -> float:
 def parse_utc(text: str, name: str = "time") -> Time:
     """An ISO 8601 UTC time (``2024-08-12T03:15:00``, a date, or with a space for the T), or an
     InvalidInputError naming ``name`` and what would be valid."""
+    from astropy.time import Time
+    from erfa import ErfaWarning
+
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ErfaWarning)
@@ -135,6 +142,8 @@ def epoch_from_header(header: Mapping[str, Any]) -> Epoch | None:
         if not lo < jyear < hi:
             raise InvalidInputError(f"the image header's MJD-OBS = {mjd!r} is not a modified Julian date "
                                     f"between the years {lo:g} and {hi:g}; give the epoch to override it")
+        from astropy.time import Time
+
         return Epoch(_jyear_tdb(Time(mjd, format="mjd", scale="utc")), "MJD-OBS")
     if "DateTimeOriginal" in header:
         try:
@@ -168,6 +177,8 @@ def _card_number(header: Mapping[str, Any], key: str, what: str) -> float:
 def _header_time(header: Mapping[str, Any], key: str) -> float:
     """The Julian year of a DATE-OBS (with TIME-OBS / UT) or EXIF DateTimeOriginal (with its
     zone, else as UTC), read by :func:`startrack.calibrate.ground.time_from_header`."""
+    from erfa import ErfaWarning
+
     from ..calibrate.ground import time_from_header
 
     names = ("DATE-OBS", "TIME-OBS", "UT") if key == "DATE-OBS" else (
