@@ -6,14 +6,18 @@ k-d tree answers it exactly. A star exactly on the cone's edge may fall either s
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-from astropy.time import Time
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from ..errors import InvalidInputError
 from ..frames import normalize
 from .star_catalog import StarCatalog
+
+if TYPE_CHECKING:
+    from astropy.time import Time
 
 
 def chord_from_angle(theta_rad: float, name: str, allow_zero: bool = False) -> float:

@@ -25,8 +25,6 @@ import warnings
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
-from astropy.time import Time
-from erfa import ErfaWarning
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidInputError
@@ -34,6 +32,8 @@ from ..frames import radec_to_vector, vector_to_radec
 from ..units import MAS
 
 if TYPE_CHECKING:
+    from astropy.time import Time
+
     from .star_catalog import StarCatalog
 
 
@@ -56,12 +56,10 @@ def epoch_to_jyear(epoch: float | Time) -> float:
     unknown future leap seconds shift the epoch by seconds, about 1 micro-arcsecond of motion
     even for Barnard's star.
     """
-    if isinstance(epoch, Time):
-        if not epoch.isscalar:
-            raise InvalidInputError(f"epoch must be a scalar Time, got shape {epoch.shape}")
-        with warnings.catch_warnings():
-            warnings.filterwarnings("ignore", message=".*dubious year", category=ErfaWarning)
-            return float(epoch.tdb.jyear)
+    if not isinstance(epoch, float | int):
+        jyear = _time_jyear(epoch)
+        if jyear is not None:
+            return jyear
     try:
         value = float(epoch)
     except (TypeError, ValueError) as exc:
@@ -71,6 +69,21 @@ def epoch_to_jyear(epoch: float | Time) -> float:
     if not np.isfinite(value):
         raise InvalidInputError(f"epoch must be finite, got {value}")
     return value
+
+
+def _time_jyear(epoch) -> float | None:
+    """The Julian year (TDB) of an astropy Time, None for anything else (astropy.time and erfa,
+    about 0.4 s to import, are loaded only here)."""
+    from astropy.time import Time
+    from erfa import ErfaWarning
+
+    if not isinstance(epoch, Time):
+        return None
+    if not epoch.isscalar:
+        raise InvalidInputError(f"epoch must be a scalar Time, got shape {epoch.shape}")
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*dubious year", category=ErfaWarning)
+        return float(epoch.tdb.jyear)
 
 
 def _east_north(ra: NDArray, dec: NDArray) -> tuple[NDArray, NDArray]:

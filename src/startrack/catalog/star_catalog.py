@@ -4,14 +4,17 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-from astropy.time import Time
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidInputError
 from ..frames import radec_to_vector
 from .propagation import epoch_to_jyear, propagate_state, propagate_vectors
+
+if TYPE_CHECKING:
+    from astropy.time import Time
 
 _BANDS = ("v", "hp")
 _FLOAT_FIELDS = ("ra_rad", "dec_rad", "pm_ra_mas_yr", "pm_dec_mas_yr", "parallax_mas", "hp_mag",
