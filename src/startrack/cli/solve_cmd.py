@@ -14,7 +14,6 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from ..io import Image, read_image
-from ..io.wcs import write_wcs
 from ..results import AttitudeSolution, Detections, Status
 from ..solve import solve_image
 from .common import (
@@ -85,6 +84,8 @@ def main(argv: list[str]) -> int:
     except InvalidInputError as exc:  # a problem with this image's content (size, no finite pixel...)
         raise InvalidInputError(f"{args.image}: {exc}") from exc
     if args.wcs and solution.solved:
+        from ..io.wcs import write_wcs  # astropy.wcs: loaded only when asked for
+
         write_wcs(args.wcs, solution.rot_cam_from_icrs, solution.camera)
     return report(_explain_blank(solution, detections, image), detections, args.json, ground=ground)
 
