@@ -21,7 +21,12 @@ from the three frames (their own ``median_image.png`` is truncated). SEP runs in
 environment (``peers/detect_env.py``) on the same single-channel images, as in
 ``detect_speed.py``: ``sep.Background`` and ``sep.extract`` at 5 times the global RMS.
 
-    .venv/bin/python benchmarks/detect_realdata.py [--no-peers]
+With ``--misses``, each matched star the scored detector misses is measured and put down to a
+cause (:func:`misses`): at the border, blended with a neighbour, in clutter, too faint for the
+fine pass, or dropped by a filter; with how many unconfirmed peaks of the fine image are as
+significant as it (what a threshold that took it would let in before the spot filters).
+
+    .venv/bin/python benchmarks/detect_realdata.py [--no-peers] [--misses]
 """
 
 from __future__ import annotations
@@ -165,6 +170,111 @@ def run_sep(images: dict[str, np.ndarray]) -> dict[str, tuple[np.ndarray, np.nda
     return out
 
 
+# --- why a matched star is missed (--misses) ---------------------------------------------------
+@dataclass(frozen=True)
+class Miss:
+    """One matched star the detector missed: where, how significant in the fine image (peak of
+    the full-resolution pass's significance within 1 px, :mod:`startrack.detect.fine_pass`) and
+    in the binned one, its distances to the border and to the nearest detection, the spread of its
+    ring (:func:`startrack.detect.fine_pass.ring_noise_ratio`, 1 on open sky), the tile clutter,
+    how many unconfirmed peaks of the fine image are at least as significant (what a threshold
+    low enough for it would let in before the spot filters), and the cause it is put down to."""
+
+    x: float
+    y: float
+    fine_sigma: float
+    binned_sigma: float
+    edge_px: float
+    nearest_px: float
+    ring: float
+    clutter: float
+    competing: int
+    cause: str
+
+
+def significance_maps(image: np.ndarray, detector: StarDetector) -> tuple[np.ndarray, np.ndarray, float, object]:
+    """The fine and the binned (full-resolution shape) significance images, the pixel noise and the
+    background model, built as the detector builds them (``dark_frame`` applied)."""
+    from startrack.detect import pipeline
+    from startrack.detect.background import low_side_clipped, tiled_background
+    from startrack.detect.fine_pass import local_contrast
+    from startrack.detect.smooth import detection_image
+    from startrack.detect.threshold import significance
+
+    prepared, _ = pipeline.preprocess(detector, image, detector.dark_frame)
+    data, skewed = prepared.data, low_side_clipped(np.asarray(image))
+    binned = detection_image(data, detector.binning, detector.kernel, detector.kernel_px, prepared.invalid)
+    model = pipeline.background_model(detector, binned, detector.binning, skewed)
+    coarse = np.kron(significance(binned, model, detector.binning), np.ones((detector.binning,) * 2))
+    fine = local_contrast(detection_image(data, 1, detector.kernel, detector.kernel_px, prepared.invalid))
+    fine_model = tiled_background(fine, detector.tile_px, skewed=skewed)
+    h, w = fine.shape
+    fine = (fine - fine_model.level) / np.asarray(fine_model.noise_map(np.arange(h), np.arange(w)))
+    pad = np.zeros((h, w))
+    pad[:coarse.shape[0], :coarse.shape[1]] = coarse[:h, :w]
+    return fine, pad, pipeline.pixel_noise(data, model), (data, model)
+
+
+def _near_max(image: np.ndarray, x: float, y: float, half: int = 1) -> float:
+    xi, yi = int(round(x)), int(round(y))
+    return float(np.nanmax(image[max(0, yi - half): yi + half + 1, max(0, xi - half): xi + half + 1]))
+
+
+def misses(image: np.ndarray, detector: StarDetector, det, ref: Reference) -> list[Miss]:
+    """The matched stars of ``ref`` that ``det`` (the detector's output) does not hold, each
+    with its measurements and cause: *edge* (within 4 px of the border), *blend* (a detection or
+    another reference star 2-6 px away took it), *clutter* (a ring over 1.4 or a tile clutter
+    over the detector's limit), *faint* (fine significance under the detector's ``fine_sigma``),
+    otherwise *filtered* (significant, alone, on open sky, yet a spot filter or a rule of the
+    fine pass dropped it)."""
+    from scipy.ndimage import maximum_filter
+
+    from startrack.detect.fine_pass import MAX_RING_NOISE, ring_noise_ratio
+
+    fine, coarse, noise, (data, model) = significance_maps(image, detector)
+    peaks = (fine == maximum_filter(fine, 5)) & (fine > 3.0)
+    py, px = np.nonzero(peaks)
+    known = np.concatenate([ref.x, ref.hip_x]), np.concatenate([ref.y, ref.hip_y])
+    unconfirmed = np.hypot(px[:, None] - known[0][None], py[:, None] - known[1][None]).min(axis=1) >= MATCH_RADIUS_PX
+    h, w = data.shape
+    out = []
+    d = np.hypot(ref.x[:, None] - det.x[None], ref.y[:, None] - det.y[None]) if len(det.x) else None
+    for i in range(ref.x.size):
+        if d is not None and d[i].min() < MATCH_RADIUS_PX:
+            continue
+        x, y = float(ref.x[i]), float(ref.y[i])
+        others = np.hypot(known[0] - x, known[1] - y)
+        nearest = min(float(d[i].min()) if d is not None else np.inf,
+                      float(np.min(others[others >= MATCH_RADIUS_PX], initial=np.inf)))
+        sig = _near_max(fine, x, y)
+        ring = float(ring_noise_ratio(data, np.array([x]), np.array([y]), noise)[0])
+        clutter = float(model.clutter_at(np.array([x]), np.array([y]))[0])
+        edge = min(x, y, w - 1 - x, h - 1 - y)
+        cause = _cause(detector, edge, nearest, ring > MAX_RING_NOISE, clutter, sig)
+        out.append(Miss(x, y, sig, _near_max(coarse, x, y, 2), edge, nearest, ring, clutter,
+                        int(np.sum(unconfirmed & (fine[py, px] >= sig))), cause))
+    return out
+
+
+def _cause(detector: StarDetector, edge_px: float, nearest_px: float, busy_ring: bool, clutter: float,
+           sig: float) -> str:
+    """:func:`misses`'s cause of one miss, the first that applies."""
+    if edge_px < 4:
+        return "edge"
+    if nearest_px < 6:
+        return "blend"
+    if busy_ring or clutter > (detector.max_clutter or np.inf):
+        return "clutter"
+    return "faint" if sig < (detector.fine_sigma or detector.sigma) else "filtered"
+
+
+def print_misses(name: str, found: list[Miss]) -> None:
+    for m in found:
+        print(f"  {name:<16} miss at ({m.x:6.1f}, {m.y:6.1f}): {m.cause:<8} fine {m.fine_sigma:5.1f} sigma, binned "
+              f"{m.binned_sigma:5.1f}, edge {m.edge_px:5.1f} px, nearest {m.nearest_px:6.1f} px, ring {m.ring:4.2f}, "
+              f"clutter {m.clutter:4.2f}, unconfirmed peaks as significant {m.competing}")
+
+
 def row(label: str, s: Score, seconds: float) -> str:
     return (f"{label:<30}{s.matched:>5}{s.found:>6}{s.recall:>7.0%}{s.top:>6}{s.detections:>6}{s.unconfirmed:>7}"
             f"{s.point_sources:>7}{s.median_px:>8.3f}{seconds * 1e3:>8.1f}")
@@ -173,6 +283,7 @@ def row(label: str, s: Score, seconds: float) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--no-peers", action="store_true", help="skip SEP")
+    parser.add_argument("--misses", action="store_true", help="say why each missed matched star is missed")
     args = parser.parse_args(argv)
     if not (REALDATA / "truth.csv").is_file():
         print(f"real-image folder {REALDATA} is absent")
@@ -183,18 +294,28 @@ def main(argv: list[str] | None = None) -> int:
     sep = {} if args.no_peers else run_sep(images)
     print(f"{'image / detector':<30}{'match':>5}{'found':>6}{'recall':>7}{'top30':>6}{'dets':>6}{'unconf':>7}"
           f"{'point':>7}{'med px':>8}{'ms':>8}")
+    report = []
     for name, image in images.items():
         det, seconds = run_ours(image, StarDetector())
         print(row(f"{name} startrack", score(det.x, det.y, refs[name], det.is_point_source), seconds))
+        scored = StarDetector()
         if IMAGES[name] == OPENSTARTRACKER:
-            det, seconds = run_ours(image, StarDetector(dark_frame=dark))
+            scored = StarDetector(dark_frame=dark)
+            det, seconds = run_ours(image, scored)
             print(row(f"{name} startrack + dark", score(det.x, det.y, refs[name], det.is_point_source), seconds))
+        if args.misses:
+            report.append((name, misses(image, scored, det, refs[name])))
         if name in sep:
             x, y, seconds = sep[name]
             print(row(f"{name} SEP", score(x, y, refs[name]), seconds))
     print(f"match: astrometry.net's genuine matches; found / recall: detected within {MATCH_RADIUS_PX:g} px; top30: "
           f"among the brightest {TOP_N}; unconf: detections near neither a match nor a Hipparcos star; point: found "
           "stars marked point sources; med px: offset from astrometry.net; ms: fastest of 3 (SEP: median)")
+    if report:
+        print("\nMissed matched stars (the scored detector: with the dark on the openstartracker frames); sigma: "
+              "the fine / binned significance at the star")
+        for name, found in report:
+            print_misses(name, found)
     return 0
 
 
