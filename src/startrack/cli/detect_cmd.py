@@ -17,13 +17,15 @@ from ..detect.centroiders import CENTROIDERS
 from ..detect.details import DetectionDetails
 from ..detect.detector import THRESHOLDS
 from ..io import read_image
+from .batch import BATCH_EPILOG, add_batch_options, is_batch
 from .common import add_max_pixels_option, apply_max_pixels_option, positive_int, print_json
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="startrack detect", description=__doc__,
+    parser = argparse.ArgumentParser(prog="startrack detect", description=__doc__, epilog=BATCH_EPILOG,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("image", help="FITS, PNG, JPEG or TIFF file")
+    parser.add_argument("image", nargs="+", metavar="IMAGE",
+                        help="FITS, PNG, JPEG or TIFF file; several files or folders for a batch")
     parser.add_argument("--method", choices=CENTROIDERS, default=StarDetector.centroid,
                         help="centroider (default: %(default)s)")
     parser.add_argument("--threshold", choices=THRESHOLDS, default=StarDetector.threshold,
@@ -35,6 +37,7 @@ def _parser() -> argparse.ArgumentParser:
                         help="print only the N brightest")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     add_max_pixels_option(parser)
+    add_batch_options(parser)
     return parser
 
 
@@ -56,17 +59,28 @@ def table(details: DetectionDetails) -> str:
 def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
     apply_max_pixels_option(args)
-    image = read_image(args.image)
+    batch = is_batch(args.image, args.csv)
+    image = None if batch else read_image(args.image[0])
     dark = None if args.dark is None else read_image(args.dark).data
     detector = StarDetector(centroid=args.method, threshold=args.threshold, sigma=args.sigma,
                             dark_frame=dark, max_stars=args.max_stars)
+    if batch:
+        from .batch import run_batch
+        from .batch_detect import detect_spec
+
+        return run_batch(detect_spec(detector), args.image, as_json=args.json, csv_out=args.csv, jobs=args.jobs)
     details = detector.detect_details(image.data)
     if args.json:
-        det = details.detections
-        print_json({"image": str(args.image), "width": det.width, "height": det.height,
-                    "background": float(det.background), "noise": float(det.noise),
-                    "k_sigma": details.k_sigma, "centroid": details.centroid,
-                    "settings": detector.settings(), "stars": details.as_records()})
+        print_json(json_record(args.image[0], details, detector))
     else:
         print(table(details))
     return 0
+
+
+def json_record(image, details: DetectionDetails, detector: StarDetector) -> dict:
+    """The ``--json`` object of one image (also each line of a batch's ``--json``)."""
+    det = details.detections
+    return {"image": str(image), "width": det.width, "height": det.height,
+            "background": float(det.background), "noise": float(det.noise),
+            "k_sigma": details.k_sigma, "centroid": details.centroid,
+            "settings": detector.settings(), "stars": details.as_records()}

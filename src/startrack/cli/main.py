@@ -30,6 +30,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "analyse": ("startrack.cli.analyse_cmd", "post-processing analyses over result sets (figures + CSV)"),
     "adcs-demo": ("startrack.cli.adcs_cmd", "closed-loop attitude control with the star tracker in the loop"),
     "web": ("startrack.cli.web_cmd", "the browser tool: a local server with pages and a JSON API"),
+    "warm-up": ("startrack.cli.batch_warmup", "build the default database and compile the solver (once)"),
 }
 
 USAGE = "usage: startrack {" + ",".join(SUBCOMMANDS) + "} [options]\n\n" + "\n".join(

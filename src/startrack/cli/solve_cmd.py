@@ -16,11 +16,15 @@ from ..errors import InvalidInputError
 from ..io import Image, read_image
 from ..results import AttitudeSolution, Detections, Status
 from ..solve import solve_image
+from .batch import BATCH_EPILOG, add_batch_options, is_batch
+from .batch_warmup import warm_up
 from .common import (
     SOLUTION_FORMATS,
     add_epoch_option,
     add_fov_options,
+    add_max_pixels_option,
     add_method_option,
+    apply_max_pixels_option,
     fov_kwargs,
     report,
 )
@@ -29,9 +33,11 @@ from .solve_stars_cmd import add_aspect_option, aspect_option, solver_epoch, tim
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="startrack solve", description=__doc__, epilog=SOLUTION_FORMATS,
+    parser = argparse.ArgumentParser(prog="startrack solve", description=__doc__,
+                                     epilog=SOLUTION_FORMATS + "\n" + BATCH_EPILOG,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("image", help="FITS, PNG, JPEG or TIFF file")
+    parser.add_argument("image", nargs="+", metavar="IMAGE",
+                        help="FITS, PNG, JPEG or TIFF file; several files or folders for a batch")
     add_fov_options(parser)
     add_method_option(parser)
     parser.add_argument("--channel", choices=("r", "g", "b"),
@@ -40,7 +46,10 @@ def _parser() -> argparse.ArgumentParser:
     add_aspect_option(parser)
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--wcs", metavar="OUT",
-                        help="when solved, write the image's FITS WCS (TAN-SIP, FITS 1-based pixels) to OUT")
+                        help="when solved, write the image's FITS WCS (TAN-SIP, FITS 1-based pixels) to OUT "
+                             "(one image only)")
+    add_max_pixels_option(parser)
+    add_batch_options(parser)
     ground = parser.add_argument_group(
         "a photo from the ground (adds altitude / azimuth and corrects for aberration and refraction)")
     ground.add_argument("--site", help="a saved or built-in site name (see startrack.calibrate.sites)")
@@ -69,11 +78,17 @@ def _site(args):
 
 def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
+    apply_max_pixels_option(args)
     solver_options = {**fov_kwargs(args), "epoch": solver_epoch(args), "method": args.method,
                       "pixel_aspect": aspect_option(args)}
+    fov_options = {key: solver_options[key] for key in ("fov_deg", "fov_range_deg", "camera")}
+    if is_batch(args.image, args.csv):
+        return _batch(args, solver_options, fov_options)
+    args.image = args.image[0]
     image = read_image(args.image, channel=args.channel)
-    ensure_database_for(solver_options["fov_deg"], solver_options["fov_range_deg"], solver_options["camera"])
+    ensure_database_for(**fov_options)
     site = _site(args)
+    warm_up(**fov_options)  # the compiled kernels loaded (or compiled, with a message) outside the solve time
     try:
         if site is None:
             solution, ground = solve_image(image, **solver_options), None
@@ -87,7 +102,23 @@ def main(argv: list[str]) -> int:
         from ..io.wcs import write_wcs  # astropy.wcs: loaded only when asked for
 
         write_wcs(args.wcs, solution.rot_cam_from_icrs, solution.camera)
-    return report(_explain_blank(solution, detections, image), detections, args.json, ground=ground)
+    return report(explain_blank(solution, detections, image), detections, args.json, ground=ground)
+
+
+def _batch(args: argparse.Namespace, solver_options: dict, fov_options: dict) -> int:
+    """Several images, a folder or --csv: :func:`startrack.cli.batch.run_batch` (lost-in-space only)."""
+    from .batch import run_batch
+    from .batch_solve import solve_spec
+
+    if args.wcs:
+        raise InvalidInputError("--wcs writes the WCS of one image; leave it out for a batch")
+    if args.site or args.latitude_deg is not None or args.longitude_deg is not None:
+        raise InvalidInputError("--site, --latitude-deg and --longitude-deg take one image; leave them out "
+                                "for a batch")
+    ensure_database_for(**fov_options)
+    warm_up(**fov_options)
+    return run_batch(solve_spec(solver_options, args.channel), args.image, as_json=args.json,
+                     csv_out=args.csv, jobs=args.jobs)
 
 
 def _solve_ground(image, site, args, solver_options):
@@ -97,7 +128,7 @@ def _solve_ground(image, site, args, solver_options):
     return solve_ground_photo(image, site, time=time_option(args), utc_offset_hours=args.utc_offset_hours, **options)
 
 
-def _explain_blank(solution: AttitudeSolution, detections: Detections, image: Image) -> AttitudeSolution:
+def explain_blank(solution: AttitudeSolution, detections: Detections, image: Image) -> AttitudeSolution:
     """Name the problem when nothing was detected because every pixel has the same value."""
     if solution.status is not Status.TOO_FEW_STARS or len(detections) or not _uniform(image.data):
         return solution

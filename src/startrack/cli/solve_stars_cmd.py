@@ -17,11 +17,14 @@ from ..identify.image_epoch import parse_utc
 from ..identify.request import check_pixel_aspect
 from ..io import read_star_list
 from ..solve import solve_stars
+from .batch_warmup import warm_up
 from .common import (
     SOLUTION_FORMATS,
     add_epoch_option,
     add_fov_options,
+    add_max_pixels_option,
     add_method_option,
+    apply_max_pixels_option,
     epoch_option,
     fov_kwargs,
     positive_int,
@@ -43,6 +46,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--time", metavar="UTC", help="when the stars were observed, ISO 8601 UTC: its year is the "
                                                       "catalog epoch unless --epoch is given")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    add_max_pixels_option(parser)
     return parser
 
 
@@ -78,6 +82,7 @@ def main(argv: list[str]) -> int:
     args = parser.parse_args(argv)
     if args.camera is None and (args.width is None or args.height is None):
         parser.error("--width and --height are required unless --camera gives them")
+    apply_max_pixels_option(args)
     solver_options = {**fov_kwargs(args), "epoch": solver_epoch(args), "method": args.method,
                       "pixel_aspect": aspect_option(args)}
     _check_size(args, solver_options["camera"])
@@ -85,7 +90,9 @@ def main(argv: list[str]) -> int:
     flux = stars.get("flux")
     if flux is None and "mag" in stars:
         flux = -stars["mag"]
-    ensure_database_for(solver_options["fov_deg"], solver_options["fov_range_deg"], solver_options["camera"])
+    fov_options = {key: solver_options[key] for key in ("fov_deg", "fov_range_deg", "camera")}
+    ensure_database_for(**fov_options)
+    warm_up(**fov_options)  # the compiled kernels loaded (or compiled, with a message) outside the solve time
     try:
         solution = solve_stars(stars["x"], stars["y"], width=args.width, height=args.height, flux=flux,
                                **solver_options)
@@ -95,8 +102,11 @@ def main(argv: list[str]) -> int:
 
 
 def _check_size(args: argparse.Namespace, camera) -> None:
-    """With --camera, --width / --height may be given only if they agree with the preset."""
+    """The image size within --max-pixels; with --camera, --width / --height only if they agree."""
+    from ..io.limits import check_image_size
+
     if camera is None:
+        check_image_size(args.width, args.height, None, "--width x --height")
         return
     for name, given, size in (("--width", args.width, camera.width), ("--height", args.height, camera.height)):
         if given is not None and given != size:

@@ -1,0 +1,123 @@
+"""startrack warm-up: compile the solver's kernels and build the default pattern database now.
+
+After an install (or an upgrade that changed a kernel) numba compiles startrack's compiled loops
+once and caches them (see :mod:`startrack.numba_cache`); the pattern database is built once per
+field-of-view range and cached (:mod:`startrack.identify.database`). Run this at set-up time so
+that no later command waits for either. The solving commands also warm up before their first
+solve (:func:`warm_up`): a star list of catalog stars is solved, so that compiling, or loading
+the compiled code from the cache, never falls inside a reported solve time, and when numba does
+compile they say so first ("compiling ... (one time ...)") on standard error.
+
+Exit status 0, 2 on a bad option.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+
+from ..camera import Camera
+
+COMPILE_ESTIMATE_S = 15
+"""What compiling every kernel takes on the 2-core reference machine (measured by
+``benchmarks/startup_benchmark.py --cold``), for the message."""
+
+
+class _CompileNotice:
+    """A numba event listener that prints one line when the first compilation starts."""
+
+    def __init__(self) -> None:
+        from numba.core import event
+
+        class Listener(event.Listener):
+            def on_start(inner, ev) -> None:  # noqa: N805 - the outer object holds the state
+                self.started()
+
+            def on_end(inner, ev) -> None:  # noqa: N805
+                pass
+
+        self.listener, self.t0 = Listener(), None
+
+    def started(self) -> None:
+        if self.t0 is None:
+            self.t0 = time.perf_counter()
+            sys.stderr.write(f"compiling startrack's solver kernels (one time after an install, about "
+                             f"{COMPILE_ESTIMATE_S} s) ...\n")
+            sys.stderr.flush()
+
+    def finished(self) -> None:
+        if self.t0 is not None:
+            sys.stderr.write(f"compiled in {time.perf_counter() - self.t0:.1f} s; cached for later runs\n")
+            sys.stderr.flush()
+
+
+def _warm_up_fov_deg(fov_deg: float | None, fov_range_deg: tuple[float, float] | None,
+                     camera: Camera | None) -> float:
+    """The field of view of the warm-up star list: the one the command will search (deg)."""
+    from ..identify.registry import DEFAULT_FOV_RANGE_DEG
+
+    if camera is not None:
+        return camera.fov_deg
+    if fov_deg is not None:
+        return fov_deg
+    lo, hi = fov_range_deg or DEFAULT_FOV_RANGE_DEG
+    return math.sqrt(lo * hi)
+
+
+def solve_catalog_stars(fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
+                        camera: Camera | None = None) -> None:
+    """Solve the 30 brightest catalog stars a camera pointed at RA 90, Dec 30 deg sees, with the
+    field-of-view options of the command (so the same pattern database is used)."""
+    import numpy as np
+
+    from ..catalog import load_catalog
+    from ..frames import radec_to_vector, rotation_from_radec_roll
+    from ..solve import solve_stars
+
+    catalog = load_catalog()
+    view = camera or Camera.from_fov(1024, 1024, _warm_up_fov_deg(fov_deg, fov_range_deg, None))
+    rot = rotation_from_radec_roll(math.radians(90.0), math.radians(30.0), 0.0)
+    vectors = rot.apply(radec_to_vector(catalog.ra_rad, catalog.dec_rad))
+    ahead = vectors[:, 2] > math.cos(math.radians(view.fov_diagonal_deg / 2))
+    x, y = view.vector_to_pixel(vectors[ahead])
+    seen = np.flatnonzero(view.in_image(x, y, margin_px=2.0))
+    order = seen[np.argsort(catalog.v_mag[ahead][seen], kind="stable")[:30]]
+    options = {"camera": camera} if camera is not None else {"fov_deg": fov_deg, "fov_range_deg": fov_range_deg}
+    solve_stars(x[order], y[order], width=view.width, height=view.height, **options)
+
+
+def warm_up(fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
+            camera: Camera | None = None) -> None:
+    """Load (or, the first time, compile with a message on stderr) the solver's compiled kernels
+    by solving catalog stars with these field-of-view options (checked, as the solvers take them)."""
+    from numba.core import event
+
+    notice = _CompileNotice()
+    with event.install_listener("numba:compile", notice.listener):
+        solve_catalog_stars(fov_deg, fov_range_deg, camera)
+    notice.finished()
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="startrack warm-up", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--fov-range-deg", type=float, nargs=2, metavar=("LO", "HI"),
+                        help="also build the database for this range of fields of view, deg "
+                             "(default: the range a solve with no field of view searches)")
+    return parser
+
+
+def main(argv: list[str]) -> int:
+    from .common import fov_kwargs
+    from .progress import ensure_database_for
+
+    args = _parser().parse_args(argv)
+    args.fov_deg = args.camera = None
+    options = fov_kwargs(args)
+    t0 = time.perf_counter()
+    ensure_database_for(**options)
+    warm_up(**options)
+    print(f"startrack is ready: database and compiled kernels loaded in {time.perf_counter() - t0:.1f} s")
+    return 0
