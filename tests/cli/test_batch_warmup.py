@@ -1,0 +1,53 @@
+"""The warm-up before the first solve: numba compiling is announced once on stderr, and the
+warm-up star list (catalog stars through a camera of the command's field of view) solves."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+from numba.core import event
+
+from startrack.cli.batch_warmup import _CompileNotice, _warm_up_fov_deg
+from startrack.cli.progress import ensure_database_for
+from startrack.solve import solve_stars
+
+
+def test_compiling_is_announced_once(capsys):
+    notice = _CompileNotice()
+
+    @njit  # not cached: compiled at its first call in every process
+    def twice(a):
+        return 2 * a
+
+    with event.install_listener("numba:compile", notice.listener):
+        twice(np.arange(3.0))
+        twice(np.arange(3))  # a second signature compiles again, without a second message
+    notice.finished()
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 2
+    assert err[0].startswith("compiling startrack's solver kernels (one time after an install")
+    assert err[1].startswith("compiled in ")
+
+
+def test_nothing_said_without_compiling(capsys):
+    notice = _CompileNotice()
+    with event.install_listener("numba:compile", notice.listener):
+        pass
+    notice.finished()
+    assert capsys.readouterr().err == ""
+
+
+def test_warm_up_field_is_the_searched_one():
+    assert _warm_up_fov_deg(12.0, None, None) == 12.0
+    assert _warm_up_fov_deg(None, (5.0, 20.0), None) == 10.0  # geometric mean, deg
+
+
+def test_warm_up_star_list_solves(monkeypatch):
+    import startrack.cli.batch_warmup as warmup
+
+    solved = []
+    monkeypatch.setattr("startrack.solve.solve_stars", lambda *a, **k: solved.append(solve_stars(*a, **k)))
+    ensure_database_for(fov_range_deg=(5.0, 35.0))
+    warmup.warm_up(fov_range_deg=(5.0, 35.0))
+    assert len(solved) == 1 and solved[0].solved
+    assert abs(solved[0].ra_deg - 90.0) < 0.01 and abs(solved[0].dec_deg - 30.0) < 0.01  # deg
