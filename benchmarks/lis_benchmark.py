@@ -11,22 +11,35 @@ methods take turns on chunks of ``--interleave`` lists, so a drift of the machin
 a long run (seen on shared VMs) does not favour whichever ran first.
 Results (the table and per-trial arrays) are saved as JSON under ``benchmarks/results/``.
 
+``--easy`` replaces the lists by easy ones: the 25 brightest stars, 0.1 px of noise, none
+missing, no false stars, no magnitude noise. ``--clock cpu`` times every solve (ours and
+cedar-solve's) by the CPU time of the solving thread (``time.thread_time``) instead of the wall
+clock, so that other work on a shared machine does not count; ``--pin`` runs startrack on CPU 0
+and cedar-solve on CPU 1 (Linux affinity, the peer process inherits it). ``--stages`` splits
+startrack's CPU time per solve into its stages (request, look-up, confirmation, final fit and
+its refits and re-matches, covariance, the rest of building the solution) and prints the
+medians. The load average before and after is printed under the table.
+
 Usage::
 
     python benchmarks/lis_benchmark.py [--trials 300] [--seed 1] [--fov-deg 10 15 20]
                                        [--fov-range 5 35] [--no-range] [--no-hint] [--no-peer]
-                                       [--interleave 1000]
+                                       [--interleave 1000] [--easy] [--clock {wall,cpu}] [--pin]
+                                       [--stages]
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
 import platform
 import sys
+import tempfile
 import time
+import types
 from datetime import datetime
 from pathlib import Path
 
@@ -34,6 +47,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import methods  # noqa: E402
 from methods import FovKnowledge, MethodRun, concatenate_runs, solve_cedar, solve_ours  # noqa: E402
 
 from startrack.analysis.scoring import (  # noqa: E402
@@ -51,8 +65,9 @@ from startrack.units import ARCSEC  # noqa: E402
 LIS_MATCHERS = [name for name in MATCHERS if name != "overlay"]
 
 RESULTS_DIR = Path(__file__).resolve().parent / "results"
-HEADER = (f"{'method':<22} {'condition':<20} {'trials':>6} {'success':>8} {'false #':>7} "
-          f"{'median ms':>10} {'p95 ms':>8} {'x cedar med':>11} {'x cedar p95':>11} {'db MiB':>7}")
+HEADER = (f"{'method':<22} {'condition':<25} {'trials':>6} {'success':>8} {'false #':>7} "
+          f"{'median ms':>10} {'p95 ms':>8} {'p99 ms':>8} {'x cedar med':>11} {'x cedar p95':>11} {'x cedar p99':>11} "
+          f"{'db MiB':>7}")
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -77,6 +92,13 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--interleave", type=int, default=1000,
                         help="methods take turns on chunks of this many lists (default 1000)")
     parser.add_argument("--progress", type=int, default=100, help="progress line every N trials")
+    parser.add_argument("--easy", action="store_true",
+                        help="easy lists: the 25 brightest stars, 0.1 px noise, none missing or false")
+    parser.add_argument("--clock", choices=("wall", "cpu"), default="wall",
+                        help="time solves by the wall clock (default) or the solving thread's CPU time")
+    parser.add_argument("--pin", action="store_true", help="startrack on CPU 0, cedar-solve on CPU 1")
+    parser.add_argument("--stages", action="store_true",
+                        help="print the median CPU time of startrack's stages per solve")
     parser.add_argument("--out", type=Path, default=None,
                         help="JSON file (default: results/lis-*.json)")
     return parser.parse_args(argv)
@@ -106,14 +128,63 @@ def run_methods(lists, conditions, knowledge, args, skip_ours: str | None) -> li
 
 def _run_chunk(lists, conditions, knowledge, args, skip_ours: str | None) -> list[MethodRun]:
     runs = []
-    for matcher in ([] if skip_ours else args.matchers):
-        if matcher != "quads" and knowledge.fov_deg is None:
-            continue  # the pair-directory matchers need a known field of view
-        runs.append(solve_ours_measured(lists, conditions, knowledge, args, matcher))
-    if not args.no_peer:
-        runs.append(solve_cedar(lists, conditions, knowledge, timeout_ms=args.cedar_timeout_ms,
-                                progress=args.progress))
+    with _clock(args.clock):
+        for matcher in ([] if skip_ours else args.matchers):
+            if matcher != "quads" and knowledge.fov_deg is None:
+                continue  # the pair-directory matchers need a known field of view
+            with _on_cpu(0 if args.pin else None):
+                runs.append(solve_ours_measured(lists, conditions, knowledge, args, matcher))
+        if not args.no_peer:
+            with _on_cpu(1 if args.pin else None):
+                runs.append(solve_cedar(lists, conditions, knowledge, timeout_ms=args.cedar_timeout_ms,
+                                        progress=args.progress))
     return runs
+
+
+CEDAR_CPU_RUNNER = """import sys, time, types
+sys.path.insert(0, {peers!r})
+import cedar_runner
+cedar_runner.time = types.SimpleNamespace(perf_counter=time.thread_time)
+sys.exit(cedar_runner.main())
+"""
+"""cedar-solve's runner with its solve clock (``time.perf_counter`` around ``solve_from_centroids``
+alone) read from the solving thread's CPU time instead."""
+
+
+@contextlib.contextmanager
+def _clock(kind: str):
+    """While inside, ``methods`` and cedar-solve's runner time each solve by ``kind``: "wall"
+    (``time.perf_counter``, as they do) or "cpu" (``time.thread_time`` of the solving thread).
+    Both read ``time.perf_counter`` around the solver call alone; "cpu" gives them a clock module
+    whose ``perf_counter`` is ``thread_time``."""
+    if kind == "wall":
+        yield
+        return
+    from peers import cedar_env
+
+    saved = methods.time, cedar_env.RUNNER
+    with tempfile.TemporaryDirectory() as tmp:
+        runner = Path(tmp) / "cedar_cpu_runner.py"
+        runner.write_text(CEDAR_CPU_RUNNER.format(peers=str(Path(cedar_env.__file__).parent)))
+        methods.time, cedar_env.RUNNER = types.SimpleNamespace(perf_counter=time.thread_time), runner
+        try:
+            yield
+        finally:
+            methods.time, cedar_env.RUNNER = saved
+
+
+@contextlib.contextmanager
+def _on_cpu(cpu: int | None):
+    """This process (and the processes it starts) on one CPU while inside (None: unchanged)."""
+    if cpu is None or not hasattr(os, "sched_setaffinity"):
+        yield
+        return
+    saved = os.sched_getaffinity(0)
+    os.sched_setaffinity(0, {cpu % os.cpu_count()})
+    try:
+        yield
+    finally:
+        os.sched_setaffinity(0, saved)
 
 
 def _loaded_tables() -> set:
@@ -174,6 +245,7 @@ def score_runs(runs: list[MethodRun], lists, conditions: Conditions, label: str)
         err_arcsec = [None if math.isnan(e) else e / ARCSEC for e in err]
         row["trials"] = {"solved": run.solved.tolist(), "time_ms": (run.time_s * 1e3).tolist(),
                          "err_arcsec": err_arcsec}
+        row["p99_ms"] = float(np.percentile(run.time_s, 99) * 1e3) if run.time_s.size else math.nan
         if "roll_deg" in run.extra:
             row.update(roll_check(truths, run, err <= tol))
         row["database_mib"] = run.extra.get("database_mib", run.extra.get("database", {}).get("file_bytes", 0) / 2**20)
@@ -198,19 +270,21 @@ def roll_check(truths, run: MethodRun, good) -> dict:
 
 
 def add_ratios(rows: list[dict]) -> None:
-    """Ours / cedar-solve for the median and 95th-percentile times, on startrack's row."""
+    """Ours / cedar-solve for the median, 95th- and 99th-percentile times, on startrack's row."""
     peer = next((r for r in rows if r["method"] == "cedar-solve"), None)
     for row in rows:
         if peer is not None and row["method"] != "cedar-solve":
             row["ratio_median"] = row["median_ms"] / peer["median_ms"]
             row["ratio_p95"] = row["p95_ms"] / peer["p95_ms"]
+            row["ratio_p99"] = row["p99_ms"] / peer["p99_ms"]
 
 
 def format_row(row: dict) -> str:
-    ratio = (f"{row['ratio_median']:>11.2f} {row['ratio_p95']:>11.2f}" if "ratio_median" in row
-             else f"{'':>11} {'':>11}")
-    return (f"{row['method']:<22} {row['condition']:<20} {row['n']:>6} {row['success_rate']:>8.2%} "
-            f"{round(row['false_rate'] * row['n']):>7d} {row['median_ms']:>10.2f} {row['p95_ms']:>8.2f} {ratio} "
+    ratio = (f"{row['ratio_median']:>11.2f} {row['ratio_p95']:>11.2f} {row['ratio_p99']:>11.2f}"
+             if "ratio_median" in row else f"{'':>11} {'':>11} {'':>11}")
+    return (f"{row['method']:<22} {row['condition']:<25} {row['n']:>6} {row['success_rate']:>8.2%} "
+            f"{round(row['false_rate'] * row['n']):>7d} {row['median_ms']:>10.2f} {row['p95_ms']:>8.2f} "
+            f"{row['p99_ms']:>8.2f} {ratio} "
             f"{row.get('database_mib', 0.0):>7.1f}")
 
 
@@ -233,10 +307,13 @@ def save_json(path: Path | None, payload: dict) -> Path:
 
 
 def table_notes(rows: list[dict], skip_ours: str | None, peer_db: dict | None,
-                loads: tuple[float, float]) -> list[str]:
+                loads: tuple[float, float], args: argparse.Namespace) -> list[str]:
     """The lines printed under the table: definitions, machine load, roll check, peer database."""
+    clock = ("CPU time of the solving thread (time.thread_time)" if args.clock == "cpu"
+             else "wall clock (time.perf_counter)")
     notes = [f"success: attitude error < {TOLERANCE_PIXELS:g} pixel angles; false: solved outside"
              " it; times over all trials, after one warm-up solve",
+             f"times: {clock}{'; startrack on CPU 0, cedar-solve on CPU 1' if args.pin else ''}",
              "x cedar: startrack's time / cedar-solve's on the same lists",
              f"load average before / after: {loads[0]:.2f} / {loads[1]:.2f} on {os.cpu_count()} "
              "cores (other work on the machine slows both methods)"]
@@ -253,6 +330,101 @@ def table_notes(rows: list[dict], skip_ours: str | None, peer_db: dict | None,
     return notes
 
 
+EASY = {"sigma_px_range": (0.1, 0.1), "missing_fraction_range": (0.0, 0.0), "false_stars_range": (0, 0),
+        "mag_noise": 0.0, "max_stars": 25}
+"""The easy lists of ``--easy``: the 25 brightest stars with 0.1 px of noise, nothing missing or false."""
+
+STAGES = (("request", "startrack.solve", "build_request"),
+          ("look-up", "startrack.identify.quad_matcher", "search_batch"),
+          ("confirmation", "startrack.identify.confirm", "Confirmer.confirm"),
+          ("final fit", "startrack.solve", "settle_matches"),
+          ("  refits", "startrack.identify.final_fit", "fit_pose"),
+          ("  deleted residuals", "startrack.identify.final_fit", "leave_one_out_residuals"),
+          ("  catalog choice", "startrack.identify.final_fit", "_Catalog.chosen"),
+          ("  re-match", "startrack.identify.final_fit", "rematch"),
+          ("solution", "startrack.solve", "_solution"),
+          ("  covariance", "startrack.solve", "covariance_batch"))
+"""Stages of a startrack solve timed by ``--stages``: (label, module, function or Class.method);
+each is timed inclusively (a stage's time holds the stages indented under it), one missing from
+the code is skipped."""
+
+
+class StageTimer:
+    """CPU time (``time.thread_time``, s) of each of :data:`STAGES` per ``solve_stars`` call, by
+    wrapping those functions while inside ``with`` (the real functions run; the wrappers only read
+    the clock). ``solves`` holds one dict {label: s} per solve, with "total"."""
+
+    def __init__(self) -> None:
+        self.solves: list[dict[str, float]] = []
+        self._current: dict[str, float] = {}
+        self._stack = contextlib.ExitStack()
+
+    def _timed(self, label: str, func):
+        def wrapper(*a, **k):
+            t0 = time.thread_time()
+            try:
+                return func(*a, **k)
+            finally:
+                self._current[label] = self._current.get(label, 0.0) + time.thread_time() - t0
+        return wrapper
+
+    def _solve(self, func):
+        def wrapper(*a, **k):
+            self._current = {}
+            out = self._timed("total", func)(*a, **k)
+            self.solves.append(self._current)
+            return out
+        return wrapper
+
+    def _patch(self, owner, name: str, new) -> None:
+        old = owner.__dict__[name] if isinstance(owner, type) else getattr(owner, name)
+        setattr(owner, name, new)
+        self._stack.callback(setattr, owner, name, old)
+
+    def __enter__(self) -> StageTimer:
+        import importlib
+
+        self._patch(methods, "solve_stars", self._solve(methods.solve_stars))
+        for label, module, name in STAGES:
+            owner, *attr = [importlib.import_module(module), *name.split(".")]
+            for part in attr[:-1]:
+                owner = getattr(owner, part, None)
+            raw = (getattr(owner, "__dict__", {}).get(attr[-1]) if isinstance(owner, type)
+                   else getattr(owner, attr[-1], None))
+            if raw is None:
+                continue
+            if isinstance(raw, classmethod):
+                self._patch(owner, attr[-1], classmethod(self._timed(label, raw.__func__)))
+            else:
+                self._patch(owner, attr[-1], self._timed(label, raw))
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stack.close()
+
+    def lines(self, title: str) -> list[str]:
+        """The table: median and mean ms per solve of each stage, and its share of the mean total."""
+        if not self.solves:
+            return []
+        labels = ["total"] + [label for label, _, _ in STAGES if any(label in s for s in self.solves)]
+        total = np.mean([s["total"] for s in self.solves])
+        out = [f"startrack stages, {title} ({len(self.solves)} solves, CPU time of the thread)",
+               f"  {'stage':<22} {'median ms':>10} {'mean ms':>8} {'share':>6}"]
+        for label in labels:
+            values = np.array([s.get(label, 0.0) for s in self.solves])
+            out.append(f"  {label:<22} {np.median(values) * 1e3:>10.3f} {values.mean() * 1e3:>8.3f} "
+                       f"{values.mean() / total:>6.1%}")
+        solution = np.array([s.get("solution", 0.0) - s.get("final fit", 0.0) for s in self.solves])
+        out.append(f"  {'  (assembly)':<22} {np.median(solution) * 1e3:>10.3f} {solution.mean() * 1e3:>8.3f} "
+                   f"{solution.mean() / total:>6.1%}")
+        return out
+
+
+def conditions_for(fov_deg: float, args: argparse.Namespace) -> Conditions:
+    """The benchmark's lists for one field of view (the easy ones with ``--easy``)."""
+    return Conditions(fov_deg=fov_deg, **(EASY if args.easy else {}))
+
+
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     skip_ours = "--no-ours given" if args.no_ours else None
@@ -260,15 +432,21 @@ def main(argv: list[str] | None = None) -> int:
     rows: list[dict] = []
     peer_db: dict | None = None
     t0 = time.perf_counter()
+    stage_lines: list[str] = []
     for fov_deg in args.fov_deg:
-        conditions = Conditions(fov_deg=fov_deg)
+        conditions = conditions_for(fov_deg, args)
         lists = generate_star_lists(conditions, args.trials, args.seed, sky=load_sky(conditions))
         for knowledge in knowledge_list(fov_deg, args):
-            runs = run_methods(lists, conditions, knowledge, args, skip_ours)
+            label = f"{'easy ' if args.easy else ''}{knowledge.label}"
+            with StageTimer() if args.stages else contextlib.nullcontext() as timer:
+                runs = run_methods(lists, conditions, knowledge, args, skip_ours)
+            stage_lines.extend(timer.lines(f"{conditions.name} {label}") if timer else [])
             peer_db = next((r.extra["database"] for r in runs if "database" in r.extra), peer_db)
-            rows.extend(score_runs(runs, lists, conditions, knowledge.label))
+            rows.extend(score_runs(runs, lists, conditions, label))
     loads = (load_before, os.getloadavg()[0])
-    print_table(rows, table_notes(rows, skip_ours, peer_db, loads))
+    print_table(rows, table_notes(rows, skip_ours, peer_db, loads, args))
+    for line in stage_lines:
+        print(line)
     payload = {"args": vars(args), "python": platform.python_version(),
                "machine": platform.machine(), "wall_s": time.perf_counter() - t0,
                "load_average_before_after": list(loads), "cedar_database": peer_db, "rows": rows}

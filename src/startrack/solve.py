@@ -15,16 +15,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
-from .attitude.covariance import covariance_batch
 from .camera import Camera
 from .catalog import load_catalog
 from .errors import InvalidInputError
-from .frames import angle_between, radec_roll_from_rotation
 from .identify.candidate import Candidate
 from .identify.field_stars import FieldStars
 from .identify.final_fit import settle_matches
 from .identify.image_epoch import DEFAULT_EPOCH_JYEAR, epoch_jyear, resolve_epoch
-from .identify.refine import wahba_equal_weights
+from .identify.refine import solution_terms
 from .identify.registry import DEFAULT_FOV_RANGE_DEG, MATCHERS, prepare_matcher
 from .identify.request import FOV_DEG_TOLERANCE, SolveRequest, build_request, check_fov_deg
 from .identify.request import star_arrays as _star_arrays  # noqa: F401 (startrack.multihead checks heads with it)
@@ -37,31 +35,33 @@ __all__ = ["DEFAULT_EPOCH_JYEAR", "DEFAULT_FOV_RANGE_DEG", "FOV_DEG_TOLERANCE", 
 
 def _solution(problem: SolveRequest, stars: FieldStars, cand: Candidate, t0: float) -> AttitudeSolution:
     """The solution from a verified candidate: refined fit, then the Wahba attitude of all matched
-    stars (Davenport's q-method: the same optimum as QUEST; one compiled 4 x 4 eigen-decomposition,
-    :func:`.identify.refine.wahba_equal_weights`; both solvers are in :mod:`startrack.attitude`) with the
-    QUEST measurement-model covariance (seed 000 §6.1.3)."""
+    stars (Davenport's q-method: the same optimum as QUEST) with the QUEST measurement-model
+    covariance (seed 000 §6.1.3), residuals and RA / Dec / roll, in one compiled call
+    (:func:`.identify.refine.solution_terms`; the solvers and the covariance are in
+    :mod:`startrack.attitude`). The attitude is a rotation matrix inside; the one Rotation is the
+    solution's."""
     fit = settle_matches(problem.x, problem.y, stars, cand, problem.focal_range, fit_aspect=problem.fit_aspect)
     camera, img, rows, ref, res_px = fit.camera, fit.image_index, fit.catalog_rows, fit.ref_icrs, fit.residual_px
     observed = camera.pixel_to_vector(problem.x[img], problem.y[img])
     usable = np.isfinite(observed).all(axis=1)  # a star where a fitted wide lens cannot be inverted: left out
     if not usable.all():
         img, rows, ref, res_px, observed = img[usable], rows[usable], ref[usable], res_px[usable], observed[usable]
-    n = len(img)
-    sigma_rad = max(math.sqrt(float(res_px @ res_px) / n), 0.05) / math.sqrt(camera.fx * camera.fy)
-    quat, matrix = wahba_equal_weights(observed, ref)
-    rot = Rotation.from_quat(quat)
-    residuals = angle_between(ref @ matrix.T, observed) / ARCSEC
-    ra, dec, roll = radec_roll_from_rotation(rot)
+    sigma_rad = max(math.sqrt(float(res_px @ res_px) / len(img)), 0.05) / math.sqrt(camera.fx * camera.fy)
+    quat, _, residual_rad, covariance, (ra, dec, roll) = solution_terms(observed, ref, sigma_rad)  # >= 3 stars
     matches = StarMatches(status=Status.OK, det_index=problem.rows[img].astype(np.int64),
-                          hip=load_catalog().hip[rows].astype(np.int64), cat_vectors=ref,
+                          hip=_hip()[rows].astype(np.int64), cat_vectors=ref,
                           false_match_prob=cand.false_match_prob)
     return AttitudeSolution(
-        status=Status.OK, rot_cam_from_icrs=rot,
-        covariance_rad2=covariance_batch(observed[None], np.full((1, n), sigma_rad))[0],  # >= 3 stars, spread
+        status=Status.OK, rot_cam_from_icrs=Rotation.from_quat(quat), covariance_rad2=covariance,
         ra_deg=math.degrees(ra), dec_deg=math.degrees(dec), roll_deg=math.degrees(roll),
-        fov_deg=camera.fov_deg, camera=camera, matches=matches, residuals_arcsec=residuals,
+        fov_deg=camera.fov_deg, camera=camera, matches=matches, residuals_arcsec=residual_rad / ARCSEC,
         false_match_prob=cand.false_match_prob, solve_time_s=time.perf_counter() - t0,
         epoch_jyear=problem.epoch.jyear, epoch_source=problem.epoch.source)
+
+
+def _hip() -> np.ndarray:
+    """Hipparcos numbers of the catalog's rows (:func:`startrack.catalog.load_catalog`)."""
+    return load_catalog().hip
 
 
 def _run(problem: SolveRequest, method: str, options: object | None) -> AttitudeSolution:

@@ -32,7 +32,7 @@ from scipy.spatial.transform import Rotation
 from ..camera import Camera
 from .candidate import Candidate
 from .field_stars import FieldStars
-from .refine import fit_pose, leave_one_out_residuals
+from .refine import fit_pose, leave_one_out_residuals, match_predicted, stars_in_cone
 from .verify import match_nearest
 
 MAX_REFINE_ROUNDS = 4
@@ -193,19 +193,36 @@ class _Catalog:
         the boresight: a selection that serves any lens bend the k1 scan tries."""
         half_diagonal = math.atan(math.hypot(camera.width / camera.fx, camera.height / camera.fy) / 2.0)
         near = np.sort(field.stars.near(matrix[2], min(1.2 * half_diagonal, math.radians(89.0))))
-        if field.depth is not None:
-            near = near[near < field.depth]
-        near = near[field.stars.brighter_neighbour_rad[near] >= BLEND_PX / camera.fx]
-        return cls(matrix, camera, field.stars.rows[near], field.stars.vectors[near])
+        return cls._kept(field, matrix, camera, near)
 
     @classmethod
     def chosen(cls, field: _Field, matrix: NDArray, camera: Camera) -> _Catalog:
-        """The catalog stars within reach of the image stars at this pose."""
+        """The catalog stars within reach of the image stars at this pose: those (to the field's
+        depth, not blended) of the cone around the boresight that holds the whole image and the
+        reach (:func:`_image_reach_rad`; one compiled pass, :func:`.refine.stars_in_cone`), or, for
+        a lens whose corner cannot be inverted or a deep catalog (:data:`CONE_SCAN_LIMIT`), those
+        near each image star."""
+        count = len(field.stars.rows) if field.depth is None else min(field.depth, len(field.stars.rows))
+        reach_rad = _image_reach_rad(camera)
+        if count > CONE_SCAN_LIMIT or not math.isfinite(reach_rad):
+            return cls.around_stars(field, matrix, camera)
+        near = stars_in_cone(field.stars.vectors, count, matrix[2], reach_rad, field.stars.brighter_neighbour_rad,
+                             BLEND_PX / camera.fx)
+        return cls(matrix, camera, field.stars.rows[near], field.stars.vectors[near])
+
+    @classmethod
+    def around_stars(cls, field: _Field, matrix: NDArray, camera: Camera) -> _Catalog:
+        """The catalog stars within reach of some image star at this pose."""
         directions = camera.pixel_to_vector(field.x, field.y) @ matrix  # ICRS unit vectors (N, 3)
         reach_px = REMATCH_RADIUS_PX + SELECT_MARGIN_PX
         near = field.stars.around(directions, ANGLE_PER_PIXEL_SAFETY * reach_px / min(camera.fx, camera.fy))
+        return cls._kept(field, matrix, camera, near)
+
+    @classmethod
+    def _kept(cls, field: _Field, matrix: NDArray, camera: Camera, near: NDArray) -> _Catalog:
+        """The stars ``near`` (indices into the field's stars, sorted) within the depth and not blended."""
         if field.depth is not None:
-            near = near[near < field.depth]  # indices are brightness ranks
+            near = near[:np.searchsorted(near, field.depth)]  # indices are brightness ranks
         near = near[field.stars.brighter_neighbour_rad[near] >= BLEND_PX / camera.fx]
         return cls(matrix, camera, field.stars.rows[near], field.stars.vectors[near])
 
@@ -214,15 +231,47 @@ class _Catalog:
         return _pose_shift_px(self.matrix, self.camera, matrix, camera) <= SELECT_MARGIN_PX
 
 
+CONE_SCAN_LIMIT = 60_000
+"""The catalog stars of a re-match are chosen by a scan of the field's brightest stars (to its
+depth) when there are at most this many; a deeper catalog (a narrow field) is searched near each
+image star through the KD-tree."""
+
+CONE_PAIRS_LIMIT = 200_000
+"""A re-match compares every image star with every catalog star it considers (compiled,
+:func:`.refine.match_predicted`) when there are at most this many pairs; beyond, the catalog
+stars are chosen near each image star and paired through KD-trees (:func:`.verify.match_nearest`)."""
+
+
+def _image_reach_rad(camera: Camera) -> float:
+    """Largest angle (radians) from the boresight of a direction the image shows, plus the reach
+    of a re-match (REMATCH_RADIUS_PX + SELECT_MARGIN_PX, times ANGLE_PER_PIXEL_SAFETY): the angle
+    of the farthest image corner (through the lens model when there is one). NaN when the lens
+    model cannot invert a corner."""
+    w, h = camera.width - 0.5, camera.height - 0.5
+    if camera.has_distortion:
+        corners = camera.pixel_to_vector(np.array([-0.5, w, -0.5, w]), np.array([-0.5, -0.5, h, h]))
+        corner_rad = float(np.max(np.arctan2(np.hypot(corners[:, 0], corners[:, 1]), corners[:, 2])))
+    else:
+        corner_rad = max(math.atan(math.hypot((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy))
+                         for u in (-0.5, w) for v in (-0.5, h))
+    reach_px = REMATCH_RADIUS_PX + SELECT_MARGIN_PX
+    return corner_rad + ANGLE_PER_PIXEL_SAFETY * reach_px / min(camera.fx, camera.fy)
+
+
 def rematch(field: _Field, catalog: _Catalog, matrix_cam_from_icrs: NDArray,
             camera: Camera) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
     """Match every image star to its nearest predicted catalog star (of ``catalog``) within
     :data:`REMATCH_RADIUS_PX`, for an attitude matrix (3, 3) taking ICRS to camera vectors:
-    image index (K,), catalog row (K,) and the row's ICRS unit vector (K, 3)."""
-    px, py = camera.vector_to_pixel(catalog.vectors @ matrix_cam_from_icrs.T)
-    inside = np.flatnonzero(camera.in_image(px, py))
-    img_i, cat_i = match_nearest(field.x, field.y, px[inside], py[inside], REMATCH_RADIUS_PX)
-    near_i = inside[cat_i]
+    image index (K,), catalog row (K,) and the row's ICRS unit vector (K, 3). Closest pairs
+    first, each star once (as :func:`.verify.match_nearest`)."""
+    if field.x.size * catalog.rows.size <= CONE_PAIRS_LIMIT:
+        img_i, near_i = match_predicted(catalog.vectors, matrix_cam_from_icrs, camera, field.x, field.y,
+                                        REMATCH_RADIUS_PX)
+    else:
+        px, py = camera.vector_to_pixel(catalog.vectors @ matrix_cam_from_icrs.T)
+        inside = np.flatnonzero(camera.in_image(px, py))
+        img_i, cat_i = match_nearest(field.x, field.y, px[inside], py[inside], REMATCH_RADIUS_PX)
+        near_i = inside[cat_i]
     return img_i, catalog.rows[near_i], catalog.vectors[near_i]
 
 

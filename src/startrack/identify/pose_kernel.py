@@ -347,3 +347,138 @@ def _quat_matrix(q):
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+@njit(cache=True)
+def rematch_pairs(vectors, matrix, fx, fy, cx, cy, dist, width, height, x, y, radius_px):
+    """Image stars matched to catalog stars, each used once, closest pairs first (as
+    :func:`.verify.match_nearest` on the catalog stars predicted inside the image).
+
+    ``vectors`` (S, 3) are ICRS unit vectors, ``matrix`` (3, 3) takes them to camera vectors; the
+    camera has focal lengths ``fx``, ``fy``, principal point ``cx``, ``cy`` (pixels), distortion
+    ``dist`` (5,) and a ``width`` x ``height`` image (pixel centres 0 ... width - 1, edges at
+    -0.5 and width - 0.5, as :meth:`startrack.camera.Camera.in_image`). ``x``, ``y`` (N,) are the
+    image stars (pixels). Returns (image index (K,), catalog index into ``vectors`` (K,)),
+    closest pair first; only pairs within ``radius_px`` are formed.
+    """
+    s = vectors.shape[0]
+    px, py, inside = np.empty(s), np.empty(s), np.empty(s, np.int64)
+    m = 0
+    for c in range(s):
+        v0, v1, v2 = _times(matrix, vectors, c)
+        if not v2 > 0.0:
+            continue  # behind the image plane
+        inv_z = 1.0 / v2
+        _, _, ad, bd, _, _, _, _ = _project(v0 * inv_z, v1 * inv_z, 1.0, dist)
+        u, w = cx + fx * ad, cy + fy * bd
+        if u >= -0.5 and w >= -0.5 and u <= width - 0.5 and w <= height - 0.5:
+            px[m], py[m], inside[m] = u, w, c
+            m += 1
+    return _closest_pairs(x, y, px[:m], py[:m], inside[:m], radius_px)
+
+
+@njit(cache=True)
+def _times(matrix, vectors, i):
+    """``matrix`` (3, 3) times row i of ``vectors`` (S, 3), as three floats."""
+    x, y, z = vectors[i, 0], vectors[i, 1], vectors[i, 2]
+    return (matrix[0, 0] * x + matrix[0, 1] * y + matrix[0, 2] * z,
+            matrix[1, 0] * x + matrix[1, 1] * y + matrix[1, 2] * z,
+            matrix[2, 0] * x + matrix[2, 1] * y + matrix[2, 2] * z)
+
+
+@njit(cache=True)
+def _closest_pairs(x, y, px, py, index, radius_px):
+    """Greedy closest-first pairs (each star once) between image stars ``x``, ``y`` (N,) and
+    predicted stars ``px``, ``py`` (M,) within ``radius_px``: (image index, ``index`` of the
+    predicted star), formed in (image, predicted) order and sorted stably by distance."""
+    r2 = radius_px * radius_px
+    k = 0
+    for _ in range(2):  # count the pairs, then fill them in
+        pi, pc, pd = np.empty(k, np.int64), np.empty(k, np.int64), np.empty(k)
+        k = 0
+        for i in range(x.size):
+            xi, yi = x[i], y[i]
+            for j in range(px.size):
+                dx, dy = xi - px[j], yi - py[j]
+                d2 = dx * dx + dy * dy
+                if d2 <= r2:
+                    if k < pi.size:
+                        pi[k], pc[k], pd[k] = i, j, d2
+                    k += 1
+    order = np.argsort(pd, kind="mergesort")
+    taken_i, taken_c = np.zeros(x.size, np.bool_), np.zeros(px.size, np.bool_)
+    out_i, out_c = np.empty(k, np.int64), np.empty(k, np.int64)
+    n = 0
+    for o in order:
+        i, j = pi[o], pc[o]
+        if not taken_i[i] and not taken_c[j]:
+            taken_i[i] = True
+            taken_c[j] = True
+            out_i[n] = i
+            out_c[n] = index[j]
+            n += 1
+    return out_i[:n], out_c[:n]
+
+
+@njit(cache=True)
+def solution_terms(obs, ref, sigma_rad):
+    """What a solution reports of equally weighted vector pairs: the q-method attitude
+    (:func:`q_method`: scalar-last quaternion (4,), matrix (3, 3) with R ref_i ~ obs_i), each
+    pair's residual angle (radians, (N,), ``atan2(|R ref x obs|, R ref . obs)``), the QUEST
+    covariance (3, 3) of the camera-frame attitude error for a common per-axis error
+    ``sigma_rad`` (:func:`startrack.attitude.covariance.covariance_batch`: sigma^2 / N times
+    ``(I - sum w w^T / N)^-1``), and the boresight RA, Dec and roll (radians, as
+    :func:`startrack.frames.radec_roll_from_rotation`)."""
+    quat, matrix = q_method(obs, ref)
+    n = obs.shape[0]
+    residual = np.empty(n)
+    info = np.eye(3)
+    for i in range(n):
+        p0, p1, p2 = _times(matrix, ref, i)
+        cx = p1 * obs[i, 2] - p2 * obs[i, 1]
+        cy = p2 * obs[i, 0] - p0 * obs[i, 2]
+        cz = p0 * obs[i, 1] - p1 * obs[i, 0]
+        residual[i] = math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz),
+                                 p0 * obs[i, 0] + p1 * obs[i, 1] + p2 * obs[i, 2])
+        for j in range(3):
+            for k in range(3):
+                info[j, k] -= obs[i, j] * obs[i, k] / n
+    covariance = np.linalg.inv(info) * (sigma_rad * sigma_rad / n)
+    return quat, matrix, residual, covariance, _radec_roll(matrix)
+
+
+@njit(cache=True)
+def _radec_roll(matrix):
+    """Boresight RA in [0, 2 pi), Dec and roll in [0, 2 pi) (radians) of an ICRS-to-camera matrix
+    (3, 3): the formulas of :func:`startrack.frames.radec_roll_from_rotation`."""
+    x, y, z = matrix[2, 0], matrix[2, 1], matrix[2, 2]
+    ra = _wrap_2pi(math.atan2(y, x))
+    dec = math.atan2(z, math.hypot(x, y))
+    y0, y1, y2 = matrix[1, 0], matrix[1, 1], matrix[1, 2]  # camera +y in ICRS; up is -y
+    sr, cr, sd, cd = math.sin(ra), math.cos(ra), math.sin(dec), math.cos(dec)
+    up_east = y0 * sr - y1 * cr
+    up_north = y0 * sd * cr + y1 * sd * sr - y2 * cd
+    return ra, dec, _wrap_2pi(-math.atan2(up_east, up_north))
+
+
+@njit(cache=True)
+def _wrap_2pi(angle):
+    """An angle (radians) in [0, 2 pi), as :func:`startrack.frames._wrap_2pi`."""
+    two_pi = 2.0 * math.pi
+    wrapped = angle % two_pi
+    return 0.0 if wrapped >= two_pi else wrapped
+
+
+@njit(cache=True)
+def cone_stars(vectors, count, axis, cos_reach, neighbour_rad, min_neighbour_rad):
+    """Indices (ascending) among the first ``count`` rows of ``vectors`` (S, 3; unit) of those
+    whose dot product with the unit vector ``axis`` (3,) is at least ``cos_reach`` and whose
+    ``neighbour_rad`` (S,) is at least ``min_neighbour_rad``."""
+    out = np.empty(count, np.int64)
+    n = 0
+    for i in range(count):
+        dot = vectors[i, 0] * axis[0] + vectors[i, 1] * axis[1] + vectors[i, 2] * axis[2]
+        if dot >= cos_reach and neighbour_rad[i] >= min_neighbour_rad:
+            out[n] = i
+            n += 1
+    return out[:n]

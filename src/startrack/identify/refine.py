@@ -188,10 +188,76 @@ def wahba_equal_weights(observed: NDArray, reference: NDArray) -> tuple[NDArray[
     return _kernel().q_method(_plain(observed), _plain(reference))
 
 
+def match_predicted(ref_icrs: NDArray, matrix_cam_from_icrs: NDArray, camera: Camera, x: NDArray, y: NDArray,
+                    radius_px: float) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Image stars matched to the catalog stars an attitude predicts inside the image, closest pairs
+    first and each star once (:func:`.verify.match_nearest`'s rule; compiled,
+    :func:`.pose_kernel.rematch_pairs`).
+
+    Parameters
+    ----------
+    ref_icrs : ndarray, shape (S, 3)
+        ICRS unit vectors of the catalog stars.
+    matrix_cam_from_icrs : ndarray, shape (3, 3)
+        The attitude, taking ICRS vectors to camera vectors.
+    camera : Camera
+    x, y : ndarray, shape (N,)
+        Image stars (pixels).
+    radius_px : float
+        Largest distance of a pair (pixels).
+
+    Returns
+    -------
+    image_index, catalog_index : ndarray, shape (K,) each
+        Indices into ``x`` and into ``ref_icrs``, closest pair first.
+    """
+    return _kernel().rematch_pairs(_plain(ref_icrs), _plain(matrix_cam_from_icrs), float(camera.fx),
+                                   float(camera.fy), float(camera.cx), float(camera.cy), _distortion(camera),
+                                   float(camera.width), float(camera.height), _plain(x), _plain(y), float(radius_px))
+
+
+def stars_in_cone(vectors: NDArray, count: int, axis: NDArray, radius_rad: float, neighbour_rad: NDArray,
+                  min_neighbour_rad: float) -> NDArray[np.int64]:
+    """Indices (ascending) among the first ``count`` of the unit vectors ``vectors`` (S, 3) of
+    those within ``radius_rad`` of the unit vector ``axis`` (3,) whose ``neighbour_rad`` (S,) is at
+    least ``min_neighbour_rad`` (one compiled pass, :func:`.pose_kernel.cone_stars`)."""
+    return _kernel().cone_stars(vectors, int(count), _plain(axis), math.cos(min(radius_rad, math.pi)),
+                                neighbour_rad, float(min_neighbour_rad))
+
+
+def solution_terms(observed: NDArray, reference: NDArray, sigma_rad: float) -> tuple:
+    """The attitude of equally weighted vector pairs (:func:`wahba_equal_weights`) with what a
+    solution reports of it, in one compiled call (:func:`.pose_kernel.solution_terms`).
+
+    Parameters
+    ----------
+    observed, reference : ndarray, shape (N, 3)
+        Unit vectors, camera frame and ICRS (N >= 3, not all on one great circle).
+    sigma_rad : float
+        1-sigma error of each observed direction per axis (radians).
+
+    Returns
+    -------
+    quat : ndarray, shape (4,)
+        Scalar-last quaternion of R with ``R reference_i ~ observed_i``.
+    matrix : ndarray, shape (3, 3)
+        R.
+    residual_rad : ndarray, shape (N,)
+        Angle between ``R reference_i`` and ``observed_i`` (radians, the stable atan2 form).
+    covariance_rad2 : ndarray, shape (3, 3)
+        QUEST covariance of the attitude error in the camera frame
+        (:func:`startrack.attitude.covariance.covariance_batch`).
+    radec_roll : (float, float, float)
+        Boresight RA, Dec and roll (radians, :func:`startrack.frames.radec_roll_from_rotation`).
+    """
+    return _kernel().solution_terms(_plain(observed), _plain(reference), float(sigma_rad))
+
+
 @functools.cache
 def warm_up_pose() -> None:
     """Compile (or load from the disk cache) the kernels of :func:`fit_pose`,
-    :func:`leave_one_out_residuals` and :func:`wahba_equal_weights`, so that a solve's time does
+    :func:`leave_one_out_residuals`, :func:`wahba_equal_weights`, :func:`match_predicted`,
+    :func:`stars_in_cone` and :func:`solution_terms`, so that a solve's time does
     not include it. Free after the first call."""
     camera = Camera(width=64, height=64, fx=100.0, k1=1e-3)
     x, y = np.array([10.0, 50.0, 30.0, 20.0]), np.array([10.0, 20.0, 50.0, 40.0])
@@ -199,3 +265,6 @@ def warm_up_pose() -> None:
     matrix, camera, _ = fit_pose(np.eye(3), camera, ref, x, y, fit_focal=True)
     leave_one_out_residuals(matrix, camera, ref, x, y, fit_focal=True)
     wahba_equal_weights(camera.pixel_to_vector(x, y), ref)
+    match_predicted(ref, matrix, camera, x, y, 1.0)
+    stars_in_cone(ref, len(ref), matrix[2], 0.1, np.zeros(len(ref)), 0.0)
+    solution_terms(camera.pixel_to_vector(x, y), ref, 1e-4)
