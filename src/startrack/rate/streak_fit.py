@@ -345,6 +345,7 @@ def verdict(p: NDArray, cov: NDArray, flag: int, shape: tuple[int, int]) -> str:
     margin = EDGE_MARGIN_SIGMAS * blur
     if np.any((ends < margin) | (ends > np.array([shape[1], shape[0]]) - 1 - margin)):
         return "an end at the image border: the star entered or left the field"
-    if np.sqrt(max(cov[0, 0] + cov[2, 2], cov[1, 1] + cov[3, 3])) > MAX_END_SIGMA_PX:
+    spread = max(cov[0, 0] + cov[2, 2], cov[1, 1] + cov[3, 3])
+    if not 0.0 <= spread <= MAX_END_SIGMA_PX**2:  # NaN or a negative variance: a singular fit
         return f"ends less precise than {MAX_END_SIGMA_PX:g} px"
     return ""

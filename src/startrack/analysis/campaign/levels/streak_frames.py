@@ -25,7 +25,9 @@ uncertainty of the rate vector over |omega|), ``rate_sigma_roll_deg_s`` / ``rate
 ``birge``, ``t_mid_err_s`` (the solution's mid-exposure time after the exposure start, minus the
 simulator's), ``streak_fraction`` (drawn), ``exposure_s``, ``streak_px`` (the true median streak
 length of the stars in the image), ``n_true`` (those stars), ``cpu_s`` (process time of the
-solve) and ``time_order_known``.
+solve), ``time_order_known``, ``five_streaks`` (solved with at least five identified streaks: the
+frames the issue's target is about) and ``meets_target`` (a trusted rate within 1 % and an axis
+within 0.5 deg, the target of issue 19 and seed 001 ch. 6).
 """
 
 from __future__ import annotations
@@ -166,7 +168,14 @@ def run(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generator, tole
                t_mid_err_s=solution.t_mid_s - (truth.t_mid_s - (-0.5 * exposure - 0.5 * (truth.camera.height - 1)
                                                                   * params["line_time_s"])),
                **rate_scores(solution, omega, alpha), **_uncertainty(solution, omega))
+    row.update(five_streaks=bool(solution.solved and solution.n_streaks >= TARGET_STREAKS),
+               meets_target=bool(row["rate_ok"] and row["rate_err_pct"] <= TARGET_RATE_PCT
+                                 and row["axis_err_deg"] <= TARGET_AXIS_DEG))
     return TrialOutput(row, image=sim.image, truth=truth)
+
+
+TARGET_STREAKS, TARGET_RATE_PCT, TARGET_AXIS_DEG = 5, 1.0, 0.5
+"""Issue 19's target: every frame with 5 identified streaks gives a rate within 1 % and an axis within 0.5 deg."""
 
 
 def check(params: Mapping[str, Any]) -> None:
@@ -186,7 +195,8 @@ COLUMNS = {"rate_status": pa.string(), "rate_ok": pa.bool_(), "rate_err_pct": pa
            "rate_sigma3_pct": pa.float64(), "rate_sigma_roll_deg_s": pa.float64(),
            "rate_sigma_cross_deg_s": pa.float64(), "birge": pa.float64(), "t_mid_err_s": pa.float64(),
            "streak_fraction": pa.float64(), "exposure_s": pa.float64(), "streak_px": pa.float64(),
-           "n_true": pa.int32(), "cpu_s": pa.float64(), "time_order_known": pa.bool_()}
+           "n_true": pa.int32(), "cpu_s": pa.float64(), "time_order_known": pa.bool_(),
+           "five_streaks": pa.bool_(), "meets_target": pa.bool_()}
 
 LEVEL = register(Level(
     name="streak_frames", doc=" ".join(__doc__.split("\n\n")[0].split()), params=PARAMS, run=run, check=check,
