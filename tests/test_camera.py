@@ -276,3 +276,14 @@ def test_numpy_and_integer_fields_are_stored_as_floats():
     cam = Camera(width=100, height=100, fx=np.float32(500.0), fy=510, cx=np.int64(50), k1=np.float64(-0.1))
     assert all(type(getattr(cam, key)) is float for key in ("fx", "fy", "cx", "cy", "k1", "k2"))
     assert (cam.fx, cam.fy, cam.cx, cam.k1) == (500.0, 510.0, 50.0, -0.1)
+
+
+def test_with_focal_and_with_distortion_name_a_value_that_is_not_a_number():
+    cam = Camera(width=100, height=100, fx=500.0)
+    with pytest.raises(InvalidInputError, match=r"camera fx must be a real number"):
+        cam.with_focal("600")
+    with pytest.raises(InvalidInputError, match=r"camera fy must be a real number"):
+        cam.with_focal(600.0, [600.0])
+    with pytest.raises(InvalidInputError, match=r"camera k2 must be a real number"):
+        cam.with_distortion(k1=-0.1, k2="0.01")
+    assert cam.with_distortion(k1=np.float32(-0.25)).k1 == -0.25

@@ -132,8 +132,8 @@ class Camera:
 
     def with_focal(self, fx: float, fy: float | None = None) -> Camera:
         """The same camera with other focal lengths (fy keeps the fx / fy ratio if not given)."""
-        if fy is None:
-            fy = fx * self.fy / self.fx
+        fx = _checked_number("fx", fx)
+        fy = fx * self.fy / self.fx if fy is None else _checked_number("fy", fy)
         if not (fx > 0 and fy > 0 and math.isfinite(fx) and math.isfinite(fy)):
             raise InvalidInputError(f"focal lengths must be positive and finite, got {fx!r}, {fy!r} px")
         return self._updated(fx=float(fx), fy=float(fy))
@@ -143,9 +143,10 @@ class Camera:
         unknown = set(coefficients) - {"k1", "k2", "k3", "p1", "p2"}
         if unknown:
             raise InvalidInputError(f"unknown distortion coefficients {sorted(unknown)}; valid: k1, k2, k3, p1, p2")
-        if not all(math.isfinite(float(v)) for v in coefficients.values()):
+        values = {k: _checked_number(k, v) for k, v in coefficients.items()}
+        if not all(math.isfinite(v) for v in values.values()):
             raise InvalidInputError(f"distortion coefficients must be finite, got {coefficients}")
-        return self._updated(**{k: float(v) for k, v in coefficients.items()})
+        return self._updated(**values)
 
     def _updated(self, **fields: float) -> Camera:
         """A copy with some already-checked fields changed (cheaper than ``dataclasses.replace``,
