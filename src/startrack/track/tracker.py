@@ -134,6 +134,39 @@ class TrackStep:
         return tuple(float(np.degrees(a)) for a in radec_roll_from_rotation(self.rot_cam_from_icrs))
 
 
+@dataclass(frozen=True)
+class SmearLimits:
+    """How an exposure smears the stars (:meth:`Tracker.smear_limits`).
+
+    Attributes
+    ----------
+    exposure_s : float
+    pixel_arcsec : float
+        One pixel at the boresight.
+    max_rate_deg_s : float
+        Largest rate across the boresight that smears a star by at most 0.1 px (seed 004
+        Table 1, :func:`startrack.simulate.snr.max_rate_rad_s`).
+    streak_on_px, streak_on_deg_s, streak_off_px, streak_off_deg_s : float
+        The smear (px) at which the Tracker enters streak mode and leaves it again, and the rates
+        across the boresight (deg/s) that make it.
+    """
+
+    exposure_s: float
+    pixel_arcsec: float
+    max_rate_deg_s: float
+    streak_on_px: float
+    streak_on_deg_s: float
+    streak_off_px: float
+    streak_off_deg_s: float
+
+    def describe(self) -> str:
+        """One line for a user (``startrack track``)."""
+        return (f"smear limit (seed 004 Table 1): exposure {self.exposure_s:g} s, 1 px = {self.pixel_arcsec:.1f} "
+                f"arcsec: 0.1 px of smear at {self.max_rate_deg_s:.4g} deg/s across the boresight; streak mode from "
+                f"{self.streak_on_px:g} px ({self.streak_on_deg_s:.3g} deg/s), point mode again below "
+                f"{self.streak_off_px:g} px ({self.streak_off_deg_s:.3g} deg/s)")
+
+
 class Tracker:
     """Follows the attitude over a sequence of star lists (or images, see :meth:`update_image`).
 
@@ -174,6 +207,7 @@ class Tracker:
         self._matcher: WindowMatcher | None = None
         self._mode = POINT_MODE
         self._streak_memory: dict = {}
+        self._last_measured: NDArray | None = None
 
     # --- public ---------------------------------------------------------------------------------
     def update(self, x: ArrayLike, y: ArrayLike, t_s: float, *, flux: ArrayLike | None = None,
@@ -273,23 +307,39 @@ class Tracker:
         return replace(step, extra=extra, time_s=time.perf_counter() - t0)
 
     def _smear_px(self, data: NDArray, exposure_s: float) -> float:
-        """How far (px) a star smears in the exposure: from the rate when there is one, else the
-        median moment length of the image's brightest streak-like blobs."""
-        if self._rate is not None:
-            camera = self._camera or self._nominal_camera(data)
-            omega = self._rate
-            half_diagonal = 0.5 * math.hypot(camera.width, camera.height)
-            return exposure_s * (camera.fx * math.hypot(omega[0], omega[1]) + abs(omega[2]) * half_diagonal)
-        from ..rate.streak_find import find_streak_candidates
-
-        found = find_streak_candidates(data)
-        return float(np.median(found.length_px[:10])) if len(found) else 0.0
+        """How far (px) a star smears in the exposure: from the rate when there is one (the
+        smoothed rate or the last frame-to-frame one, whichever is faster: the smoothed rate lags
+        when the rate changes), else measured in the image (:func:`image_smear_px`)."""
+        if self._rate is None:
+            return image_smear_px(data)
+        camera = self._camera or self._nominal_camera(data)
+        half_diagonal = 0.5 * math.hypot(camera.width, camera.height)
+        rates = [self._rate] + ([self._last_measured] if self._last_measured is not None else [])
+        return max(exposure_s * (camera.fx * math.hypot(w[0], w[1]) + abs(w[2]) * half_diagonal) for w in rates)
 
     def _nominal_camera(self, data: NDArray) -> Camera:
         """A pinhole camera of the tracker's FOV (or the middle of its FOV range) for the image size."""
         kw = self._lis_kwargs
         fov = kw["fov_deg"] if kw["fov_deg"] is not None else float(np.mean(kw["fov_range_deg"] or (5.0, 35.0)))
         return Camera.from_fov(data.shape[1], data.shape[0], fov)
+
+    @property
+    def mode(self) -> str:
+        """The mode of the last image (:data:`POINT_MODE` or :data:`STREAK_MODE`)."""
+        return self._mode
+
+    def smear_limits(self, exposure_s: float, width: int, height: int) -> SmearLimits:
+        """The smear diagnostics of an exposure (seed 004 Table 1; module docstring), from the
+        tracker's camera or, before it has one, a pinhole camera of its FOV for this image size."""
+        from ..simulate.snr import max_rate_rad_s
+
+        camera = self._camera or self._nominal_camera(np.empty((int(height), int(width)), dtype=np.uint8))
+        opt = self.options
+        per_px = 1.0 / (camera.fx * exposure_s)  # rad/s across the boresight per pixel of smear
+        return SmearLimits(exposure_s=float(exposure_s), pixel_arcsec=camera.pixel_scale_arcsec,
+                           max_rate_deg_s=math.degrees(max_rate_rad_s(camera, exposure_s, 0.1)),
+                           streak_on_px=opt.streak_on_px, streak_on_deg_s=math.degrees(opt.streak_on_px * per_px),
+                           streak_off_px=opt.streak_off_px, streak_off_deg_s=math.degrees(opt.streak_off_px * per_px))
 
     def _streak_image(self, data: NDArray, t_s: float, exposure_s: float) -> TrackStep:
         """Streak processing: tracking from the prediction, else lost-in-space on the streaks."""
@@ -356,8 +406,8 @@ class Tracker:
         differenced = self._quat is not None and self._t is not None and t_s > self._t
         self._advance(solution.rot_cam_from_icrs, t_s)
         known = solution.time_order_known or differenced
-        if solution.rate.ok:
-            omega = solution.rate.omega_rad_s.copy()
+        if solution.rate.ok or _usable_for_prediction(solution):
+            omega = solution.turn_rad / solution.exposure_s
             if not solution.time_order_known and differenced and np.dot(omega, self._rate) < 0:
                 omega = -omega  # the attitudes of two frames tell the time order one frame cannot
             self._rate = omega
@@ -374,6 +424,7 @@ class Tracker:
     def reset(self) -> None:
         """Forget the attitude and rate (the next frame is solved lost-in-space)."""
         self._rot, self._quat, self._t, self._rate = None, None, None, None
+        self._last_measured = None
         self._streak_memory = {}
         if self._rig is not None:
             self._rig.reset()
@@ -434,12 +485,53 @@ class Tracker:
         quat = tuple(rot.as_quat().tolist())
         if self._quat is not None and self._t is not None and t_s > self._t:
             measured = -quat_rotvec(quat_product(quat, quat_conjugate(self._quat))) / (t_s - self._t)
+            self._last_measured = measured
             gain = self.options.rate_gain
             self._rate = measured if self._rate is None else (1 - gain) * self._rate + gain * measured
         self._rot, self._quat, self._t = rot, quat, t_s
 
     def _rate_copy(self) -> NDArray | None:
         return None if self._rate is None else self._rate.copy()
+
+
+POINT_MOMENT_BINS = 1.6
+"""The moment length of a point star's candidate on the binned grid of
+:func:`startrack.rate.streak_find.find_streak_candidates`, in bins: the major axis of a round
+blob picks up the noise (6-7 px at 4 px bins on unsmeared generic-cmos frames, 12 and 20 deg
+fields, measured); :func:`image_smear_px` takes it out in quadrature."""
+SMEAR_CANDIDATES = 20
+
+
+def image_smear_px(data: NDArray) -> float:
+    """The smear (px) of a frame measured in the image: the lower quartile of the moment lengths
+    of its :data:`SMEAR_CANDIDATES` brightest streak candidates (blends of two stars and the
+    brightest stars' wide wings measure longer, never shorter), the point-star length
+    (:data:`POINT_MOMENT_BINS`) taken out in quadrature. 0 when the frame has no candidate."""
+    from ..rate.streak_find import find_streak_candidates
+
+    found = find_streak_candidates(data)
+    if not len(found):
+        return 0.0
+    quartile = float(np.percentile(found.length_px[:SMEAR_CANDIDATES], 25))
+    return math.sqrt(max(quartile**2 - (POINT_MOMENT_BINS * found.bin_px) ** 2, 0.0))
+
+
+PREDICTION_RATE_UNCERTAINTY = 0.3
+"""Largest 3-sigma uncertainty (fraction of the rate) of a streak frame's rate, trusted or not,
+that the Tracker still prefers to the rate differenced from the attitudes: under an angular
+acceleration the smoothed difference lags by ``(1 - rate_gain) / rate_gain`` frame periods (a
+tracker slewing at 4 deg/s^2 with 5 frames a second and gain 0.5 was 0.8 deg/s behind), while the
+streaks give the rate at this frame's mid-exposure."""
+
+
+def _usable_for_prediction(solution) -> bool:
+    """Whether an untrusted streak rate is still precise enough to predict the next frame by."""
+    cov, turn = solution.rate.covariance_rad2_s2, solution.turn_rad
+    if cov is None or not np.all(np.isfinite(turn)) or not math.isfinite(solution.exposure_s):
+        return False
+    norm = float(np.linalg.norm(turn)) / solution.exposure_s
+    trace = float(np.trace(cov))
+    return math.isfinite(trace) and norm > 0 and 3.0 * math.sqrt(max(trace, 0.0)) <= PREDICTION_RATE_UNCERTAINTY * norm
 
 
 def _checked_rate(rate_rad_s: ArrayLike) -> NDArray[np.float64]:
