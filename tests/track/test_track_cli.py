@@ -40,3 +40,27 @@ def test_track_refuses_an_empty_folder(tmp_path, capsys):
     assert main(["track", str(tmp_path), "--fov-deg", "12"]) == 2
     err = capsys.readouterr().err
     assert "no image files" in err and err.count("\n") == 1
+
+
+def test_track_prints_the_smear_limits_and_the_mode_switches(tmp_path, capsys, slew_frames):
+    for k, sim in enumerate(slew_frames):
+        write_png(tmp_path / f"frame{k:03d}.png", sim.image)
+    out = tmp_path / "track.csv"
+    code = main(["track", str(tmp_path), "--fov-deg", "20", "--exposure-s", "0.1", "--frame-interval-s", "0.4",
+                 "--out", str(out)])
+    printed = capsys.readouterr()
+    assert code == 0, printed.err
+    lines = printed.out.splitlines()
+    # seed 004 Table 1's rate for 0.1 px: 0.1 / fx / T, fx = 1452 px for 512 px over 20 deg
+    assert lines[0].startswith("smear limit (seed 004 Table 1): exposure 0.1 s") and "0.03946 deg/s" in lines[0]
+    switches = [line for line in lines if " mode (smear " in line]
+    assert len(switches) == 2 and "point -> streak mode" in switches[0] and "streak -> point mode" in switches[1]
+    with open(out, newline="") as fh:
+        modes = [row["mode"] for row in csv.DictReader(fh)]
+    assert "streak tracking" in modes and modes[0] == "lost-in-space"
+
+
+def test_track_refuses_a_bad_exposure(tmp_path, capsys):
+    write_png(tmp_path / "frame000.png", np.zeros((64, 64), dtype=np.uint16))
+    assert main(["track", str(tmp_path), "--fov-deg", "12", "--exposure-s", "-1"]) == 2
+    assert "--exposure-s must be a positive, finite number of seconds" in capsys.readouterr().err

@@ -3,37 +3,19 @@ frame, point mode at rest, streak mode at speed, and the switches between them."
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
+from slew_frames import CAMERA, EXPOSURE_S, slew_rate
 
-from startrack import Camera
 from startrack.frames import attitude_error
-from startrack.simulate import VaryingRate, get_sensor_preset, simulate_sequence
 from startrack.track import Tracker
 from startrack.track.tracker import POINT_MODE, STREAK_MODE
 from startrack.units import DEG
 
-CAMERA = Camera.from_fov(512, 512, 20.0)
-EXPOSURE_S = 0.1
-PEAK = 8.0 * DEG
-AXIS = np.array([0.3, -0.9, 0.2]) / np.linalg.norm([0.3, -0.9, 0.2])
-
-
-def slew_rate(t_s):
-    """Rest 0.4 s, speed up to 8 deg/s in 1.6 s, hold 0.4 s, slow down in 1.6 s, rest (rad/s, (N, 3))."""
-    t = np.asarray(t_s, dtype=float) - 0.4
-    speed = PEAK * np.clip(np.minimum(t / 1.6, (3.6 - t) / 1.6), 0.0, 1.0)
-    return speed[:, None] * AXIS[None, :]
-
 
 @pytest.fixture(scope="module")
-def run():
-    profile = VaryingRate(Rotation.from_euler("zyx", [40, 20, 10], degrees=True), slew_rate)
-    sensor = get_sensor_preset("generic-cmos").with_exposure(EXPOSURE_S)
-    frames = simulate_sequence(CAMERA, profile, 12, frame_rate_hz=2.5, sensor=sensor, seed=3, max_mag=7.5,
-                               catalog_epoch_jyear=2025.0)
+def run(slew_frames):
     tracker = Tracker(width=512, height=512, fov_deg=20.0, epoch=2025.0)
     out = []
-    for sim in frames:
+    for sim in slew_frames:
         step = tracker.update_image(sim.image, sim.truth.t_mid_s, streak_exposure_s=EXPOSURE_S)
         speed = float(np.linalg.norm(slew_rate([sim.truth.t_mid_s])[0]))
         out.append((sim.truth, step, tracker.mode, speed))

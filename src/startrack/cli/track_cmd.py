@@ -36,7 +36,8 @@ from .progress import ProgressBar, ensure_database_for
 IMAGE_SUFFIXES = {".fits", ".fit", ".fts", ".png", ".jpg", ".jpeg", ".tif", ".tiff"}
 
 EPILOG = "CSV columns: " + ", ".join(COLUMNS) + (
-    ".\nmode is lost-in-space, tracking, or none for a frame that could not be used; status is ok, "
+    ".\nmode is lost-in-space, tracking, streak lost-in-space, streak tracking (a smeared frame solved from its "
+    "streaks, with an exposure time), or none for a frame that could not be used; status is ok, "
     "too_few_stars, no_match, timeout, or error (an unreadable frame or one of another size; the reason "
     "says which); the quaternion (qw >= 0) is rot_cam_from_icrs; the rate is the camera's, in the camera "
     "frame.\nExit status: 0 when every frame has an attitude, 1 when some have none, 2 on bad input.")
@@ -59,6 +60,10 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("source", help="a folder of images (name order = time order) or one image")
     add_fov_options(parser)
     parser.add_argument("--frame-interval-s", type=float, default=0.1, help="time between frames (default 0.1 s)")
+    parser.add_argument("--exposure-s", type=float, default=None, metavar="T",
+                        help="exposure of every frame (s; default: the header's EXPTIME, EXPOSURE or ExposureTime); "
+                             "with one, the tracker switches between point and streak mode by the smear and prints "
+                             "the smear limits and where it switched")
     parser.add_argument("--out", default="track.csv", help="CSV file to write (default track.csv; - for "
                                                            "standard output)")
     add_epoch_option(parser)
@@ -72,10 +77,13 @@ class _Sequence:
 
     options: dict
     epoch: float | None
+    exposure_s: float | None = None
     tracker: Tracker | None = None
     size: tuple[int, int] | None = None
     first: str = ""
     unusable: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    limits_told: bool = False
 
     def __post_init__(self) -> None:
         camera = self.options["camera"]
@@ -85,14 +93,30 @@ class _Sequence:
 
     def row(self, k: int, path: Path, t_s: float) -> list[str]:
         """The CSV row of frame ``k``: its tracking step, or an error row naming the problem."""
+        from ..rate.streak_solve import header_exposure_s
+
         try:
-            data = read_image(path).data
-            self._check_size(data.shape[1], data.shape[0], path)
-            step = self.tracker.update_image(data, t_s)
+            img = read_image(path)
+            self._check_size(img.data.shape[1], img.data.shape[0], path)
+            exposure = self.exposure_s if self.exposure_s is not None else header_exposure_s(img.header)
+            step = self.tracker.update_image(img.data, t_s, streak_exposure_s=exposure)
         except (StartrackError, ValueError) as exc:
             self.unusable.append(path.name)
             return error_row(k, path.name, t_s, str(exc))
+        self._note(k, path.name, step, exposure)
         return track_row(k, path.name, step)
+
+    def _note(self, k: int, name: str, step, exposure: float | None) -> None:
+        """Remember the smear limits (once, at the first frame with an exposure) and each mode switch."""
+        if exposure is None:
+            return
+        if not self.limits_told:
+            self.notes.append(self.tracker.smear_limits(exposure, *self.size).describe())
+            self.limits_told = True
+        if step.extra.get("switched"):
+            other = "streak" if self.tracker.mode == "point" else "point"
+            self.notes.append(f"frame {k} ({name}, t = {step.t_s:g} s): {other} -> {self.tracker.mode} mode "
+                              f"(smear {step.extra['streak_px']:.1f} px)")
 
     def _check_size(self, width: int, height: int, path: Path) -> None:
         if self.size is None:
@@ -116,7 +140,7 @@ def main(argv: list[str]) -> int:
     options = fov_kwargs(args)
     with max_pixels_limit(max_pixels_option(args)):
         ensure_database_for(options["fov_deg"], options["fov_range_deg"], options["camera"])
-        sequence, solved = _Sequence(options, epoch), 0
+        sequence, solved = _Sequence(options, epoch, _exposure_option(args.exposure_s)), 0
         bar = ProgressBar("  frames")
         try:
             with track_csv_writer(args.out, inputs=files) as write:
@@ -127,8 +151,14 @@ def main(argv: list[str]) -> int:
                     bar(k + 1, len(files))
         finally:
             bar.close()
-    _summary(solved, len(files), sequence.unusable, args.out)
+    _summary(solved, len(files), sequence.unusable, args.out, sequence.notes)
     return 0 if solved == len(files) else 1
+
+
+def _exposure_option(exposure_s: float | None) -> float | None:
+    if exposure_s is not None and not (math.isfinite(exposure_s) and exposure_s > 0):
+        raise InvalidInputError(f"--exposure-s must be a positive, finite number of seconds, got {exposure_s:g}")
+    return exposure_s
 
 
 def _is_stdout(out: str) -> bool:
@@ -141,9 +171,12 @@ def _is_stdout(out: str) -> bool:
         return False
 
 
-def _summary(solved: int, total: int, unusable: list[str], out: str) -> None:
-    """The one-line summary, on standard error when the CSV went to standard output."""
+def _summary(solved: int, total: int, unusable: list[str], out: str, notes: list[str]) -> None:
+    """The smear limits and mode switches, then the one-line summary, on standard error when the
+    CSV went to standard output."""
     to_stdout = _is_stdout(out)
+    for note in notes:
+        print(note, file=sys.stderr if to_stdout else sys.stdout)
     where = "standard output" if out == STDOUT else out
     text = f"{solved} of {total} frames have an attitude"
     if unusable:
