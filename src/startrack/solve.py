@@ -161,7 +161,9 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
     sigma = _check_prior(prior_rot_cam_from_icrs, prior_sigma_deg)
     request = build_request(x, y, width=width, height=height, fov_deg=fov_deg, fov_range_deg=fov_range_deg,
                             camera=camera, flux=flux, epoch=resolve_epoch(epoch), pixel_aspect=pixel_aspect)
-    return _run(replace(request, prior_rot=prior_rot_cam_from_icrs, prior_sigma_deg=sigma), method, options)
+    if prior_rot_cam_from_icrs is not None or sigma != request.prior_sigma_deg:  # else the defaults hold
+        request = replace(request, prior_rot=prior_rot_cam_from_icrs, prior_sigma_deg=sigma)
+    return _run(request, method, options)
 
 
 def search_order(found) -> np.ndarray:

@@ -14,9 +14,11 @@ every matched star where the fit to the *other* stars puts it (its deleted resid
 :func:`.refine.leave_one_out_residuals`); a star that those would not have matched (farther than
 :data:`REMATCH_RADIUS_PX`) is dropped and the fit settled again, up to :data:`MAX_LEFT_OUT` times.
 
-A solve runs this stage once, on a few dozen stars, so its cost is numpy's per-call overhead: the
-fits work on rotation matrices (:func:`.refine.fit_pose`) and the re-match only predicts the
-catalog stars near some image star (:class:`_Catalog`), not the thousand or more of a wide field.
+A solve runs this stage once, on a few dozen stars, so its cost is per-call overhead: the fits
+work on rotation matrices (:func:`.refine.fit_pose`), the re-match is one compiled call
+(:func:`.refine.match_predicted`) over the catalog stars of the cone that holds the image, chosen
+once by one compiled scan of the field's brightest stars and kept while the pose moves less than a
+margin (:class:`_Catalog`).
 """
 
 from __future__ import annotations

@@ -1,6 +1,8 @@
 """The compiled loops of :mod:`.refine` (numba): the pose fit's least-squares system, its
-Gauss-Newton iterations and the deleted residuals of its stars; and the equal-weight q-method
-that both the pattern search (:mod:`.quad_kernel`) and a solve's final attitude use.
+Gauss-Newton iterations and the deleted residuals of its stars; the final fit's re-match
+(projection, image test and closest-first pairing) and its choice of catalog stars in a cone;
+the equal-weight q-method that both the pattern search (:mod:`.quad_kernel`) and a solve's final
+attitude use, and what a solution reports of that attitude (residuals, covariance, RA / Dec / roll).
 
 One projection model covers the whole camera: Brown-Conrady distortion with coefficients
 ``dist`` = (k1, k2, k3, p1, p2) as in :class:`startrack.camera.Camera` (all zero: pinhole).
