@@ -1,0 +1,313 @@
+"""Where a user waits: import time, the first solve in a new process, the command's wall time for
+one image and for a batch of 20, beside cedar-solve and astrometry.net, in one run.
+
+Measured, each in fresh processes (the median of ``--repeat`` runs where it says so):
+
+* ``import startrack`` and ``import startrack.cli.solve_cmd`` (the solve command's modules);
+* the first solve in a new process once the caches exist: the database load, the warm-up
+  (:func:`startrack.cli.batch_warmup.warm_up`: the compiled kernels loaded from numba's cache),
+  the first and second ``solve_image`` of a real photo, and the same first solve with no warm-up
+  (loading then falls inside it); and what each compiled function costs to load (numba's
+  ``load_overload`` timed per function, largest first);
+* ``startrack solve IMAGE`` wall time (the console script in a new process);
+* a batch of 20 real photos: ``startrack solve FOLDER`` (one process) against 20 commands one
+  after the other, total and per image;
+* cedar-solve (its own virtual environment, ``benchmarks/peers/cedar_env.py``): a new process
+  that imports tetra3, loads its database and solves the same photo (``solve_from_image``), and
+  20 photos in one such process;
+* astrometry.net's ``solve-field`` on the same photo, when it and its index files are installed
+  (otherwise a printed note says why it was left out);
+* with ``--cold``, first: the one-time compile, ``startrack warm-up`` with an empty numba cache
+  (``NUMBA_CACHE_DIR`` set to a new temporary folder, so the catalog and databases stay cached);
+  the rest then runs on that fresh numba cache, as after an install (a development cache holds
+  the stale files of every edited kernel, which :func:`startrack.numba_cache.heal` reads in full).
+
+Usage::
+
+    python benchmarks/startup_benchmark.py [--repeat 3] [--cold] [--no-peers]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PYTHON = Path(sys.executable)
+STARTRACK = PYTHON.parent / "startrack"
+REALDATA = ROOT.parent / "shared" / "realdata"
+PHOTO = REALDATA / "smroid-cedar-solve" / "crappy.jpg"  # one that cedar-solve solves from the image too
+BATCH_SOURCES = sorted((REALDATA / "smroid-cedar-solve").glob("*.jpg"))
+BATCH_SIZE = 20
+FOV_DEG = 10.2  # the cedar-solve photos' field, deg (truth.csv: 10.1-10.2)
+SOLVE_ARGS = ("--fov-deg", str(FOV_DEG))
+
+sys.path.insert(0, str(Path(__file__).resolve().parent / "peers"))
+
+FIRST_SOLVE = r"""
+import json, sys, time
+t0 = time.perf_counter()
+import startrack
+from startrack.io import read_image
+from startrack.cli.progress import ensure_database_for
+from startrack.cli.batch_warmup import warm_up
+t1 = time.perf_counter()
+import startrack.solve, startrack.detect.detector, startrack.identify.quad_search, startrack.identify.refine
+from numba.core.registry import CPUDispatcher
+from startrack.identify import pose_kernel, quad_kernel
+loads = {}
+for module in (quad_kernel, pose_kernel):
+    for name, fn in vars(module).items():
+        if isinstance(fn, CPUDispatcher):
+            def timed(sig, ctx, _load=fn._cache.load_overload, _key=module.__name__.split(".")[-1] + "." + name):
+                t = time.perf_counter()
+                try:
+                    return _load(sig, ctx)
+                finally:
+                    loads[_key] = loads.get(_key, 0.0) + time.perf_counter() - t
+            fn._cache.load_overload = timed  # a timer around numba's own cache load
+t2 = time.perf_counter()
+image = read_image(sys.argv[1])
+t2b = time.perf_counter()
+ensure_database_for(float(sys.argv[2]))
+t3 = time.perf_counter()
+if sys.argv[3] == "warm":
+    warm_up(float(sys.argv[2]))
+t4 = time.perf_counter()
+first = startrack.solve_image(image, fov_deg=float(sys.argv[2]))
+t5 = time.perf_counter()
+second = startrack.solve_image(image, fov_deg=float(sys.argv[2]))
+t6 = time.perf_counter()
+print(json.dumps({"import_s": t1 - t0, "solver_import_s": t2 - t1, "read_s": t2b - t2, "db_s": t3 - t2b,
+                  "warm_up_s": t4 - t3, "first_s": t5 - t4,
+                  "first_reported_s": first.solve_time_s, "second_s": t6 - t5, "solved": first.solved,
+                  "loads": loads}))
+"""
+
+CEDAR_SOLVE = r"""
+import json, logging, sys, time
+t0 = time.perf_counter()
+logging.getLogger("tetra3.Tetra3").addHandler(logging.NullHandler())
+import tetra3
+from PIL import Image
+t1 = time.perf_counter()
+solver = tetra3.Tetra3("default_database")
+t2 = time.perf_counter()
+times, solved = [], 0
+for path in sys.argv[2:]:
+    t = time.perf_counter()
+    with Image.open(path) as img:
+        result = solver.solve_from_image(img, fov_estimate=float(sys.argv[1]), fov_max_error=0.5)
+    times.append(time.perf_counter() - t)
+    solved += result.get("RA") is not None
+print(json.dumps({"import_s": t1 - t0, "load_db_s": t2 - t1, "solve_s": times, "solved": solved}))
+"""
+
+
+def _wall(cmd: list[str], env: dict | None = None) -> tuple[float, subprocess.CompletedProcess]:
+    t0 = time.perf_counter()
+    done = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=900)
+    return time.perf_counter() - t0, done
+
+
+def _median_wall(cmd: list[str], repeat: int) -> tuple[float, float]:
+    """(median, min) wall time of ``cmd`` over ``repeat`` runs, s."""
+    runs = []
+    for _ in range(repeat):
+        elapsed, done = _wall(cmd)
+        if done.returncode not in (0, 1):
+            raise RuntimeError(f"{' '.join(cmd)} failed: {done.stderr.strip()[-500:]}")
+        runs.append(elapsed)
+    return statistics.median(runs), min(runs)
+
+
+def _import_s(module: str, repeat: int) -> list[float]:
+    code = f"import time; t = time.perf_counter(); import {module}; print(time.perf_counter() - t)"
+    return [float(subprocess.run([str(PYTHON), "-c", code], capture_output=True, text=True, check=True).stdout)
+            for _ in range(repeat)]
+
+
+def measure_imports(repeat: int) -> None:
+    print("\nimport time in a new process (s)")
+    for module in ("startrack", "startrack.cli.solve_cmd", "startrack.cli.detect_cmd"):
+        runs = _import_s(module, repeat)
+        print(f"  {module:<26} median {statistics.median(runs):6.3f}  min {min(runs):6.3f}")
+
+
+def _first_solve(mode: str) -> dict:
+    done = subprocess.run([str(PYTHON), "-c", FIRST_SOLVE, str(PHOTO), str(FOV_DEG), mode],
+                          capture_output=True, text=True, check=True, timeout=900)
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def measure_first_solve(repeat: int) -> None:
+    print(f"\nfirst solve in a new process, caches present ({PHOTO.name}, --fov-deg {FOV_DEG}; median of {repeat})")
+    for mode, label in (("warm", "with the warm-up (the commands)"), ("cold", "no warm-up (the library)")):
+        runs = [_first_solve(mode) for _ in range(repeat)]
+        med = {k: statistics.median(r[k] for r in runs) for k in
+               ("import_s", "solver_import_s", "read_s", "db_s", "warm_up_s", "first_s", "first_reported_s",
+                "second_s")}
+        print(f"  {label}:\n    import startrack + io {med['import_s']:.3f} s, solver modules (scipy.spatial, numba, "
+              f"detect) {med['solver_import_s']:.3f} s, read {med['read_s']:.3f} s, database {med['db_s']:.3f} s,\n"
+              f"    warm-up {med['warm_up_s']:.3f} s, first solve_image {med['first_s']:.3f} s "
+              f"(solve_time_s {1e3 * med['first_reported_s']:.1f} ms), second {1e3 * med['second_s']:.1f} ms")
+    loads = runs[-1]["loads"]
+    total = sum(loads.values())
+    print(f"  compiled functions loaded from numba's cache: {len(loads)}, {1e3 * total:.0f} ms in all "
+          "(the last run; a function called only inside another is loaded with it)")
+    for name, seconds in sorted(loads.items(), key=lambda kv: -kv[1]):
+        print(f"    {name:<34} {1e3 * seconds:7.1f} ms")
+
+
+def measure_cli(repeat: int) -> None:
+    print("\nstartrack solve IMAGE, wall time of the command (s)")
+    med, low = _median_wall([str(STARTRACK), "solve", str(PHOTO), *SOLVE_ARGS], repeat)
+    print(f"  one image            median {med:6.3f}  min {low:6.3f}")
+    med, low = _median_wall([str(STARTRACK), "detect", str(PHOTO)], repeat)
+    print(f"  detect, one image    median {med:6.3f}  min {low:6.3f}")
+
+
+def _batch_folder(root: Path) -> list[Path]:
+    """20 links to the real photos (cycled), named in order."""
+    paths = []
+    for i in range(BATCH_SIZE):
+        source = BATCH_SOURCES[i % len(BATCH_SOURCES)]
+        link = root / f"{i:02d}_{source.name}"
+        link.symlink_to(source)
+        paths.append(link)
+    return paths
+
+
+def measure_batch(root: Path) -> list[Path]:
+    paths = _batch_folder(root)
+    print(f"\na batch of {BATCH_SIZE} photos ({len(BATCH_SOURCES)} different, 507-512 px JPEG), wall time")
+    for jobs in (1, 2):
+        elapsed, done = _wall([str(STARTRACK), "solve", str(root), *SOLVE_ARGS, "--jobs", str(jobs)])
+        solved = sum(" solved " in line for line in done.stdout.splitlines())
+        print(f"  startrack solve FOLDER --jobs {jobs}   {elapsed:6.2f} s total, "
+              f"{elapsed / BATCH_SIZE:6.3f} s per image ({solved}/{BATCH_SIZE} solved)")
+    t0, solved = time.perf_counter(), 0
+    for path in paths:
+        solved += _wall([str(STARTRACK), "solve", str(path), *SOLVE_ARGS])[1].returncode == 0
+    elapsed = time.perf_counter() - t0
+    print(f"  {BATCH_SIZE} x startrack solve IMAGE    {elapsed:6.2f} s total, {elapsed / BATCH_SIZE:6.3f} s per image "
+          f"({solved}/{BATCH_SIZE} solved)")
+    return paths
+
+
+def measure_cedar(paths: list[Path], repeat: int) -> None:
+    from cedar_env import CEDAR_VENV
+
+    python = CEDAR_VENV / "bin" / "python"
+    if not python.is_file():
+        print(f"\ncedar-solve: left out, its environment {CEDAR_VENV} is absent "
+              "(python benchmarks/peers/cedar_env.py creates it)")
+        return
+    print("\ncedar-solve 0.5.1 (tetra3), the command-line equivalent: a new process that imports tetra3, "
+          "loads its database and solves (solve_from_image, fov_estimate 10.2 deg)")
+    one = []
+    for _ in range(repeat):
+        elapsed, done = _wall([str(python), "-c", CEDAR_SOLVE, str(FOV_DEG), str(PHOTO)])
+        one.append((elapsed, json.loads(done.stdout.strip().splitlines()[-1])))
+    med = statistics.median(e for e, _ in one)
+    inner = one[-1][1]
+    print(f"  one image            median {med:6.3f} s wall (import {inner['import_s']:.3f} s, database "
+          f"{inner['load_db_s']:.3f} s, solve {1e3 * inner['solve_s'][0]:.0f} ms; solved {inner['solved']})")
+    elapsed, done = _wall([str(python), "-c", CEDAR_SOLVE, str(FOV_DEG), *map(str, paths)])
+    inner = json.loads(done.stdout.strip().splitlines()[-1])
+    print(f"  {BATCH_SIZE} images, one process {elapsed:6.2f} s total, {elapsed / BATCH_SIZE:6.3f} s per image "
+          f"({inner['solved']}/{BATCH_SIZE} solved; median solve {1e3 * statistics.median(inner['solve_s']):.0f} ms)")
+
+
+def _astrometry_indexes() -> list[Path]:
+    """Index files on the paths astrometry.net's configuration names."""
+    folders = [Path("/usr/share/astrometry"), Path("/usr/local/astrometry/data")]
+    for cfg in (Path("/etc/astrometry.cfg"), Path("/usr/local/astrometry/etc/astrometry.cfg")):
+        if cfg.is_file():
+            folders += [Path(line.split(None, 1)[1].strip()) for line in cfg.read_text().splitlines()
+                        if line.startswith("add_path")]
+    return sorted({p for f in folders if f.is_dir() for p in f.glob("index-*.fits")})
+
+
+def measure_astrometry(work: Path) -> None:
+    exe = shutil.which("solve-field")
+    if exe is None:
+        print("\nastrometry.net: left out, solve-field is not installed")
+        return
+    if not _astrometry_indexes():
+        print(f"\nastrometry.net: left out, {exe} is installed but no index files (index-*.fits) are on its "
+              "paths (/etc/astrometry.cfg add_path), so it cannot solve")
+        return
+    cmd = [exe, "--overwrite", "--no-plots", "--no-verify", "--dir", str(work), "--scale-units", "degwidth",
+           "--scale-low", str(FOV_DEG * 0.9), "--scale-high", str(FOV_DEG * 1.1), "--cpulimit", "60", str(PHOTO)]
+    elapsed, done = _wall(cmd)
+    solved = (work / f"{PHOTO.stem}.solved").exists()
+    print(f"\nastrometry.net solve-field, one image: {elapsed:6.2f} s wall (solved {solved})")
+
+
+def measure_cold_compile(numba_dir: Path) -> None:
+    """``startrack warm-up`` into the empty ``numba_dir``, then once more from it."""
+    print(f"\nthe one-time compile: startrack warm-up with an empty numba cache (NUMBA_CACHE_DIR={numba_dir})")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(numba_dir)}
+    elapsed, done = _wall([str(STARTRACK), "warm-up"], env=env)
+    print(f"  compile run   {elapsed:6.2f} s wall; it said: {' | '.join(done.stderr.strip().splitlines())}")
+    elapsed, done = _wall([str(STARTRACK), "warm-up"], env=env)
+    said = " | ".join(done.stderr.strip().splitlines()) or "nothing: loaded from the cache"
+    print(f"  the next run  {elapsed:6.2f} s wall; it said: {said}")
+
+
+def describe_numba_cache() -> None:
+    from startrack.cache import cache_dir
+    from startrack.numba_cache import numba_cache_dir
+
+    folder = Path(os.environ.get("NUMBA_CACHE_DIR") or numba_cache_dir(cache_dir()))
+    files = [p for p in folder.rglob("*") if p.is_file()] if folder.is_dir() else []
+    print(f"numba cache {folder}: {len(files)} files, {sum(p.stat().st_size for p in files) / 1e6:.1f} MB")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--repeat", type=int, default=3, help="fresh processes per timing (median printed)")
+    parser.add_argument("--cold", action="store_true", help="also time the one-time compile (about 15-25 s)")
+    parser.add_argument("--no-peers", action="store_true", help="leave out cedar-solve and astrometry.net")
+    args = parser.parse_args(argv)
+    if not PHOTO.is_file():
+        print(f"the real photos are absent ({REALDATA}); nothing measured")
+        return 1
+    print(f"startup benchmark: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at the start")
+    with tempfile.TemporaryDirectory() as numba_dir:
+        if args.cold:
+            measure_cold_compile(Path(numba_dir))
+            os.environ["NUMBA_CACHE_DIR"] = numba_dir  # every later process: the fresh cache
+        measure_warm(args)
+    print(f"\nload average {os.getloadavg()[0]:.2f} at the end (2 shared cores: figures vary with it)")
+    return 0
+
+
+def measure_warm(args: argparse.Namespace) -> None:
+    """Everything but the compile, with the caches present."""
+    _wall([str(STARTRACK), "warm-up"])  # caches present: default database built, kernels compiled
+    _wall([str(STARTRACK), "solve", str(PHOTO), *SOLVE_ARGS])  # and the 10.2 deg database, its kernels' types
+    describe_numba_cache()
+    measure_imports(args.repeat)
+    measure_first_solve(args.repeat)
+    measure_cli(args.repeat)
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp) / "batch"
+        folder.mkdir()
+        paths = measure_batch(folder)
+        if not args.no_peers:
+            measure_cedar(paths, args.repeat)
+            measure_astrometry(Path(tmp) / "astrometry")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
