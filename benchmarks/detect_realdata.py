@@ -196,8 +196,8 @@ def significance_maps(image: np.ndarray, detector: StarDetector) -> tuple[np.nda
     """The fine and the binned (full-resolution shape) significance images, the pixel noise and the
     background model, built as the detector builds them (``dark_frame`` applied)."""
     from startrack.detect import pipeline
-    from startrack.detect.background import low_side_clipped, tiled_background
-    from startrack.detect.fine_pass import local_contrast
+    from startrack.detect.background import low_side_clipped
+    from startrack.detect.fine_pass import fine_significance
     from startrack.detect.smooth import detection_image
     from startrack.detect.threshold import significance
 
@@ -206,10 +206,9 @@ def significance_maps(image: np.ndarray, detector: StarDetector) -> tuple[np.nda
     binned = detection_image(data, detector.binning, detector.kernel, detector.kernel_px, prepared.invalid)
     model = pipeline.background_model(detector, binned, detector.binning, skewed)
     coarse = np.kron(significance(binned, model, detector.binning), np.ones((detector.binning,) * 2))
-    fine = local_contrast(detection_image(data, 1, detector.kernel, detector.kernel_px, prepared.invalid))
-    fine_model = tiled_background(fine, detector.tile_px, skewed=skewed)
-    h, w = fine.shape
-    fine = (fine - fine_model.level) / np.asarray(fine_model.noise_map(np.arange(h), np.arange(w)))
+    h, w = data.shape
+    fine = fine_significance(data, prepared.invalid, detector.kernel, detector.kernel_px, detector.tile_px, skewed)
+    fine = np.zeros((h, w)) if fine is None else fine
     pad = np.zeros((h, w))
     pad[:coarse.shape[0], :coarse.shape[1]] = coarse[:h, :w]
     return fine, pad, pipeline.pixel_noise(data, model), (data, model)

@@ -92,13 +92,9 @@ def fine_regions(data: NDArray, invalid: NDArray[np.bool_] | None, kernel: str, 
     Regions
         Full-resolution regions (may be empty).
     """
-    det = local_contrast(detection_image(data, 1, kernel, kernel_px, invalid))
-    model = tiled_background(det, tile_px, skewed=skewed)
-    if model.noise <= 0:
-        return label_regions(np.zeros(det.shape, dtype=bool))
-    h, w = det.shape  # the local contrast has one level over the frame (its median, below 0 for
-    # skewed noise): only the noise is mapped
-    snr = (det - np.float32(model.level)) / np.asarray(model.noise_map(np.arange(h), np.arange(w)), dtype=np.float32)
+    snr = fine_significance(data, invalid, kernel, kernel_px, tile_px, skewed)
+    if snr is None:
+        return label_regions(np.zeros(data.shape, dtype=bool))
     regions = label_regions(snr > min(grow_sigma, fine_sigma))
     if len(regions) == 0:
         return regions
@@ -107,9 +103,24 @@ def fine_regions(data: NDArray, invalid: NDArray[np.bool_] | None, kernel: str, 
         regions = split_regions(regions, snr, fine_sigma)
     if edge_margin_px and len(regions):
         values = snr[regions.y, regions.x]
-        regions = regions.select(peak_away_from_edge(regions, values, det.shape, edge_margin_px, values > fine_sigma,
+        regions = regions.select(peak_away_from_edge(regions, values, snr.shape, edge_margin_px, values > fine_sigma,
                                                      EDGE_CORE_PX))
     return regions
+
+
+def fine_significance(data: NDArray, invalid: NDArray[np.bool_] | None, kernel: str, kernel_px: int,
+                      tile_px: int, skewed: bool = False) -> NDArray[np.float32] | None:
+    """The full-resolution pass's significance image, shape (H, W): the ``kernel``-smoothed
+    plane's local contrast (:func:`local_contrast`) over its tiled noise, in noise units; None
+    when the image has no noise (a constant plane). Arguments as :func:`fine_regions`'s."""
+    det = local_contrast(detection_image(data, 1, kernel, kernel_px, invalid))
+    model = tiled_background(det, tile_px, skewed=skewed)
+    if model.noise <= 0:
+        return None
+    h, w = det.shape  # the local contrast has one level over the frame (its median, below 0 for
+    # skewed noise): only the noise is mapped
+    return (det - np.float32(model.level)) / np.asarray(model.noise_map(np.arange(h), np.arange(w)),
+                                                        dtype=np.float32)
 
 
 def local_contrast(image: NDArray[np.float32]) -> NDArray[np.float32]:
