@@ -22,7 +22,7 @@ from .identify.candidate import Candidate
 from .identify.field_stars import FieldStars
 from .identify.final_fit import settle_matches
 from .identify.image_epoch import DEFAULT_EPOCH_JYEAR, epoch_jyear, resolve_epoch
-from .identify.refine import solution_terms
+from .identify.refine import pixel_vectors, solution_terms
 from .identify.registry import DEFAULT_FOV_RANGE_DEG, MATCHERS, prepare_matcher
 from .identify.request import FOV_DEG_TOLERANCE, SolveRequest, build_request, check_fov_deg
 from .identify.request import star_arrays as _star_arrays  # noqa: F401 (startrack.multihead checks heads with it)
@@ -42,7 +42,7 @@ def _solution(problem: SolveRequest, stars: FieldStars, cand: Candidate, t0: flo
     solution's."""
     fit = settle_matches(problem.x, problem.y, stars, cand, problem.focal_range, fit_aspect=problem.fit_aspect)
     camera, img, rows, ref, res_px = fit.camera, fit.image_index, fit.catalog_rows, fit.ref_icrs, fit.residual_px
-    observed = camera.pixel_to_vector(problem.x[img], problem.y[img])
+    observed = pixel_vectors(camera, problem.x[img], problem.y[img])
     usable = np.isfinite(observed).all(axis=1)  # a star where a fitted wide lens cannot be inverted: left out
     if not usable.all():
         img, rows, ref, res_px, observed = img[usable], rows[usable], ref[usable], res_px[usable], observed[usable]

@@ -21,7 +21,7 @@ from startrack.frames import angle_between, attitude_error, radec_roll_from_rota
 from startrack.identify import final_fit
 from startrack.identify.candidate import Candidate
 from startrack.identify.field_stars import field_stars
-from startrack.identify.refine import match_predicted, solution_terms
+from startrack.identify.refine import match_predicted, pixel_vectors, solution_terms
 from startrack.identify.verify import match_nearest
 from startrack.units import ARCSEC
 
@@ -56,6 +56,19 @@ def test_solution_terms_equal_the_reference_computations(n):
         assert abs(_wrapped_diff(ra, want_ra)) < NOISE_RAD and abs(dec - want_dec) < NOISE_RAD
         assert abs(_wrapped_diff(roll, want_roll)) < NOISE_RAD
         assert 0 <= ra < 2 * np.pi and 0 <= roll < 2 * np.pi
+
+
+@pytest.mark.parametrize(("k1", "k2", "p1"), [(0.0, 0.0, 0.0), (0.01, 0.0, 0.0), (-0.3, 0.05, 1e-4), (-0.6, 0.0, 0.0)])
+def test_pixel_vectors_equal_camera_pixel_to_vector(k1, k2, p1):
+    """The compiled inversion of the lens model gives Camera.pixel_to_vector's vectors (the same
+    iterations) and NaN at the same points (beyond the fold of a strong barrel lens)."""
+    rng = np.random.default_rng(3)
+    camera = Camera.from_fov(1024, 768, 60.0, cx=500.0).with_distortion(k1=k1, k2=k2, p1=p1)
+    x, y = rng.uniform(-300, 1300, 400), rng.uniform(-300, 1100, 400)
+    want, got = camera.pixel_to_vector(x, y), pixel_vectors(camera, x, y)
+    assert np.array_equal(np.isnan(got), np.isnan(want))
+    assert np.allclose(got, want, rtol=0, atol=NOISE_RAD, equal_nan=True)
+    assert (k1 > -0.5) == bool(np.isfinite(want).all())  # the strong lens folds inside this range
 
 
 def _reference_rematch(camera, vectors, matrix, x, y, radius_px):

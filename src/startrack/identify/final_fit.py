@@ -34,7 +34,7 @@ from scipy.spatial.transform import Rotation
 from ..camera import Camera
 from .candidate import Candidate
 from .field_stars import FieldStars
-from .refine import fit_pose, leave_one_out_residuals, match_predicted, stars_in_cone
+from .refine import fit_pose, leave_one_out_residuals, match_predicted, pixel_vectors, stars_in_cone
 from .verify import match_nearest
 
 MAX_REFINE_ROUNDS = 4
@@ -142,7 +142,7 @@ def lens_folds(camera: Camera, x: NDArray, y: NDArray) -> bool:
     ``y`` (pixels, (N,)): its distortion folds back before them, so they map to no direction. A
     fit to the stars of a wide lens can reach such a model where it has no stars; it is then
     refitted with fewer terms."""
-    return not bool(np.all(np.isfinite(camera.pixel_to_vector(x, y))))
+    return not bool(np.all(np.isfinite(pixel_vectors(camera, x, y))))
 
 
 def _fit_lens(field: _Field, matrix: NDArray, camera: Camera, ref: NDArray, img: NDArray):
@@ -215,7 +215,7 @@ class _Catalog:
     @classmethod
     def around_stars(cls, field: _Field, matrix: NDArray, camera: Camera) -> _Catalog:
         """The catalog stars within reach of some image star at this pose."""
-        directions = camera.pixel_to_vector(field.x, field.y) @ matrix  # ICRS unit vectors (N, 3)
+        directions = pixel_vectors(camera, field.x, field.y) @ matrix  # ICRS unit vectors (N, 3)
         reach_px = REMATCH_RADIUS_PX + SELECT_MARGIN_PX
         near = field.stars.around(directions, ANGLE_PER_PIXEL_SAFETY * reach_px / min(camera.fx, camera.fy))
         return cls._kept(field, matrix, camera, near)
@@ -251,7 +251,7 @@ def _image_reach_rad(camera: Camera) -> float:
     model cannot invert a corner."""
     w, h = camera.width - 0.5, camera.height - 0.5
     if camera.has_distortion:
-        corners = camera.pixel_to_vector(np.array([-0.5, w, -0.5, w]), np.array([-0.5, -0.5, h, h]))
+        corners = pixel_vectors(camera, np.array([-0.5, w, -0.5, w]), np.array([-0.5, -0.5, h, h]))
         corner_rad = float(np.max(np.arctan2(np.hypot(corners[:, 0], corners[:, 1]), corners[:, 2])))
     else:
         corner_rad = max(math.atan(math.hypot((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy))

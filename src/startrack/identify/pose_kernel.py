@@ -484,3 +484,36 @@ def cone_stars(vectors, count, axis, cos_reach, neighbour_rad, min_neighbour_rad
             out[n] = i
             n += 1
     return out[:n]
+
+
+@njit(cache=True, error_model="numpy")  # a zero determinant gives inf / NaN (a NaN point), not an exception
+def pixel_vectors(x, y, fx, fy, cx, cy, dist, tol, max_iter):
+    """Unit camera vectors (N, 3) of pixels ``x``, ``y`` (N,) with the distortion removed, as
+    :meth:`startrack.camera.Camera.pixel_to_vector` computes them: Newton's method on the pinhole
+    coordinates of all points together, at most ``max_iter`` steps, until every distorted point
+    is within ``tol`` (pinhole units) of the measured one; a point that is not then (beyond the
+    fold of the lens polynomial) is NaN."""
+    n = x.size
+    ad, bd = (x - cx) / fx, (y - cy) / fy
+    a, b, ra, rb = ad.copy(), bd.copy(), np.empty(n), np.empty(n)
+    for _ in range(max_iter):
+        done = True
+        for i in range(n):
+            _, _, fa, fb, _, _, _, _ = _project(a[i], b[i], 1.0, dist)
+            ra[i], rb[i] = fa - ad[i], fb - bd[i]
+            done = done and math.hypot(ra[i], rb[i]) < tol
+        if done:
+            break
+        for i in range(n):
+            _, _, _, _, daa, dab, dba, dbb = _project(a[i], b[i], 1.0, dist)
+            det = daa * dbb - dab * dba
+            a[i], b[i] = a[i] - (dbb * ra[i] - dab * rb[i]) / det, b[i] - (-dba * ra[i] + daa * rb[i]) / det
+    out = np.empty((n, 3))
+    for i in range(n):
+        _, _, fa, fb, _, _, _, _ = _project(a[i], b[i], 1.0, dist)
+        if not math.hypot(fa - ad[i], fb - bd[i]) < tol:
+            out[i, 0] = out[i, 1] = out[i, 2] = np.nan
+            continue
+        norm = math.sqrt(a[i] * a[i] + b[i] * b[i] + 1.0)
+        out[i, 0], out[i, 1], out[i, 2] = a[i] / norm, b[i] / norm, 1.0 / norm
+    return out

@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from ..camera import Camera
+from ..camera import UNDISTORT_MAX_ITER, UNDISTORT_TOL_PX, Camera
 
 _MAX_ITER = 6
 _CONVERGED_PX = 1e-4
@@ -216,6 +216,16 @@ def match_predicted(ref_icrs: NDArray, matrix_cam_from_icrs: NDArray, camera: Ca
                                    float(camera.width), float(camera.height), _plain(x), _plain(y), float(radius_px))
 
 
+def pixel_vectors(camera: Camera, x: NDArray, y: NDArray) -> NDArray[np.float64]:
+    """:meth:`Camera.pixel_to_vector <startrack.camera.Camera.pixel_to_vector>` of finite pixel
+    coordinates ``x``, ``y`` (N,) in one compiled call (:func:`.pose_kernel.pixel_vectors`; the
+    same Newton iterations and tolerance, point by point): unit camera vectors (N, 3), NaN where
+    the lens model cannot be inverted."""
+    return _kernel().pixel_vectors(_plain(x), _plain(y), float(camera.fx), float(camera.fy), float(camera.cx),
+                                   float(camera.cy), _distortion(camera), UNDISTORT_TOL_PX / max(camera.fx, camera.fy),
+                                   UNDISTORT_MAX_ITER)
+
+
 def stars_in_cone(vectors: NDArray, count: int, axis: NDArray, radius_rad: float, neighbour_rad: NDArray,
                   min_neighbour_rad: float) -> NDArray[np.int64]:
     """Indices (ascending) among the first ``count`` of the unit vectors ``vectors`` (S, 3) of
@@ -257,7 +267,7 @@ def solution_terms(observed: NDArray, reference: NDArray, sigma_rad: float) -> t
 def warm_up_pose() -> None:
     """Compile (or load from the disk cache) the kernels of :func:`fit_pose`,
     :func:`leave_one_out_residuals`, :func:`wahba_equal_weights`, :func:`match_predicted`,
-    :func:`stars_in_cone` and :func:`solution_terms`, so that a solve's time does
+    :func:`pixel_vectors`, :func:`stars_in_cone` and :func:`solution_terms`, so that a solve's time does
     not include it. Free after the first call."""
     camera = Camera(width=64, height=64, fx=100.0, k1=1e-3)
     x, y = np.array([10.0, 50.0, 30.0, 20.0]), np.array([10.0, 20.0, 50.0, 40.0])
@@ -266,5 +276,6 @@ def warm_up_pose() -> None:
     leave_one_out_residuals(matrix, camera, ref, x, y, fit_focal=True)
     wahba_equal_weights(camera.pixel_to_vector(x, y), ref)
     match_predicted(ref, matrix, camera, x, y, 1.0)
+    pixel_vectors(camera, x, y)
     stars_in_cone(ref, len(ref), matrix[2], 0.1, np.zeros(len(ref)), 0.0)
     solution_terms(camera.pixel_to_vector(x, y), ref, 1e-4)
