@@ -51,3 +51,12 @@ def test_warm_up_star_list_solves(monkeypatch):
     warmup.warm_up(fov_range_deg=(5.0, 35.0))
     assert len(solved) == 1 and solved[0].solved
     assert abs(solved[0].ra_deg - 90.0) < 0.01 and abs(solved[0].dec_deg - 30.0) < 0.01  # deg
+
+
+def test_warm_up_command():
+    from test_cli import run
+
+    code, out, err = run("warm-up", "--fov-range-deg", 5, 35)
+    assert code == 0, err
+    assert out.startswith("startrack is ready: database and compiled kernels loaded in ")
+    assert run("warm-up", "--fov-range-deg", 35, 5)[0] == 2  # LO > HI is misuse

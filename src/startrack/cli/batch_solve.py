@@ -9,7 +9,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from .batch import ERROR, BatchSpec, Record
+from .batch import BatchSpec, Record
 
 HEADER = "{image}  status           RA deg    Dec deg   roll deg  FOV deg  matched   rms\"  time ms  reason"
 
@@ -42,11 +42,10 @@ def _number(value: float | None, spec: str, width: int) -> str:
 
 def solve_line(record: Record, width: int) -> str:
     """One table line (the columns of :data:`HEADER`)."""
-    status = "solved" if record["status"] == "ok" else record["status"]
-    matched = len(record.get("matches", []))
+    solved = record["status"] == "ok"
+    status = "solved" if solved else record["status"]
+    matched = len(record["matches"]) if solved else "-"
     stars = f"{matched}/{record['n_detections']}" if "n_detections" in record else "-"
-    if record["status"] != "ok":
-        stars = f"-/{record['n_detections']}" if "n_detections" in record else "-"
     time_ms = record.get("solve_time_s")
     cells = [record["image"].ljust(width), status.ljust(13),
              _number(record.get("ra_deg"), ".5f", 10), _number(record.get("dec_deg"), "+.5f", 10),
@@ -69,6 +68,3 @@ def solve_spec(solver_options: dict[str, Any], channel: str | None) -> BatchSpec
                      process=functools.partial(solve_record, solver_options=solver_options, channel=channel),
                      header=HEADER, line=solve_line, csv_columns=CSV_COLUMNS, csv_rows=solve_csv_rows,
                      done_statuses=frozenset({"ok"}))
-
-
-__all__ = ["CSV_COLUMNS", "ERROR", "HEADER", "solve_csv_rows", "solve_line", "solve_record", "solve_spec"]

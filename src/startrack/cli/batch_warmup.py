@@ -20,9 +20,9 @@ import time
 
 from ..camera import Camera
 
-COMPILE_ESTIMATE_S = 15
-"""What compiling every kernel takes on the 2-core reference machine (measured by
-``benchmarks/startup_benchmark.py --cold``), for the message."""
+COMPILE_ESTIMATE_S = 30
+"""What compiling every kernel takes on the 2-core reference machine, for the message: 22-44 s
+measured by ``benchmarks/startup_benchmark.py --cold`` with the machine shared (load 3-4)."""
 
 
 class _CompileNotice:
