@@ -144,3 +144,11 @@ def test_detect_batch_table_exit_zero(folder):
 
 def test_folder_suffixes_cover_every_reader():
     assert {".fits", ".png", ".jpg", ".jpeg", ".tif", ".tiff", ".dng"} <= IMAGE_SUFFIXES
+
+
+def test_csv_to_stdout_is_the_only_output(folder):
+    code, out, err = run("solve", *(folder / n for n in GOOD), *FOV, "--csv", "-")
+    assert code == 0, err
+    rows = list(csv.DictReader(out.splitlines()))
+    assert [Path(r["image"]).name for r in rows] == list(GOOD)
+    assert all(r["status"] == "ok" for r in rows)

@@ -187,19 +187,23 @@ def run_batch(spec: BatchSpec, paths: Sequence[str], *, as_json: bool = False, c
         The exit status: 0 when every image is done (``spec.done_statuses``), 1 when some are not
         (not solved, or an ``error``); misuse raises InvalidInputError before any image (exit 2).
     """
+    from ..io.targets import STDOUT
+
     images = expand_inputs(paths)
     width = min(max(len(str(p)) for p in images), 60)
+    lines = csv_out != STDOUT  # with --csv -, the CSV is the only standard output
     records: list[Record] = []
     start = time.perf_counter()
     with ExitStack() as stack:
         writer = _csv_writer(stack, spec, csv_out, images)
         bar = _Bar(f"{spec.name}", len(images))
-        if not as_json:
+        if lines and not as_json:
             print(spec.header.format(image="image".ljust(width)), flush=True)
+        bar(0)
         for done, record in enumerate(_records(spec, images, jobs, stack), 1):
             bar.clear()
-            text = json.dumps(record, allow_nan=False) if as_json else spec.line(record, width)
-            print(text, flush=True)
+            if lines:
+                print(json.dumps(record, allow_nan=False) if as_json else spec.line(record, width), flush=True)
             if writer is not None:
                 writer.writerows(spec.csv_rows(record))
             records.append(record)
@@ -229,7 +233,8 @@ def add_batch_options(parser) -> None:
     from .common import positive_count
 
     parser.add_argument("--csv", metavar="OUT",
-                        help="also write a CSV with one row per image (detect: per star) to OUT (- for stdout)")
+                        help="also write a CSV with one row per image (detect: per star) to OUT; - writes "
+                             "it to standard output instead of the table")
     parser.add_argument("--jobs", type=positive_count, default=1, metavar="N",
                         help="images in N worker processes at once (default 1: all in this process)")
 
