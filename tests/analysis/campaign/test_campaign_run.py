@@ -141,6 +141,25 @@ def test_a_worker_that_dies_costs_only_its_trial(tmp_path):
     assert table.num_rows == 8
 
 
+def test_trials_waiting_with_no_worker_left_become_lost_rows(tmp_path, monkeypatch):
+    # A scheduler with no worker at all: the run ends with LOST rows (after NO_WORKERS_S), not a hang.
+    from distributed import LocalCluster
+
+    from startrack.analysis.campaign import engine
+
+    monkeypatch.setattr(engine, "NO_WORKERS_S", 1.0)
+    monkeypatch.setattr(engine, "POLL_S", 0.5)
+    with LocalCluster(n_workers=0, processes=True, dashboard_address=":0", host="127.0.0.1") as cluster:
+        t0 = time.perf_counter()
+        table = run_campaign(FAULTY.replace("FAULT", "raise"), tmp_path, scheduler=cluster.scheduler_address,
+                             chunk_size=4, report=False)
+        waited_s = time.perf_counter() - t0
+    rows = table.to_pylist()
+    assert [r["trial"] for r in rows] == list(range(8)) and {r["status"] for r in rows} == {"LOST"}
+    assert all("no Dask worker was connected for 1 s" in r["error"] for r in rows)
+    assert waited_s < 60.0  # seconds: it gave up instead of waiting for a worker
+
+
 IMAGE = """
 [campaign]
 name = "rerun"

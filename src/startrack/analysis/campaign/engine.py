@@ -7,7 +7,8 @@ loaded once per worker, including workers that join later; :mod:`.warm_plugin`).
 kilobytes) goes with every chunk: a scattered copy would be lost with the worker holding it.
 Chunks are gathered as they finish, each handed to ``on_chunk`` (which writes its part). A chunk
 whose worker dies is split into single trials and sent again; a single trial whose worker dies
-three times becomes a ``LOST`` row with the error, never a lost campaign.
+three times becomes a ``LOST`` row with the error, never a lost campaign; so do the trials still
+waiting when no worker has been connected for :data:`NO_WORKERS_S` (never a hung campaign).
 """
 
 from __future__ import annotations
@@ -105,40 +106,80 @@ def dask_client(workers: int | None = None, scheduler: str | None = None) -> Ite
         yield client
 
 
+NO_WORKERS_S = 120.0
+"""With chunks pending and no worker connected for this long, the rest are ``LOST`` rows (local
+workers whose nannies could not restart them, a cluster whose workers all left)."""
+POLL_S = 5.0
+"""How often, while nothing finishes, the scheduler is asked whether any worker is left."""
+
+
 def run_dask(client: Any, spec: CampaignSpec, chunks: list[Chunk], on_chunk: ChunkDone,
              progress: Progress | None = None) -> dict[str, float]:
     """Run the chunks on ``client``'s workers (see the module docstring); returns the seconds
     spent warming the workers (``warm_s``) and from the first submission to the last result
     (``compute_s``)."""
-    from distributed import as_completed
-
     from .warm_plugin import WarmUp
 
     t0 = time.perf_counter()
     client.register_plugin(WarmUp(spec), name=f"startrack-warm-{spec.name}")
     t1 = time.perf_counter()
     pending = {client.submit(run_chunk, spec, chunk, pure=False): (chunk, 0) for chunk in chunks}
-    total, done = sum(c.size for c in chunks), 0
-    queue = as_completed(list(pending))
-    for future in queue:
-        chunk, tries = pending.pop(future)
-        try:
-            table = future.result()
-        except Exception:  # the worker died (or the chunk could not be sent): retry trial by trial
-            retries = _retries(chunk, tries)
-            for single, attempt in retries:
-                retry = client.submit(run_chunk, spec, single, pure=False)
-                pending[retry] = (single, attempt)
-                queue.add(retry)
-            if retries:
-                continue
-            table = lost_table(spec, chunk, traceback.format_exc())
-        future.release()
-        on_chunk(chunk, table)
-        done += chunk.size
-        if progress is not None:
+    total, done, idle_since = sum(c.size for c in chunks), 0, None
+    while pending:
+        finished = _first_finished(list(pending))
+        if not finished:
+            idle_since = None if _has_workers(client) else (idle_since or time.perf_counter())
+            if idle_since is not None and time.perf_counter() - idle_since >= NO_WORKERS_S:
+                _abandon(spec, pending, on_chunk)
+                pending, done = {}, total
+        for future in finished:
+            chunk, tries = pending.pop(future)
+            table = _table_or_retry(client, spec, future, chunk, tries, pending)
+            if table is not None:
+                on_chunk(chunk, table)
+                done += chunk.size
+        if progress is not None and (finished or not pending):
             progress(done, total)
     return {"warm_s": t1 - t0, "compute_s": time.perf_counter() - t1}
+
+
+def _first_finished(futures: list[Any]) -> list[Any]:
+    """The futures that finish within :data:`POLL_S` (at least one), or none."""
+    from distributed import wait
+
+    try:
+        return list(wait(futures, timeout=POLL_S, return_when="FIRST_COMPLETED").done)
+    except TimeoutError:
+        return []
+
+
+def _has_workers(client: Any) -> bool:
+    return bool(client.scheduler_info(n_workers=-1).get("workers"))
+
+
+def _abandon(spec: CampaignSpec, pending: dict[Any, tuple[Chunk, int]], on_chunk: ChunkDone) -> None:
+    """Hand every pending chunk to ``on_chunk`` as ``LOST`` rows: no worker is left."""
+    reason = f"no Dask worker was connected for {NO_WORKERS_S:g} s while this trial waited"
+    for future, (chunk, _) in pending.items():
+        future.release()
+        on_chunk(chunk, lost_table(spec, chunk, reason))
+
+
+def _table_or_retry(client: Any, spec: CampaignSpec, future: Any, chunk: Chunk, tries: int,
+                    pending: dict[Any, tuple[Chunk, int]]) -> pa.Table | None:
+    """The chunk's table; or, when its worker died, None with its retries added to ``pending``
+    (``LOST`` rows once a single trial has failed :data:`SINGLE_TRIES` times)."""
+    try:
+        table = future.result()
+    except Exception:  # the worker died (or the chunk could not be sent): retry trial by trial
+        retries = _retries(chunk, tries)
+        for single, attempt in retries:
+            pending[client.submit(run_chunk, spec, single, pure=False)] = (single, attempt)
+        if retries:
+            return None
+        table = lost_table(spec, chunk, traceback.format_exc())
+    future.release()
+    return table
 
 
 def _retries(chunk: Chunk, tries: int) -> list[tuple[Chunk, int]]:
