@@ -6,7 +6,7 @@ tests, ``tests/web/web_server.py``) on a temporary data folder, with one worker,
 until its worker is ready (catalog and default pattern database loaded). Then:
 
 - **upload to result**: each real image of ``../shared/realdata`` (truth.csv) is posted to
-  ``POST /api/jobs`` with no options (the FOV is searched, 5-35 deg) and ``GET /api/jobs/{id}``
+  ``POST /api/jobs`` with no options (the FOV is searched over the solver's default range) and ``GET /api/jobs/{id}``
   is polled every 10 ms until the job ends; the time is the wall clock of the client from the
   start of the upload to the answer that says ``done`` (or ``failed``). ``--repeats`` posts each
   image that many times and prints the median. The worker's own per-stage times are printed
@@ -39,6 +39,7 @@ REALDATA = ROOT.parent / "shared" / "realdata"
 sys.path.insert(0, str(ROOT / "tests" / "web"))
 from web_server import WebServer  # noqa: E402  (the launcher the browser tests use)
 
+from startrack.identify.registry import DEFAULT_FOV_RANGE_DEG  # noqa: E402
 from startrack.io import write_png  # noqa: E402
 
 SLOW = {"method": "pyramid", "fov_deg": 10.0}
@@ -58,7 +59,8 @@ def upload_to_result(server: WebServer, path: Path) -> tuple[float, dict]:
 def image_table(server: WebServer, repeats: int) -> None:
     with open(REALDATA / "truth.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
-    print(f"\nupload to result, {repeats} run(s) per image, median (one worker, FOV searched 5-35 deg)")
+    lo, hi = DEFAULT_FOV_RANGE_DEG
+    print(f"\nupload to result, {repeats} run(s) per image, median (one worker, FOV searched {lo:g}-{hi:g} deg)")
     print(f"{'image':<16}{'size':>11}{'state':>7}{'matched':>9}{'total s':>9}   worker stages, s "
           "(read detect identify attitude refine annotate)")
     for row in rows:

@@ -4,7 +4,7 @@
 
 =======================  ======================================================================
 ``fov_deg``              horizontal field of view, deg (0.5 to 100), trusted to 3 %
-``fov_range_deg``        ``[low, high]`` to search, deg (default 5 to 35)
+``fov_range_deg``        ``[low, high]`` to search, deg (default the solver's, 3 to 100)
 ``camera``               a camera preset (:data:`startrack.camera.PRESETS`) or a saved profile
 ``epoch``                catalog epoch, Julian year (default: from ``time``, else J2000.0)
 ``time``                 UTC time of the exposure, ISO 8601 (default: from the file's header)
