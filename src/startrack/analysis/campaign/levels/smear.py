@@ -7,12 +7,15 @@ The camera is StarNav I as Table 1 implies it (512 x 512 px, 8 deg field: IFOV 0
 their path stays ``margin_px`` inside the image and rendered from the trial's attitude while the
 camera turns at ``rate_deg_s`` about a uniformly random axis for ``exposure_s``; each keeps its
 electrons (uniform in ``star_electrons``) whatever the smear, as the seed's rule says ("the
-volume is constant, the area grows"). The seed gives no noise model: the defaults (1.5e3-6e3 e-,
+volume is constant, the area grows"). The seed gives no noise model: the defaults (1e3-4e3 e-,
 sky 10 e-, read noise 10 e-, PSF sigma 1 px) put the unsmeared errors near its 35.6 / 39.1 urad.
 The image is segmented (:func:`startrack.rate.streak_detect.find_streaks`, ``min_area_px``) and
-each blob's intensity centroid is the measurement; each true star (its mid-exposure position,
-the time tag of seed 004 eq. 6) takes its nearest centroid within ``match_px``, and stars with
-another star within ``crowd_px`` are left out (a blend is not a centroid error).
+each blob's intensity centroid is the measurement (``centroider = "moments"``, the seed's first
+moments), or the stars are found and centroided by :class:`startrack.detect.StarDetector` with the
+``centroider`` named (e.g. ``"mle"``, the maximum-likelihood pixel-integrated Gaussian fit);
+each true star (its mid-exposure position, the time tag of seed 004 eq. 6) takes its nearest
+centroid within ``match_px``, and stars with another star within ``crowd_px`` are left out (a
+blend is not a centroid error).
 
 - ``sigma_urad``: this image's RMS over its star pairs of measured minus true interstar angle
   (eq. 7 of one image; ``rms:sigma_urad`` over a cell is eq. 7 with every image weighted alike);
@@ -42,6 +45,8 @@ from scipy.spatial.transform import Rotation
 
 from ....attitude import solve_wahba
 from ....camera import Camera
+from ....detect import StarDetector
+from ....detect.centroiders import CENTROIDERS
 from ....rate.streak_detect import find_streaks
 from ....units import DEG
 from ...streak_scenes import StreakScene, render_streak_scene, star_field, star_paths
@@ -65,6 +70,9 @@ SMEAR_PARAMS = (
     Param("min_area_px", "int", 4, "smallest blob kept by the segmentation (px)", lo=1, hi=10000),
     Param("match_px", "float", 3.0, "largest distance from a true star to its centroid (px)", lo=0.1, hi=100.0),
     Param("crowd_px", "float", 8.0, "stars with another star this close are left out (px)", lo=0.0, hi=1000.0),
+    Param("centroider", "str", "moments", '"moments": the intensity centroid of each segmented blob (the '
+          "seed's first moments); otherwise a startrack.detect centroider of StarDetector (e.g. \"mle\")",
+          choices=("moments", *CENTROIDERS)),
 )
 PARAMS = params_by_name(camera_params(fov_deg=8.0, width=512, height=512), SMEAR_PARAMS)
 
@@ -113,13 +121,21 @@ def matched(params: Mapping[str, Any], scene: StreakScene, found_xy: NDArray) ->
     return np.flatnonzero(keep), found_xy[index[keep]], int(np.count_nonzero(crowded))
 
 
+def centroids_xy(params: Mapping[str, Any], image: NDArray) -> NDArray[np.float64]:
+    """The measured star positions (N, 2) of an image by the trial's ``centroider``."""
+    if params["centroider"] == "moments":
+        regions = find_streaks(image, min_area_px=params["min_area_px"]).regions
+        return np.array([r.centroid_xy for r in regions]).reshape(-1, 2)
+    found = StarDetector(centroid=params["centroider"], min_area_px=params["min_area_px"]).detect(image)
+    return np.stack([found.x, found.y], axis=1).reshape(-1, 2)
+
+
 def run(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generator, tolerance_px: float) -> TrialOutput:
     """One smeared image starting at ``rot``, centroided and scored."""
     scene = draw_image(params, rot, rng)
     camera = scene.camera
     t0 = time.perf_counter()
-    regions = find_streaks(scene.image, min_area_px=params["min_area_px"]).regions
-    found = np.array([r.centroid_xy for r in regions]).reshape(-1, 2)
+    found = centroids_xy(params, scene.image)
     elapsed = time.perf_counter() - t0
     stars, xy, crowded = matched(params, scene, found)
     truth_mid = Rotation.from_rotvec(-scene.omega_rad_s * scene.exposure_s / 2) * scene.rot_start
