@@ -407,7 +407,7 @@ def _closest_pairs(x, y, px, py, index, radius_px):
                     if k < pi.size:
                         pi[k], pc[k], pd[k] = i, j, d2
                     k += 1
-    order = np.argsort(pd, kind="mergesort")
+    order = _stable_order(pd)
     taken_i, taken_c = np.zeros(x.size, np.bool_), np.zeros(px.size, np.bool_)
     out_i, out_c = np.empty(k, np.int64), np.empty(k, np.int64)
     n = 0
@@ -420,6 +420,35 @@ def _closest_pairs(x, y, px, py, index, radius_px):
             out_c[n] = index[j]
             n += 1
     return out_i[:n], out_c[:n]
+
+
+@njit(cache=True)
+def _stable_order(values):
+    """Indices that sort ``values`` (K,) ascending, ties in their order (insertion sort: the few
+    pairs of a re-match; ``np.argsort(kind="mergesort")`` would give the same, at seconds of
+    compilation more)."""
+    order = np.arange(values.size)
+    for i in range(1, values.size):
+        k, v = order[i], values[order[i]]
+        j = i - 1
+        while j >= 0 and values[order[j]] > v:
+            order[j + 1] = order[j]
+            j -= 1
+        order[j + 1] = k
+    return order
+
+
+@njit(cache=True)
+def _inverse_3x3(m):
+    """Inverse (3, 3) of a non-singular 3 x 3 matrix by its adjugate (no LAPACK to compile)."""
+    adj = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            r0, r1 = (j + 1) % 3, (j + 2) % 3
+            c0, c1 = (i + 1) % 3, (i + 2) % 3
+            adj[i, j] = m[r0, c0] * m[r1, c1] - m[r0, c1] * m[r1, c0]
+    det = m[0, 0] * adj[0, 0] + m[0, 1] * adj[1, 0] + m[0, 2] * adj[2, 0]
+    return adj / det
 
 
 @njit(cache=True)
@@ -445,7 +474,7 @@ def solution_terms(obs, ref, sigma_rad):
         for j in range(3):
             for k in range(3):
                 info[j, k] -= obs[i, j] * obs[i, k] / n
-    covariance = np.linalg.inv(info) * (sigma_rad * sigma_rad / n)
+    covariance = _inverse_3x3(info) * (sigma_rad * sigma_rad / n)
     return quat, matrix, residual, covariance, _radec_roll(matrix)
 
 
