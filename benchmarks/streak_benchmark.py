@@ -25,10 +25,15 @@ and results: ``docs/seed_tables_001_004.md``.
    exposures at 5 frames a second) of a rate that rests 1 s, speeds up to 8 deg/s in 2 s, holds
    1 s, slows down in 2 s and rests 1 s: every frame's mode, attitude error and rate error, and
    where the mode switched.
+7. Issue 19, the speed of the streak ends (:func:`run_end_speed`): on 1024 x 1024 frames (12 deg)
+   of 20 streaks 30 and 150 px long, the process time of the streak path's search and fit
+   (``streak_find`` + ``streak_fit``) against the segmentation of :mod:`startrack.rate.
+   streak_detect` with Harris corners and with the earlier blurred-segment fit (best of 3; the
+   issue: no slower than 5x Harris).
 
 Usage::
 
-    python benchmarks/streak_benchmark.py [--parts 1,2,3,4,5,6] [--frames 6] [--rso-trials 1]
+    python benchmarks/streak_benchmark.py [--parts 1,2,3,4,5,6,7] [--frames 6] [--rso-trials 1]
         [--smear-images 30] [--streak-frames 100] [--seed S] [--workers 2 | --sync] [--out DIR]
         [--json PATH]
 
@@ -64,7 +69,7 @@ PARTS = {
     4: ("seed004-table2-smear-centroids", "smear_images"),
     5: ("streak-mode", "streak_frames"),
 }
-SLEW_PART = 6
+SLEW_PART, SPEED_PART = 6, 7
 """Part -> (shipped spec, the option that sets its trials per cell)."""
 
 
@@ -149,9 +154,80 @@ def run_slew() -> dict:
     return {"slew": SLEW, "rows": rows, "switches": switches}
 
 
+def _best_cpu_s(run, repeats: int = 3):
+    """(best process time over ``repeats`` calls (s), the last call's result)."""
+    best, out = float("inf"), None
+    for _ in range(repeats):
+        t0 = time.process_time()
+        out = run()
+        best = min(best, time.process_time() - t0)
+    return best, out
+
+
+def run_end_speed() -> dict:
+    """Part 7: process time of the streak ends, the streak path against Harris and the segment fit."""
+    import numpy as np
+    from scipy.spatial.transform import Rotation
+
+    from startrack import Camera
+    from startrack.analysis.streak_scenes import render_streak_scene, spin_rate, star_field
+    from startrack.rate import streak_rate
+    from startrack.rate.streak_detect import find_streaks
+    from startrack.rate.streak_find import find_streak_candidates
+    from startrack.rate.streak_fit import first_guesses, fit_streaks
+    from startrack.units import DEG
+
+    print(f"\npart {SPEED_PART}: streak ends, process time (ms, best of 3) on 1024 x 1024 px, 12 deg, 20 streaks",
+          flush=True)
+    camera, rows = Camera.from_fov(1024, 1024, 12.0), []
+    print(f"  {'length':>6} {'streak path':>11} {'(ok)':>5} {'segmentation':>12} {'+ Harris':>8} {'+ segment fit':>13} "
+          f"{'path / Harris':>13} {'segment / Harris':>16}")
+    for length in (30, 150):
+        rng = np.random.default_rng(1)
+        omega = spin_rate(90 * DEG, 2 * DEG, 0.3)
+        exposure = length / camera.fx / (2 * DEG)
+        vectors = star_field(camera, omega, exposure, 20, rng, margin_px=15)
+        image = render_streak_scene(camera, Rotation.random(random_state=rng), omega, exposure, vectors,
+                                    rng.uniform(2e4, 1e5, 20), rng=rng).image
+
+        def path(img=image):
+            cand = find_streak_candidates(img)
+            start, own, reach, band = first_guesses(img, cand)
+            return fit_streaks(img, start, reach, band, noise=cand.noise, labels=cand.labels, bin_px=cand.bin_px,
+                               own=own)
+
+        def harris(img=image):
+            return streak_rate._corner_ends(img, find_streaks(img), "harris", 0.64, 6.0, streak_rate.LENGTH_TOLERANCE,
+                                            None)
+
+        def segment(img=image):
+            return streak_rate._segment_ends(img, find_streaks(img), 6.0)
+
+        t_path, fits = _best_cpu_s(path)
+        t_seg_only, _ = _best_cpu_s(lambda img=image: find_streaks(img))
+        t_harris, _ = _best_cpu_s(harris)
+        t_segment, _ = _best_cpu_s(segment)
+        row = {"length_px": length, "path_ms": 1e3 * t_path, "ok": int(fits.ok.sum()),
+               "segmentation_ms": 1e3 * t_seg_only, "harris_ms": 1e3 * t_harris, "segment_fit_ms": 1e3 * t_segment}
+        rows.append(row)
+        print(f"  {length:6d} {row['path_ms']:11.0f} {row['ok']:5d} {row['segmentation_ms']:12.0f} "
+              f"{row['harris_ms']:8.0f} {row['segment_fit_ms']:13.0f} {t_path / t_harris:13.2f} "
+              f"{t_segment / t_harris:16.2f}", flush=True)
+    return {"rows": rows}
+
+
+def run_any(part: int, args: argparse.Namespace) -> dict:
+    """One part: a spec (1-5), the slew (6) or the speed of the ends (7)."""
+    if part == SLEW_PART:
+        return run_slew()
+    if part == SPEED_PART:
+        return run_end_speed()
+    return run_part(part, args)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--parts", type=str, default="1,2,3,4,5,6", help="comma-separated parts to run (1-6)")
+    parser.add_argument("--parts", type=str, default="1,2,3,4,5,6,7", help="comma-separated parts to run (1-7)")
     parser.add_argument("--frames", type=int, default=6, help="frames per cell of parts 1 and 2")
     parser.add_argument("--rso-trials", type=int, default=1, help="star fields per opportunity of part 3")
     parser.add_argument("--smear-images", type=int, default=30, help="images per cell of part 4 (seed: 100)")
@@ -164,11 +240,11 @@ def main(argv: list[str] | None = None) -> int:
         parts = sorted({int(p) for p in args.parts.split(",")})
     except ValueError:
         parser.error(f"--parts: comma-separated numbers 1-4, got {args.parts!r}")
-    if not set(parts) <= set(PARTS) | {SLEW_PART}:
-        parser.error(f"--parts: valid parts are 1-6, got {args.parts!r}")
+    if not set(parts) <= set(PARTS) | {SLEW_PART, SPEED_PART}:
+        parser.error(f"--parts: valid parts are 1-7, got {args.parts!r}")
     t0 = time.perf_counter()
     results = {"args": {k: str(v) if isinstance(v, Path) else v for k, v in vars(args).items()},
-               "parts": {part: run_slew() if part == SLEW_PART else run_part(part, args) for part in parts}}
+               "parts": {part: run_any(part, args) for part in parts}}
     path = args.json or RESULTS_DIR / f"streak-{datetime.now():%Y%m%d-%H%M%S}.json"
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(results, indent=1, default=str))
