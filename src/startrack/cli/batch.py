@@ -30,11 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InvalidInputError, StartrackError
-from ..io.image import RAW_SUFFIXES
-
-IMAGE_SUFFIXES = frozenset({".fits", ".fit", ".fts", ".png", ".jpg", ".jpeg", ".tif", ".tiff"}) | RAW_SUFFIXES
-"""Files a folder is searched for (the reader then checks the content); the same list as
-:data:`startrack.analysis.postprocess.records_io.IMAGE_SUFFIXES`, which costs astropy to import."""
+from ..io.image import IMAGE_SUFFIXES
 
 ERROR = "error"
 """Status of an image that could not be read or used (the reason says why)."""

@@ -59,7 +59,7 @@ def folder_images(root: Path | None, relative: str) -> tuple[Path, list[Path], l
     """The folder ``relative`` under ``root``, its image files and the names skipped (module docstring)."""
     if root is None:
         raise Refusal(404, "folder mode is off: start the server with --root DIR to process folders under DIR")
-    from ..analysis.postprocess.records_io import IMAGE_SUFFIXES
+    from ..io.image import IMAGE_SUFFIXES
 
     if not isinstance(relative, str) or "\x00" in relative:
         raise Refusal(422, "folder must be a path relative to --root", "folder")
@@ -81,7 +81,7 @@ def folder_images(root: Path | None, relative: str) -> tuple[Path, list[Path], l
 
 def list_folders(root: Path | None, limit: int = 200) -> list[str]:
     """Sub-folders of ``root`` (relative, sorted; two levels) that hold image files, for the upload page."""
-    from ..analysis.postprocess.records_io import IMAGE_SUFFIXES
+    from ..io.image import IMAGE_SUFFIXES
 
     if root is None:
         return []

@@ -42,14 +42,12 @@ from ...camera import Camera, get_preset
 from ...detect import StarDetector
 from ...errors import ImageReadError, InvalidInputError
 from ...io import Image, read_image
-from ...io.image import RAW_SUFFIXES
+from ...io.image import IMAGE_SUFFIXES
 from ...results import AttitudeSolution, Status
 from ...solve import check_fov_deg, epoch_jyear, solve_image
 from ..records import ImageRecord
 from .core import ResultSet
 
-IMAGE_SUFFIXES = frozenset({".fits", ".fit", ".fts", ".png", ".jpg", ".jpeg", ".tif", ".tiff"}) | RAW_SUFFIXES
-"""File names a folder is searched for (the reader then checks the content)."""
 KEEP_PIXELS_MAX = 64_000_000
 """Pixels of a set kept in memory (about 128 MB of 16-bit images); the rest are re-read."""
 UNREADABLE = "unreadable image: "
