@@ -27,33 +27,16 @@ def prewarm() -> None:
 
     from matplotlib.figure import Figure
 
+    from ..cli.batch_warmup import solve_catalog_stars
     from ..identify import load_database
     from ..identify.registry import DEFAULT_FOV_RANGE_DEG, database_settings_for
     from . import analysis_jobs, pipeline  # noqa: F401 (imported for their import time)
 
     load_database(database_settings_for(DEFAULT_FOV_RANGE_DEG))
-    _solve_a_star_list()
+    solve_catalog_stars()  # with the default FOV search, as jobs without options run
     fig = Figure(figsize=(1, 1))
     fig.add_subplot().set_title("warm-up")
     fig.savefig(io.BytesIO(), format="png")
-
-
-def _solve_a_star_list() -> None:
-    """Solve the catalog's brightest stars as a 15 deg pinhole camera at RA 90, Dec 30 sees them."""
-    import numpy as np
-
-    from ..camera import Camera
-    from ..catalog import load_catalog
-    from ..frames import radec_to_vector, rotation_from_radec_roll
-    from ..solve import solve_stars
-
-    catalog = load_catalog()
-    camera = Camera.from_fov(512, 512, 15.0)
-    rot = rotation_from_radec_roll(np.radians(90.0), np.radians(30.0), 0.0)
-    x, y = camera.vector_to_pixel(rot.apply(radec_to_vector(catalog.ra_rad, catalog.dec_rad)))
-    seen = camera.in_image(x, y, margin_px=2.0) & (catalog.v_mag < 7.0)
-    order = np.argsort(catalog.v_mag[seen])[:30]
-    solve_stars(x[seen][order], y[seen][order], width=512, height=512)
 
 
 def run_job(jobs_dir: Path, job_id: str) -> None:
