@@ -7,6 +7,7 @@ computes the QUEST attitude with its covariance (:mod:`startrack.attitude`).
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import replace
@@ -202,8 +203,14 @@ def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[flo
     -------
     AttitudeSolution
         With ``detections`` (the stars found, brightest first; ``matches.det_index`` indexes
-        them). The patterns are formed from the point sources first (spots the detector marks
-        extended or elongated come last). ``solve_time_s`` covers detection and identification,
+        them). A smeared frame (its brightest spots elongated, :mod:`startrack.rate.streak_solve`'s
+        ``SMEARED_ELONGATION``; or a failed point solve of somewhat elongated spots) is solved from
+        its streaks without being asked: the result is then a
+        :class:`startrack.rate.streak_solve.StreakSolution` (``mode`` "streak", the attitude at
+        mid-exposure ``t_mid_s`` after the exposure start, the rate when the header gives the
+        exposure; ``matches.det_index`` then indexes ``streaks``). The patterns are formed from
+        the point sources first (spots the detector marks extended or elongated come last).
+        ``solve_time_s`` covers detection and identification,
         not reading the file nor what a process does once (loading the pattern database and the
         compiled search).
     """
@@ -222,9 +229,19 @@ def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[flo
     t0 = time.perf_counter()
     found = (detector or StarDetector()).detect(img.data)
     detect_s = time.perf_counter() - t0
+    from .rate import streak_solve
+
+    smeared = functools.partial(streak_solve.solve_smeared_image, img.data, img.header, camera=camera, fov_deg=fov_deg,
+                                fov_range_deg=fov_range_deg, epoch=when.jyear, method=method, pixel_aspect=pixel_aspect)
+    elongation = streak_solve.smear_elongation(found)
+    if elongation >= streak_solve.SMEARED_ELONGATION and (streaked := smeared()).solved:
+        return replace(streaked, solve_time_s=detect_s + streaked.solve_time_s, detections=found)
     order = search_order(found)
     request = build_request(found.x[order], found.y[order], width=width, height=height, fov_deg=fov_deg,
                             fov_range_deg=fov_range_deg, camera=camera, flux=None, epoch=when,
                             pixel_aspect=pixel_aspect)
     solution = _run(replace(request, rows=order[request.rows]), method, options)
+    if not solution.solved and streak_solve.SOME_ELONGATION <= elongation < streak_solve.SMEARED_ELONGATION \
+            and (streaked := smeared()).solved:
+        return replace(streaked, solve_time_s=detect_s + streaked.solve_time_s, detections=found)
     return replace(solution, solve_time_s=detect_s + solution.solve_time_s, detections=found)
