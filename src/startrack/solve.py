@@ -208,7 +208,8 @@ def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[flo
         its streaks without being asked: the result is then a
         :class:`startrack.rate.streak_solve.StreakSolution` (``mode`` "streak", the attitude at
         mid-exposure ``t_mid_s`` after the exposure start, the rate when the header gives the
-        exposure; ``matches.det_index`` then indexes ``streaks``). The patterns are formed from
+        exposure; ``detections`` are then the fitted streaks' light centroids, one per row of
+        ``streaks``, which ``matches.det_index`` indexes). The patterns are formed from
         the point sources first (spots the detector marks extended or elongated come last).
         ``solve_time_s`` covers detection and identification,
         not reading the file nor what a process does once (loading the pattern database and the
@@ -235,7 +236,7 @@ def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[flo
                                 fov_range_deg=fov_range_deg, epoch=when.jyear, method=method, pixel_aspect=pixel_aspect)
     elongation = streak_solve.smear_elongation(found)
     if elongation >= streak_solve.SMEARED_ELONGATION and (streaked := smeared()).solved:
-        return replace(streaked, solve_time_s=detect_s + streaked.solve_time_s, detections=found)
+        return streak_solve.image_solution(streaked, found, detect_s)
     order = search_order(found)
     request = build_request(found.x[order], found.y[order], width=width, height=height, fov_deg=fov_deg,
                             fov_range_deg=fov_range_deg, camera=camera, flux=None, epoch=when,
@@ -243,5 +244,5 @@ def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[flo
     solution = _run(replace(request, rows=order[request.rows]), method, options)
     if not solution.solved and streak_solve.SOME_ELONGATION <= elongation < streak_solve.SMEARED_ELONGATION \
             and (streaked := smeared()).solved:
-        return replace(streaked, solve_time_s=detect_s + streaked.solve_time_s, detections=found)
+        return streak_solve.image_solution(streaked, found, detect_s)
     return replace(solution, solve_time_s=detect_s + solution.solve_time_s, detections=found)

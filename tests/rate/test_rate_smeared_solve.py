@@ -35,7 +35,12 @@ def test_a_smeared_frame_is_solved_from_its_streaks_at_mid_exposure(smeared):
     assert attitude_error(smeared.truth.rot_cam_from_icrs, solution.rot_cam_from_icrs) < CAMERA.pixel_scale_arcsec \
         * np.pi / (180 * 3600)  # within a pixel (42 arcsec) of the mid-exposure attitude
     assert solution.t_mid_s == pytest.approx(EXPOSURE_S / 2)  # the header's exposure, global shutter
-    assert solution.exposure_s == EXPOSURE_S and solution.detections is not None
+    assert solution.exposure_s == EXPOSURE_S
+    # the detections are the fitted streaks (matches.det_index indexes them): at the stars' mid-exposure positions
+    found, rows = solution.detections, solution.matches.det_index
+    assert len(found) == len(solution.streaks) and not np.any(found.is_point_source)
+    predicted = np.stack(CAMERA.vector_to_pixel(solution.rot_cam_from_icrs.apply(solution.matches.cat_vectors)), axis=1)
+    assert np.max(np.hypot(found.x[rows] - predicted[:, 0], found.y[rows] - predicted[:, 1])) < 2.0  # px
     # one frame cannot order the exposure in time: the rate is compared either way round. This
     # frame's 16 streaks fix the roll rate to 0.027 deg/s (1 sigma): 4.2 % of the rate at 3 sigma,
     # so the rate is refused, and the fitted one lies within its claimed uncertainty

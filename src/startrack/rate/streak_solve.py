@@ -43,7 +43,7 @@ from ..camera import Camera
 from ..errors import InvalidInputError
 from ..frames import radec_roll_from_rotation
 from ..identify.field_stars import field_stars
-from ..results import AttitudeSolution, StarMatches, Status
+from ..results import AttitudeSolution, Detections, StarMatches, Status
 from ..units import DEG
 from .catalog_free import consensus
 from .estimate import RateEstimate, failed
@@ -539,3 +539,29 @@ def solve_smeared_image(image, header, *, camera: Camera | None, fov_deg: float 
     kwargs = {"camera": camera} if camera is not None else {"fov_deg": fov_deg, "fov_range_deg": fov_range_deg}
     return solve_streaked(image, exposure_s=header_exposure_s(header), epoch=epoch,
                           options=StreakOptions(pixel_aspect=aspect), method=method, **kwargs)
+
+
+def streak_detections(solution: StreakSolution, width: int, height: int, noise: float = 0.0,
+                      background: float = 0.0) -> Detections:
+    """The fitted streaks of a solution as :class:`startrack.results.Detections` (one per row of
+    ``solution.streaks``, so that ``matches.det_index`` indexes them): the light centroids (the
+    mid-exposure positions, px), the fitted light, the larger end sigma, the elongation length
+    over the blur's FWHM and a point quality of 0 (streaks, not point sources)."""
+    fits = solution.streaks
+    if fits is None or not len(fits):
+        return Detections(width=int(width), height=int(height), noise=noise, background=background)
+    centroid = fits.measurements()[0][:, 4:6]
+    n = len(fits)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        elongation = np.maximum(1.0, fits.length_px / (2.355 * fits.blur_px))
+    return Detections(x=centroid[:, 0].copy(), y=centroid[:, 1].copy(), flux=np.asarray(fits.flux, dtype=float),
+                      sigma_px=np.max(fits.end_sigma_px(), axis=1), area_px=np.zeros(n, dtype=np.int64),
+                      peak=np.full(n, np.nan), elongation=elongation, background=background, noise=noise,
+                      width=int(width), height=int(height), point_quality=np.zeros(n))
+
+
+def image_solution(solution: StreakSolution, found: Detections, detect_s: float) -> StreakSolution:
+    """A streak solution as :func:`startrack.solve_image` returns it: the detection time added and
+    its streaks as the detections (:func:`streak_detections`; ``found`` gives the size and noise)."""
+    detections = streak_detections(solution, found.width, found.height, found.noise, found.background)
+    return replace(solution, solve_time_s=detect_s + solution.solve_time_s, detections=detections)
