@@ -203,7 +203,7 @@ def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[flo
     -------
     AttitudeSolution
         With ``detections`` (the stars found, brightest first; ``matches.det_index`` indexes
-        them). A smeared frame (its brightest spots elongated, :mod:`startrack.rate.streak_solve`'s
+        them). A smeared frame (its brightest spots elongated, :mod:`startrack.rate.streak_image`'s
         ``SMEARED_ELONGATION``; or a failed point solve of somewhat elongated spots) is solved from
         its streaks without being asked: the result is then a
         :class:`startrack.rate.streak_solve.StreakSolution` (``mode`` "streak", the attitude at
@@ -230,19 +230,19 @@ def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[flo
     t0 = time.perf_counter()
     found = (detector or StarDetector()).detect(img.data)
     detect_s = time.perf_counter() - t0
-    from .rate import streak_solve
+    from .rate import streak_image
 
-    smeared = functools.partial(streak_solve.solve_smeared_image, img.data, img.header, camera=camera, fov_deg=fov_deg,
+    smeared = functools.partial(streak_image.solve_smeared_image, img.data, img.header, camera=camera, fov_deg=fov_deg,
                                 fov_range_deg=fov_range_deg, epoch=when.jyear, method=method, pixel_aspect=pixel_aspect)
-    elongation = streak_solve.smear_elongation(found)
-    if elongation >= streak_solve.SMEARED_ELONGATION and (streaked := smeared()).solved:
-        return streak_solve.image_solution(streaked, found, detect_s)
+    elongation = streak_image.smear_elongation(found)
+    if elongation >= streak_image.SMEARED_ELONGATION and (streaked := smeared()).solved:
+        return streak_image.image_solution(streaked, found, detect_s)
     order = search_order(found)
     request = build_request(found.x[order], found.y[order], width=width, height=height, fov_deg=fov_deg,
                             fov_range_deg=fov_range_deg, camera=camera, flux=None, epoch=when,
                             pixel_aspect=pixel_aspect)
     solution = _run(replace(request, rows=order[request.rows]), method, options)
-    if not solution.solved and streak_solve.SOME_ELONGATION <= elongation < streak_solve.SMEARED_ELONGATION \
+    if not solution.solved and streak_image.SOME_ELONGATION <= elongation < streak_image.SMEARED_ELONGATION \
             and (streaked := smeared()).solved:
-        return streak_solve.image_solution(streaked, found, detect_s)
+        return streak_image.image_solution(streaked, found, detect_s)
     return replace(solution, solve_time_s=detect_s + solution.solve_time_s, detections=found)

@@ -47,6 +47,7 @@ from ..camera import Camera
 from ..errors import InvalidInputError
 from ..frames import radec_roll_from_rotation
 from ..identify.field_stars import field_stars
+from ..rate.smear_mode import SmearLimits, image_smear_px, usable_for_prediction
 from ..results import Status
 from ..solve import epoch_jyear, solve_stars
 from .quaternions import Quat, quat_conjugate, quat_matrix, quat_product, quat_rotvec, rotvec_quat
@@ -132,39 +133,6 @@ class TrackStep:
         if self.rot_cam_from_icrs is None:
             return (math.nan, math.nan, math.nan)
         return tuple(float(np.degrees(a)) for a in radec_roll_from_rotation(self.rot_cam_from_icrs))
-
-
-@dataclass(frozen=True)
-class SmearLimits:
-    """How an exposure smears the stars (:meth:`Tracker.smear_limits`).
-
-    Attributes
-    ----------
-    exposure_s : float
-    pixel_arcsec : float
-        One pixel at the boresight.
-    max_rate_deg_s : float
-        Largest rate across the boresight that smears a star by at most 0.1 px (seed 004
-        Table 1, :func:`startrack.simulate.snr.max_rate_rad_s`).
-    streak_on_px, streak_on_deg_s, streak_off_px, streak_off_deg_s : float
-        The smear (px) at which the Tracker enters streak mode and leaves it again, and the rates
-        across the boresight (deg/s) that make it.
-    """
-
-    exposure_s: float
-    pixel_arcsec: float
-    max_rate_deg_s: float
-    streak_on_px: float
-    streak_on_deg_s: float
-    streak_off_px: float
-    streak_off_deg_s: float
-
-    def describe(self) -> str:
-        """One line for a user (``startrack track``)."""
-        return (f"smear limit (seed 004 Table 1): exposure {self.exposure_s:g} s, 1 px = {self.pixel_arcsec:.1f} "
-                f"arcsec: 0.1 px of smear at {self.max_rate_deg_s:.4g} deg/s across the boresight; streak mode from "
-                f"{self.streak_on_px:g} px ({self.streak_on_deg_s:.3g} deg/s), point mode again below "
-                f"{self.streak_off_px:g} px ({self.streak_off_deg_s:.3g} deg/s)")
 
 
 class Tracker:
@@ -406,7 +374,7 @@ class Tracker:
         differenced = self._quat is not None and self._t is not None and t_s > self._t
         self._advance(solution.rot_cam_from_icrs, t_s)
         known = solution.time_order_known or differenced
-        if solution.rate.ok or _usable_for_prediction(solution):
+        if solution.rate.ok or usable_for_prediction(solution):
             omega = solution.turn_rad / solution.exposure_s
             if not solution.time_order_known and differenced and np.dot(omega, self._rate) < 0:
                 omega = -omega  # the attitudes of two frames tell the time order one frame cannot
@@ -492,46 +460,6 @@ class Tracker:
 
     def _rate_copy(self) -> NDArray | None:
         return None if self._rate is None else self._rate.copy()
-
-
-POINT_MOMENT_BINS = 1.6
-"""The moment length of a point star's candidate on the binned grid of
-:func:`startrack.rate.streak_find.find_streak_candidates`, in bins: the major axis of a round
-blob picks up the noise (6-7 px at 4 px bins on unsmeared generic-cmos frames, 12 and 20 deg
-fields, measured); :func:`image_smear_px` takes it out in quadrature."""
-SMEAR_CANDIDATES = 20
-
-
-def image_smear_px(data: NDArray) -> float:
-    """The smear (px) of a frame measured in the image: the lower quartile of the moment lengths
-    of its :data:`SMEAR_CANDIDATES` brightest streak candidates (blends of two stars and the
-    brightest stars' wide wings measure longer, never shorter), the point-star length
-    (:data:`POINT_MOMENT_BINS`) taken out in quadrature. 0 when the frame has no candidate."""
-    from ..rate.streak_find import find_streak_candidates
-
-    found = find_streak_candidates(data)
-    if not len(found):
-        return 0.0
-    quartile = float(np.percentile(found.length_px[:SMEAR_CANDIDATES], 25))
-    return math.sqrt(max(quartile**2 - (POINT_MOMENT_BINS * found.bin_px) ** 2, 0.0))
-
-
-PREDICTION_RATE_UNCERTAINTY = 0.3
-"""Largest 3-sigma uncertainty (fraction of the rate) of a streak frame's rate, trusted or not,
-that the Tracker still prefers to the rate differenced from the attitudes: under an angular
-acceleration the smoothed difference lags by ``(1 - rate_gain) / rate_gain`` frame periods (a
-tracker slewing at 4 deg/s^2 with 5 frames a second and gain 0.5 was 0.8 deg/s behind), while the
-streaks give the rate at this frame's mid-exposure."""
-
-
-def _usable_for_prediction(solution) -> bool:
-    """Whether an untrusted streak rate is still precise enough to predict the next frame by."""
-    cov, turn = solution.rate.covariance_rad2_s2, solution.turn_rad
-    if cov is None or not np.all(np.isfinite(turn)) or not math.isfinite(solution.exposure_s):
-        return False
-    norm = float(np.linalg.norm(turn)) / solution.exposure_s
-    trace = float(np.trace(cov))
-    return math.isfinite(trace) and norm > 0 and 3.0 * math.sqrt(max(trace, 0.0)) <= PREDICTION_RATE_UNCERTAINTY * norm
 
 
 def _checked_rate(rate_rad_s: ArrayLike) -> NDArray[np.float64]:
