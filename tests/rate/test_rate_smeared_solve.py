@@ -60,3 +60,24 @@ def test_without_an_exposure_the_turn_per_exposure_is_given(smeared):
     turn = solution.turn_rad if np.dot(solution.turn_rad, OMEGA) > 0 else -solution.turn_rad
     assert np.linalg.norm(turn - OMEGA * EXPOSURE_S) < 0.03 * np.linalg.norm(OMEGA) * EXPOSURE_S
     assert solution.rate.status.name == "DEGENERATE" and "exposure time is unknown" in solution.rate.reason
+
+
+def test_startrack_solve_says_it_solved_from_streaks(smeared, tmp_path, capsys):
+    # The CLI on a FITS frame with EXPTIME: JSON and the table say "streak", the mid-exposure time and the rate.
+    import json
+
+    from startrack.cli.main import main
+    from startrack.io import write_fits
+
+    path = tmp_path / "smeared.fits"
+    write_fits(path, np.asarray(smeared.image), header={"EXPTIME": EXPOSURE_S})
+    assert main(["solve", str(path), "--fov-deg", "12", "--epoch", "2025.0", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["mode"] == "streak" and data["t_mid_s"] == pytest.approx(EXPOSURE_S / 2)
+    assert data["exposure_s"] == EXPOSURE_S and data["rate_status"] in ("ok", "degenerate")
+    rate = np.radians(data["rate_deg_s"])
+    rate = rate if np.dot(rate, OMEGA) > 0 else -rate  # one frame cannot order the exposure in time
+    assert np.linalg.norm(rate - OMEGA) < 0.05 * np.linalg.norm(OMEGA)  # within 5 % (rad/s) of the truth
+    assert main(["solve", str(path), "--fov-deg", "12", "--epoch", "2025.0"]) == 0
+    table = capsys.readouterr().out
+    assert "solved from their streaks" in table and "0.1000 s after the exposure starts" in table
