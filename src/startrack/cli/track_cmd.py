@@ -19,6 +19,7 @@ from pathlib import Path
 
 from ..errors import InvalidInputError, StartrackError
 from ..io import read_image
+from ..io.image import IMAGE_SUFFIXES
 from ..io.limits import max_pixels_limit
 from ..io.targets import STDOUT, output_target
 from ..io.track_csv import COLUMNS, error_row, track_csv_writer, track_row
@@ -32,8 +33,6 @@ from .common import (
     max_pixels_option,
 )
 from .progress import ProgressBar, ensure_database_for
-
-IMAGE_SUFFIXES = {".fits", ".fit", ".fts", ".png", ".jpg", ".jpeg", ".tif", ".tiff"}
 
 EPILOG = "CSV columns: " + ", ".join(COLUMNS) + (
     ".\nmode is lost-in-space, tracking, streak lost-in-space, streak tracking (a smeared frame solved from its "
