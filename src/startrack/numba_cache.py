@@ -10,19 +10,26 @@ with an UnpicklingError. So:
   the platform's user cache), unless the user set ``NUMBA_CACHE_DIR`` themselves. It runs when
   :mod:`startrack.cache` is imported, which every path to a kernel does before numba is imported;
   if numba was imported earlier, its ``config.CACHE_DIR`` is set instead.
-* :func:`heal` checks every file of that folder once per process, before the first table is loaded
+* :func:`heal` checks the files of that folder once per process, before the first table is loaded
   from the cache: an index (``.nbi``) must be numba's version string followed by a complete pickle
   stream, a data file (``.nbc``) a complete pickle stream (its opcodes are walked to the STOP
   opcode without building anything, so nothing is imported; about 40 ms for 9 MB); a file that
-  fails is deleted, and numba compiles that
-  function again (a few seconds) and rewrites it. Temporary files of killed writers
-  (``*.tmp.*`` older than an hour) are removed too. A data file whose bytes are damaged inside
-  the compiled code itself is beyond what can be checked without loading it.
+  fails is deleted, and numba compiles that function again (a few seconds) and rewrites it.
+  Temporary files of killed writers (``*.tmp.*`` older than an hour) are removed too. A data file
+  whose bytes are damaged inside the compiled code itself is beyond what can be checked without
+  loading it.
+* Files found whole are remembered in :data:`CHECKED_NAME` in that folder, by their size and
+  modification time (ns): a later process reads only the files that are new or changed since
+  (numba writes every file anew, through a temporary file and a rename, so a rewrite changes
+  both), and otherwise only lists the folder (a few ms for 700 files, against 0.37 s to read
+  the 32 MB of a development cache in full). A file damaged in place with its size and time
+  kept as they were is not read again; remove :data:`CHECKED_NAME` to check everything.
 """
 
 from __future__ import annotations
 
 import io
+import json
 import os
 import pickle
 import pickletools
@@ -33,6 +40,9 @@ from pathlib import Path
 NUMBA_ENV_VAR = "NUMBA_CACHE_DIR"
 STALE_TEMP_S = 3600.0
 """A numba temporary file untouched for this long belongs to a killed writer."""
+
+CHECKED_NAME = ".startrack-checked.json"
+"""The record of the files :func:`heal` found whole: ``{relative path: [size, mtime_ns]}``."""
 
 _HEALED: set[Path] = set()
 
@@ -100,25 +110,68 @@ def _check(path: Path) -> bool:
 def heal(folder: Path | None) -> list[Path]:
     """Delete the damaged and stale files of startrack's numba cache (once per process per folder).
 
-    Returns the files removed; never raises.
+    A file recorded whole in :data:`CHECKED_NAME` with its present size and modification time is
+    not read again. Returns the files removed; never raises.
     """
     if folder is None or folder in _HEALED or not folder.is_dir():
         return []
     _HEALED.add(folder)
+    before = _read_checked(folder)
+    checked: dict[str, list[int]] = {}
     removed, now = [], time.time()
-    for path in folder.rglob("*"):
-        stale_temp = ".tmp." in path.name and _age_s(path, now) > STALE_TEMP_S
-        damaged = path.suffix in (".nbi", ".nbc") and not _check(path)
-        if (stale_temp or damaged) and _unlink(path):
-            removed.append(path)
+    for path, size, mtime_ns in _cache_files(folder):
+        name = path.relative_to(folder).as_posix()
+        if ".tmp." in path.name:
+            if now - mtime_ns * 1e-9 > STALE_TEMP_S and _unlink(path):
+                removed.append(path)
+        elif path.suffix in (".nbi", ".nbc"):
+            stamp = [size, mtime_ns]
+            if before.get(name) == stamp or _check(path):
+                checked[name] = stamp
+            elif _unlink(path):
+                removed.append(path)
+    if checked != before:
+        _write_checked(folder, checked)
     return removed
 
 
-def _age_s(path: Path, now: float) -> float:
+def _cache_files(folder: Path):
+    """(path, size, mtime_ns) of every file in ``folder`` and its subfolders; never raises."""
+    pending = [folder]
+    while pending:
+        try:
+            entries = list(os.scandir(pending.pop()))
+        except OSError:
+            continue
+        for entry in entries:
+            try:
+                if entry.is_dir(follow_symlinks=False):
+                    pending.append(Path(entry.path))
+                elif entry.is_file(follow_symlinks=False):
+                    info = entry.stat(follow_symlinks=False)
+                    yield Path(entry.path), info.st_size, info.st_mtime_ns
+            except OSError:
+                continue
+
+
+def _read_checked(folder: Path) -> dict[str, list[int]]:
+    """The record of files found whole, or {} if it is absent or unreadable."""
     try:
-        return now - path.stat().st_mtime
+        record = json.loads((folder / CHECKED_NAME).read_text())
+    except (OSError, ValueError):
+        return {}
+    return record if isinstance(record, dict) else {}
+
+
+def _write_checked(folder: Path, checked: dict[str, list[int]]) -> None:
+    """Replace the record atomically (a temporary file and a rename); a failure is ignored."""
+    target = folder / CHECKED_NAME
+    tmp = folder / f"{CHECKED_NAME}.{os.getpid()}.tmp.{time.time_ns():x}"
+    try:
+        tmp.write_text(json.dumps(checked, sort_keys=True))
+        os.replace(tmp, target)
     except OSError:
-        return 0.0
+        _unlink(tmp)
 
 
 def _unlink(path: Path) -> bool:
