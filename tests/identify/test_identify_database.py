@@ -6,7 +6,9 @@ import pytest
 from startrack import cache
 from startrack.errors import InvalidInputError
 from startrack.identify.database import (
+    KEY_BINS,
     LARGEST_LN_STEP,
+    LEVEL_SHIFT,
     RATIO_SCALE,
     DatabaseSettings,
     build_database_arrays,
@@ -46,6 +48,20 @@ def test_patterns_fit_their_level_and_are_sorted_by_key(arrays):
         assert np.all(largest_from_stored(arrays["pattern_largest"][sl]) <= 2 * SMALL.region_fraction * fov * 1.0002)
         keys = pattern_key(arrays["pattern_ratios"][sl])
         assert np.all(np.diff(keys) >= 0)
+
+
+def test_the_stored_key_index_is_each_level_s_pattern_key_and_its_cells(arrays):
+    """Stored since layout 4 (it was recomputed at each load); the same arrays as that recomputation."""
+    offsets, keys, starts = arrays["level_offsets"], arrays["keys"], arrays["cell_starts"]
+    assert keys.dtype == np.int64 and starts.dtype == np.int64
+    assert starts.shape == ((len(offsets) - 1) * KEY_BINS**2 + 1,) and starts[-1] == keys.size
+    assert np.all(np.diff(keys) >= 0) and np.all(np.diff(starts) >= 0)
+    for k in range(len(offsets) - 1):
+        sl = slice(offsets[k], offsets[k + 1])
+        np.testing.assert_array_equal(keys[sl], (k << LEVEL_SHIFT) + pattern_key(arrays["pattern_ratios"][sl]))
+    cell = np.searchsorted(starts, np.arange(keys.size), side="right") - 1  # the cell each row is in
+    in_level = keys & ((1 << LEVEL_SHIFT) - 1)
+    np.testing.assert_array_equal(cell, (keys >> LEVEL_SHIFT) * KEY_BINS**2 + in_level // 65536)
 
 
 def test_patterns_are_unique_within_a_level_and_use_bright_stars(arrays):

@@ -17,8 +17,9 @@ applied per scale; notes ``seed-000.md`` §1.14-1.15):
    ``stars_per_region`` brightest stars form every four-star pattern (C(6, 4) = 15 for 6 stars).
    Duplicates are removed.
 3. Each pattern is keyed by its five sorted edge ratios (:mod:`.patterns`); each level's patterns
-   are sorted by a key of its three smallest ratios (:func:`pattern_key`). At load time the keys
-   of all levels, prefixed by their level, form one sorted array (:attr:`PatternDatabase.keys`),
+   are sorted by a key of its three smallest ratios (:func:`pattern_key`). The keys of all levels,
+   prefixed by their level, form one sorted array (:attr:`PatternDatabase.keys`, stored with the
+   patterns: computing it at each load took 0.11-0.35 s of a 0.35-0.76 s load),
    so that every range query of a batch of image patterns, over every level, is one binary
    search (:meth:`PatternDatabase.key_ranges`). In numpy that is faster than a k-vector per
    level (measured: the k-vector's exact trimming gathers a window per query); the k-vector
@@ -46,9 +47,10 @@ from ..errors import InvalidInputError
 from .patterns import edge_ratios, pair_angles
 
 DB_KIND = "patterns"
-DB_VERSION = 3
+DB_VERSION = 4
 """3: largest edges stored on a logarithmic scale (fields of view to 120 deg), star and level
-masks widened when needed."""
+masks widened when needed; 4: the key index (:attr:`PatternDatabase.keys`, ``cell_starts``)
+stored, not recomputed at each load."""
 
 DB_MAX_FOV_DEG = 120.0
 """Widest level a database may reach: a 100 deg camera's short side plus the search margin."""
@@ -109,11 +111,11 @@ class PatternDatabase:
     verify_levels : ndarray of uint16 (uint32 beyond 16 levels), shape (S,)
         Bit k set when the star belongs to level k's verification set.
     keys : ndarray of int64, shape (P,)
-        ``(level << LEVEL_SHIFT) + pattern_key``, ascending (built at load time).
+        ``(level << LEVEL_SHIFT) + pattern_key``, ascending (stored in the cache file).
     cell_starts : ndarray of int64, shape (L * KEY_BINS**2 + 1,)
         First row of each (level, bin of r0, bin of r1) cell, index
         ``(level * KEY_BINS + bin0) * KEY_BINS + bin1``: a look-up searches one cell's rows, not
-        all of :attr:`keys` (fewer cache misses; built at load time).
+        all of :attr:`keys` (fewer cache misses; stored in the cache file).
     """
 
     settings: DatabaseSettings
@@ -305,28 +307,48 @@ def _compact(keep, sub, vectors, stars_used, verify_bits, level_patterns, levels
         ratios.append(quantised[order])
         largest.append(largest_to_stored(big[order]))
         offsets.append(offsets[-1] + len(order))
+    all_ratios, level_offsets = np.concatenate(ratios), np.array(offsets, dtype=np.int64)
+    keys, cell_starts = key_index(all_ratios, level_offsets)
     return {
         "cat_index": keep[used], "hip": sub.hip[used].astype(np.int64), "vectors": vec,
         "mag": sub.v_mag[used].astype(np.float32), "level_fov_rad": levels,
-        "pattern_stars": np.concatenate(stars), "pattern_ratios": np.concatenate(ratios),
-        "pattern_largest": np.concatenate(largest), "level_offsets": np.array(offsets, dtype=np.int64),
-        "verify_levels": verify_bits[used],
+        "pattern_stars": np.concatenate(stars), "pattern_ratios": all_ratios,
+        "pattern_largest": np.concatenate(largest), "level_offsets": level_offsets,
+        "verify_levels": verify_bits[used], "keys": keys, "cell_starts": cell_starts,
     }
+
+
+def key_index(pattern_ratios: NDArray[np.uint16],
+              level_offsets: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """The key index of patterns sorted by level, then :func:`pattern_key`.
+
+    Parameters
+    ----------
+    pattern_ratios : ndarray of uint16, shape (P, 5)
+        Quantised sorted edge ratios (:data:`RATIO_SCALE`).
+    level_offsets : ndarray of int, shape (L + 1,)
+        Patterns of level k are rows ``level_offsets[k]:level_offsets[k + 1]``.
+
+    Returns
+    -------
+    keys : ndarray of int64, shape (P,)
+        ``(level << LEVEL_SHIFT) + pattern_key``, ascending.
+    cell_starts : ndarray of int64, shape (L * KEY_BINS**2 + 1,)
+        First row of each (level, bin of r0, bin of r1) cell, then P.
+    """
+    level = np.repeat(np.arange(len(level_offsets) - 1, dtype=np.int64), np.diff(level_offsets))
+    keys = (level << LEVEL_SHIFT) + pattern_key(pattern_ratios)
+    cells = np.arange((len(level_offsets) - 1) * KEY_BINS**2, dtype=np.int64)
+    cell_keys = ((cells // KEY_BINS**2) << LEVEL_SHIFT) + (cells % KEY_BINS**2) * 65536
+    return keys, np.append(np.searchsorted(keys, cell_keys, side="left"), keys.size)
 
 
 # --- loading ----------------------------------------------------------------------------------
 def _from_arrays(settings: DatabaseSettings, arrays: dict[str, NDArray]) -> PatternDatabase:
-    offsets = arrays["level_offsets"]
-    level = np.repeat(np.arange(len(offsets) - 1, dtype=np.int64), np.diff(offsets))
-    keys = (level << LEVEL_SHIFT) + pattern_key(arrays["pattern_ratios"])
-    n_levels = len(offsets) - 1
-    cells = np.arange(n_levels * KEY_BINS**2, dtype=np.int64)
-    cell_keys = ((cells // KEY_BINS**2) << LEVEL_SHIFT) + (cells % KEY_BINS**2) * 65536
-    cell_starts = np.append(np.searchsorted(keys, cell_keys, side="left"), keys.size)
     fields = {k: arrays[k] for k in ("cat_index", "hip", "vectors", "mag", "level_fov_rad", "pattern_stars",
-                                     "pattern_ratios", "pattern_largest", "level_offsets", "verify_levels")}
-    return PatternDatabase(settings=settings, **fields, keys=keys, cell_starts=cell_starts,
-                           tree=cKDTree(arrays["vectors"]))
+                                     "pattern_ratios", "pattern_largest", "level_offsets", "verify_levels",
+                                     "keys", "cell_starts")}
+    return PatternDatabase(settings=settings, **fields, tree=cKDTree(arrays["vectors"]))
 
 
 def load_database(settings: DatabaseSettings | None = None,

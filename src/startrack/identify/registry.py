@@ -16,26 +16,20 @@ re-match. The table of what each needs and how fast it is lives in ``docs/identi
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Mapping
 from functools import partial
-from typing import Protocol
+from importlib import import_module
+from typing import TYPE_CHECKING, Protocol
 
-from scipy.spatial.transform import Rotation
-
-from ..camera import Camera
 from ..errors import InvalidInputError
-from .angle_pivot import AnglePivotOptions, match_angle_pivot
-from .candidate import MatchOutcome
-from .database import DB_MAX_FOV_DEG, DatabaseSettings, load_database
-from .field_stars import FieldStars, field_stars
-from .match_groups import VanBezooijenOptions, match_van_bezooijen
-from .nvertex import NVertexOptions, match_nvertex
-from .overlay import OverlayOptions, catalog_star_set, match_overlay
-from .pair_database import PairSettings, load_pair_database
-from .pyramid import PyramidOptions, match_pyramid
-from .quad_matcher import MatcherOptions, match_lost_in_space
-from .quad_search import warm_up
-from .triangles import TriangleOptions, match_triangles
+from .database import DB_MAX_FOV_DEG, DatabaseSettings
+
+if TYPE_CHECKING:
+    from scipy.spatial.transform import Rotation
+
+    from ..camera import Camera
+    from .candidate import MatchOutcome
+    from .field_stars import FieldStars
 
 DEFAULT_FOV_RANGE_DEG: tuple[float, float] = (3.0, 100.0)
 """Searched when no field of view is given: telescopes' finder fields, star trackers, camera
@@ -68,7 +62,7 @@ class MatchRequest(Protocol):
     fit_aspect: bool
 
 
-Matcher = Callable[[object | None], MatchOutcome]
+Matcher = Callable[[object | None], "MatchOutcome"]
 """A prepared matcher: called with its options (or None), returns the outcome."""
 
 
@@ -88,7 +82,18 @@ def database_settings_for(fov_range_deg: tuple[float, float] = DEFAULT_FOV_RANGE
     return DatabaseSettings(fov_min_deg=max(lo * 0.97, 0.4), fov_max_deg=min(hi * 1.03, DB_MAX_FOV_DEG), **depth)
 
 
+def _load(module: str, name: str):
+    """``name`` from the module ``startrack.identify.<module>``, imported on first use (a matcher's
+    modules cost 20-50 ms each to import; a call imports only those of the matcher it runs)."""
+    return getattr(import_module(f".{module}", __package__), name)
+
+
 def _quads(request: MatchRequest) -> tuple[Matcher, FieldStars]:
+    from .database import load_database
+    from .field_stars import field_stars
+    from .quad_matcher import match_lost_in_space
+    from .quad_search import warm_up
+
     db = load_database(database_settings_for(request.fov_range_deg))
     warm_up(db)
 
@@ -113,10 +118,16 @@ def _known_focal(request: MatchRequest, name: str) -> tuple[Camera, float]:
     return camera, tolerance
 
 
-def _on_pairs(match: Callable[..., MatchOutcome], name: str) -> Callable[[MatchRequest], tuple[Matcher, FieldStars]]:
-    """Entry of a matcher with the signature of :func:`.pyramid.match_pyramid`."""
+def _on_pairs(module: str, function: str, name: str,
+              **keywords) -> Callable[[MatchRequest], tuple[Matcher, FieldStars]]:
+    """Entry of a matcher with the signature of :func:`.pyramid.match_pyramid`: ``function`` of
+    ``module`` with ``keywords``, imported when the entry is called."""
 
     def prepare(request: MatchRequest) -> tuple[Matcher, FieldStars]:
+        from .field_stars import field_stars
+        from .pair_database import PairSettings, load_pair_database
+
+        match = partial(_load(module, function), **keywords)
         camera, tolerance = _known_focal(request, name)
         settings = PairSettings(fov_deg=float(math.ceil(camera.fov_diagonal_deg * (1 + tolerance))))
         pdb = load_pair_database(settings)
@@ -130,6 +141,10 @@ def _on_pairs(match: Callable[..., MatchOutcome], name: str) -> Callable[[MatchR
 
 
 def _overlay(request: MatchRequest) -> tuple[Matcher, FieldStars]:
+    from .field_stars import field_stars
+    from .overlay import catalog_star_set, match_overlay
+    from .pair_database import PairSettings
+
     if request.prior_rot is None:
         raise InvalidInputError("the overlay matcher needs a prior attitude: give prior_rot_cam_from_icrs")
     camera, _ = _known_focal(request, "overlay")
@@ -144,26 +159,43 @@ def _overlay(request: MatchRequest) -> tuple[Matcher, FieldStars]:
 
 MATCHERS: dict[str, Callable[[MatchRequest], tuple[Matcher, FieldStars]]] = {
     "quads": _quads,
-    "pyramid": _on_pairs(match_pyramid, "pyramid"),
-    "angle": _on_pairs(match_angle_pivot, "angle"),
-    "triangle-planar": _on_pairs(partial(match_triangles, variant="planar"), "triangle-planar"),
-    "triangle-spherical": _on_pairs(partial(match_triangles, variant="spherical"), "triangle-spherical"),
-    "nvertex-3": _on_pairs(partial(match_nvertex, n=3), "nvertex-3"),
-    "nvertex-4": _on_pairs(partial(match_nvertex, n=4), "nvertex-4"),
-    "nvertex-5": _on_pairs(partial(match_nvertex, n=5), "nvertex-5"),
-    "van-bezooijen": _on_pairs(match_van_bezooijen, "van-bezooijen"),
+    "pyramid": _on_pairs("pyramid", "match_pyramid", "pyramid"),
+    "angle": _on_pairs("angle_pivot", "match_angle_pivot", "angle"),
+    "triangle-planar": _on_pairs("triangles", "match_triangles", "triangle-planar", variant="planar"),
+    "triangle-spherical": _on_pairs("triangles", "match_triangles", "triangle-spherical", variant="spherical"),
+    "nvertex-3": _on_pairs("nvertex", "match_nvertex", "nvertex-3", n=3),
+    "nvertex-4": _on_pairs("nvertex", "match_nvertex", "nvertex-4", n=4),
+    "nvertex-5": _on_pairs("nvertex", "match_nvertex", "nvertex-5", n=5),
+    "van-bezooijen": _on_pairs("match_groups", "match_van_bezooijen", "van-bezooijen"),
     "overlay": _overlay,
 }
-"""Matchers by name (see the module docstring)."""
+"""Matchers by name (see the module docstring); each imports its modules when it is called."""
 
 
-OPTIONS: dict[str, type] = {
-    "quads": MatcherOptions, "pyramid": PyramidOptions, "angle": AnglePivotOptions,
-    "triangle-planar": TriangleOptions, "triangle-spherical": TriangleOptions,
-    "nvertex-3": NVertexOptions, "nvertex-4": NVertexOptions, "nvertex-5": NVertexOptions,
-    "van-bezooijen": VanBezooijenOptions, "overlay": OverlayOptions,
-}
-"""The options dataclass of each matcher."""
+class _Options(Mapping[str, type]):
+    """The options dataclass of each matcher, imported when it is looked up."""
+
+    _WHERE = {
+        "quads": ("quad_matcher", "MatcherOptions"), "pyramid": ("pyramid", "PyramidOptions"),
+        "angle": ("angle_pivot", "AnglePivotOptions"),
+        "triangle-planar": ("triangles", "TriangleOptions"), "triangle-spherical": ("triangles", "TriangleOptions"),
+        "nvertex-3": ("nvertex", "NVertexOptions"), "nvertex-4": ("nvertex", "NVertexOptions"),
+        "nvertex-5": ("nvertex", "NVertexOptions"), "van-bezooijen": ("match_groups", "VanBezooijenOptions"),
+        "overlay": ("overlay", "OverlayOptions"),
+    }
+
+    def __getitem__(self, method: str) -> type:
+        return _load(*self._WHERE[method])
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._WHERE)
+
+    def __len__(self) -> int:
+        return len(self._WHERE)
+
+
+OPTIONS: Mapping[str, type] = _Options()
+"""The options dataclass of each matcher (a read-only mapping; a look-up imports its module)."""
 
 
 def options_for(method: str, **settings) -> object:
