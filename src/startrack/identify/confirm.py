@@ -23,8 +23,8 @@ from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
 from .candidate import Candidate
-from .refine import refine_pointing, warm_up_pose
-from .verify import false_match_bound, match_nearest, project_stars
+from .refine import fit_pose, match_predicted, warm_up_pose
+from .verify import TEST_RADIUS_FRACTIONS, count_in_image, false_match_bound_counts, field_cone
 
 LOOSE_RADIUS_FACTOR = 2.5
 """First verification pass: match radius as a multiple of the final one."""
@@ -86,51 +86,86 @@ class Confirmer:
     def __post_init__(self) -> None:
         warm_up_pose()  # the loose pass refits poses: compile (or load) that before a matcher's clock starts
 
-    def confirm(self, stars: StarSet, rot: Rotation, camera: Camera, pattern_img: NDArray,
+    def confirm(self, stars: StarSet, rot: Rotation | NDArray, camera: Camera, pattern_img: NDArray,
                 n_trials: int, pool_end: int = 0) -> Candidate | None:
-        """A verified :class:`Candidate`, or None (see the module docstring). ``pool_end``: one past
-        the faintest star rank the patterns are drawn from; the test covers
-        :attr:`verify_stars` stars, more when the pool reaches deeper (half as many again beyond it).
+        """A verified :class:`Candidate`, or None (see the module docstring). ``rot``: the candidate
+        attitude, a Rotation or its matrix (3, 3, camera from ICRS; the Rotation is then made only
+        for a verified candidate). ``pool_end``: one past the faintest star rank the patterns are
+        drawn from; the test covers :attr:`verify_stars` stars, more when the pool reaches deeper
+        (half as many again beyond it).
 
         After a loose refit, the stars that only the loose radius had matched are fitted, not
         found: the test counts the stars the candidate matched at the tight radius before any
         refit and those the refit newly brings in, not the ones it pulled in (a refit with a free
         focal length can pull a wrong candidate's chance loose matches under the tight radius:
         one false match in about 300 wide-field solves before this rule)."""
+        matrix = rot.as_matrix() if isinstance(rot, Rotation) else np.asarray(rot, dtype=np.float64)
         n = min(len(self.x), max(self.verify_stars, pool_end + self.verify_stars // 2))
-        found, tight = self._verify(stars, rot, camera, pattern_img, n_trials, n, np.zeros(0, np.int64))
+        xs, ys = self.x[:n], self.y[:n]
+        given, field = (rot if isinstance(rot, Rotation) else None), _Field(stars, matrix, camera)
+        prob, tight = self._verify(field, xs, ys, pattern_img, n_trials, np.zeros(0, np.int64))
         fitted = np.zeros(0, np.int64)
         for _ in range(LOOSE_ROUNDS_DISTORTED if self.fit_distortion else 1):
-            if found is not None:
-                return found
-            proj = project_stars(stars.tree, stars.vectors, rot, camera, stars.keep)
-            img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y,
-                                         LOOSE_RADIUS_FACTOR * self.radius_px)
+            if prob <= self.max_false_match_prob:
+                return field.candidate(given, tight, prob)
+            img_i, cat_j = field.matches(xs, ys, LOOSE_RADIUS_FACTOR * self.radius_px)
             extra = np.count_nonzero(_not_in(img_i, pattern_img))
             if extra < MIN_EXTRA_MATCHES:
                 return None
             fitted = np.union1d(fitted, img_i[_not_in(img_i, tight) & _not_in(img_i, pattern_img)])
             lens = extra >= MIN_EXTRA_FOR_LENS
-            rot, camera, _ = refine_pointing(rot, camera, stars.vectors[proj.star[cat_i]], self.x[img_i],
-                                             self.y[img_i], fit_focal=self.fit_focal,
-                                             fit_k1=self.fit_distortion and lens, fit_aspect=self.fit_aspect and lens)
-            found, _ = self._verify(stars, rot, camera, pattern_img, n_trials, n, fitted)
-        return found
+            refit, camera, _ = fit_pose(field.matrix, field.camera, field.vectors[cat_j], xs[img_i], ys[img_i],
+                                        fit_focal=self.fit_focal, fit_k1=self.fit_distortion and lens,
+                                        fit_aspect=self.fit_aspect and lens)
+            given, field = None, _Field(stars, refit, camera)
+            prob, tight = self._verify(field, xs, ys, pattern_img, n_trials, fitted)
+        return field.candidate(None, tight, prob) if prob <= self.max_false_match_prob else None
 
-    def _verify(self, stars: StarSet, rot, camera, pattern_img, n_trials: int, n: int,
-                fitted: NDArray) -> tuple[Candidate | None, NDArray[np.int64]]:
-        """The candidate if its tight-radius matches among the first ``n`` stars, other than the
-        pattern's and the ``fitted`` ones, make a false match unlikely enough (else None); and
-        the image stars matched at the tight radius."""
-        proj = project_stars(stars.tree, stars.vectors, rot, camera, stars.keep)
-        img_i, cat_i = match_nearest(self.x[:n], self.y[:n], proj.x, proj.y, self.radius_px)
-        extra = _not_in(img_i, pattern_img) & _not_in(img_i, fitted)
-        d2 = (self.x[img_i[extra]] - proj.x[cat_i[extra]]) ** 2 + (self.y[img_i[extra]] - proj.y[cat_i[extra]]) ** 2
-        prob = false_match_bound(d2, n - len(pattern_img) - len(fitted), proj.star.size, self.radius_px,
-                                 camera.width, camera.height, n_trials)
-        if prob > self.max_false_match_prob:
-            return None, img_i
-        return Candidate(rot, camera, img_i, stars.catalog_rows[proj.star[cat_i]], prob), img_i
+    def _verify(self, field: _Field, xs: NDArray, ys: NDArray, pattern_img: NDArray, n_trials: int,
+                fitted: NDArray) -> tuple[float, NDArray[np.int64]]:
+        """The false-match bound of the tight-radius matches among the image stars ``xs``, ``ys``
+        other than the pattern's and the ``fitted`` ones, at each radius of
+        :data:`.verify.TEST_RADIUS_FRACTIONS`; and the image stars matched at the tight radius
+        (the field keeps their catalog stars)."""
+        tight, field.tight_catalog = field.matches(xs, ys, self.radius_px)
+        counts = []
+        for f in TEST_RADIUS_FRACTIONS:  # the matches at f r keep those of the tight ones within f r
+            img_i = tight if f == 1.0 or tight.size == 0 else field.matches(xs, ys, f * self.radius_px)[0]
+            counts.append(int(np.count_nonzero(_not_in(img_i, pattern_img) & _not_in(img_i, fitted))))
+        n_tested = len(xs) - len(pattern_img) - len(fitted)
+        if max(counts) == 0 or n_tested <= 0:
+            return 1.0, tight
+        prob = false_match_bound_counts(counts, n_tested, count_in_image(field.vectors, field.matrix, field.camera),
+                                        self.radius_px, field.camera.width, field.camera.height, n_trials)
+        return prob, tight
+
+
+class _Field:
+    """The catalog stars that can land in the image of one attitude (matrix (3, 3), camera from
+    ICRS) and camera: their indices into a :class:`StarSet` (cone of :func:`.verify.field_cone`) and
+    their ICRS vectors (C, 3); matched by :func:`.refine.match_predicted`, which projects them and
+    keeps those inside the image (as :func:`.verify.project_stars` with
+    :func:`.verify.match_nearest`)."""
+
+    def __init__(self, stars: StarSet, matrix: NDArray, camera: Camera):
+        self.stars, self.matrix, self.camera = stars, matrix, camera
+        self.index = field_cone(stars.tree, matrix, camera, stars.keep)
+        self.vectors = stars.vectors[self.index]
+        self.tight_catalog = np.zeros(0, np.int64)
+
+    def matches(self, xs: NDArray, ys: NDArray, radius_px: float) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """(image index into ``xs``, index into :attr:`vectors`) of the closest-first pairs within the radius."""
+        if self.index.size == 0 or len(xs) == 0:
+            empty = np.zeros(0, np.int64)
+            return empty, empty
+        return match_predicted(self.vectors, self.matrix, self.camera, xs, ys, radius_px)
+
+    def candidate(self, rot: Rotation | None, image_index: NDArray, prob: float) -> Candidate:
+        """The verified candidate of these matches at the tight radius (``rot``: the attitude as a
+        Rotation when the caller gave one, else it is made from the matrix)."""
+        rot = rot if rot is not None else Rotation.from_matrix(self.matrix)
+        rows = self.stars.catalog_rows[self.index[self.tight_catalog]]
+        return Candidate(rot, self.camera, image_index, rows, prob)
 
 
 def _not_in(values: NDArray, few: NDArray) -> NDArray[np.bool_]:

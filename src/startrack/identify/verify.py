@@ -19,7 +19,7 @@ stars that were not used to form the candidate.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -53,16 +53,36 @@ def project_stars(tree: cKDTree, vectors: NDArray, rot_cam_from_icrs: Rotation, 
     keep : callable, optional
         Given the indices of the stars in the field, returns a mask of those to keep.
     """
-    half_diag = math.radians(camera.fov_diagonal_deg) / 2.0 * 1.05
-    matrix = rot_cam_from_icrs.as_matrix()  # its last row is the boresight in ICRS
-    idx = np.asarray(tree.query_ball_point(matrix[2], 2.0 * math.sin(min(half_diag, 1.5) / 2.0)), dtype=np.int64)
-    if keep is not None and idx.size:
-        idx = idx[keep(idx)]
+    matrix = rot_cam_from_icrs.as_matrix()
+    idx = field_cone(tree, matrix, camera, keep)
     if idx.size == 0:
         return Projection(idx, np.zeros(0), np.zeros(0))
     x, y = camera.vector_to_pixel(vectors[idx] @ matrix.T)
     inside = camera.in_image(x, y)
     return Projection(idx[inside], x[inside], y[inside])
+
+
+def field_cone(tree: cKDTree, matrix_cam_from_icrs: NDArray, camera: Camera,
+               keep: Callable[[NDArray], NDArray] | None = None) -> NDArray[np.int64]:
+    """Indices (into the vectors a KD-tree was built on) of the stars within 1.05 times the half
+    diagonal of the image (at most 1.5 rad) of the boresight of an attitude matrix (3, 3, camera
+    from ICRS), filtered by ``keep`` as in :func:`project_stars`: every star that can land in the
+    image, and none behind it."""
+    half_diag = math.radians(camera.fov_diagonal_deg) / 2.0 * 1.05
+    axis = matrix_cam_from_icrs[2]  # the last row is the boresight in ICRS
+    idx = np.asarray(tree.query_ball_point(axis, 2.0 * math.sin(min(half_diag, 1.5) / 2.0)), dtype=np.int64)
+    if keep is not None and idx.size:
+        idx = idx[keep(idx)]
+    return idx
+
+
+def count_in_image(vectors_icrs: NDArray, matrix_cam_from_icrs: NDArray, camera: Camera) -> int:
+    """How many of the ICRS unit vectors (S, 3), all in front of the camera (as those of
+    :func:`field_cone`), an attitude matrix (3, 3) puts inside the image."""
+    if len(vectors_icrs) == 0:
+        return 0
+    x, y = camera.vector_to_pixel(vectors_icrs @ matrix_cam_from_icrs.T)
+    return int(np.count_nonzero(camera.in_image(x, y)))
 
 
 def match_nearest(img_x: NDArray, img_y: NDArray, cat_x: NDArray, cat_y: NDArray,
@@ -165,7 +185,16 @@ def false_match_bound(extra_d2_px2: NDArray, n_tested: int, n_predicted: int, ra
         ``min(1, len(TEST_RADIUS_FRACTIONS) * min over radii of the bound at that radius)``.
     """
     d2 = np.asarray(extra_d2_px2, dtype=float)
-    best = min(false_match_probability(int(np.count_nonzero(d2 <= (f * radius_px) ** 2)), n_tested, n_predicted,
-                                       f * radius_px, width, height, n_trials)
-               for f in TEST_RADIUS_FRACTIONS)
+    counts = [int(np.count_nonzero(d2 <= (f * radius_px) ** 2)) for f in TEST_RADIUS_FRACTIONS]
+    return false_match_bound_counts(counts, n_tested, n_predicted, radius_px, width, height, n_trials)
+
+
+def false_match_bound_counts(n_matched: Sequence[int], n_tested: int, n_predicted: int, radius_px: float,
+                             width: int, height: int, n_trials: int) -> float:
+    """:func:`false_match_bound` from the number of matched image stars (beyond those that formed the
+    candidate) within each radius of :data:`TEST_RADIUS_FRACTIONS` (times ``radius_px``), in that
+    order: the form for matches made at each radius (a closest-first greedy match at a smaller
+    radius keeps exactly the pairs of the match at the larger one that lie within it)."""
+    best = min(false_match_probability(int(k), n_tested, n_predicted, f * radius_px, width, height, n_trials)
+               for k, f in zip(n_matched, TEST_RADIUS_FRACTIONS, strict=True))
     return min(1.0, len(TEST_RADIUS_FRACTIONS) * best)
