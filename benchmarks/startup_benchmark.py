@@ -5,7 +5,9 @@ Measured, each in fresh processes (the median of ``--repeat`` runs where it says
 
 * ``import startrack`` and ``import startrack.cli.solve_cmd`` (the solve command's modules);
 * the first solve in a new process once the caches exist: the database load, the warm-up
-  (:func:`startrack.cli.batch_warmup.warm_up`: the compiled kernels loaded from numba's cache),
+  (:func:`startrack.cli.batch_warmup.warm_up`: the compiled kernels loaded from numba's cache,
+  the smallest first so that numba's own start, 0.25-0.4 s whatever function comes first, is
+  printed apart from quad_kernel.search's load),
   the first and second ``solve_image`` of a real photo, and the same first solve with no warm-up
   (loading then falls inside it); and what each compiled function costs to load (numba's
   ``load_overload`` timed per function, largest first);
@@ -80,6 +82,7 @@ t2b = time.perf_counter()
 ensure_database_for(float(sys.argv[2]))
 t3 = time.perf_counter()
 if sys.argv[3] == "warm":
+    quad_kernel._bin(0)  # the smallest compiled function first: its load is numba's own start (see --help)
     warm_up(float(sys.argv[2]))
 t4 = time.perf_counter()
 first = startrack.solve_image(image, fov_deg=float(sys.argv[2]))
@@ -150,8 +153,10 @@ def _first_solve(mode: str) -> dict:
 
 def measure_first_solve(repeat: int) -> None:
     print(f"\nfirst solve in a new process, caches present ({PHOTO.name}, --fov-deg {FOV_DEG}; median of {repeat})")
+    by_mode: dict[str, list[dict]] = {}
     for mode, label in (("warm", "with the warm-up (the commands)"), ("cold", "no warm-up (the library)")):
         runs = [_first_solve(mode) for _ in range(repeat)]
+        by_mode[mode] = runs
         med = {k: statistics.median(r[k] for r in runs) for k in
                ("import_s", "solver_import_s", "read_s", "db_s", "warm_up_s", "first_s", "first_reported_s",
                 "second_s")}
@@ -162,8 +167,13 @@ def measure_first_solve(repeat: int) -> None:
     loads = runs[-1]["loads"]
     total = sum(loads.values())
     print(f"  compiled functions loaded from numba's cache: {len(loads)}, {1e3 * total:.0f} ms in all "
-          "(the last run; a function called only inside another is loaded with it; the first one loaded "
-          "also pays for numba's code generator starting)")
+          "(the last run, no warm-up; a function called only inside another is loaded with it; the first "
+          "one loaded also pays for numba's start: its typing and lowering registries, numba.np.npyimpl and "
+          "the rest, whatever the function)")
+    first = by_mode["warm"][-1]["loads"]
+    start = first.get("quad_kernel._bin", float("nan"))
+    print(f"  with the warm-up, the smallest function (quad_kernel._bin) loaded first: {1e3 * start:.0f} ms, "
+          f"numba's start; quad_kernel.search after it: {1e3 * first.get('quad_kernel.search', float('nan')):.0f} ms")
     order = {name: k for k, name in enumerate(loads)}
     for name, seconds in sorted(loads.items(), key=lambda kv: -kv[1]):
         print(f"    {name:<34} {1e3 * seconds:7.1f} ms   (loaded {order[name] + 1}.)")
