@@ -16,6 +16,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import threading
 import time
 import traceback
 from collections.abc import Callable, Iterator
@@ -110,7 +111,7 @@ NO_WORKERS_S = 120.0
 """With chunks pending and no worker connected for this long, the rest are ``LOST`` rows (local
 workers whose nannies could not restart them, a cluster whose workers all left)."""
 POLL_S = 5.0
-"""How often, while nothing finishes, the scheduler is asked whether any worker is left."""
+"""How often the watchdog asks the scheduler whether any worker is left."""
 
 
 def run_dask(client: Any, spec: CampaignSpec, chunks: list[Chunk], on_chunk: ChunkDone,
@@ -118,63 +119,95 @@ def run_dask(client: Any, spec: CampaignSpec, chunks: list[Chunk], on_chunk: Chu
     """Run the chunks on ``client``'s workers (see the module docstring); returns the seconds
     spent warming the workers (``warm_s``) and from the first submission to the last result
     (``compute_s``)."""
+    from distributed import as_completed
+
     from .warm_plugin import WarmUp
 
     t0 = time.perf_counter()
     client.register_plugin(WarmUp(spec), name=f"startrack-warm-{spec.name}")
     t1 = time.perf_counter()
     pending = {client.submit(run_chunk, spec, chunk, pure=False): (chunk, 0) for chunk in chunks}
-    total, done, idle_since = sum(c.size for c in chunks), 0, None
-    while pending:
-        finished = _first_finished(list(pending))
-        if not finished:
-            idle_since = None if _has_workers(client) else (idle_since or time.perf_counter())
-            if idle_since is not None and time.perf_counter() - idle_since >= NO_WORKERS_S:
-                _abandon(spec, pending, on_chunk)
-                pending, done = {}, total
-        for future in finished:
-            chunk, tries = pending.pop(future)
-            table = _table_or_retry(client, spec, future, chunk, tries, pending)
-            if table is not None:
-                on_chunk(chunk, table)
-                done += chunk.size
-        if progress is not None and (finished or not pending):
-            progress(done, total)
+    total, done = sum(c.size for c in chunks), 0
+    queue = as_completed(list(pending))
+    with _Watchdog(client, pending) as watchdog:
+        for future in queue:
+            chunk, tries = watchdog.pop(future)
+            if watchdog.fired.is_set():
+                table = lost_table(spec, chunk, watchdog.reason)
+            else:
+                table = _table_or_retry(client, spec, future, chunk, tries, watchdog, queue)
+            if table is None:
+                continue
+            on_chunk(chunk, table)
+            done += chunk.size
+            if progress is not None:
+                progress(done, total)
     return {"warm_s": t1 - t0, "compute_s": time.perf_counter() - t1}
 
 
-def _first_finished(futures: list[Any]) -> list[Any]:
-    """The futures that finish within :data:`POLL_S` (at least one), or none."""
-    from distributed import wait
+class _Watchdog:
+    """The pending futures (future -> (chunk, tries)), shared with a thread that cancels them all
+    once no worker has been connected for :data:`NO_WORKERS_S` (``fired`` is then set, and each
+    cancelled chunk becomes ``LOST`` rows with :attr:`reason`)."""
 
-    try:
-        return list(wait(futures, timeout=POLL_S, return_when="FIRST_COMPLETED").done)
-    except TimeoutError:
-        return []
+    def __init__(self, client: Any, pending: dict[Any, tuple[Chunk, int]]):
+        self.client, self.pending, self.lock = client, pending, threading.Lock()
+        self.fired, self.stop = threading.Event(), threading.Event()
+        self.reason = f"no Dask worker was connected for {NO_WORKERS_S:g} s while this trial waited"
+        self.thread = threading.Thread(target=self._watch, name="startrack-campaign-watchdog", daemon=True)
 
+    def __enter__(self) -> _Watchdog:
+        self.thread.start()
+        return self
 
-def _has_workers(client: Any) -> bool:
-    return bool(client.scheduler_info(n_workers=-1).get("workers"))
+    def __exit__(self, *exc: object) -> None:
+        self.stop.set()
+        self.thread.join()
 
+    def pop(self, future: Any) -> tuple[Chunk, int]:
+        with self.lock:
+            return self.pending.pop(future)
 
-def _abandon(spec: CampaignSpec, pending: dict[Any, tuple[Chunk, int]], on_chunk: ChunkDone) -> None:
-    """Hand every pending chunk to ``on_chunk`` as ``LOST`` rows: no worker is left."""
-    reason = f"no Dask worker was connected for {NO_WORKERS_S:g} s while this trial waited"
-    for future, (chunk, _) in pending.items():
-        future.release()
-        on_chunk(chunk, lost_table(spec, chunk, reason))
+    def add(self, future: Any, entry: tuple[Chunk, int]) -> None:
+        with self.lock:
+            self.pending[future] = entry
+            if self.fired.is_set():  # submitted as the watchdog gave up: it will not wait either
+                self.client.cancel([future])
+
+    def _watch(self) -> None:
+        idle_since = None
+        while not self.stop.wait(POLL_S):
+            if self._has_workers():
+                idle_since = None
+                continue
+            idle_since = idle_since or time.perf_counter()
+            if time.perf_counter() - idle_since >= NO_WORKERS_S:
+                with self.lock:
+                    self.fired.set()
+                    futures = list(self.pending)
+                self.client.cancel(futures)
+                return
+
+    def _has_workers(self) -> bool:
+        try:
+            return bool(self.client.scheduler_info(n_workers=-1).get("workers"))
+        except Exception:  # the scheduler itself is gone: as good as no workers
+            return False
 
 
 def _table_or_retry(client: Any, spec: CampaignSpec, future: Any, chunk: Chunk, tries: int,
-                    pending: dict[Any, tuple[Chunk, int]]) -> pa.Table | None:
-    """The chunk's table; or, when its worker died, None with its retries added to ``pending``
-    (``LOST`` rows once a single trial has failed :data:`SINGLE_TRIES` times)."""
+                    watchdog: _Watchdog, queue: Any) -> pa.Table | None:
+    """The chunk's table; or, when its worker died, None with its retries submitted (added to the
+    watchdog's futures and the ``as_completed`` queue); ``LOST`` rows once a single trial has
+    failed :data:`SINGLE_TRIES` times."""
     try:
         table = future.result()
     except Exception:  # the worker died (or the chunk could not be sent): retry trial by trial
         retries = _retries(chunk, tries)
         for single, attempt in retries:
-            pending[client.submit(run_chunk, spec, single, pure=False)] = (single, attempt)
+            retry = client.submit(run_chunk, spec, single, pure=False)
+            watchdog.add(retry, (single, attempt))
+            queue.add(retry)
         if retries:
             return None
         table = lost_table(spec, chunk, traceback.format_exc())
