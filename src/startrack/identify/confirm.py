@@ -89,20 +89,20 @@ class Confirmer:
     def confirm(self, stars: StarSet, rot: Rotation | NDArray, camera: Camera, pattern_img: NDArray,
                 n_trials: int, pool_end: int = 0) -> Candidate | None:
         """A verified :class:`Candidate`, or None (see the module docstring). ``rot``: the candidate
-        attitude, a Rotation or its matrix (3, 3, camera from ICRS; the Rotation is then made only
-        for a verified candidate). ``pool_end``: one past the faintest star rank the patterns are
-        drawn from; the test covers :attr:`verify_stars` stars, more when the pool reaches deeper
-        (half as many again beyond it).
+        attitude (camera from ICRS), a Rotation, a unit scalar-last quaternion (4,) or a rotation
+        matrix (3, 3); the Rotation of the last two is made only for a verified candidate.
+        ``pool_end``: one past the faintest star rank the patterns are drawn from; the test covers
+        :attr:`verify_stars` stars, more when the pool reaches deeper (half as many again beyond it).
 
         After a loose refit, the stars that only the loose radius had matched are fitted, not
         found: the test counts the stars the candidate matched at the tight radius before any
         refit and those the refit newly brings in, not the ones it pulled in (a refit with a free
         focal length can pull a wrong candidate's chance loose matches under the tight radius:
         one false match in about 300 wide-field solves before this rule)."""
-        matrix = rot.as_matrix() if isinstance(rot, Rotation) else np.asarray(rot, dtype=np.float64)
+        matrix, given = _attitude(rot)
         n = min(len(self.x), max(self.verify_stars, pool_end + self.verify_stars // 2))
         xs, ys = self.x[:n], self.y[:n]
-        given, field = (rot if isinstance(rot, Rotation) else None), _Field(stars, matrix, camera)
+        field = _Field(stars, matrix, camera)
         prob, tight = self._verify(field, xs, ys, pattern_img, n_trials, np.zeros(0, np.int64))
         fitted = np.zeros(0, np.int64)
         for _ in range(LOOSE_ROUNDS_DISTORTED if self.fit_distortion else 1):
@@ -160,12 +160,33 @@ class _Field:
             return empty, empty
         return match_predicted(self.vectors, self.matrix, self.camera, xs, ys, radius_px)
 
-    def candidate(self, rot: Rotation | None, image_index: NDArray, prob: float) -> Candidate:
-        """The verified candidate of these matches at the tight radius (``rot``: the attitude as a
-        Rotation when the caller gave one, else it is made from the matrix)."""
-        rot = rot if rot is not None else Rotation.from_matrix(self.matrix)
+    def candidate(self, given: Rotation | NDArray | None, image_index: NDArray, prob: float) -> Candidate:
+        """The verified candidate of these matches at the tight radius (``given``: the attitude as
+        the caller gave it, a Rotation or a quaternion (4,), when it was not refitted; else None and
+        the Rotation is made from the matrix)."""
+        if isinstance(given, Rotation):
+            rot = given
+        else:
+            rot = Rotation.from_matrix(self.matrix) if given is None else Rotation.from_quat(given)
         rows = self.stars.catalog_rows[self.index[self.tight_catalog]]
         return Candidate(rot, self.camera, image_index, rows, prob)
+
+
+def _attitude(rot: Rotation | NDArray) -> tuple[NDArray[np.float64], Rotation | NDArray | None]:
+    """(rotation matrix (3, 3), what :meth:`_Field.candidate` makes the Rotation from) of an attitude
+    given as a Rotation, a unit scalar-last quaternion (4,) or a matrix (3, 3)."""
+    if isinstance(rot, Rotation):
+        return rot.as_matrix(), rot
+    values = np.asarray(rot, dtype=np.float64)
+    if values.shape == (3, 3):
+        return values, None
+    if values.shape != (4,):
+        raise ValueError(f"rot must be a Rotation, a quaternion (4,) or a rotation matrix (3, 3), "
+                         f"got shape {values.shape}")
+    x, y, z, w = values.tolist()
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]), values
 
 
 def _not_in(values: NDArray, few: NDArray) -> NDArray[np.bool_]:

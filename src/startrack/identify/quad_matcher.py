@@ -29,7 +29,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
 from ..errors import InvalidInputError
@@ -38,6 +37,7 @@ from .candidate import Candidate, MatchOutcome
 from .confirm import Confirmer, StarSet, match_radius_px
 from .database import PatternDatabase
 from .quad_search import Fits, SearchSetup, focal_grid, search_batch, warm_up
+from .refine import pixel_vectors
 
 MAX_RATIO_TOLERANCE = 0.1
 """Patterns whose edge ratios are less certain than this (tiny patterns) are not looked up."""
@@ -172,7 +172,7 @@ class _Search:
     def __init__(self, x, y, camera: Camera, focal_range, db: PatternDatabase, options: MatcherOptions,
                  trials: list[int], shape_floor: float = 0.0, fit_aspect: bool = False):
         self.x, self.y, self.camera, self.db, self.options, self.trials = x, y, camera, db, options, trials
-        vec = camera.pixel_to_vector(x, y)
+        vec = pixel_vectors(camera, x, y)
         self.u, self.w = vec[:, 0] / vec[:, 2], vec[:, 1] / vec[:, 2]
         calibrated = focal_range is None
         focal_range = focal_range or (camera.fx, camera.fx)
@@ -206,7 +206,7 @@ class _Search:
     def _confirmed(self, fits: Fits, pool_end: int) -> Candidate | None:
         levels = np.searchsorted(self.db.level_offsets, fits.row, side="right") - 1
         for i in range(fits.row.size):
-            found = self.confirmer.confirm(self._level_stars(int(levels[i])), Rotation.from_quat(fits.quat[i]),
+            found = self.confirmer.confirm(self._level_stars(int(levels[i])), fits.quat[i],
                                            self.camera.with_focal(fits.focal[i]), fits.image_stars[i],
                                            self.trials[0], pool_end)
             if found is not None:
