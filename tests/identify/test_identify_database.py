@@ -126,3 +126,13 @@ def test_every_valid_range_gets_a_database(request_deg, expected):
     satisfy ... got 4.85 to 103.0' from that margin.)"""
     settings = database_settings_for(request_deg)
     assert (settings.fov_min_deg, settings.fov_max_deg) == pytest.approx(expected)
+
+
+def test_the_star_tree_is_built_on_first_use_over_the_database_stars(arrays):
+    from startrack.identify.database import _from_arrays
+
+    db = _from_arrays(SMALL, arrays)
+    assert not db._star_tree  # a load builds no tree
+    dist, index = db.tree.query(arrays["vectors"][[0, 5, 9]])
+    np.testing.assert_array_equal(index, [0, 5, 9])
+    assert np.all(dist == 0.0) and db.tree is db.tree
