@@ -128,10 +128,14 @@ class Confirmer:
         :data:`.verify.TEST_RADIUS_FRACTIONS`; and the image stars matched at the tight radius
         (the field keeps their catalog stars)."""
         tight, field.tight_catalog = field.matches(xs, ys, self.radius_px)
+        counted = np.ones(len(xs), dtype=bool)  # the stars the test counts: not the pattern's or fitted
+        pattern_img = np.asarray(pattern_img, dtype=np.int64)
+        counted[pattern_img[pattern_img < len(xs)]] = False
+        counted[fitted] = False
         counts = []
         for f in TEST_RADIUS_FRACTIONS:  # the matches at f r keep those of the tight ones within f r
             img_i = tight if f == 1.0 or tight.size == 0 else field.matches(xs, ys, f * self.radius_px)[0]
-            counts.append(int(np.count_nonzero(_not_in(img_i, pattern_img) & _not_in(img_i, fitted))))
+            counts.append(int(np.count_nonzero(counted[img_i])))
         n_tested = len(xs) - len(pattern_img) - len(fitted)
         if max(counts) == 0 or n_tested <= 0:
             return 1.0, tight
