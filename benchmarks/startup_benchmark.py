@@ -22,7 +22,8 @@ Measured, each in fresh processes (the median of ``--repeat`` runs where it says
 * with ``--cold``, first: the one-time compile, ``startrack warm-up`` with an empty numba cache
   (``NUMBA_CACHE_DIR`` set to a new temporary folder, so the catalog and databases stay cached);
   the rest then runs on that fresh numba cache, as after an install (a development cache holds
-  the stale files of every edited kernel, which :func:`startrack.numba_cache.heal` reads in full).
+  the stale files of every edited kernel; :func:`startrack.numba_cache.heal` reads only the files
+  that are new or changed since a process last found them whole).
 
 Usage::
 
