@@ -91,6 +91,12 @@ class MatcherOptions:
         _check_options(self)
 
 
+@functools.cache
+def _default_options() -> MatcherOptions:
+    """The default :class:`MatcherOptions`, checked once (they are immutable)."""
+    return MatcherOptions()
+
+
 def _check_options(options: MatcherOptions) -> None:
     """Refuse settings the search cannot use, naming the field."""
     for name in ("pattern_stars", "verify_stars", "max_pattern_stars"):
@@ -266,7 +272,7 @@ def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatab
         With a :class:`Candidate` when the false-match bound is below the threshold; otherwise
         status NO_MATCH, TOO_FEW_STARS or TIMEOUT and a reason.
     """
-    options = options or MatcherOptions()
+    options = options or _default_options()
     if len(x) < 4:
         return MatchOutcome(Status.TOO_FEW_STARS,
                             f"lost-in-space identification needs at least 4 stars, got {len(x)}", None, 0)

@@ -16,6 +16,7 @@ Pixel aspect
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -131,8 +132,14 @@ def _focal_setup(width, height, fov_deg, fov_range_deg, camera, aspect: float):
             raise InvalidInputError(f"fov_range_deg must be (low, high) with low <= high, got ({lo:g}, {hi:g})")
     f_lo, f_hi = focal_px_from_fov(width, math.radians(hi)), focal_px_from_fov(width, math.radians(lo))
     fx = math.sqrt(f_lo * f_hi)
-    nominal = Camera(width=int(width), height=int(height), fx=fx, fy=fx / aspect)
-    return nominal, (f_lo, f_hi), (lo, hi)
+    return _nominal_camera(int(width), int(height), fx, fx / aspect), (f_lo, f_hi), (lo, hi)
+
+
+@functools.lru_cache(maxsize=64)
+def _nominal_camera(width: int, height: int, fx: float, fy: float) -> Camera:
+    """The pinhole Camera of these settings, built (and checked) once: a Camera is immutable, and a
+    batch of images or star lists from one camera asks for the same nominal camera every time."""
+    return Camera(width=width, height=height, fx=fx, fy=fy)
 
 
 def check_distinct(x: NDArray, y: NDArray) -> None:
@@ -154,17 +161,17 @@ def star_arrays(x, y, flux, width, height) -> tuple[NDArray, NDArray, NDArray]:
     x, y = _coordinates(x, "x"), _coordinates(y, "y")
     if x.shape != y.shape:
         raise InvalidInputError(f"x and y must have the same length, got {x.size} and {y.size}")
-    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+    if not (np.isfinite(x).all() and np.isfinite(y).all()):
         raise InvalidInputError("star coordinates must be finite numbers (got NaN or inf)")
-    outside = (x < -0.5) | (y < -0.5) | (x > width - 0.5) | (y > height - 0.5)
-    if np.any(outside):
+    if x.size and (x.min() < -0.5 or y.min() < -0.5 or x.max() > width - 0.5 or y.max() > height - 0.5):
+        outside = (x < -0.5) | (y < -0.5) | (x > width - 0.5) | (y > height - 0.5)
         i = int(np.flatnonzero(outside)[0])
         raise InvalidInputError(f"star {i} at ({x[i]:g}, {y[i]:g}) lies outside the {width} x {height} image "
                                 f"(valid: -0.5 <= x <= {width - 0.5}, -0.5 <= y <= {height - 0.5})")
     check_distinct(x, y)
     if flux is not None:
         flux = _coordinates(flux, "flux")
-        if flux.shape != x.shape or not np.all(np.isfinite(flux)):
+        if flux.shape != x.shape or not np.isfinite(flux).all():
             raise InvalidInputError("flux must be finite and as long as x and y")
         order = np.argsort(-flux, kind="stable")
         return x[order], y[order], order
