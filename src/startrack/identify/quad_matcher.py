@@ -165,8 +165,16 @@ def distinct_stars(x: NDArray, y: NDArray, count: int) -> NDArray[np.int64]:
     """The first ``count`` stars (in order) that are not within MIN_SEPARATION_PX of a brighter one."""
     n = min(len(x), 4 * count)  # enough candidates, and the (n, n) test stays small
     d2 = (x[:n, None] - x[None, :n]) ** 2 + (y[:n, None] - y[None, :n]) ** 2
-    close = np.tril(d2 < MIN_SEPARATION_PX**2, k=-1)  # pairs (i, j) with j brighter than i
+    close = (d2 < MIN_SEPARATION_PX**2) & _below_diagonal(n)  # pairs (i, j) with j brighter than i
     return np.flatnonzero(~close.any(axis=1))[:count]
+
+
+@functools.cache
+def _below_diagonal(n: int) -> NDArray[np.bool_]:
+    """The (n, n) mask of the entries below the diagonal (j < i), made once per size (read-only)."""
+    mask = np.tri(n, n, k=-1, dtype=bool)
+    mask.flags.writeable = False
+    return mask
 
 
 class _Search:
