@@ -65,9 +65,9 @@ from startrack.cli.batch_warmup import warm_up
 t1 = time.perf_counter()
 import startrack.solve, startrack.detect.detector, startrack.identify.quad_search, startrack.identify.refine
 from numba.core.registry import CPUDispatcher
-from startrack.identify import pose_kernel, quad_kernel
+from startrack.identify import match_kernel, pose_kernel, quad_kernel
 loads = {}
-for module in (quad_kernel, pose_kernel):
+for module in (quad_kernel, pose_kernel, match_kernel):
     for name, fn in vars(module).items():
         if isinstance(fn, CPUDispatcher):
             def timed(sig, ctx, _load=fn._cache.load_overload, _key=module.__name__.split(".")[-1] + "." + name):

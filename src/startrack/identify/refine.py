@@ -7,10 +7,10 @@ distortion coefficients k1 and k2. Gauss-Newton with the analytic Jacobian of th
 projection; a few iterations suffice.
 
 The fits run on rotation matrices (``matrix_cam_from_icrs``, (3, 3), mapping ICRS vectors to
-camera vectors) in compiled loops (:mod:`.pose_kernel`, numba, loaded on first use): on the few
-dozen stars of a solve, per-call overhead of numpy and scipy would cost more than the arithmetic.
-:func:`warm_up_pose` compiles them before any timed work. :func:`refine_pointing` is the same fit
-for a Rotation.
+camera vectors) in compiled loops (:mod:`.pose_kernel` and :mod:`.match_kernel`, numba, loaded
+on first use): on the few dozen stars of a solve, per-call overhead of numpy and scipy would
+cost more than the arithmetic. :func:`warm_up_pose` compiles them before any timed work.
+:func:`refine_pointing` is the same fit for a Rotation.
 """
 
 from __future__ import annotations
@@ -36,6 +36,14 @@ def _kernel() -> ModuleType:
     from . import pose_kernel
 
     return pose_kernel
+
+
+@functools.cache
+def _match_kernel() -> ModuleType:
+    """The compiled pairing, cone and lens-inversion loops, :mod:`.match_kernel`."""
+    from . import match_kernel
+
+    return match_kernel
 
 
 def _plain(values: ArrayLike) -> NDArray[np.float64]:
@@ -192,7 +200,7 @@ def match_predicted(ref_icrs: NDArray, matrix_cam_from_icrs: NDArray, camera: Ca
                     radius_px: float) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """Image stars matched to the catalog stars an attitude predicts inside the image, closest pairs
     first and each star once (:func:`.verify.match_nearest`'s rule; compiled,
-    :func:`.pose_kernel.rematch_pairs`).
+    :func:`.match_kernel.rematch_pairs`).
 
     Parameters
     ----------
@@ -211,17 +219,17 @@ def match_predicted(ref_icrs: NDArray, matrix_cam_from_icrs: NDArray, camera: Ca
     image_index, catalog_index : ndarray, shape (K,) each
         Indices into ``x`` and into ``ref_icrs``, closest pair first.
     """
-    return _kernel().rematch_pairs(_plain(ref_icrs), _plain(matrix_cam_from_icrs), float(camera.fx),
+    return _match_kernel().rematch_pairs(_plain(ref_icrs), _plain(matrix_cam_from_icrs), float(camera.fx),
                                    float(camera.fy), float(camera.cx), float(camera.cy), _distortion(camera),
                                    float(camera.width), float(camera.height), _plain(x), _plain(y), float(radius_px))
 
 
 def pixel_vectors(camera: Camera, x: NDArray, y: NDArray) -> NDArray[np.float64]:
     """:meth:`Camera.pixel_to_vector <startrack.camera.Camera.pixel_to_vector>` of finite pixel
-    coordinates ``x``, ``y`` (N,) in one compiled call (:func:`.pose_kernel.pixel_vectors`; the
+    coordinates ``x``, ``y`` (N,) in one compiled call (:func:`.match_kernel.pixel_vectors`; the
     same Newton iterations and tolerance, point by point): unit camera vectors (N, 3), NaN where
     the lens model cannot be inverted."""
-    return _kernel().pixel_vectors(_plain(x), _plain(y), float(camera.fx), float(camera.fy), float(camera.cx),
+    return _match_kernel().pixel_vectors(_plain(x), _plain(y), float(camera.fx), float(camera.fy), float(camera.cx),
                                    float(camera.cy), _distortion(camera), UNDISTORT_TOL_PX / max(camera.fx, camera.fy),
                                    UNDISTORT_MAX_ITER)
 
@@ -230,8 +238,8 @@ def stars_in_cone(vectors: NDArray, count: int, axis: NDArray, radius_rad: float
                   min_neighbour_rad: float) -> NDArray[np.int64]:
     """Indices (ascending) among the first ``count`` of the unit vectors ``vectors`` (S, 3) of
     those within ``radius_rad`` of the unit vector ``axis`` (3,) whose ``neighbour_rad`` (S,) is at
-    least ``min_neighbour_rad`` (one compiled pass, :func:`.pose_kernel.cone_stars`)."""
-    return _kernel().cone_stars(vectors, int(count), _plain(axis), math.cos(min(radius_rad, math.pi)),
+    least ``min_neighbour_rad`` (one compiled pass, :func:`.match_kernel.cone_stars`)."""
+    return _match_kernel().cone_stars(vectors, int(count), _plain(axis), math.cos(min(radius_rad, math.pi)),
                                 neighbour_rad, float(min_neighbour_rad))
 
 

@@ -1,0 +1,139 @@
+"""The compiled loops of :mod:`.refine` that pair stars (numba): the final fit's re-match
+(projection, image test and closest-first pairing), its choice of catalog stars in a cone, and
+the inversion of the lens model (pixels to unit camera vectors). The projection model is
+:func:`.pose_kernel._project` (Brown-Conrady, ``dist`` = (k1, k2, k3, p1, p2)).
+
+Kept apart from startrack's import as :mod:`.pose_kernel` is; compiled functions are cached on
+disk (``cache=True``); all arrays are float64 and C-contiguous.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .pose_kernel import _project, _times
+
+
+@njit(cache=True)
+def rematch_pairs(vectors, matrix, fx, fy, cx, cy, dist, width, height, x, y, radius_px):
+    """Image stars matched to catalog stars, each used once, closest pairs first (as
+    :func:`.verify.match_nearest` on the catalog stars predicted inside the image).
+
+    ``vectors`` (S, 3) are ICRS unit vectors, ``matrix`` (3, 3) takes them to camera vectors; the
+    camera has focal lengths ``fx``, ``fy``, principal point ``cx``, ``cy`` (pixels), distortion
+    ``dist`` (5,) and a ``width`` x ``height`` image (pixel centres 0 ... width - 1, edges at
+    -0.5 and width - 0.5, as :meth:`startrack.camera.Camera.in_image`). ``x``, ``y`` (N,) are the
+    image stars (pixels). Returns (image index (K,), catalog index into ``vectors`` (K,)),
+    closest pair first; only pairs within ``radius_px`` are formed.
+    """
+    s = vectors.shape[0]
+    px, py, inside = np.empty(s), np.empty(s), np.empty(s, np.int64)
+    m = 0
+    for c in range(s):
+        v0, v1, v2 = _times(matrix, vectors, c)
+        if not v2 > 0.0:
+            continue  # behind the image plane
+        inv_z = 1.0 / v2
+        _, _, ad, bd, _, _, _, _ = _project(v0 * inv_z, v1 * inv_z, 1.0, dist)
+        u, w = cx + fx * ad, cy + fy * bd
+        if u >= -0.5 and w >= -0.5 and u <= width - 0.5 and w <= height - 0.5:
+            px[m], py[m], inside[m] = u, w, c
+            m += 1
+    return _closest_pairs(x, y, px[:m], py[:m], inside[:m], radius_px)
+
+@njit(cache=True)
+def _closest_pairs(x, y, px, py, index, radius_px):
+    """Greedy closest-first pairs (each star once) between image stars ``x``, ``y`` (N,) and
+    predicted stars ``px``, ``py`` (M,) within ``radius_px``: (image index, ``index`` of the
+    predicted star), formed in (image, predicted) order and sorted stably by distance."""
+    r2 = radius_px * radius_px
+    k = 0
+    for _ in range(2):  # count the pairs, then fill them in
+        pi, pc, pd = np.empty(k, np.int64), np.empty(k, np.int64), np.empty(k)
+        k = 0
+        for i in range(x.size):
+            xi, yi = x[i], y[i]
+            for j in range(px.size):
+                dx, dy = xi - px[j], yi - py[j]
+                d2 = dx * dx + dy * dy
+                if d2 <= r2:
+                    if k < pi.size:
+                        pi[k], pc[k], pd[k] = i, j, d2
+                    k += 1
+    order = _stable_order(pd)
+    taken_i, taken_c = np.zeros(x.size, np.bool_), np.zeros(px.size, np.bool_)
+    out_i, out_c = np.empty(k, np.int64), np.empty(k, np.int64)
+    n = 0
+    for o in order:
+        i, j = pi[o], pc[o]
+        if not taken_i[i] and not taken_c[j]:
+            taken_i[i] = True
+            taken_c[j] = True
+            out_i[n] = i
+            out_c[n] = index[j]
+            n += 1
+    return out_i[:n], out_c[:n]
+
+@njit(cache=True)
+def _stable_order(values):
+    """Indices that sort ``values`` (K,) ascending, ties in their order (insertion sort: the few
+    pairs of a re-match; ``np.argsort(kind="mergesort")`` would give the same, at seconds of
+    compilation more)."""
+    order = np.arange(values.size)
+    for i in range(1, values.size):
+        k, v = order[i], values[order[i]]
+        j = i - 1
+        while j >= 0 and values[order[j]] > v:
+            order[j + 1] = order[j]
+            j -= 1
+        order[j + 1] = k
+    return order
+
+@njit(cache=True)
+def cone_stars(vectors, count, axis, cos_reach, neighbour_rad, min_neighbour_rad):
+    """Indices (ascending) among the first ``count`` rows of ``vectors`` (S, 3; unit) of those
+    whose dot product with the unit vector ``axis`` (3,) is at least ``cos_reach`` and whose
+    ``neighbour_rad`` (S,) is at least ``min_neighbour_rad``."""
+    out = np.empty(count, np.int64)
+    n = 0
+    for i in range(count):
+        dot = vectors[i, 0] * axis[0] + vectors[i, 1] * axis[1] + vectors[i, 2] * axis[2]
+        if dot >= cos_reach and neighbour_rad[i] >= min_neighbour_rad:
+            out[n] = i
+            n += 1
+    return out[:n]
+
+@njit(cache=True, error_model="numpy")  # a zero determinant gives inf / NaN (a NaN point), not an exception
+def pixel_vectors(x, y, fx, fy, cx, cy, dist, tol, max_iter):
+    """Unit camera vectors (N, 3) of pixels ``x``, ``y`` (N,) with the distortion removed, as
+    :meth:`startrack.camera.Camera.pixel_to_vector` computes them: Newton's method on the pinhole
+    coordinates of all points together, at most ``max_iter`` steps, until every distorted point
+    is within ``tol`` (pinhole units) of the measured one; a point that is not then (beyond the
+    fold of the lens polynomial) is NaN."""
+    n = x.size
+    ad, bd = (x - cx) / fx, (y - cy) / fy
+    a, b, ra, rb = ad.copy(), bd.copy(), np.empty(n), np.empty(n)
+    for _ in range(max_iter):
+        done = True
+        for i in range(n):
+            _, _, fa, fb, _, _, _, _ = _project(a[i], b[i], 1.0, dist)
+            ra[i], rb[i] = fa - ad[i], fb - bd[i]
+            done = done and math.hypot(ra[i], rb[i]) < tol
+        if done:
+            break
+        for i in range(n):
+            _, _, _, _, daa, dab, dba, dbb = _project(a[i], b[i], 1.0, dist)
+            det = daa * dbb - dab * dba
+            a[i], b[i] = a[i] - (dbb * ra[i] - dab * rb[i]) / det, b[i] - (-dba * ra[i] + daa * rb[i]) / det
+    out = np.empty((n, 3))
+    for i in range(n):
+        _, _, fa, fb, _, _, _, _ = _project(a[i], b[i], 1.0, dist)
+        if not math.hypot(fa - ad[i], fb - bd[i]) < tol:
+            out[i, 0] = out[i, 1] = out[i, 2] = np.nan
+            continue
+        norm = math.sqrt(a[i] * a[i] + b[i] * b[i] + 1.0)
+        out[i, 0], out[i, 1], out[i, 2] = a[i] / norm, b[i] / norm, 1.0 / norm
+    return out
