@@ -27,6 +27,7 @@ from ..identify.field_stars import field_stars
 from ..results import Status
 from ..rig import CameraRig
 from ..solve import epoch_jyear
+from ..track.inputs import checked_rate
 from ..track.tracker import LOST_IN_SPACE, TRACKING, TrackerOptions
 from ..track.windows import WindowMatcher
 from .joint import fit_joint, measured_sigma_px, residuals_px
@@ -112,7 +113,7 @@ class RigTracker:
         t0 = time.perf_counter()
         lists = rig_stars(stars, self.rig)
         if gyro_rate_rad_s is not None:
-            self._rate = _checked_rate(gyro_rate_rad_s)
+            self._rate = checked_rate(gyro_rate_rad_s, "body")
         step = self._track(lists, float(t_s)) if self._rot is not None else None
         if step is None:
             step = self._lost_in_space(lists, float(t_s))
@@ -185,13 +186,6 @@ def _rms_px(matches, rot: Rotation) -> float:
     parts = [residuals_px(m, m.stars.head.rot_cam_from_icrs(rot)) for m in matches if len(m)]
     d = np.concatenate(parts) if parts else np.zeros((0, 2))
     return float(np.sqrt(np.mean(np.sum(d * d, axis=1)))) if len(d) else float("nan")
-
-
-def _checked_rate(rate_rad_s: ArrayLike) -> NDArray[np.float64]:
-    rate = np.array(rate_rad_s, dtype=float)
-    if rate.shape != (3,) or not np.all(np.isfinite(rate)):
-        raise InvalidInputError(f"gyro_rate_rad_s must be 3 finite numbers (rad/s, body frame), got {rate_rad_s!r}")
-    return rate
 
 
 __all__ = ["RigTrackStep", "RigTracker"]

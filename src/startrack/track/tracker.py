@@ -50,6 +50,7 @@ from ..identify.field_stars import field_stars
 from ..rate.smear_mode import SmearLimits, image_smear_px, usable_for_prediction
 from ..results import Status
 from ..solve import epoch_jyear, solve_stars
+from .inputs import checked_flux, checked_rate, checked_stars, checked_time
 from .quaternions import Quat, quat_conjugate, quat_matrix, quat_product, quat_rotvec, rotvec_quat
 from .windows import WindowMatcher
 
@@ -184,13 +185,13 @@ class Tracker:
         if self._rig is not None:
             raise InvalidInputError("this Tracker follows a rig: give each head's stars to update_rig")
         t0 = time.perf_counter()
-        t_s = _checked_time(t_s)
-        x, y = _checked_stars(x, y)
+        t_s = checked_time(t_s)
+        x, y = checked_stars(x, y)
         if flux is not None:
-            order = np.argsort(-_checked_flux(flux, x.shape), kind="stable")
+            order = np.argsort(-checked_flux(flux, x.shape), kind="stable")
             x, y = x[order], y[order]
         if gyro_rate_rad_s is not None:
-            self._rate = _checked_rate(gyro_rate_rad_s)
+            self._rate = checked_rate(gyro_rate_rad_s)
         step = self._track(x, y, t_s) if self._rot is not None and self._camera is not None else None
         if step is None:
             step = self._lost_in_space(x, y, t_s)
@@ -222,9 +223,9 @@ class Tracker:
         from ..io import read_image
         from ..rate.streak_solve import header_exposure_s
 
-        t_s = _checked_time(t_s)
+        t_s = checked_time(t_s)
         if gyro_rate_rad_s is not None:
-            gyro_rate_rad_s = _checked_rate(gyro_rate_rad_s)
+            gyro_rate_rad_s = checked_rate(gyro_rate_rad_s)
         img = read_image(image)
         data = img.data
         if streak_exposure_s is not None and streak_bias_px is not None:
@@ -260,7 +261,7 @@ class Tracker:
         """One frame with automatic mode switching (module docstring)."""
         t0 = time.perf_counter()
         if gyro_rate_rad_s is not None:
-            self._rate = _checked_rate(gyro_rate_rad_s)
+            self._rate = checked_rate(gyro_rate_rad_s)
         smear = self._smear_px(data, exposure_s)
         previous = self._mode
         if smear >= self.options.streak_on_px or (previous == STREAK_MODE and smear > self.options.streak_off_px):
@@ -460,50 +461,6 @@ class Tracker:
 
     def _rate_copy(self) -> NDArray | None:
         return None if self._rate is None else self._rate.copy()
-
-
-def _checked_rate(rate_rad_s: ArrayLike) -> NDArray[np.float64]:
-    rate = np.array(rate_rad_s, dtype=float)
-    if rate.shape != (3,) or not np.all(np.isfinite(rate)):
-        raise InvalidInputError(f"gyro_rate_rad_s must be 3 finite numbers (rad/s, camera frame), got {rate_rad_s!r}")
-    return rate
-
-
-def _checked_time(t_s: float) -> float:
-    """The frame time as a float; NaN, an infinity or a non-number is refused."""
-    try:
-        value = float(t_s)
-    except (TypeError, ValueError):
-        raise InvalidInputError(f"t_s must be a finite number of seconds, got {t_s!r}") from None
-    if not math.isfinite(value):
-        raise InvalidInputError(f"t_s must be a finite number of seconds, got {t_s!r}")
-    return value
-
-
-def _checked_stars(x: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Star positions (N,) each, finite and of one shape (px)."""
-    try:
-        xs, ys = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-    except (TypeError, ValueError):
-        raise InvalidInputError("x and y must be arrays of pixel positions (numbers)") from None
-    if xs.ndim != 1 or xs.shape != ys.shape:
-        raise InvalidInputError(f"x and y must be 1-D arrays of one length, got shapes {xs.shape} and {ys.shape}")
-    for name, values in (("x", xs), ("y", ys)):
-        bad = np.flatnonzero(~np.isfinite(values))
-        if bad.size:
-            raise InvalidInputError(f"{name} must hold finite pixel positions; entry {int(bad[0])} is "
-                                    f"{values[bad[0]]!r} ({bad.size} not finite)")
-    return xs, ys
-
-
-def _checked_flux(flux: ArrayLike, shape: tuple[int, ...]) -> NDArray[np.float64]:
-    """Star fluxes of the stars' shape, finite."""
-    values = np.asarray(flux, dtype=float)
-    if values.shape != shape:
-        raise InvalidInputError(f"flux must have one entry per star, shape {shape}, got {values.shape}")
-    if not np.all(np.isfinite(values)):
-        raise InvalidInputError("flux must be finite numbers (NaN or infinity given)")
-    return values
 
 
 def _with_time(step: TrackStep, seconds: float) -> TrackStep:
