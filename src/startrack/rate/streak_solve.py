@@ -51,6 +51,7 @@ from .streak_find import StreakCandidates, find_streak_candidates
 from .streak_fit import StreakFits, first_guesses, fit_streaks
 from .streak_model import JointFit, Timing, fit_joint, predict
 from .streak_predict import Field, Identified, concatenated, fit_predicted, v_mags, zero_point
+from .streak_screen import typical
 from .trust import consensus_tolerance_px
 
 METHOD = "streak joint fit"
@@ -306,38 +307,6 @@ def _timing(exposure_s: float | None, line_time_s: float, height: int) -> Timing
 
 LIS_ATTEMPTS = 2
 """Identification attempts: the brightest ``lis_streaks`` candidates, then twice as many."""
-TYPICAL_LENGTH = (1.25, 3.0)
-TYPICAL_BLUR = 1.25
-
-
-def typical(fits: StreakFits) -> NDArray[np.bool_]:
-    """Clean fits (K,) whose length is at most 1.25 x the median + 3 px and whose blur at most 1.25
-    x the median: a longer or wider one is usually two streaks in line, or side by side, fitted as
-    one (its light centroid is then between two stars); they stay out of the identification."""
-    out = np.zeros(len(fits), dtype=bool)
-    if not np.any(fits.ok):
-        return out
-    length, blur = fits.length_px, fits.blur_px
-    out = fits.ok & (length <= TYPICAL_LENGTH[0] * np.median(length[fits.ok]) + TYPICAL_LENGTH[1])
-    return out & (blur <= TYPICAL_BLUR * np.median(blur[fits.ok])) & ~duplicates(fits)
-
-
-DUPLICATE_PX = 3.0
-
-
-def duplicates(fits: StreakFits) -> NDArray[np.bool_]:
-    """Fits (K,) whose light centroid is within :data:`DUPLICATE_PX` of a brighter clean fit's:
-    two first guesses (pieces of one faint streak) that grew into the same streak."""
-    centroid = fits.measurements()[0][:, 4:6]
-    order = np.argsort(-fits.flux, kind="stable")
-    out = np.zeros(len(fits), dtype=bool)
-    for rank, i in enumerate(order):
-        if not fits.ok[i]:
-            continue
-        brighter = order[:rank]
-        brighter = brighter[fits.ok[brighter] & ~out[brighter]]
-        out[i] = bool(np.any(np.linalg.norm(centroid[brighter] - centroid[i], axis=1) < DUPLICATE_PX))
-    return out
 
 
 def _ordered_guesses(img: NDArray, cand: StreakCandidates, opts: StreakOptions):
