@@ -37,9 +37,7 @@ import math
 import os
 import platform
 import sys
-import tempfile
 import time
-import types
 from datetime import datetime
 from pathlib import Path
 
@@ -128,49 +126,16 @@ def run_methods(lists, conditions, knowledge, args, skip_ours: str | None) -> li
 
 def _run_chunk(lists, conditions, knowledge, args, skip_ours: str | None) -> list[MethodRun]:
     runs = []
-    with _clock(args.clock):
-        for matcher in ([] if skip_ours else args.matchers):
-            if matcher != "quads" and knowledge.fov_deg is None:
-                continue  # the pair-directory matchers need a known field of view
-            with _on_cpu(0 if args.pin else None):
-                runs.append(solve_ours_measured(lists, conditions, knowledge, args, matcher))
-        if not args.no_peer:
-            with _on_cpu(1 if args.pin else None):
-                runs.append(solve_cedar(lists, conditions, knowledge, timeout_ms=args.cedar_timeout_ms,
-                                        progress=args.progress))
+    for matcher in ([] if skip_ours else args.matchers):
+        if matcher != "quads" and knowledge.fov_deg is None:
+            continue  # the pair-directory matchers need a known field of view
+        with _on_cpu(0 if args.pin else None):
+            runs.append(solve_ours_measured(lists, conditions, knowledge, args, matcher))
+    if not args.no_peer:
+        with _on_cpu(1 if args.pin else None):
+            runs.append(solve_cedar(lists, conditions, knowledge, timeout_ms=args.cedar_timeout_ms,
+                                    progress=args.progress, clock=args.clock))
     return runs
-
-
-CEDAR_CPU_RUNNER = """import sys, time, types
-sys.path.insert(0, {peers!r})
-import cedar_runner
-cedar_runner.time = types.SimpleNamespace(perf_counter=time.thread_time)
-sys.exit(cedar_runner.main())
-"""
-"""cedar-solve's runner with its solve clock (``time.perf_counter`` around ``solve_from_centroids``
-alone) read from the solving thread's CPU time instead."""
-
-
-@contextlib.contextmanager
-def _clock(kind: str):
-    """While inside, ``methods`` and cedar-solve's runner time each solve by ``kind``: "wall"
-    (``time.perf_counter``, as they do) or "cpu" (``time.thread_time`` of the solving thread).
-    Both read ``time.perf_counter`` around the solver call alone; "cpu" gives them a clock module
-    whose ``perf_counter`` is ``thread_time``."""
-    if kind == "wall":
-        yield
-        return
-    from peers import cedar_env
-
-    saved = methods.time, cedar_env.RUNNER
-    with tempfile.TemporaryDirectory() as tmp:
-        runner = Path(tmp) / "cedar_cpu_runner.py"
-        runner.write_text(CEDAR_CPU_RUNNER.format(peers=str(Path(cedar_env.__file__).parent)))
-        methods.time, cedar_env.RUNNER = types.SimpleNamespace(perf_counter=time.thread_time), runner
-        try:
-            yield
-        finally:
-            methods.time, cedar_env.RUNNER = saved
 
 
 @contextlib.contextmanager
@@ -220,7 +185,7 @@ def solve_ours_measured(lists, conditions, knowledge, args, matcher) -> MethodRu
     """:func:`solve_ours` plus the on-disk size (MiB) of the tables the matcher loaded for it."""
     before = _loaded_tables()
     run = solve_ours(lists, conditions, knowledge, matcher=matcher, progress=args.progress,
-                     timeout_s=args.timeout_s)
+                     timeout_s=args.timeout_s, clock=args.clock)
     new = _loaded_tables() - before
     for kind in ("patterns", "pairs"):
         key = (conditions.name, knowledge.label, kind)

@@ -43,16 +43,17 @@ def ensure_cedar_env(*, force: bool = False) -> Path:
 
 
 def run_cedar(lists_npz: Path, out_npz: Path, *, solve_timeout_ms: float = 5000.0,
-              progress: int = 0, python: Path | None = None) -> dict[str, np.ndarray]:
+              progress: int = 0, python: Path | None = None, clock: str = "wall") -> dict[str, np.ndarray]:
     """Solve every star list in ``lists_npz`` with cedar-solve; return its per-list results.
 
     The runner writes ``out_npz`` (arrays ``solved``, ``ra_deg``, ``dec_deg``, ``roll_deg``,
     ``fov_deg``, ``prob``, ``time_s``, ``status``) and a JSON header with the database's
-    properties, returned under the key ``"database"`` (a dict).
+    properties, returned under the key ``"database"`` (a dict). ``clock`` is the runner's
+    ``--clock``: "wall" or "cpu" (the solving thread's CPU time).
     """
     python = ensure_cedar_env() if python is None else python
     cmd = [str(python), str(RUNNER), str(lists_npz), str(out_npz),
-           "--solve-timeout-ms", str(solve_timeout_ms), "--progress", str(progress)]
+           "--solve-timeout-ms", str(solve_timeout_ms), "--progress", str(progress), "--clock", clock]
     subprocess.run(cmd, check=True)
     with np.load(out_npz, allow_pickle=False) as npz:
         results = {name: npz[name] for name in npz.files}
