@@ -7,9 +7,10 @@ import numpy as np
 from numba import njit
 from numba.core import event
 
-from startrack.cli.batch_warmup import _CompileNotice, _warm_up_fov_deg
+from startrack.cli.batch_warmup import _CompileNotice
 from startrack.cli.progress import ensure_database_for
 from startrack.solve import solve_stars
+from startrack.warm_up import warm_up_fov_deg
 
 
 def test_compiling_is_announced_once(capsys):
@@ -38,8 +39,8 @@ def test_nothing_said_without_compiling(capsys):
 
 
 def test_warm_up_field_is_the_searched_one():
-    assert _warm_up_fov_deg(12.0, None, None) == 12.0
-    assert _warm_up_fov_deg(None, (5.0, 20.0), None) == 10.0  # geometric mean, deg
+    assert warm_up_fov_deg(12.0, None, None) == 12.0
+    assert warm_up_fov_deg(None, (5.0, 20.0), None) == 10.0  # geometric mean, deg
 
 
 def test_warm_up_star_list_solves(monkeypatch):

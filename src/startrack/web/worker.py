@@ -27,9 +27,9 @@ def prewarm() -> None:
 
     from matplotlib.figure import Figure
 
-    from ..cli.batch_warmup import solve_catalog_stars
     from ..identify import load_database
     from ..identify.registry import DEFAULT_FOV_RANGE_DEG, database_settings_for
+    from ..warm_up import solve_catalog_stars
     from . import analysis_jobs, pipeline  # noqa: F401 (imported for their import time)
 
     load_database(database_settings_for(DEFAULT_FOV_RANGE_DEG))
