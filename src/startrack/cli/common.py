@@ -17,7 +17,7 @@ import numpy as np
 from ..camera import Camera, get_preset
 from ..errors import InvalidInputError
 from ..identify.registry import MATCHERS
-from ..io.solution_json import solution_to_dict
+from ..io.solution_json import solution_to_dict, streak_fields
 from ..results import AttitudeSolution, Detections
 from ..solve import check_fov_deg, epoch_jyear
 
@@ -228,7 +228,7 @@ def report(solution: AttitudeSolution, detections: Detections | None, as_json: b
         "altitude_deg": _finite_or_none(ground.altitude_deg), "azimuth_deg": _finite_or_none(ground.azimuth_deg)}
     streak = streak_fields(solution)
     if as_json:
-        print_json({**solution_to_dict(solution, detections), **streak, **extra})
+        print_json({**solution_to_dict(solution, detections), **extra})
     else:
         print(solution_table(solution, detections))
         if streak and solution.solved:
@@ -238,30 +238,6 @@ def report(solution: AttitudeSolution, detections: Detections | None, as_json: b
                           ("alt, az", f"{ground.altitude_deg:.4f} deg, {ground.azimuth_deg:.4f} deg "
                                       "(apparent altitude, azimuth east of north)")]))
     return 0 if solution.solved else 1
-
-
-def streak_fields(solution: AttitudeSolution) -> dict:
-    """What a solve from streaks adds to the output (empty for point stars): ``mode`` "streak",
-    the mid-exposure time the attitude refers to (``t_mid_s``, s after the exposure starts; and
-    ``time_mid_utc`` when the header dates it), ``exposure_s``, the fitted rate (camera frame,
-    deg/s: the turn during the exposure, ``turn_deg``, over the exposure; None without one),
-    whether it is trusted (``rate_status``, ``rate_reason``) and whether its sign is known
-    (``time_order_known``)."""
-    if getattr(solution, "mode", "point") != "streak":
-        return {}
-    rate = solution.rate
-    exposure = _finite_or_none(solution.exposure_s)
-    time_mid = solution.time_mid
-    return {"mode": "streak", "t_mid_s": _finite_or_none(solution.t_mid_s), "exposure_s": exposure,
-            "time_mid_utc": None if time_mid is None else time_mid.utc.isot,
-            "rate_status": rate.status.value, "rate_reason": rate.reason,
-            "time_order_known": bool(solution.time_order_known),
-            "rate_deg_s": _finite_list(np.degrees(solution.turn_rad) / exposure) if exposure else None,
-            "turn_deg": _finite_list(np.degrees(solution.turn_rad))}
-
-
-def _finite_list(values) -> list[float | None]:
-    return [_finite_or_none(float(v)) for v in values]
 
 
 def _streak_rows(streak: dict) -> list[tuple[str, str]]:

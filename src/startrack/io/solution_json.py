@@ -38,7 +38,32 @@ def solution_to_dict(solution: AttitudeSolution, detections: Detections | None =
     out["solve_time_s"] = _num(solution.solve_time_s)
     if detections is not None:
         out["n_detections"] = len(detections)
-    return out
+    return {**out, **streak_fields(solution)}
+
+
+def streak_fields(solution: AttitudeSolution) -> dict:
+    """What a solve from streaks (:class:`startrack.rate.streak_solve.StreakSolution`) adds to the
+    output (empty for point stars): ``mode`` "streak", the mid-exposure time the attitude refers
+    to (``t_mid_s``, s after the exposure starts; and
+    ``time_mid_utc`` when the header dates it), ``exposure_s``, the fitted rate (camera frame,
+    deg/s: the turn during the exposure, ``turn_deg``, over the exposure; None without one),
+    whether it is trusted (``rate_status``, ``rate_reason``) and whether its sign is known
+    (``time_order_known``)."""
+    if getattr(solution, "mode", "point") != "streak":
+        return {}
+    rate = solution.rate
+    exposure = _num(solution.exposure_s)
+    time_mid = solution.time_mid
+    return {"mode": "streak", "t_mid_s": _num(solution.t_mid_s), "exposure_s": exposure,
+            "time_mid_utc": None if time_mid is None else time_mid.utc.isot,
+            "rate_status": rate.status.value, "rate_reason": rate.reason,
+            "time_order_known": bool(solution.time_order_known),
+            "rate_deg_s": _nums(np.degrees(solution.turn_rad) / exposure) if exposure else None,
+            "turn_deg": _nums(np.degrees(solution.turn_rad))}
+
+
+def _nums(values) -> list[float | None]:
+    return [_num(float(v)) for v in values]
 
 
 def _matches(solution: AttitudeSolution, detections: Detections | None) -> list[dict[str, Any]]:
