@@ -40,7 +40,7 @@ SPECS = {
 name = "bench-stars"
 level = "stars"
 trials = {trials}
-seed = 1
+seed = {seed}
 [base]
 fov_deg = 15.0
 max_mag = 6.5
@@ -52,7 +52,7 @@ false_stars = 2
 name = "bench-image"
 level = "image"
 trials = {trials}
-seed = 1
+seed = {seed}
 [base]
 fov_deg = 15.0
 width = 1024
@@ -94,7 +94,7 @@ def plain_processes(level: str, trials: int, workers: int, folder: Path) -> floa
     """Trials per second of ``workers`` plain processes, each running trials / workers of the
     level serially (own seed) at the same time: the machine's parallel ceiling."""
     share = max(1, trials // workers)
-    jobs = [(SPECS[level].format(trials=share).replace("seed = 1", f"seed = {k + 1}"), str(folder / f"plain{k}"))
+    jobs = [(SPECS[level].format(trials=share, seed=k + 1), str(folder / f"plain{k}"))
             for k in range(workers)]
     with concurrent.futures.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
         seconds = list(pool.map(_share, jobs))
@@ -106,7 +106,7 @@ def same_trials(a, b) -> bool:
 
 
 def measure(level: str, trials: int, workers: int) -> dict:
-    text = SPECS[level].format(trials=trials)
+    text = SPECS[level].format(trials=trials, seed=1)
     with tempfile.TemporaryDirectory() as tmp:
         one, table_one = serial(text, Path(tmp) / "serial")
         many, table_many, memory = parallel(text, Path(tmp) / "dask", workers)
