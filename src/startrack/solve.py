@@ -236,7 +236,7 @@ def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[flo
                                 fov_range_deg=fov_range_deg, epoch=when.jyear, method=method, pixel_aspect=pixel_aspect)
     elongation = streak_image.smear_elongation(found)
     if elongation >= streak_image.SMEARED_ELONGATION and (streaked := smeared()).solved:
-        return streak_image.image_solution(streaked, found, detect_s)
+        return streak_image.image_solution(streaked, found, detect_s, when.source)
     order = search_order(found)
     request = build_request(found.x[order], found.y[order], width=width, height=height, fov_deg=fov_deg,
                             fov_range_deg=fov_range_deg, camera=camera, flux=None, epoch=when,
@@ -244,5 +244,5 @@ def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[flo
     solution = _run(replace(request, rows=order[request.rows]), method, options)
     if not solution.solved and streak_image.SOME_ELONGATION <= elongation < streak_image.SMEARED_ELONGATION \
             and (streaked := smeared()).solved:
-        return streak_image.image_solution(streaked, found, detect_s)
+        return streak_image.image_solution(streaked, found, detect_s, when.source)
     return replace(solution, solve_time_s=detect_s + solution.solve_time_s, detections=found)

@@ -81,3 +81,13 @@ def test_startrack_solve_says_it_solved_from_streaks(smeared, tmp_path, capsys):
     assert main(["solve", str(path), "--fov-deg", "12", "--epoch", "2025.0"]) == 0
     table = capsys.readouterr().out
     assert "solved from their streaks" in table and "0.1000 s after the exposure starts" in table
+
+
+def test_the_epoch_of_a_streaked_frame_is_the_one_solve_image_resolved(smeared):
+    # DATE-OBS in the header and no epoch given: the streak solution names the header, as a point solve would.
+    image = Image(np.asarray(smeared.image), header={"EXPTIME": EXPOSURE_S, "DATE-OBS": "2025-01-01T00:00:00"})
+    solution = solve_image(image, fov_deg=12.0)
+    assert solution.mode == "streak" and solution.solved
+    assert solution.epoch_source == "DATE-OBS" and solution.epoch_jyear == pytest.approx(2025.0, abs=0.01)  # years
+    given = solve_image(image, fov_deg=12.0, epoch=2025.0)
+    assert given.epoch_source == "given"

@@ -59,8 +59,11 @@ def streak_detections(solution: StreakSolution, width: int, height: int, noise: 
                       width=int(width), height=int(height), point_quality=np.zeros(n))
 
 
-def image_solution(solution: StreakSolution, found: Detections, detect_s: float) -> StreakSolution:
-    """A streak solution as :func:`startrack.solve_image` returns it: the detection time added and
-    its streaks as the detections (:func:`streak_detections`; ``found`` gives the size and noise)."""
+def image_solution(solution: StreakSolution, found: Detections, detect_s: float, epoch_source: str) -> StreakSolution:
+    """A streak solution as :func:`startrack.solve_image` returns it: the detection time added, its
+    streaks as the detections (:func:`streak_detections`; ``found`` gives the size and noise) and
+    the epoch's source as :func:`startrack.solve_image` resolved it (the streak solve was given the
+    year alone, so it says "given" even for a header's epoch)."""
     detections = streak_detections(solution, found.width, found.height, found.noise, found.background)
-    return replace(solution, solve_time_s=detect_s + solution.solve_time_s, detections=detections)
+    return replace(solution, solve_time_s=detect_s + solution.solve_time_s, detections=detections,
+                   epoch_source=epoch_source)
