@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
+from .compiled import kernels
 from .robust import (
     GAUSS_HI,
     GAUSS_LO,
@@ -98,22 +99,39 @@ class BackgroundModel:
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
         if not self.is_tiled:
             return np.full(x.shape, self.level), np.full(x.shape, self.noise)
-        return (self._interpolate(self.level_grid, x, y, True),
-                self._interpolate(self.noise_grid, x, y, False))
+        wy, wx = _point_weights(self.centres_y, y), _point_weights(self.centres_x, x)
+        return _bilinear(self.level_grid, wy, wx, True), _bilinear(self.noise_grid, wy, wx, False)
+
+    def level_at(self, x: NDArray, y: NDArray) -> NDArray:
+        """The level alone at points (x, y) (see :meth:`at`)."""
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        if not self.is_tiled:
+            return np.full(x.shape, self.level)
+        return _bilinear(self.level_grid, _point_weights(self.centres_y, y), _point_weights(self.centres_x, x), True)
 
     def clutter_at(self, x: NDArray, y: NDArray) -> NDArray:
         """Clutter ratio at points (x, y): 1 on clean sky, larger on structure."""
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
         if not self.is_tiled:
             return np.ones(x.shape)
-        return self._interpolate(self.clutter_grid, x, y, False)
+        wy, wx = _point_weights(self.centres_y, y), _point_weights(self.centres_x, x)
+        return _bilinear(self.clutter_grid, wy, wx, False)
 
-    def _interpolate(self, grid: NDArray, x: NDArray, y: NDArray, extrapolate: bool) -> NDArray:
-        y0, y1, wy = _axis_weights(self.centres_y, y, extrapolate)
-        x0, x1, wx = _axis_weights(self.centres_x, x, extrapolate)
-        top = grid[y0, x0] * (1 - wx) + grid[y0, x1] * wx
-        bottom = grid[y1, x0] * (1 - wx) + grid[y1, x1] * wx
-        return top * (1 - wy) + bottom * wy
+
+def _point_weights(centres: NDArray, coords: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """:func:`_axis_weights` with extrapolation (the held weights are these clipped to [0, 1])."""
+    return _axis_weights(centres, coords, True)
+
+
+def _bilinear(grid: NDArray, wy: tuple, wx: tuple, extrapolate: bool) -> NDArray:
+    """Bilinear interpolation of ``grid`` with the axis weights of :func:`_point_weights`; held
+    constant beyond the outer centres unless ``extrapolate`` (:func:`_axis_weights`)."""
+    (y0, y1, ty), (x0, x1, tx) = wy, wx
+    if not extrapolate:
+        ty, tx = np.minimum(np.maximum(ty, 0.0), 1.0), np.minimum(np.maximum(tx, 0.0), 1.0)
+    top = grid[y0, x0] * (1 - tx) + grid[y0, x1] * tx
+    bottom = grid[y1, x0] * (1 - tx) + grid[y1, x1] * tx
+    return top * (1 - ty) + bottom * ty
 
 
 def _axis_weights(centres: NDArray, coords: NDArray, extrapolate: bool
@@ -129,9 +147,9 @@ def _axis_weights(centres: NDArray, coords: NDArray, extrapolate: bool
         zero = np.zeros(coords.shape, dtype=np.int64)
         return zero, zero, np.zeros(coords.shape)
     pos = (coords - centres[0]) / (centres[1] - centres[0])
-    i0 = np.clip(np.floor(pos).astype(np.int64), 0, n - 2)
+    i0 = np.minimum(np.maximum(np.floor(pos).astype(np.int64), 0), n - 2)
     low, high = (-0.75, 1.75) if extrapolate else (0.0, 1.0)
-    return i0, i0 + 1, np.clip(pos - i0, low, high)
+    return i0, i0 + 1, np.minimum(np.maximum(pos - i0, low), high)
 
 
 def _grid_map(grid: NDArray, centres_y: NDArray, centres_x: NDArray, ys: NDArray, xs: NDArray,
@@ -198,18 +216,19 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
         ``level`` is the median of the tile levels, ``noise`` the lower quartile of the tile
         noises (:data:`CLEAN_SKY_QUANTILE`).
     """
-    sample, rows, cols = _tile_samples(image, tile)
+    rows, cols = _tile_rows_cols(image.shape, tile)
     ny, nx = max(1, image.shape[0] // tile), max(1, image.shape[1] // tile)
     centres_y = rows.reshape(ny, -1).mean(axis=1)  # the mean sampled row of each tile
     centres_x = cols.reshape(nx, -1).mean(axis=1)
-    q_lo, median, q_hi = _tile_quantiles(sample, (ny, nx), (GAUSS_LO, 0.5, GAUSS_HI))
+    q_lo, median, q_hi = _stack_quantiles(_gather(image, rows, cols, (ny, nx)), (GAUSS_LO, 0.5, GAUSS_HI))
     if not np.isfinite(median).any():
         return global_background(image)
     level, lower = _median3(median, linear=True), _median3(median - q_lo)
     # noise from the residual, so that a gradient across a tile does not count as noise
-    level_map = _grid_map(level, centres_y, centres_x, rows, cols, True)
-    residual = sample - level_map
-    q_lo, q_mid, q_hi = _tile_quantiles(residual, (ny, nx), (GAUSS_LO, 0.5, GAUSS_HI))
+    keep_map = rows.size == image.shape[0] and cols.size == image.shape[1]
+    level_map = np.empty((rows.size, cols.size) if keep_map else (0, 0), np.float32)
+    residual = _gather(image, rows, cols, (ny, nx), (level, centres_y, centres_x), level_map)
+    q_lo, q_mid, q_hi = _stack_quantiles(residual, (GAUSS_LO, 0.5, GAUSS_HI))
     noise = _median3(0.5 * (q_hi - q_lo) * (upper_tail_factor(q_lo, q_mid, q_hi) if skewed else 1.0))
     noise_global = float(np.quantile(noise, CLEAN_SKY_QUANTILE))
     if noise_global <= 0:  # quantized, nearly flat tiles: fall back on the global estimate
@@ -220,7 +239,7 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
         level=float(np.median(level)), noise=noise_global, level_grid=level,
         noise_grid=np.maximum(noise, MIN_NOISE_RATIO * noise_global), clutter_grid=clutter,
         centres_y=offset + scale * centres_y, centres_x=offset + scale * centres_x,
-        level_map=level_map if level_map.shape == image.shape else None,
+        level_map=level_map if keep_map else None,
     )
 
 
@@ -254,39 +273,73 @@ def _median3(grid: NDArray, linear: bool = False) -> NDArray:
     Borders repeat the edge value, or with ``linear`` are padded by linear extrapolation, so
     that a plane (a uniform gradient of the level) passes unchanged up to the border.
     """
-    if not linear:
-        return ndimage.median_filter(grid, size=3, mode="nearest")
-    padded = np.pad(grid, 1, mode="reflect", reflect_type="odd")
-    return ndimage.median_filter(padded, size=3)[1:-1, 1:-1]
+    padded = np.pad(grid, 1, mode="reflect", reflect_type="odd") if linear else np.pad(grid, 1, mode="edge")
+    return kernels().median3(padded)
 
 
-def _tile_samples(image: NDArray, tile: int) -> tuple[NDArray, NDArray, NDArray]:
-    """A regular subsample of every tile, about :data:`TILE_SAMPLES` pixels each.
+def _tile_rows_cols(shape: tuple[int, int], tile: int) -> tuple[NDArray, NDArray]:
+    """The rows and columns of a regular subsample of every tile, about :data:`TILE_SAMPLES`
+    pixels each, tile after tile: shapes (ny * n_rows,), (nx * n_cols,) of int64.
 
-    Returns the sample (ny * n_rows, nx * n_cols) and its row and column indices in ``image``.
     The grid has max(1, H // tile) x max(1, W // tile) equal tiles; the last H % tile rows and
     W % tile columns are left out.
     """
-    h, w = image.shape
+    h, w = shape
     ny, nx = max(1, h // tile), max(1, w // tile)
     tile_h, tile_w = h // ny, w // nx
     step = max(1, int(np.sqrt(tile_h * tile_w / TILE_SAMPLES)))
     rows = (np.arange(ny)[:, None] * tile_h + np.arange(0, tile_h, step)).ravel()
     cols = (np.arange(nx)[:, None] * tile_w + np.arange(0, tile_w, step)).ravel()
-    if step == 1:  # every pixel of the tiles: a view, no copy
-        return image[: ny * tile_h, : nx * tile_w], rows, cols
+    return rows, cols
+
+
+def _gather(image: NDArray, rows: NDArray, cols: NDArray, grid: tuple[int, int],
+            level: tuple[NDArray, NDArray, NDArray] | None = None,
+            level_map: NDArray[np.float32] | None = None) -> NDArray:
+    """The samples ``image[rows] x [cols]`` (:func:`_tile_rows_cols`) tile by tile, shape
+    (ny, nx, n_rows * n_cols), in the image's type; with ``level`` (a level grid and its tile
+    centres in the image's pixels), their residuals from the level interpolated bilinearly
+    (extrapolated beyond the outer centres, :func:`_axis_weights`), which is also written to
+    ``level_map`` (shape (len(rows), len(cols)), or empty) -- one compiled pass
+    (:func:`.frame_kernels.gather_tiles`)."""
+    ny, nx = grid
+    size = (rows.size // ny) * (cols.size // nx)
+    if level is None:
+        out = np.empty((ny, nx, size), image.dtype)
+        empty_i, empty_f = np.zeros(0, np.int64), np.zeros(0, np.float32)
+        kernels().gather_tiles(image, rows, cols, np.zeros((0, 0), np.float32), empty_i, empty_i, empty_f,
+                               empty_i, empty_i, empty_f, out, np.zeros((0, 0), np.float32))
+        return out
+    values, centres_y, centres_x = level
+    y0, y1, wy = _axis_weights(centres_y, rows.astype(float), True)
+    x0, x1, wx = _axis_weights(centres_x, cols.astype(float), True)
+    out = np.empty((ny, nx, size), np.result_type(image.dtype, np.float32))
+    kernels().gather_tiles(image, rows, cols, values.astype(np.float32), y0, y1, wy.astype(np.float32),
+                           x0, x1, wx.astype(np.float32), out,
+                           np.zeros((0, 0), np.float32) if level_map is None else level_map)
+    return out
+
+
+def _tile_samples(image: NDArray, tile: int) -> tuple[NDArray, NDArray, NDArray]:
+    """The subsample of every tile (:func:`_tile_rows_cols`) as one array (ny * n_rows,
+    nx * n_cols) (a view when it is every pixel), and its row and column indices in ``image``."""
+    rows, cols = _tile_rows_cols(image.shape, tile)
+    if rows.size > 1 and cols.size > 1 and rows[1] - rows[0] == 1 and cols[1] - cols[0] == 1:
+        return image[: rows.size, : cols.size], rows, cols
     return image[np.ix_(rows, cols)], rows, cols
 
 
-def _tile_quantiles(sample: NDArray, grid: tuple[int, int], q: tuple[float, ...]
-                    ) -> list[NDArray]:
-    """Quantiles ``q`` of each tile of a :func:`_tile_samples` sample, ignoring NaN, each of
-    shape ``grid``; a tile with no finite value takes its nearest neighbour's (all NaN when
+def _tile_quantiles(sample: NDArray, grid: tuple[int, int], q: tuple[float, ...]) -> list[NDArray]:
+    """Quantiles ``q`` of each tile of a :func:`_tile_samples` sample, on the tile ``grid``
+    (ny, nx) (see :func:`_stack_quantiles`)."""
+    return _stack_quantiles(_gather(sample, np.arange(sample.shape[0]), np.arange(sample.shape[1]), grid), q)
+
+
+def _stack_quantiles(stack: NDArray, q: tuple[float, ...]) -> list[NDArray]:
+    """Quantiles ``q`` of each tile of a :func:`_gather` stack (ny, nx, S), ignoring NaN, each of
+    shape (ny, nx); a tile with no finite value takes its nearest neighbour's (all NaN when
     no tile has one)."""
-    ny, nx = grid
-    stack = sample.reshape(ny, sample.shape[0] // ny, nx, sample.shape[1] // nx)
-    values = _last_axis_quantiles(stack.transpose(0, 2, 1, 3).reshape(ny, nx, -1), q)
-    return [_fill_from_nearest(v) for v in values]
+    return [_fill_from_nearest(v) for v in _last_axis_quantiles(stack, q)]
 
 
 def _last_axis_quantiles(stack: NDArray, q: tuple[float, ...]) -> list[NDArray]:

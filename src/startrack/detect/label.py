@@ -1,8 +1,9 @@
 """8-connected clustering of candidate pixels (seed 000 §4.2.1, notes §1.7; seed 003 Fig. 3.2).
 
 A pixel joins the cluster of any of its 8 neighbours that is also above threshold; this is
-``scipy.ndimage.label`` with a 3 x 3 structuring element. Clusters are then held as flat
-pixel lists grouped cluster by cluster (:class:`Regions`), so that every per-cluster quantity
+``scipy.ndimage.label`` with a 3 x 3 structuring element, computed by one compiled scan
+(:func:`.frame_kernels.label8`). Clusters are then held as flat pixel lists grouped cluster by
+cluster (:class:`Regions`), so that every per-cluster quantity
 is one vectorised reduction (``np.add.reduceat``) over only the clustered pixels.
 """
 
@@ -12,11 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage
 
+from .compiled import kernels
 from .threshold import threshold_mask
-
-EIGHT_CONNECTED = np.ones((3, 3), dtype=bool)
 
 
 @dataclass(frozen=True)
@@ -65,9 +64,14 @@ class Regions:
         return np.minimum.reduceat(values, self.starts)
 
     def argmax(self, values: NDArray) -> NDArray[np.int64]:
-        """Position (into the pixel arrays) of each region's largest value, shape (N,)."""
-        order = np.lexsort((values, self.index))
-        return order[self.starts + self.counts - 1]
+        """Position (into the pixel arrays) of each region's largest value, shape (N,): the last
+        of equal largest values (of its NaN values, if it has any)."""
+        if len(self) == 0:
+            return np.zeros(0, dtype=np.int64)
+        largest = self.max(values)[self.index]
+        with np.errstate(invalid="ignore"):
+            top = (values == largest) | (np.isnan(values) & np.isnan(largest))
+        return np.maximum.reduceat(np.where(top, np.arange(values.size), -1), self.starts)
 
     def select(self, keep: NDArray[np.bool_]) -> Regions:
         """The regions where ``keep`` (shape (N,)) is True, renumbered 0 .. K-1."""
@@ -101,12 +105,12 @@ def regions_from_index(index: NDArray, y: NDArray, x: NDArray, n: int) -> Region
 
 
 def label_regions(mask: NDArray[np.bool_]) -> Regions:
-    """8-connected regions of the True pixels of ``mask`` (shape (H, W)), as :class:`Regions`
-    (region order is scipy's raster order of first pixels)."""
-    labels, n = ndimage.label(mask, structure=EIGHT_CONNECTED)
-    flat = np.flatnonzero(mask)  # the labelled pixels (a bool scan is faster than the labels')
-    y, x = np.divmod(flat, mask.shape[1])
-    return regions_from_index(labels.ravel()[flat] - 1, y, x, n)
+    """8-connected regions of the True pixels of ``mask`` (shape (H, W)), as :class:`Regions`:
+    numbered in raster order of their first pixels (``scipy.ndimage.label``'s order, with its
+    3 x 3 structuring element), each region's pixels in raster order. One compiled union-find
+    scan (:func:`.frame_kernels.label8`)."""
+    index, y, x, starts = kernels().label8(np.ascontiguousarray(mask, dtype=np.bool_))
+    return Regions(index, y, x, starts)
 
 
 def hysteresis_regions(snr: NDArray, detect_sigma: float, grow_sigma: float) -> Regions:

@@ -22,7 +22,7 @@ from .background import (
     tiled_background,
     with_noise_floor,
 )
-from .centroid import SpotMeasurements, centroid_sigma, measure_spots, sigma_eq42
+from .centroid import SpotMeasurements, centroid_sigma, measure_spots, sigma_eq42, take_spots
 from .centroiders import CentroidInputs, run_centroider
 from .dark import subtract_dark, subtract_row_reference
 from .deblend import split_regions
@@ -68,6 +68,41 @@ NOISE_FLOOR_FRACTION = 1e-6
 
 
 @dataclass(frozen=True)
+class MeasuredRegions:
+    """N regions with what the later stages read of them, measured once (a subset is taken,
+    not measured again: every quantity is per pixel or per region).
+
+    Attributes
+    ----------
+    regions : Regions
+        Full-resolution pixels of the N spots.
+    raw, signal : ndarray, shape (M,)
+        Each pixel's value (float64, NaN where missing) and its value less the background
+        level (0 where missing).
+    spots : SpotMeasurements
+        The weighted-sum measurements, shape (N,) each.
+    peak_level, local_noise : ndarray, shape (N,)
+        Background level and pixel noise at each spot's peak.
+    """
+
+    regions: Regions
+    raw: NDArray[np.float64]
+    signal: NDArray[np.float64]
+    spots: SpotMeasurements
+    peak_level: NDArray[np.float64]
+    local_noise: NDArray[np.float64]
+
+    def __len__(self) -> int:
+        return len(self.regions)
+
+    def take(self, keep: NDArray[np.bool_]) -> MeasuredRegions:
+        """The regions where ``keep`` (shape (N,)) is True, renumbered as :meth:`Regions.select`."""
+        pixels = keep[self.regions.index]
+        return MeasuredRegions(self.regions.select(keep), self.raw[pixels], self.signal[pixels],
+                               take_spots(self.spots, keep), self.peak_level[keep], self.local_noise[keep])
+
+
+@dataclass(frozen=True)
 class Frame:
     """A prepared frame with its background: what every later stage reads."""
 
@@ -91,10 +126,10 @@ def detect_frame(cfg: StarDetector, image: NDArray, dark: NDArray | None) -> Det
     if model.noise <= 0:  # a constant image
         return empty_details(frame, image.shape[1], cfg)
     regions, k_sigma = find_regions(cfg, frame, det)
-    regions = with_fine_pass(cfg, frame, filter_spots(cfg, frame, regions), regions, k_sigma)
-    if len(regions) == 0:
+    kept = with_fine_pass(cfg, frame, filter_spots(cfg, frame, measure_regions(frame, regions)), regions, k_sigma)
+    if len(kept) == 0:
         return empty_details(frame, image.shape[1], cfg, k_sigma)
-    return measure(cfg, frame, regions, k_sigma, image.shape[1])
+    return measure(cfg, frame, kept, k_sigma, image.shape[1])
 
 
 def preprocess(cfg: StarDetector, image: NDArray, dark: NDArray | None
@@ -169,39 +204,39 @@ def find_regions(cfg: StarDetector, frame: Frame, det: NDArray) -> tuple[Regions
     return regions.upsample(binning), k_sigma
 
 
-def with_fine_pass(cfg: StarDetector, frame: Frame, regions: Regions, found: Regions, k_sigma: float
-                   ) -> Regions:
-    """``regions`` (the binned pass's spots that passed the filters, out of all it ``found``)
+def with_fine_pass(cfg: StarDetector, frame: Frame, kept: MeasuredRegions, found: Regions, k_sigma: float
+                   ) -> MeasuredRegions:
+    """``kept`` (the binned pass's spots that passed the filters, out of all it ``found``)
     plus the filtered spots of the full-resolution pass (:mod:`.fine_pass`) that share no pixel
     with any it found, the blends it separates split (with ``deblend``); unchanged when the
     pass is off (no binning, ``fine_sigma`` None, a threshold other than "ksigma": the dynamic
     one targets a count of the binned pass's spots) or not needed (:func:`stars_are_sharp`)."""
     if cfg.fine_sigma is None or frame.binning == 1 or cfg.threshold != "ksigma" or \
-            not stars_are_sharp(frame, regions):
-        return regions
-    data = frame.prepared.data
+            not stars_are_sharp(frame, kept):
+        return kept
+    data, regions = frame.prepared.data, kept.regions
     fine = fine_regions(data, frame.prepared.invalid, cfg.kernel, cfg.kernel_px, cfg.tile_px,
                         max(cfg.fine_sigma, k_sigma), cfg.grow_sigma, 1 if cfg.reject_edge else 0, cfg.deblend,
                         frame.skewed)
-    base = spot_measurements(frame, regions)[0]
-    unsplit = saturated_spots(regions, data[regions.y, regions.x].astype(np.float64), data) | (not cfg.deblend)
+    base = kept.spots
+    unsplit = saturated_spots(regions, kept.raw, data) | (not cfg.deblend)
     unsplit |= ring_noise_ratio(data, base.x, base.y, frame.noise_px, BLEND_RING_PX) > MAX_BLEND_RING_NOISE
-    fine = filter_spots(cfg, frame, fine)
-    spots = spot_measurements(frame, fine)[0]
+    extra = filter_spots(cfg, frame, measure_regions(frame, fine))
+    spots = extra.spots
     quiet = ring_noise_ratio(data, spots.x, spots.y, frame.noise_px) <= MAX_RING_NOISE
     taken = np.zeros(data.shape, dtype=bool)
     taken[found.y, found.x] = True
     # a saturated star the binned pass left out was cut by the border or rejected for its shape;
     # an extended spot is structure, not the sharp star this pass is for
-    quiet &= ~touches(fine, taken) & ~saturated_spots(fine, data[fine.y, fine.x].astype(np.float64), data)
-    quiet &= point_like(frame, regions, fine)
-    return add_new_regions(regions, fine, data, unsplit, quiet)
+    quiet &= ~touches(extra.regions, taken) & ~saturated_spots(extra.regions, extra.raw, data)
+    quiet &= point_like(frame, kept, extra)
+    return measure_regions(frame, add_new_regions(regions, extra.regions, data, unsplit, quiet))
 
 
-def point_like(frame: Frame, base: Regions, extra: Regions) -> NDArray[np.bool_]:
+def point_like(frame: Frame, base: MeasuredRegions, extra: MeasuredRegions) -> NDArray[np.bool_]:
     """Shape (K,): which regions of ``extra`` are point sources (:mod:`.point_source`) against
     the frame's reference taken from ``base`` and ``extra`` together."""
-    both = [(r, region_signal(frame, r)) for r in (base, extra)]
+    both = [(m.regions, m.signal) for m in (base, extra)]
     shapes = [core_shape(r, signal, r.max(signal)) for r, signal in both]
     size = np.concatenate([sz for sz, _ in shapes])
     elongation = np.concatenate([el for _, el in shapes])
@@ -210,13 +245,13 @@ def point_like(frame: Frame, base: Regions, extra: Regions) -> NDArray[np.bool_]
     return quality[len(base):] >= Detections.POINT_SOURCE_MIN_QUALITY
 
 
-def stars_are_sharp(frame: Frame, regions: Regions) -> bool:
+def stars_are_sharp(frame: Frame, kept: MeasuredRegions) -> bool:
     """Whether the frame's significant spots (peak SNR at least 10) have a median half-maximum
     core (:func:`.point_source.core_shape`) under :data:`SHARP_CORE_PX`, or the frame has fewer
     than three such spots to tell: the stars the binned image spreads out and blends."""
-    if len(regions) == 0:
+    if len(kept) == 0:
         return True
-    signal = region_signal(frame, regions)
+    regions, signal = kept.regions, kept.signal
     peak = regions.max(signal)
     size, _ = core_shape(regions, signal, peak)
     significant = np.isfinite(size) & (peak >= SHARP_MIN_SNR * frame.noise_px)
@@ -250,40 +285,31 @@ def _prefiltered_regions(cfg: StarDetector, frame: Frame) -> Regions:
 
 # --- measurement, filters, centroid ------------------------------------------------------------
 
-def region_signal(frame: Frame, regions: Regions) -> NDArray[np.float64]:
-    """Background-subtracted value of every region pixel, shape (M,) (0 where invalid)."""
-    data, invalid = frame.prepared.data, frame.prepared.invalid
-    level, _ = frame.model.at(regions.x, regions.y)
-    signal = data[regions.y, regions.x].astype(np.float64) - level
+def measure_regions(frame: Frame, regions: Regions) -> MeasuredRegions:
+    """Each pixel's raw value and background-subtracted signal (0 where invalid), the spots'
+    weighted-sum measurements, and the background level and pixel noise at their peaks."""
+    data, invalid, model = frame.prepared.data, frame.prepared.invalid, frame.model
+    raw = data[regions.y, regions.x].astype(np.float64)
+    signal = raw - model.level_at(regions.x, regions.y)
     if invalid is not None:
         signal[invalid[regions.y, regions.x]] = 0.0
-    return signal
-
-
-def spot_measurements(frame: Frame, regions: Regions) -> tuple[SpotMeasurements, NDArray, NDArray]:
-    """The spots' weighted-sum measurements, and the background level and pixel noise at their
-    peaks, shape (N,) each."""
-    model = frame.model
-    spots = measure_spots(regions, region_signal(frame, regions))
+    spots = measure_spots(regions, signal)
     peak_level, peak_noise = model.at(spots.peak_x, spots.peak_y)
-    return spots, peak_level, frame.noise_px * peak_noise / model.noise
+    return MeasuredRegions(regions, raw, signal, spots, peak_level, frame.noise_px * peak_noise / model.noise)
 
 
-def filter_spots(cfg: StarDetector, frame: Frame, regions: Regions) -> Regions:
+def filter_spots(cfg: StarDetector, frame: Frame, found: MeasuredRegions) -> MeasuredRegions:
     """The regions that pass every spot filter (:func:`spot_filters`)."""
-    if len(regions) == 0:
-        return regions
-    spots, peak_level, local_noise = spot_measurements(frame, regions)
-    return regions.select(spot_filters(cfg, frame, regions, spots, local_noise, peak_level))
+    if len(found) == 0:
+        return found
+    return found.take(spot_filters(cfg, frame, found.regions, found.spots, found.local_noise, found.peak_level))
 
 
-def measure(cfg: StarDetector, frame: Frame, regions: Regions, k_sigma: float,
+def measure(cfg: StarDetector, frame: Frame, kept: MeasuredRegions, k_sigma: float,
             full_width: int) -> DetectionDetails:
-    """Measure the (filtered) spots, centroid them and pack the result."""
-    spots, peak_level, local_noise = spot_measurements(frame, regions)
-    data = frame.prepared.data
-    raw = data[regions.y, regions.x].astype(np.float64)
-    inputs = CentroidInputs(data, frame.prepared.invalid, regions, spots, raw, peak_level, local_noise)
+    """Centroid the (filtered) spots and pack the result."""
+    inputs = CentroidInputs(frame.prepared.data, frame.prepared.invalid, kept.regions, kept.spots, kept.raw,
+                            kept.peak_level, kept.local_noise)
     return pack(cfg, frame, inputs, k_sigma, full_width)
 
 

@@ -20,22 +20,20 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from .compiled import kernels
+
 
 def bin_mean(image: NDArray, factor: int) -> NDArray[np.float32]:
     """Mean over ``factor`` x ``factor`` blocks, as float32 (any numeric input); trailing rows /
-    columns that do not fill a block are dropped. Returns shape (H // factor, W // factor)."""
+    columns that do not fill a block are dropped. Returns shape (H // factor, W // factor).
+
+    One compiled pass (:func:`.frame_kernels.bin_mean`): each block's rows are summed first,
+    then its columns, so the values do not depend on the frame's layout."""
     if factor == 1:
         return image.astype(np.float32, copy=False)
-    h, w = image.shape[0] // factor, image.shape[1] // factor
-    cropped = image[: h * factor, : w * factor]
-    rows = cropped[0::factor].astype(np.float32)  # sum the rows of each block first ...
-    for dy in range(1, factor):
-        rows += cropped[dy::factor]
-    out = rows[:, 0::factor].copy()  # ... then its columns: half the work of 2-D strides
-    for dx in range(1, factor):
-        out += rows[:, dx::factor]
-    out *= np.float32(1.0 / factor**2)
-    return out
+    if image.dtype == np.bool_:
+        image = image.view(np.uint8)
+    return kernels().bin_mean(image, factor)
 
 
 KERNELS = ("binomial", "box")
@@ -57,28 +55,13 @@ def smooth(image: NDArray[np.float32], kernel: str, size: int) -> NDArray[np.flo
     """Separable ``size`` x ``size`` smoothing with :func:`kernel_weights`, edges repeated;
     same shape as the input (the input itself when ``size`` is 1).
 
-    Implemented as weighted sums of shifted slices, several times faster than
-    ``scipy.ndimage`` filters for such small kernels on float32.
+    One compiled pass per axis (:func:`.frame_kernels.smooth`), rows first, each output the
+    float32 sum ``sum_k weights[k] * shifted_k`` from k = 0 (other float inputs are taken as
+    float32).
     """
     if size == 1:
         return image
-    weights = kernel_weights(kernel, size)
-    padded = np.pad(image, size // 2, mode="edge")
-    rows = _weighted_window_sum(padded, weights, axis=0)
-    return _weighted_window_sum(rows, weights, axis=1)
-
-
-def _weighted_window_sum(a: NDArray[np.float32], weights: NDArray[np.float32], axis: int
-                         ) -> NDArray[np.float32]:
-    """sum_k weights[k] * a shifted by k along ``axis`` (the result is shorter by len - 1)."""
-    n = a.shape[axis] - weights.size + 1
-    index = [slice(None), slice(None)]
-    index[axis] = slice(0, n)
-    out = a[tuple(index)] * weights[0]
-    for k in range(1, weights.size):
-        index[axis] = slice(k, k + n)
-        out += weights[k] * a[tuple(index)]
-    return out
+    return kernels().smooth(np.asarray(image, dtype=np.float32), kernel_weights(kernel, size))
 
 
 MIN_VALID_WEIGHT = 0.5

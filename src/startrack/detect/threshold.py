@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from .background import BackgroundModel
+from .background import BackgroundModel, _axis_weights
+from .compiled import kernels
 
 
 def significance(image: NDArray[np.float32], model: BackgroundModel, binning: int = 1
@@ -35,16 +36,18 @@ def significance(image: NDArray[np.float32], model: BackgroundModel, binning: in
     h, w = image.shape
     centre = (binning - 1) / 2
     ys, xs = centre + binning * np.arange(h), centre + binning * np.arange(w)
-    if model.level_map is not None and model.level_map.shape == image.shape:
-        level, noise = model.level_map, model.noise_map(ys, xs)
-    else:
-        level, noise = model.maps(ys, xs)
-    snr = image - np.float32(level) if np.isscalar(level) else image - level
-    if np.isscalar(noise):
-        snr *= np.float32(1.0 / noise)
-    else:
-        snr /= noise
-    return snr
+    image = np.asarray(image, dtype=np.float32)
+    if not model.is_tiled:
+        level, inverse = np.full((1, 1), model.level, np.float32), np.full((1, 1), 1.0 / model.noise, np.float32)
+        rows_i, rows_f = np.zeros(h, np.int64), np.zeros(h, np.float32)
+        cols_i, cols_f = np.zeros(w, np.int64), np.zeros(w, np.float32)
+        return kernels().significance(image, level, inverse, rows_i, rows_i, rows_f, cols_i, cols_i, cols_f, 0)
+    y0, y1, wy = _axis_weights(model.centres_y, ys, True)
+    x0, x1, wx = _axis_weights(model.centres_x, xs, True)
+    mapped = model.level_map is not None and model.level_map.shape == image.shape
+    level = model.level_map if mapped else model.level_grid.astype(np.float32)
+    return kernels().significance(image, level, model.noise_grid.astype(np.float32), y0, y1, wy.astype(np.float32),
+                                  x0, x1, wx.astype(np.float32), 1 if mapped else 2)
 
 
 def threshold_mask(snr: NDArray, k_sigma: float) -> NDArray[np.bool_]:

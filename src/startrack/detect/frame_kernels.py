@@ -1,0 +1,304 @@
+"""The compiled loops of the detector's whole-frame passes (numba): binning and smoothing of the
+detection image, the gathering of tile samples (and of their residuals from the interpolated
+level), the 3 x 3 median of a tile grid, the significance image and the 8-connected labelling.
+
+Each loop gives the numbers of the numpy expressions it replaces (the same float32 operations in
+the same order), so the detector's results do not depend on which one ran; they are one pass over
+the frame each instead of a dozen numpy temporaries. Kept apart so that importing startrack does
+not import numba: :mod:`.compiled` loads this module on first use. Compiled functions are cached
+on disk (``cache=True``, see :mod:`startrack.numba_cache`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def bin_mean(image, factor):
+    """Mean over ``factor`` x ``factor`` blocks as float32, trailing rows and columns dropped:
+    each block's rows summed first (in the wider of float32 and the image's type, rounded to
+    float32), then its columns, then scaled, as :func:`.smooth.bin_mean` did with numpy.
+    ``image`` (H, W) of any real dtype; returns (H // factor, W // factor) float32."""
+    h, w = image.shape[0] // factor, image.shape[1] // factor
+    out = np.empty((h, w), np.float32)
+    scale = np.float32(1.0 / (factor * factor))
+    row = np.empty(w * factor, np.float32)
+    for i in range(h):
+        src = image[i * factor]
+        for j in range(w * factor):
+            row[j] = src[j]
+        for dy in range(1, factor):  # added in the wider of float32 and the image's type
+            src = image[i * factor + dy]
+            for j in range(w * factor):
+                row[j] += src[j]
+        if factor == 2:
+            for j in range(w):
+                out[i, j] = (row[2 * j] + row[2 * j + 1]) * scale
+            continue
+        for j in range(w):
+            total = row[j * factor]
+            for dx in range(1, factor):
+                total += row[j * factor + dx]
+            out[i, j] = total * scale
+    return out
+
+
+@njit(cache=True)
+def smooth(image, weights):
+    """Separable smoothing of float32 ``image`` (H, W) with the odd float32 ``weights`` (K,),
+    edges repeated: rows first, then columns, each ``sum_k weights[k] * shifted_k`` accumulated
+    in float32 from k = 0 (as :func:`.smooth.smooth` did with numpy). Returns (H, W) float32."""
+    h, w = image.shape
+    r = weights.size // 2
+    rows = np.empty((h, w), np.float32)
+    for i in range(h):
+        acc, src, first = rows[i], image[min(max(i - r, 0), h - 1)], weights[0]
+        for j in range(w):
+            acc[j] = src[j] * first
+        for k in range(1, weights.size):
+            src, weight = image[min(max(i - r + k, 0), h - 1)], weights[k]
+            for j in range(w):
+                acc[j] += weight * src[j]
+    out = np.empty((h, w), np.float32)
+    for i in range(h):
+        _smooth_row(rows[i], weights, out[i])
+    return out
+
+
+@njit(cache=True)
+def _smooth_row(row, weights, out):
+    """One row of :func:`smooth`'s second pass: the interior by shifted slices, the ``r``
+    pixels at either end with clamped indices."""
+    w, r = row.size, weights.size // 2
+    lo, hi = min(r, w), max(min(r, w), w - r)
+    dst, src, first = out[lo:hi], row[lo - r: hi - r], weights[0]
+    for j in range(hi - lo):
+        dst[j] = src[j] * first
+    for k in range(1, weights.size):
+        src, weight = row[lo - r + k: hi - r + k], weights[k]
+        for j in range(hi - lo):
+            dst[j] += weight * src[j]
+    for j in range(lo):
+        out[j] = _clamped_sum(row, weights, j)
+    for j in range(hi, w):
+        out[j] = _clamped_sum(row, weights, j)
+
+
+@njit(cache=True)
+def _clamped_sum(row, weights, j):
+    """``sum_k weights[k] * row[j - r + k]`` with the index clamped to the row (edges repeated)."""
+    w, r = row.size, weights.size // 2
+    total = row[min(max(j - r, 0), w - 1)] * weights[0]
+    for k in range(1, weights.size):
+        total += weights[k] * row[min(max(j - r + k, 0), w - 1)]
+    return total
+
+
+@njit(cache=True)
+def _along_x(grid, x0, x1, wx, clip):
+    """The float32 ``grid`` (ny, nx) interpolated along x at every column: (ny, len(x0)),
+    ``grid[:, x0] + wx * (grid[:, x1] - grid[:, x0])`` (float32 weights ``wx``, clipped to
+    [0, 1] with ``clip``) -- the first half of :func:`.background._grid_map`."""
+    out = np.empty((grid.shape[0], x0.size), np.float32)
+    for g in range(grid.shape[0]):
+        for c in range(x0.size):
+            weight = min(max(wx[c], np.float32(0.0)), np.float32(1.0)) if clip else wx[c]
+            out[g, c] = grid[g, x0[c]] + weight * (grid[g, x1[c]] - grid[g, x0[c]])
+    return out
+
+
+@njit(cache=True)
+def _along_y(rows, y0, y1, weight, out):
+    """Row ``out`` (n,) = ``low + (high - low) * weight`` between rows ``y0`` and ``y1`` of the
+    :func:`_along_x` grid ``rows`` -- the second half of :func:`.background._grid_map`."""
+    low, high = rows[y0], rows[y1]
+    for c in range(out.size):
+        out[c] = (high[c] - low[c]) * weight + low[c]
+
+
+@njit(cache=True)
+def gather_tiles(image, rows, cols, grid, y0, y1, wy, x0, x1, wx, out, level_out):
+    """The samples ``image[rows] x [cols]`` of an ny x nx grid of tiles into ``out`` (ny, nx, S)
+    (of the type numpy would give them), tile by tile in raster order. ``rows`` (ny * nr,) and
+    ``cols`` (nx * nc,) hold each tile's rows and columns one tile after another. With a level
+    ``grid`` (float32, not empty): the samples less the level interpolated at each (``y0, y1,
+    wy`` per entry of ``rows``, ``x0, x1, wx`` per entry of ``cols``, float32 weights), and that
+    level written to ``level_out`` (len(rows), len(cols)) when it is not empty."""
+    ny, nx = out.shape[0], out.shape[1]
+    nr, nc = rows.size // ny, cols.size // nx
+    residual, keep = grid.size > 0, level_out.size > 0
+    along_x = _along_x(grid, x0, x1, wx, False) if residual else np.zeros((0, 0), np.float32)
+    level = np.zeros(cols.size if residual else 0, np.float32)
+    flat = out.reshape(-1)
+    for ty in range(ny):
+        for j in range(nr):
+            r = ty * nr + j
+            if residual:
+                _along_y(along_x, y0[r], y1[r], wy[r], level)
+                if keep:
+                    level_out[r] = level
+            _gather_row(image, rows[r], cols, level, flat, (ty * nx * nr + j) * nc, nr * nc, nc)
+    return out
+
+
+@njit(cache=True)
+def _gather_row(image, row, cols, level, flat, start, tile_size, nc):
+    """Row ``row`` of the samples (less ``level`` when it is not empty) into the flat stack:
+    columns of tile tx go to ``flat[start + tx * tile_size + i]``, i < ``nc``."""
+    residual = level.size > 0
+    dense = cols[-1] - cols[0] == cols.size - 1  # every column from cols[0] on: no look-up
+    src = image[row, cols[0]: cols[0] + cols.size] if dense else image[row].copy()[cols]
+    for tx in range(cols.size // nc):
+        first, base = tx * nc, start + tx * tile_size
+        if residual:
+            for i in range(nc):
+                flat[base + i] = src[first + i] - level[first + i]
+        else:
+            for i in range(nc):
+                flat[base + i] = src[first + i]
+
+
+@njit(cache=True)
+def median3(padded):
+    """3 x 3 median of every inner cell of ``padded`` (ny + 2, nx + 2): shape (ny, nx), the
+    middle of each neighbourhood's nine values sorted (as ``scipy.ndimage.median_filter``)."""
+    ny, nx = padded.shape[0] - 2, padded.shape[1] - 2
+    out = np.empty((ny, nx), padded.dtype)
+    values = np.empty(9, padded.dtype)
+    for i in range(ny):
+        for j in range(nx):
+            n = 0
+            for di in range(3):
+                for dj in range(3):
+                    v = padded[i + di, j + dj]
+                    k = n
+                    while k > 0 and values[k - 1] > v:  # insertion sort
+                        values[k] = values[k - 1]
+                        k -= 1
+                    values[k] = v
+                    n += 1
+            out[i, j] = values[4]
+    return out
+
+
+@njit(cache=True)
+def significance(image, level, noise, y0, y1, wy, x0, x1, wx, mode):
+    """(image - level) / noise of float32 ``image`` (h, w), float32 (h, w). ``mode`` 0: ``level``
+    and ``noise`` hold the constant level and the inverse of the constant noise (``[0, 0]``);
+    1: ``level`` is the level at every pixel (h, w) and ``noise`` a grid; 2: both are grids. A
+    grid is interpolated bilinearly (``y0, y1, wy`` per row, ``x0, x1, wx`` per column, float32;
+    the noise's weights clipped to [0, 1], the level's as given)."""
+    h, w = image.shape
+    out = np.empty((h, w), np.float32)
+    if mode == 0:
+        for i in range(h):
+            for j in range(w):
+                out[i, j] = (image[i, j] - level[0, 0]) * noise[0, 0]
+        return out
+    zero, one = np.float32(0.0), np.float32(1.0)
+    noise_x = _along_x(noise, x0, x1, wx, True)
+    level_x = _along_x(level, x0, x1, wx, False) if mode == 2 else np.zeros((0, 0), np.float32)
+    lvl, sd = np.empty(w, np.float32), np.empty(w, np.float32)
+    for i in range(h):
+        _along_y(noise_x, y0[i], y1[i], min(max(wy[i], zero), one), sd)
+        if mode == 2:
+            _along_y(level_x, y0[i], y1[i], wy[i], lvl)
+        _divide_row(image[i], lvl if mode == 2 else level[i], sd, out[i])
+    return out
+
+
+@njit(cache=True)
+def _divide_row(row, level, noise, out):
+    """out = (row - level) / noise, element by element (float32 rows of one length)."""
+    for j in range(out.size):
+        out[j] = (row[j] - level[j]) / noise[j]
+
+
+@njit(cache=True)
+def _root(parent, a):
+    while parent[a] != a:
+        parent[a] = parent[parent[a]]
+        a = parent[a]
+    return a
+
+
+@njit(cache=True)
+def _union(parent, a, b):
+    """Join the sets of a and b under the smaller root (the earlier label in raster order)."""
+    a, b = _root(parent, a), _root(parent, b)
+    if a < b:
+        parent[b] = a
+    elif b < a:
+        parent[a] = b
+
+
+@njit(cache=True)
+def _provisional(mask):
+    """Raster scan of ``mask``: flat index and provisional label of every True pixel, and the
+    union-find parents of the labels (8-connected to the row above and the pixel before)."""
+    h, w = mask.shape
+    flat = np.empty(16, np.int64)
+    label = np.empty(16, np.int64)
+    parent = np.empty(16, np.int64)
+    previous, current = np.full(w, -1, np.int64), np.full(w, -1, np.int64)
+    m = n = 0
+    for i in range(h):
+        for j in range(w):
+            current[j] = -1
+            if not mask[i, j]:
+                continue
+            mine = current[j - 1] if j > 0 else -1
+            for dj in (-1, 0, 1):
+                if 0 <= j + dj < w and previous[j + dj] >= 0:
+                    if mine < 0:
+                        mine = previous[j + dj]
+                    else:
+                        _union(parent, mine, previous[j + dj])
+            if mine < 0:
+                if n == parent.size:
+                    parent = np.concatenate((parent, np.empty(n, np.int64)))
+                parent[n] = mine = n
+                n += 1
+            if m == flat.size:
+                flat = np.concatenate((flat, np.empty(m, np.int64)))
+                label = np.concatenate((label, np.empty(m, np.int64)))
+            flat[m], label[m], current[j] = i * w + j, mine, mine
+            m += 1
+        previous, current = current, previous
+    return flat[:m], label[:m], parent[:n]
+
+
+@njit(cache=True)
+def label8(mask):
+    """8-connected regions of the True pixels of bool ``mask`` (H, W), numbered in raster order
+    of their first pixels (``scipy.ndimage.label``'s order), each region's pixels in raster order.
+    Returns (index, y, x) of shape (M,) grouped region after region, and starts (N,), int64."""
+    w = mask.shape[1]
+    flat, label, parent = _provisional(mask)
+    final = np.empty(parent.size, np.int64)
+    n = 0
+    for a in range(parent.size):  # a root precedes the labels joined to it
+        root = _root(parent, a)
+        if root == a:
+            final[a] = n
+            n += 1
+        else:
+            final[a] = final[root]
+    counts = np.zeros(n, np.int64)
+    for k in range(flat.size):
+        counts[final[label[k]]] += 1
+    starts = np.empty(n, np.int64)
+    total = 0
+    for r in range(n):
+        starts[r] = total
+        total += counts[r]
+    fill = starts.copy()
+    index, y, x = np.empty(flat.size, np.int64), np.empty(flat.size, np.int64), np.empty(flat.size, np.int64)
+    for k in range(flat.size):
+        r = final[label[k]]
+        p = fill[r]
+        fill[r] += 1
+        index[p], y[p], x[p] = r, flat[k] // w, flat[k] % w
+    return index, y, x, starts
