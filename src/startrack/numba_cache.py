@@ -156,20 +156,31 @@ def _cache_files(folder: Path):
 
 def _read_checked(folder: Path) -> dict[str, list[int]]:
     """The record of files found whole, or {} if it is absent or unreadable."""
+    return read_record(folder / CHECKED_NAME)
+
+
+def _write_checked(folder: Path, checked: dict[str, list[int]]) -> None:
+    write_record(folder / CHECKED_NAME, checked)
+
+
+def read_record(path: Path) -> dict[str, list[int]]:
+    """A record of files found whole (a JSON object: name -> stamp), or {} if absent or unreadable.
+    Also :mod:`startrack.cache`'s record of the table files it has checked."""
     try:
-        record = json.loads((folder / CHECKED_NAME).read_text())
+        record = json.loads(path.read_text())
     except (OSError, ValueError):
         return {}
     return record if isinstance(record, dict) else {}
 
 
-def _write_checked(folder: Path, checked: dict[str, list[int]]) -> None:
-    """Replace the record atomically (a temporary file and a rename); a failure is ignored."""
-    target = folder / CHECKED_NAME
-    tmp = folder / f"{CHECKED_NAME}.{os.getpid()}.tmp.{time.time_ns():x}"
+def write_record(path: Path, record: dict[str, list[int]], tmp: Path | None = None) -> None:
+    """Replace a record atomically (through the temporary file ``tmp`` beside it, by default
+    ``NAME.PID.tmp.NS``, and a rename); a failure is ignored (the files are then checked again by
+    the next process)."""
+    tmp = tmp or path.with_name(f"{path.name}.{os.getpid()}.tmp.{time.time_ns():x}")
     try:
-        tmp.write_text(json.dumps(checked, sort_keys=True))
-        os.replace(tmp, target)
+        tmp.write_text(json.dumps(record, sort_keys=True))
+        os.replace(tmp, path)
     except OSError:
         _unlink(tmp)
 
