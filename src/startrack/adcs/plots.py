@@ -13,12 +13,16 @@ from __future__ import annotations
 import math
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-from matplotlib.figure import Figure
 
+from ..plotting import new_figure
 from .loop import RunRecord
 from .metrics import SEED_TABLE_5_3
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 DPI = 110
 
@@ -43,7 +47,7 @@ def _title(record: RunRecord) -> str:
 
 def draw_attitude(record: RunRecord) -> Figure:
     """Angle about y (truth, estimate, plan, target) and the pointing error with the 4.5 deg band."""
-    fig = Figure(figsize=(10, 6.5), layout="constrained")
+    fig = new_figure(figsize=(10, 6.5), layout="constrained")
     top, bottom = fig.subplots(2, 1, sharex=True)
     t, deg = record.t_s, np.degrees
     top.plot(t, deg(record.target_theta), color="0.6", lw=1, ls="--", label="target")
@@ -67,7 +71,7 @@ def draw_attitude(record: RunRecord) -> Figure:
 
 def draw_actuation(record: RunRecord) -> Figure:
     """Commanded and delivered current with the limit, torque about y and power I^2 R."""
-    fig = Figure(figsize=(10, 7.5), layout="constrained")
+    fig = new_figure(figsize=(10, 7.5), layout="constrained")
     cur, tor, pw = fig.subplots(3, 1, sharex=True)
     t, limit = record.t_s, record.config.cubesat.max_current_a
     cur.plot(t, 1e3 * record.current_cmd, color="tab:orange", lw=0.8, label="commanded")
@@ -91,7 +95,7 @@ def draw_actuation(record: RunRecord) -> Figure:
 
 def draw_feedback(record: RunRecord) -> Figure:
     """Validity and latency of the feedback, and the rate estimate against the truth."""
-    fig = Figure(figsize=(10, 7.5), layout="constrained")
+    fig = new_figure(figsize=(10, 7.5), layout="constrained")
     valid, rate, rate_err = fig.subplots(3, 1, sharex=True)
     _validity(valid, record)
     t = record.t_s

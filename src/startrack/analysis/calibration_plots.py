@@ -7,15 +7,19 @@ Plotting only: the numbers come from :mod:`startrack.calibrate`.
 from __future__ import annotations
 
 import os
+from typing import TYPE_CHECKING
 
 import numpy as np
-from matplotlib.figure import Figure
 
 from ..calibrate.lens_models import distortion_field_px
 from ..calibrate.repeatability import Repeatability
 from ..camera import Camera
+from ..plotting import new_figure
 from ..units import ARCMIN
 from .postprocess.figures import draw_radial_fit, draw_repeatability
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 def _save(fig: Figure, path: str | os.PathLike) -> None:
@@ -28,7 +32,7 @@ def plot_residuals(x: np.ndarray, y: np.ndarray, residuals_px: np.ndarray, camer
     """Residual vectors on the image (magnified ``scale`` times) and residual distance against the
     distance from the principal point with a 2nd-order fit (seed 003 §VIII.C: an even-order trend
     means radial distortion is left)."""
-    fig = Figure(figsize=(12, 5), dpi=100)
+    fig = new_figure(figsize=(12, 5), dpi=100)
     ax_map, ax_rad = fig.subplots(1, 2)
     ax_map.quiver(x, y, residuals_px[:, 0] * scale, residuals_px[:, 1] * scale, angles="xy", scale_units="xy",
                   scale=1.0, width=0.003)
@@ -47,7 +51,7 @@ def plot_residuals(x: np.ndarray, y: np.ndarray, residuals_px: np.ndarray, camer
 def plot_distortion(camera: Camera, path: str | os.PathLike, *, n: int = 21, title: str = "") -> None:
     """The lens displacement (measured minus pinhole) over the image, arrows and magnitude."""
     x, y, d = distortion_field_px(camera, n)
-    fig = Figure(figsize=(7, 7 * camera.height / camera.width), dpi=100)
+    fig = new_figure(figsize=(7, 7 * camera.height / camera.width), dpi=100)
     ax = fig.subplots()
     mag = np.hypot(d[:, 0], d[:, 1]).reshape(n, n)
     im = ax.imshow(mag, extent=(-0.5, camera.width - 0.5, camera.height - 0.5, -0.5), cmap="viridis")
@@ -59,7 +63,7 @@ def plot_distortion(camera: Camera, path: str | os.PathLike, *, n: int = 21, tit
 
 def plot_repeatability(result: Repeatability, path: str | os.PathLike, *, title: str = "") -> None:
     """Total, pointing and roll error of each image against the mean mount, arcmin, over time."""
-    fig = Figure(figsize=(9, 4), dpi=100)
+    fig = new_figure(figsize=(9, 4), dpi=100)
     ax = fig.subplots()
     draw_repeatability(ax, result)
     ax.set_title(title or f"fixed-mount repeatability (mount s.e. {result.mount_standard_error_rad / ARCMIN:.3f}')")

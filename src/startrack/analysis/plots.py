@@ -8,8 +8,8 @@ from __future__ import annotations
 import os
 
 import numpy as np
-from matplotlib.figure import Figure
 
+from ..plotting import new_figure
 from ..results import AttitudeSolution, Detections
 
 
@@ -30,7 +30,7 @@ def plot_solution(image: np.ndarray, detections: Detections, solution: AttitudeS
     """Save a PNG of the image with detections (grey), identified stars (green, HIP numbers) and,
     optionally, the true star positions (red crosses)."""
     height, width = np.asarray(image).shape[:2]
-    fig = Figure(figsize=(8, 8 * height / width), dpi=110)
+    fig = new_figure(figsize=(8, 8 * height / width), dpi=110)
     ax = fig.subplots()
     ax.imshow(display_stretch(image), cmap="gray", origin="upper", extent=(-0.5, width - 0.5, height - 0.5, -0.5))
     ax.scatter(detections.x, detections.y, s=90, facecolors="none", edgecolors="0.6", linewidths=0.8)
@@ -61,7 +61,7 @@ def _title(solution: AttitudeSolution) -> str:
 def plot_star_counts(availability, path: str | os.PathLike, *, title: str = "") -> None:
     """Save a histogram of stars in the field over random pointings (seed 002 Fig. 5-1)."""
     hist = availability.histogram
-    fig = Figure(figsize=(7, 4), dpi=110)
+    fig = new_figure(figsize=(7, 4), dpi=110)
     ax = fig.subplots()
     ax.bar(np.arange(hist.size), hist / hist.sum(), width=0.9, color="tab:blue")
     ax.set_xlabel("stars in the image")

@@ -19,13 +19,13 @@ import math
 from pathlib import Path
 
 import numpy as np
-from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
 from ..analysis.plots import display_stretch
 from ..catalog import load_catalog
 from ..frames import radec_to_vector
 from ..io.atomic import atomic_path
+from ..plotting import new_figure
 from ..results import AttitudeSolution, Detections
 
 REJECT_COLOURS = {"area": "tab:orange", "elongation": "tab:purple", "edge": "tab:brown", "hot pixel": "magenta",
@@ -42,7 +42,7 @@ def write_annotated(path: Path, image: NDArray, solution: AttitudeSolution, dete
     height, width = image.shape[:2]
     long_side = max(width, height)
     w_in, h_in = LONG_SIDE_IN * width / long_side, LONG_SIDE_IN * height / long_side
-    fig = Figure(figsize=(w_in + 0.9, h_in + 0.8), dpi=DPI)
+    fig = new_figure(figsize=(w_in + 0.9, h_in + 0.8), dpi=DPI)
     ax = fig.add_axes((0.7 / (w_in + 0.9), 0.5 / (h_in + 0.8), w_in / (w_in + 0.9), h_in / (h_in + 0.8)))
     ax.imshow(display_stretch(image), cmap="gray", origin="upper", extent=(-0.5, width - 0.5, height - 0.5, -0.5),
               interpolation="nearest" if long_side <= DPI * LONG_SIDE_IN else "antialiased")

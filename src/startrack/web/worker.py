@@ -25,16 +25,15 @@ def prewarm() -> None:
     figure (matplotlib's font cache), so that the first job costs what the others do."""
     import io
 
-    from matplotlib.figure import Figure
-
     from ..identify import load_database
     from ..identify.registry import DEFAULT_FOV_RANGE_DEG, database_settings_for
+    from ..plotting import new_figure
     from ..warm_up import solve_catalog_stars
     from . import analysis_jobs, pipeline  # noqa: F401 (imported for their import time)
 
     load_database(database_settings_for(DEFAULT_FOV_RANGE_DEG))
     solve_catalog_stars()  # with the default FOV search, as jobs without options run
-    fig = Figure(figsize=(1, 1))
+    fig = new_figure(figsize=(1, 1))
     fig.add_subplot().set_title("warm-up")
     fig.savefig(io.BytesIO(), format="png")
 

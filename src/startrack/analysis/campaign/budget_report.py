@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 import pyarrow as pa
-from matplotlib.figure import Figure
 
+from ...plotting import new_figure
 from .aggregate import as_columns, read_campaign
 from .budget_terms import AXES, TERMS, budget_rows
 from .figures import ReportFigure
@@ -75,7 +75,7 @@ def budget_figure(table: pa.Table) -> ReportFigure:
     """Grouped bars per source (all-on first), one row of (cross, roll) panels per case."""
     rows = [r for r in table.to_pylist() if r["source"] not in ("baseline", "sum")]
     cases = list(dict.fromkeys(r["case"] for r in rows))
-    fig = Figure(figsize=(11, 3.8 * len(cases)), layout="constrained")
+    fig = new_figure(figsize=(11, 3.8 * len(cases)), layout="constrained")
     axes = fig.subplots(len(cases), 2, squeeze=False)
     for i, case in enumerate(cases):
         mine = [r for r in rows if r["case"] == case]

@@ -7,21 +7,23 @@ switched); :func:`report_figures` pairs each figure with its tables for the repo
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pyarrow as pa
-from matplotlib import colormaps
-from matplotlib.axes import Axes
-from matplotlib.colors import LogNorm, Normalize
-from matplotlib.figure import Figure
-from matplotlib.ticker import LogFormatter
 
+from ...plotting import new_figure
 from .aggregate import axis_table, format_value, quantile_table, sky_table, time_tables
 from .stats import PERCENTILES
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.colors import Normalize
+    from matplotlib.figure import Figure
 
 DPI = 110
 UNITS = (("_mag_arcsec2", "mag/arcsec²"), ("_deg_s", "deg/s"), ("_e_s", "e⁻/s"), ("_arcsec", "arcsec"),
@@ -122,7 +124,7 @@ def rates_figure(table: pa.Table, axis: str | None, line: str | None, note: str 
     """Success rate with its Wilson 95 % interval (left) and false-solve rate with its 95 % upper
     bound (right) against ``axis`` (``None``: per cell label), one line per value of ``line``."""
     x_name = axis or "label"
-    fig = Figure(figsize=(11, 4.3), dpi=DPI, layout="constrained")
+    fig = new_figure(figsize=(11, 4.3), dpi=DPI, layout="constrained")
     ax_s, ax_f = fig.subplots(1, 2)
     pos = _x_axis(ax_s, table[x_name].to_pylist(), axis_label(axis) if axis else "cell")
     _x_axis(ax_f, table[x_name].to_pylist(), axis_label(axis) if axis else "cell")
@@ -171,7 +173,7 @@ def accuracy_figure(table: pa.Table, axis: str | None, line: str | None, note: s
     """Median (solid) and 95th percentile (dashed) of the cross-boresight and |roll| errors of the
     correct trials against ``axis``, on log scales."""
     x_name = axis or "label"
-    fig = Figure(figsize=(11, 4.3), dpi=DPI, layout="constrained")
+    fig = new_figure(figsize=(11, 4.3), dpi=DPI, layout="constrained")
     panels = fig.subplots(1, 2)
     for ax, err, label in zip(panels, ("err_cross", "err_roll"), ("cross-boresight", "|roll|"), strict=True):
         pos = _x_axis(ax, table[x_name].to_pylist(), axis_label(axis) if axis else "cell")
@@ -198,23 +200,29 @@ def _log_if_positive(ax: Axes, which: str, columns: Sequence[Any]) -> None:
         plain_log_labels(ax.yaxis if which == "y" else ax.xaxis)
 
 
-class PlainLogFormatter(LogFormatter):
-    """matplotlib's choice of which log ticks to label, written as plain numbers (0.01, 2, 300)."""
+@functools.cache
+def _plain_log_formatter() -> type:
+    """A ``LogFormatter`` subclass: matplotlib's choice of which log ticks to label, written as plain
+    numbers (0.01, 2, 300). Defined on first use, so that matplotlib is imported only to draw."""
+    from matplotlib.ticker import LogFormatter
 
-    def __call__(self, x: float, pos: int | None = None) -> str:
-        return f"{x:g}" if super().__call__(x, pos) else ""
+    class PlainLogFormatter(LogFormatter):
+        def __call__(self, x: float, pos: int | None = None) -> str:
+            return f"{x:g}" if super().__call__(x, pos) else ""
+
+    return PlainLogFormatter
 
 
 def plain_log_labels(axis: Any) -> None:
     """Label a log axis with plain numbers, a few minor ticks too when it spans under two decades."""
-    axis.set_major_formatter(PlainLogFormatter(labelOnlyBase=False))
-    axis.set_minor_formatter(PlainLogFormatter(labelOnlyBase=False, minor_thresholds=(2, 0.5)))
+    axis.set_major_formatter(_plain_log_formatter()(labelOnlyBase=False))
+    axis.set_minor_formatter(_plain_log_formatter()(labelOnlyBase=False, minor_thresholds=(2, 0.5)))
 
 
 def error_cdf_figure(table: pa.Table, split: str, title: str = "") -> Figure:
     """Cumulative distributions of the cross-boresight and |roll| errors of the correct trials
     (log error axis), one curve per group of ``split``, the 50/68/95/99.7 % points marked."""
-    fig = Figure(figsize=(11, 4.6), dpi=DPI, layout="constrained")
+    fig = new_figure(figsize=(11, 4.6), dpi=DPI, layout="constrained")
     panels = fig.subplots(1, 2, sharey=True)
     rows = table.to_pylist()
     curves = list(dict.fromkeys(r["curve"] for r in rows))
@@ -247,7 +255,7 @@ def error_cdf_figure(table: pa.Table, split: str, title: str = "") -> Figure:
 def time_figure(histogram: pa.Table, summary: pa.Table, title: str = "") -> Figure:
     """Histogram of the solve time (and of each stage when recorded), log time axis (ms), with
     the solve time's p50, p95, p99 and maximum marked."""
-    fig = Figure(figsize=(9, 4.3), dpi=DPI, layout="constrained")
+    fig = new_figure(figsize=(9, 4.3), dpi=DPI, layout="constrained")
     ax = fig.subplots()
     edges = np.append(histogram["left_ms"].to_numpy(), histogram["right_ms"].to_numpy()[-1:])
     ax.stairs(histogram["time_s"].to_numpy(), edges, color="C0", fill=True, alpha=0.3, label="solve time (time_s)")
@@ -283,7 +291,10 @@ def sky_figure(sky: pa.Table, title: str = "") -> Figure:
     panels = [("success_rate", "success rate", "RdYlGn")]
     if np.isfinite(sky["err_cross_p50_arcsec"].to_numpy(zero_copy_only=False)).any():
         panels.append(("err_cross_p50_arcsec", "median cross-boresight error (arcsec)", "viridis"))
-    fig = Figure(figsize=(6.5 * len(panels), 4.4), dpi=DPI, layout="constrained")
+    fig = new_figure(figsize=(6.5 * len(panels), 4.4), dpi=DPI, layout="constrained")
+    from matplotlib import colormaps  # importable: new_figure checked matplotlib
+    from matplotlib.colors import LogNorm
+
     for i, (column, label, cmap) in enumerate(panels):
         ax = fig.add_subplot(1, len(panels), i + 1, projection="mollweide")
         grid = sky[column].to_numpy(zero_copy_only=False).astype(float).reshape(n_dec, n_ra)[:, ::-1]
@@ -306,6 +317,8 @@ def sky_figure(sky: pa.Table, title: str = "") -> Figure:
 
 
 def _norm(column: str, grid: np.ndarray) -> Normalize:
+    from matplotlib.colors import LogNorm, Normalize
+
     if column == "success_rate":
         return Normalize(0.0, 1.0)
     good = grid[np.isfinite(grid) & (grid > 0)]

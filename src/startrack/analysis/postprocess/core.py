@@ -17,14 +17,16 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from matplotlib.figure import Figure
 
 from ...errors import InvalidInputError
 from ...io.atomic import atomic_path
 from ..records import ImageRecord
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 PARAM_TYPES = (int, float, bool, str, list)
 """The parameter types an analysis may declare (a ``list`` holds numbers or strings)."""

@@ -9,14 +9,18 @@ scatter with its second-order fit and the fixed-mount errors over time (the pict
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
-from matplotlib.axes import Axes
-from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
+from ... import plotting
 from ...calibrate.repeatability import Repeatability
 from ...units import ARCMIN
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
 """One colour per result set (the analyses take at most six)."""
@@ -26,8 +30,8 @@ DPI = 100
 def new_figure(rows: int, cols: int, *, width_in: float = 4.2, height_in: float = 3.4,
                title: str = "") -> tuple[Figure, NDArray]:
     """A figure of ``rows x cols`` axes (a 2-D array of them), laid out with constrained layout."""
-    fig = Figure(figsize=(width_in * cols, height_in * rows + (0.4 if title else 0.0)), dpi=DPI,
-                 layout="constrained")
+    fig = plotting.new_figure(figsize=(width_in * cols, height_in * rows + (0.4 if title else 0.0)), dpi=DPI,
+                              layout="constrained")
     axes = np.atleast_2d(fig.subplots(rows, cols, squeeze=False))
     if title:
         fig.suptitle(title, fontsize=11)

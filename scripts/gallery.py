@@ -1,6 +1,7 @@
 """The simulator gallery of docs/simulation.md: three frames annotated with their truth.
 
-Regenerate with ``python -m startrack.analysis.gallery [--out docs/gallery]``:
+Regenerate from the repository root with ``.venv/bin/python scripts/gallery.py [--out docs/gallery]``
+(needs matplotlib, the ``plot`` extra):
 
 - ``point.png``: a still frame of the Hipparcos sky, true positions circled, the brightest named;
 - ``streak.png``: the same camera turning at 1 deg/s during a 0.5 s exposure, each star's start
@@ -19,11 +20,12 @@ from pathlib import Path
 
 import numpy as np
 from astropy.time import Time
-from matplotlib.figure import Figure
 
-from ..camera import Camera
-from ..frames import rotation_from_radec_roll, vector_to_radec
-from ..simulate import (
+from startrack.analysis.plots import display_stretch
+from startrack.camera import Camera
+from startrack.frames import rotation_from_radec_roll, vector_to_radec
+from startrack.plotting import new_figure
+from startrack.simulate import (
     RSO,
     FrameTiming,
     KeplerElements,
@@ -34,9 +36,8 @@ from ..simulate import (
     get_sensor_preset,
     simulate_frame,
 )
-from ..simulate.orbits import MU_EARTH_KM3_S2
-from ..units import DEG
-from .plots import display_stretch
+from startrack.simulate.orbits import MU_EARTH_KM3_S2
+from startrack.units import DEG
 
 DEFAULT_OUT = Path("docs") / "gallery"
 CAMERA = Camera.from_fov(1024, 768, 14.0, name="gallery")
@@ -46,7 +47,7 @@ EPOCH = Time("2026-09-23T20:00:00", scale="utc")
 
 def _axes(image: np.ndarray, title: str):
     height, width = image.shape
-    fig = Figure(figsize=(9, 9 * height / width + 0.6), dpi=90)
+    fig = new_figure(figsize=(9, 9 * height / width + 0.6), dpi=90)
     ax = fig.subplots()
     ax.imshow(display_stretch(image), cmap="gray", origin="upper",
               extent=(-0.5, width - 0.5, height - 0.5, -0.5))
@@ -150,7 +151,7 @@ def write_gallery(folder: str | Path = DEFAULT_OUT) -> list[Path]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m startrack.analysis.gallery", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(prog="scripts/gallery.py", description=__doc__.split("\n")[0])
     parser.add_argument("--out", default=str(DEFAULT_OUT), help=f"output folder (default {DEFAULT_OUT})")
     args = parser.parse_args(argv)
     for path in write_gallery(args.out):
