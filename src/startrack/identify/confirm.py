@@ -23,8 +23,8 @@ from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
 from .candidate import Candidate
-from .refine import fit_pose, match_predicted, warm_up_pose
-from .verify import TEST_RADIUS_FRACTIONS, count_in_image, false_match_bound_counts, field_cone
+from .refine import fit_pose, predicted_pairs, warm_up_pose
+from .verify import TEST_RADIUS_FRACTIONS, SkyBands, false_match_bound_counts, field_cone
 
 LOOSE_RADIUS_FACTOR = 2.5
 """First verification pass: match radius as a multiple of the final one."""
@@ -44,10 +44,10 @@ about 300 wide-field solves before this rule)."""
 
 @dataclass(frozen=True)
 class StarSet:
-    """Catalog stars to confirm against: KD-tree over their ICRS vectors (S, 3), their catalog
-    rows (S,), and optionally a filter of the indices to use."""
+    """Catalog stars to confirm against: a KD-tree or a :class:`.verify.SkyBands` over their ICRS
+    vectors (S, 3), their catalog rows (S,), and optionally a filter of the indices to use."""
 
-    tree: cKDTree
+    tree: cKDTree | SkyBands
     vectors: NDArray[np.float64]
     catalog_rows: NDArray[np.int64]
     keep: Callable[[NDArray], NDArray] | None = None
@@ -102,13 +102,14 @@ class Confirmer:
         matrix, given = _attitude(rot)
         n = min(len(self.x), max(self.verify_stars, pool_end + self.verify_stars // 2))
         xs, ys = self.x[:n], self.y[:n]
-        field = _Field(stars, matrix, camera)
-        prob, tight = self._verify(field, xs, ys, pattern_img, n_trials, np.zeros(0, np.int64))
+        reach_px = LOOSE_RADIUS_FACTOR * self.radius_px
+        field = _Field(stars, matrix, camera, xs, ys, reach_px)
+        prob, tight = self._verify(field, pattern_img, n_trials, np.zeros(0, np.int64))
         fitted = np.zeros(0, np.int64)
         for _ in range(LOOSE_ROUNDS_DISTORTED if self.fit_distortion else 1):
             if prob <= self.max_false_match_prob:
                 return field.candidate(given, tight, prob)
-            img_i, cat_j = field.matches(xs, ys, LOOSE_RADIUS_FACTOR * self.radius_px)
+            img_i, cat_j, _ = field.matches(reach_px)
             extra = np.count_nonzero(_not_in(img_i, pattern_img))
             if extra < MIN_EXTRA_MATCHES:
                 return None
@@ -117,52 +118,74 @@ class Confirmer:
             refit, camera, _ = fit_pose(field.matrix, field.camera, field.vectors[cat_j], xs[img_i], ys[img_i],
                                         fit_focal=self.fit_focal, fit_k1=self.fit_distortion and lens,
                                         fit_aspect=self.fit_aspect and lens)
-            given, field = None, _Field(stars, refit, camera)
-            prob, tight = self._verify(field, xs, ys, pattern_img, n_trials, fitted)
+            given, field = None, _Field(stars, refit, camera, xs, ys, reach_px)
+            prob, tight = self._verify(field, pattern_img, n_trials, fitted)
         return field.candidate(None, tight, prob) if prob <= self.max_false_match_prob else None
 
-    def _verify(self, field: _Field, xs: NDArray, ys: NDArray, pattern_img: NDArray, n_trials: int,
+    def _verify(self, field: _Field, pattern_img: NDArray, n_trials: int,
                 fitted: NDArray) -> tuple[float, NDArray[np.int64]]:
-        """The false-match bound of the tight-radius matches among the image stars ``xs``, ``ys``
-        other than the pattern's and the ``fitted`` ones, at each radius of
+        """The false-match bound of the tight-radius matches among the field's image stars other
+        than the pattern's and the ``fitted`` ones, at each radius of
         :data:`.verify.TEST_RADIUS_FRACTIONS`; and the image stars matched at the tight radius
         (the field keeps their catalog stars)."""
-        tight, field.tight_catalog = field.matches(xs, ys, self.radius_px)
-        counted = np.ones(len(xs), dtype=bool)  # the stars the test counts: not the pattern's or fitted
+        tight, field.tight_catalog, d2 = field.matches(self.radius_px)
+        n_stars = len(field.xs)
+        counted = np.ones(n_stars, dtype=bool)  # the stars the test counts: not the pattern's or fitted
         pattern_img = np.asarray(pattern_img, dtype=np.int64)
-        counted[pattern_img[pattern_img < len(xs)]] = False
+        counted[pattern_img[pattern_img < n_stars]] = False
         counted[fitted] = False
         counts = []
-        for f in TEST_RADIUS_FRACTIONS:  # the matches at f r keep those of the tight ones within f r
-            img_i = tight if f == 1.0 or tight.size == 0 else field.matches(xs, ys, f * self.radius_px)[0]
+        for f in TEST_RADIUS_FRACTIONS:  # the matches at f r are those of the tight ones within f r
+            img_i = tight if f == 1.0 else tight[d2 <= (f * self.radius_px) * (f * self.radius_px)]
             counts.append(int(np.count_nonzero(counted[img_i])))
-        n_tested = len(xs) - len(pattern_img) - len(fitted)
+        n_tested = n_stars - len(pattern_img) - len(fitted)
         if max(counts) == 0 or n_tested <= 0:
             return 1.0, tight
-        prob = false_match_bound_counts(counts, n_tested, count_in_image(field.vectors, field.matrix, field.camera),
-                                        self.radius_px, field.camera.width, field.camera.height, n_trials)
+        prob = false_match_bound_counts(counts, n_tested, field.n_in_image, self.radius_px, field.camera.width,
+                                        field.camera.height, n_trials)
         return prob, tight
 
 
 class _Field:
     """The catalog stars that can land in the image of one attitude (matrix (3, 3), camera from
     ICRS) and camera: their indices into a :class:`StarSet` (cone of :func:`.verify.field_cone`) and
-    their ICRS vectors (C, 3); matched by :func:`.refine.match_predicted`, which projects them and
-    keeps those inside the image (as :func:`.verify.project_stars` with
-    :func:`.verify.match_nearest`)."""
+    their ICRS vectors (C, 3); matched to the image stars ``xs``, ``ys`` (N,) once, within
+    ``reach_px``, by :func:`.refine.predicted_pairs` (which projects them and keeps those inside the
+    image, as :func:`.verify.project_stars` with :func:`.verify.match_nearest`), the matches at a
+    smaller radius taken from those (a closest-first greedy match at a smaller radius keeps
+    exactly the pairs of the match at the larger one that lie within it)."""
 
-    def __init__(self, stars: StarSet, matrix: NDArray, camera: Camera):
-        self.stars, self.matrix, self.camera = stars, matrix, camera
+    def __init__(self, stars: StarSet, matrix: NDArray, camera: Camera, xs: NDArray, ys: NDArray, reach_px: float):
+        self.stars, self.matrix, self.camera, self.xs, self.ys = stars, matrix, camera, xs, ys
         self.index = field_cone(stars.tree, matrix, camera, stars.keep)
         self.vectors = stars.vectors[self.index]
         self.tight_catalog = np.zeros(0, np.int64)
+        self.reach_px = reach_px
+        self._pairs: tuple | None = None
 
-    def matches(self, xs: NDArray, ys: NDArray, radius_px: float) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-        """(image index into ``xs``, index into :attr:`vectors`) of the closest-first pairs within the radius."""
-        if self.index.size == 0 or len(xs) == 0:
-            empty = np.zeros(0, np.int64)
-            return empty, empty
-        return match_predicted(self.vectors, self.matrix, self.camera, xs, ys, radius_px)
+    @property
+    def n_in_image(self) -> int:
+        """How many of the field's catalog stars the attitude puts inside the image."""
+        return self._within_reach()[3]
+
+    def matches(self, radius_px: float) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
+        """(image index into ``xs``, index into :attr:`vectors`, squared distance (px^2)) of the
+        closest-first pairs within ``radius_px`` (at most :attr:`reach_px`)."""
+        img_i, cat_j, d2, _ = self._within_reach()
+        if radius_px < self.reach_px:
+            keep = d2 <= radius_px * radius_px
+            return img_i[keep], cat_j[keep], d2[keep]
+        return img_i, cat_j, d2
+
+    def _within_reach(self) -> tuple:
+        """The pairs within :attr:`reach_px` and the count of stars in the image, made on first use."""
+        if self._pairs is None:
+            if self.index.size == 0 or len(self.xs) == 0:
+                empty = np.zeros(0, np.int64)
+                self._pairs = (empty, empty, np.zeros(0), 0)
+            else:
+                self._pairs = predicted_pairs(self.vectors, self.matrix, self.camera, self.xs, self.ys, self.reach_px)
+        return self._pairs
 
     def candidate(self, given: Rotation | NDArray | None, image_index: NDArray, prob: float) -> Candidate:
         """The verified candidate of these matches at the tight radius (``given``: the attitude as

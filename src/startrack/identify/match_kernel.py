@@ -1,6 +1,7 @@
 """The compiled loops of :mod:`.refine` that pair stars (numba): the final fit's re-match
-(projection, image test and closest-first pairing), its choice of catalog stars in a cone, and
-the inversion of the lens model (pixels to unit camera vectors). The projection model is
+(projection, image test and closest-first pairing), its choice of catalog stars in a cone, the
+confirmation's cone of verification stars (:func:`band_cone`), and the inversion of the lens
+model (pixels to unit camera vectors). The projection model is
 :func:`.pose_kernel._project` (Brown-Conrady, ``dist`` = (k1, k2, k3, p1, p2)).
 
 Kept apart from startrack's import as :mod:`.pose_kernel` is; compiled functions are cached on
@@ -29,6 +30,27 @@ def rematch_pairs(vectors, matrix, fx, fy, cx, cy, dist, width, height, x, y, ra
     image stars (pixels). Returns (image index (K,), catalog index into ``vectors`` (K,)),
     closest pair first; only pairs within ``radius_px`` are formed.
     """
+    px, py, inside = _predicted(vectors, matrix, fx, fy, cx, cy, dist, width, height)
+    out_i, out_c, _ = _closest_pairs(x, y, px, py, inside, radius_px)
+    return out_i, out_c
+
+
+@njit(cache=True)
+def predicted_pairs(vectors, matrix, fx, fy, cx, cy, dist, width, height, x, y, radius_px):
+    """:func:`rematch_pairs` with what a false-match test also needs: (image index (K,), catalog
+    index into ``vectors`` (K,), squared distance of each pair (K,) in px^2, and the number of
+    catalog stars predicted inside the image). The pairs a match within a smaller radius r would
+    keep are those of these with a squared distance of at most r * r, in the same order (the
+    greedy match takes the closest pairs first)."""
+    px, py, inside = _predicted(vectors, matrix, fx, fy, cx, cy, dist, width, height)
+    out_i, out_c, out_d2 = _closest_pairs(x, y, px, py, inside, radius_px)
+    return out_i, out_c, out_d2, inside.size
+
+
+@njit(cache=True)
+def _predicted(vectors, matrix, fx, fy, cx, cy, dist, width, height):
+    """Pixel positions (M,) each of the catalog stars (``vectors`` (S, 3), see
+    :func:`rematch_pairs`) that land inside the image, and their indices into ``vectors`` (M,)."""
     s = vectors.shape[0]
     px, py, inside = np.empty(s), np.empty(s), np.empty(s, np.int64)
     m = 0
@@ -42,13 +64,15 @@ def rematch_pairs(vectors, matrix, fx, fy, cx, cy, dist, width, height, x, y, ra
         if u >= -0.5 and w >= -0.5 and u <= width - 0.5 and w <= height - 0.5:
             px[m], py[m], inside[m] = u, w, c
             m += 1
-    return _closest_pairs(x, y, px[:m], py[:m], inside[:m], radius_px)
+    return px[:m], py[:m], inside[:m]
+
 
 @njit(cache=True)
 def _closest_pairs(x, y, px, py, index, radius_px):
     """Greedy closest-first pairs (each star once) between image stars ``x``, ``y`` (N,) and
     predicted stars ``px``, ``py`` (M,) within ``radius_px``: (image index, ``index`` of the
-    predicted star), formed in (image, predicted) order and sorted stably by distance."""
+    predicted star, squared distance (px^2)), formed in (image, predicted) order and sorted
+    stably by distance."""
     r2 = radius_px * radius_px
     k = 0
     for _ in range(2):  # count the pairs, then fill them in
@@ -65,17 +89,17 @@ def _closest_pairs(x, y, px, py, index, radius_px):
                     k += 1
     order = _stable_order(pd)
     taken_i, taken_c = np.zeros(x.size, np.bool_), np.zeros(px.size, np.bool_)
-    out_i, out_c = np.empty(k, np.int64), np.empty(k, np.int64)
+    out_i, out_c, out_d2 = np.empty(k, np.int64), np.empty(k, np.int64), np.empty(k)
     n = 0
     for o in order:
         i, j = pi[o], pc[o]
         if not taken_i[i] and not taken_c[j]:
             taken_i[i] = True
             taken_c[j] = True
-            out_i[n] = i
-            out_c[n] = index[j]
+            out_i[n], out_c[n], out_d2[n] = i, index[j], pd[o]
             n += 1
-    return out_i[:n], out_c[:n]
+    return out_i[:n], out_c[:n], out_d2[:n]
+
 
 @njit(cache=True)
 def _stable_order(values):
@@ -105,6 +129,28 @@ def cone_stars(vectors, count, axis, cos_reach, neighbour_rad, min_neighbour_rad
             out[n] = i
             n += 1
     return out[:n]
+
+@njit(cache=True)
+def band_cone(sorted_vectors, order, z_sorted, axis, chord):
+    """Indices (ascending, into the unsorted vectors) of the unit vectors within the chord
+    ``chord`` of the unit vector ``axis`` (3,): |v - axis|^2 <= chord^2, the test of
+    ``cKDTree.query_ball_point``. ``sorted_vectors`` (S, 3) are the vectors in ascending order of
+    z (``z_sorted`` (S,) their z, ``order`` (S,) their indices): a vector within the chord has
+    |z - axis_z| <= chord, so only that band of z is read (bisection, then one pass)."""
+    pad = 1e-12  # the band only bounds the pass; the test itself is exact
+    lo = np.searchsorted(z_sorted, axis[2] - chord - pad)
+    hi = np.searchsorted(z_sorted, axis[2] + chord + pad, side="right")
+    out = np.empty(hi - lo, np.int64)
+    c2 = chord * chord
+    n = 0
+    for k in range(lo, hi):
+        d0, d1 = sorted_vectors[k, 0] - axis[0], sorted_vectors[k, 1] - axis[1]
+        d2 = sorted_vectors[k, 2] - axis[2]
+        if d0 * d0 + d1 * d1 + d2 * d2 <= c2:
+            out[n] = order[k]
+            n += 1
+    return np.sort(out[:n])
+
 
 @njit(cache=True, error_model="numpy")  # a zero determinant gives inf / NaN (a NaN point), not an exception
 def pixel_vectors(x, y, fx, fy, cx, cy, dist, tol, max_iter):

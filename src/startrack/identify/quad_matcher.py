@@ -25,6 +25,7 @@ import functools
 import itertools
 import math
 import time
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,6 +39,7 @@ from .confirm import Confirmer, StarSet, match_radius_px
 from .database import PatternDatabase
 from .quad_search import Fits, SearchSetup, focal_grid, search_batch, warm_up
 from .refine import pixel_vectors
+from .verify import SkyBands
 
 MAX_RATIO_TOLERANCE = 0.1
 """Patterns whose edge ratios are less certain than this (tiny patterns) are not looked up."""
@@ -228,7 +230,31 @@ class _Search:
         return None
 
     def _level_stars(self, level: int) -> StarSet:
-        return StarSet(*self.db.verification_stars(level))
+        return level_stars(self.db, level)
+
+
+_LEVEL_STARS: dict[int, dict[int, StarSet]] = {}
+"""Each loaded database's verification star sets by level (keyed by ``id(db)``; an entry goes
+with its database)."""
+
+
+def level_stars(db: PatternDatabase, level: int) -> StarSet:
+    """Level ``level``'s verification stars of ``db`` (those whose bit k of
+    :attr:`PatternDatabase.verify_levels` is set) as a :class:`.confirm.StarSet` over a
+    :class:`.verify.SkyBands` index: made on first use, then kept while the database lives. The
+    index is a sort, not a KD-tree (:meth:`PatternDatabase.verification_stars`), so a level first
+    used inside a solve costs 0.1-1.5 ms there instead of 1-20 ms (the default database's levels
+    of 5-35 deg, 46,000-1,700 stars), and a cone query reads one band of z."""
+    sets = _LEVEL_STARS.get(id(db))
+    if sets is None:
+        sets = _LEVEL_STARS[id(db)] = {}
+        weakref.finalize(db, _LEVEL_STARS.pop, id(db), None)
+    if level not in sets:
+        bits = db.verify_levels.dtype.type
+        members = np.flatnonzero((db.verify_levels >> bits(level)) & bits(1))
+        vectors = np.ascontiguousarray(db.vectors[members])
+        sets[level] = StarSet(SkyBands(vectors), vectors, db.cat_index[members])
+    return sets[level]
 
 
 CONFIRM_K1_FOV_DEG = 25.0

@@ -224,6 +224,18 @@ def match_predicted(ref_icrs: NDArray, matrix_cam_from_icrs: NDArray, camera: Ca
                                    float(camera.width), float(camera.height), _plain(x), _plain(y), float(radius_px))
 
 
+
+def predicted_pairs(ref_icrs: NDArray, matrix_cam_from_icrs: NDArray, camera: Camera, x: NDArray, y: NDArray,
+                    radius_px: float) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64], int]:
+    """:func:`match_predicted` with the squared distance of each pair (K,) in px^2 and the number
+    of catalog stars predicted inside the image (one compiled call,
+    :func:`.match_kernel.predicted_pairs`): the pairs of a match within a radius r up to
+    ``radius_px`` are those with a squared distance of at most r * r, in the same order."""
+    return _match_kernel().predicted_pairs(_plain(ref_icrs), _plain(matrix_cam_from_icrs), float(camera.fx),
+                                           float(camera.fy), float(camera.cx), float(camera.cy), _distortion(camera),
+                                           float(camera.width), float(camera.height), _plain(x), _plain(y),
+                                           float(radius_px))
+
 def pixel_vectors(camera: Camera, x: NDArray, y: NDArray) -> NDArray[np.float64]:
     """:meth:`Camera.pixel_to_vector <startrack.camera.Camera.pixel_to_vector>` of finite pixel
     coordinates ``x``, ``y`` (N,) in one compiled call (:func:`.match_kernel.pixel_vectors`; the
@@ -275,8 +287,8 @@ def solution_terms(observed: NDArray, reference: NDArray, sigma_rad: float) -> t
 def warm_up_pose() -> None:
     """Compile (or load from the disk cache) the kernels of :func:`fit_pose`,
     :func:`leave_one_out_residuals`, :func:`wahba_equal_weights`, :func:`match_predicted`,
-    :func:`pixel_vectors`, :func:`stars_in_cone` and :func:`solution_terms`, so that a solve's time does
-    not include it. Free after the first call."""
+    :func:`predicted_pairs`, :func:`pixel_vectors`, :func:`stars_in_cone` and :func:`solution_terms`, so that a
+    solve's time does not include it. Free after the first call."""
     camera = Camera(width=64, height=64, fx=100.0, k1=1e-3)
     x, y = np.array([10.0, 50.0, 30.0, 20.0]), np.array([10.0, 20.0, 50.0, 40.0])
     ref = camera.pixel_to_vector(x, y)  # attitude: identity
@@ -284,6 +296,7 @@ def warm_up_pose() -> None:
     leave_one_out_residuals(matrix, camera, ref, x, y, fit_focal=True)
     wahba_equal_weights(camera.pixel_to_vector(x, y), ref)
     match_predicted(ref, matrix, camera, x, y, 1.0)
+    predicted_pairs(ref, matrix, camera, x, y, 1.0)
     pixel_vectors(camera, x, y)
     stars_in_cone(ref, len(ref), matrix[2], 0.1, np.zeros(len(ref)), 0.0)
     solution_terms(camera.pixel_to_vector(x, y), ref, 1e-4)
