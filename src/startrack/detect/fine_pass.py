@@ -20,7 +20,9 @@ and, to join the binned pass's:
 * a spot that shares no pixel with any spot the binned pass found is a star it missed, kept
   when its own surroundings (the ring 4-8 px about it, :func:`ring_noise_ratio`) are quiet:
   a spot among lit leaves has other leaves there, which the tile statistics of the clutter
-  filter average away;
+  filter average away; or, where they are not, when it stands 1.5 times the threshold above its
+  ring's spread in the fine image (:func:`quiet_surroundings`: the raw ring of an 8-bit frame
+  whose noise is half a count is coarse, its spread 1.4-1.6 times the pixel noise on open sky);
 * a binned spot that holds the peaks of two or more of its spots is a blend (a close pair, a
   cluster) and is replaced by them, unless it is saturated (a clipped core has a ring of peaks
   in this image) or its wider surroundings (9-13 px) are busy (a clump of leaves);
@@ -59,6 +61,10 @@ MAX_RING_NOISE = 1.4
 """A spot only the fine pass found is kept when its surroundings are at most this noisy
 (:func:`ring_noise_ratio`); stars on the sky of ``../shared/realdata`` are at 0.4-1.2, lit leaves
 at 1.3-3.6."""
+BUSY_RING_SIGMA_FACTOR = 1.5
+"""... or, its surroundings busier, when its peak stands this many times the pass's threshold
+above the spread of its ring in the fine image itself (:func:`quiet_surroundings`): a threshold
+set from the spot's own clutter."""
 
 LOCAL_BOX_PX = 7
 """Side of the box whose mean is taken off the fine image: several times a sharp star's width,
@@ -67,7 +73,7 @@ smaller than the structures of a photograph's foreground."""
 
 def fine_regions(data: NDArray, invalid: NDArray[np.bool_] | None, kernel: str, kernel_px: int,
                  tile_px: int, fine_sigma: float, grow_sigma: float, edge_margin_px: int,
-                 deblend: bool = True, skewed: bool = False) -> Regions:
+                 deblend: bool = True, skewed: bool = False, snr: NDArray | None = None) -> Regions:
     """Spots of the full-resolution, ``kernel``-smoothed image above ``fine_sigma`` (grown to
     ``grow_sigma``), deblended, with their peaks at least ``edge_margin_px`` inside the border.
 
@@ -86,13 +92,16 @@ def fine_regions(data: NDArray, invalid: NDArray[np.bool_] | None, kernel: str, 
         Split regions with several separate peaks (:mod:`.deblend`).
     skewed : bool
         The frame's low side is clipped (:func:`.background.tiled_background`).
+    snr : ndarray, shape (H, W), or None
+        The significance image (:func:`fine_significance`) when the caller has made it.
 
     Returns
     -------
     Regions
         Full-resolution regions (may be empty).
     """
-    snr = fine_significance(data, invalid, kernel, kernel_px, tile_px, skewed)
+    if snr is None:
+        snr = fine_significance(data, invalid, kernel, kernel_px, tile_px, skewed)
     if snr is None:
         return label_regions(np.zeros(data.shape, dtype=bool))
     regions = label_regions(snr > min(grow_sigma, fine_sigma))
@@ -187,6 +196,45 @@ def ring_noise_ratio(data: NDArray, x: NDArray, y: NDArray, pixel_noise: float,
         warnings.simplefilter("ignore", RuntimeWarning)  # an all-NaN ring (masked pixels) is NaN
         lo, hi = np.nanpercentile(ring, [15.87, 84.13], axis=1)
         return 0.5 * (hi - lo) / pixel_noise
+
+
+def quiet_surroundings(data: NDArray, snr: NDArray | None, regions: Regions, x: NDArray, y: NDArray,
+                       pixel_noise: float, fine_sigma: float) -> NDArray[np.bool_]:
+    """Which spots the fine pass alone found stand on surroundings quiet enough to keep them,
+    shape (N,).
+
+    A spot is kept when the ring 4-8 px about it in the frame is at most :data:`MAX_RING_NOISE`
+    times the pixel noise (:func:`ring_noise_ratio`), or else when its peak significance (its
+    largest value of ``snr``) stands :data:`BUSY_RING_SIGMA_FACTOR` times ``fine_sigma`` above
+    the spread of the same ring in the fine image (taken as at least 1, the image being in noise
+    units). The second test is a threshold set
+    from the spot's own clutter: lit leaves and a roof's texture are busy in both images, while
+    the raw ring of an 8-bit frame whose noise is half a count is busy only through rounding
+    (on the openstartracker frames with the dark, open sky's raw rings spread 1.36-1.59 times
+    the pixel noise, their fine rings 0.6-1.0).
+
+    Parameters
+    ----------
+    data : ndarray, shape (H, W)
+        The prepared plane.
+    snr : ndarray, shape (H, W), or None
+        The fine pass's significance image (:func:`fine_significance`); None: the first test only.
+    regions : Regions
+        The N spots' pixels.
+    x, y : ndarray, shape (N,)
+        Their centroids, px.
+    pixel_noise : float
+        The frame's pixel noise (``data`` units).
+    fine_sigma : float
+        The fine pass's detection threshold (noise units).
+    """
+    quiet = ring_noise_ratio(data, x, y, pixel_noise) <= MAX_RING_NOISE
+    if snr is None or len(x) == 0:
+        return quiet
+    local = np.fmax(ring_noise_ratio(snr, x, y, 1.0), 1.0)
+    peak = regions.max(snr[regions.y, regions.x]).astype(np.float64)
+    with np.errstate(invalid="ignore"):
+        return quiet | (peak / local >= BUSY_RING_SIGMA_FACTOR * fine_sigma)
 
 
 def grow(regions: Regions, shape: tuple[int, int], which: NDArray[np.bool_], steps: int = GROW_STEPS) -> Regions:
