@@ -226,7 +226,7 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
     level, lower = _median3(median, linear=True), _median3(median - q_lo)
     # noise from the residual, so that a gradient across a tile does not count as noise
     keep_map = rows.size == image.shape[0] and cols.size == image.shape[1]
-    level_map = np.empty((rows.size, cols.size) if keep_map else (0, 0), np.float32)
+    level_map = np.empty((rows.size, cols.size), np.float32)
     residual = _gather(image, rows, cols, (ny, nx), (level, centres_y, centres_x), level_map)
     q_lo, q_mid, q_hi = _stack_quantiles(residual, (GAUSS_LO, 0.5, GAUSS_HI))
     noise = _median3(0.5 * (q_hi - q_lo) * (upper_tail_factor(q_lo, q_mid, q_hi) if skewed else 1.0))
@@ -300,24 +300,19 @@ def _gather(image: NDArray, rows: NDArray, cols: NDArray, grid: tuple[int, int],
     (ny, nx, n_rows * n_cols), in the image's type; with ``level`` (a level grid and its tile
     centres in the image's pixels), their residuals from the level interpolated bilinearly
     (extrapolated beyond the outer centres, :func:`_axis_weights`), which is also written to
-    ``level_map`` (shape (len(rows), len(cols)), or empty) -- one compiled pass
-    (:func:`.frame_kernels.gather_tiles`)."""
+    ``level_map`` (shape (len(rows), len(cols)), allocated when None) -- one compiled pass
+    (:func:`.frame_kernels.gather_tiles`, :func:`.frame_kernels.gather_residuals`)."""
     ny, nx = grid
     size = (rows.size // ny) * (cols.size // nx)
     if level is None:
-        out = np.empty((ny, nx, size), image.dtype)
-        empty_i, empty_f = np.zeros(0, np.int64), np.zeros(0, np.float32)
-        kernels().gather_tiles(image, rows, cols, np.zeros((0, 0), np.float32), empty_i, empty_i, empty_f,
-                               empty_i, empty_i, empty_f, out, np.zeros((0, 0), np.float32))
-        return out
+        return kernels().gather_tiles(image, rows, cols, np.empty((ny, nx, size), image.dtype))
     values, centres_y, centres_x = level
     y0, y1, wy = _axis_weights(centres_y, rows.astype(float), True)
     x0, x1, wx = _axis_weights(centres_x, cols.astype(float), True)
     out = np.empty((ny, nx, size), np.result_type(image.dtype, np.float32))
-    kernels().gather_tiles(image, rows, cols, values.astype(np.float32), y0, y1, wy.astype(np.float32),
-                           x0, x1, wx.astype(np.float32), out,
-                           np.zeros((0, 0), np.float32) if level_map is None else level_map)
-    return out
+    level_map = np.empty((rows.size, cols.size), np.float32) if level_map is None else level_map
+    return kernels().gather_residuals(image, rows, cols, values.astype(np.float32), y0, y1, wy.astype(np.float32),
+                                      x0, x1, wx.astype(np.float32), out, level_map)
 
 
 def _tile_samples(image: NDArray, tile: int) -> tuple[NDArray, NDArray, NDArray]:
@@ -386,7 +381,8 @@ def pixel_noise(image: NDArray, model: BackgroundModel) -> float:
     """
     sample, step = strided_sample(image)
     if model.is_tiled:
-        level, _ = model.maps(step * np.arange(sample.shape[0]), step * np.arange(sample.shape[1]))
+        level = _grid_map(model.level_grid, model.centres_y, model.centres_x, step * np.arange(sample.shape[0]),
+                          step * np.arange(sample.shape[1]), True)
     else:
         level = model.level
     sample = sample.astype(np.float64)

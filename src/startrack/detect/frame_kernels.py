@@ -6,7 +6,8 @@ Each loop gives the numbers of the numpy expressions it replaces (the same float
 the same order), so the detector's results do not depend on which one ran; they are one pass over
 the frame each instead of a dozen numpy temporaries. Kept apart so that importing startrack does
 not import numba: :mod:`.compiled` loads this module on first use. Compiled functions are cached
-on disk (``cache=True``, see :mod:`startrack.numba_cache`).
+on disk (``cache=True``, see :mod:`startrack.numba_cache`); numpy's error model (a division by
+zero gives inf or NaN, as in numpy, and the loops vectorize).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def bin_mean(image, factor):
     """Mean over ``factor`` x ``factor`` blocks as float32, trailing rows and columns dropped:
     each block's rows summed first (in the wider of float32 and the image's type, rounded to
@@ -45,7 +46,7 @@ def bin_mean(image, factor):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def smooth(image, weights):
     """Separable smoothing of float32 ``image`` (H, W) with the odd float32 ``weights`` (K,),
     edges repeated: rows first, then columns, each ``sum_k weights[k] * shifted_k`` accumulated
@@ -67,7 +68,7 @@ def smooth(image, weights):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _smooth_row(row, weights, out):
     """One row of :func:`smooth`'s second pass: the interior by shifted slices, the ``r``
     pixels at either end with clamped indices."""
@@ -86,7 +87,7 @@ def _smooth_row(row, weights, out):
         out[j] = _clamped_sum(row, weights, j)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _clamped_sum(row, weights, j):
     """``sum_k weights[k] * row[j - r + k]`` with the index clamped to the row (edges repeated)."""
     w, r = row.size, weights.size // 2
@@ -96,7 +97,7 @@ def _clamped_sum(row, weights, j):
     return total
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _along_x(grid, x0, x1, wx, clip):
     """The float32 ``grid`` (ny, nx) interpolated along x at every column: (ny, len(x0)),
     ``grid[:, x0] + wx * (grid[:, x1] - grid[:, x0])`` (float32 weights ``wx``, clipped to
@@ -109,58 +110,59 @@ def _along_x(grid, x0, x1, wx, clip):
     return out
 
 
-@njit(cache=True)
-def _along_y(rows, y0, y1, weight, out):
-    """Row ``out`` (n,) = ``low + (high - low) * weight`` between rows ``y0`` and ``y1`` of the
-    :func:`_along_x` grid ``rows`` -- the second half of :func:`.background._grid_map`."""
-    low, high = rows[y0], rows[y1]
-    for c in range(out.size):
-        out[c] = (high[c] - low[c]) * weight + low[c]
-
-
-@njit(cache=True)
-def gather_tiles(image, rows, cols, grid, y0, y1, wy, x0, x1, wx, out, level_out):
+@njit(cache=True, error_model="numpy")
+def gather_tiles(image, rows, cols, out):
     """The samples ``image[rows] x [cols]`` of an ny x nx grid of tiles into ``out`` (ny, nx, S)
-    (of the type numpy would give them), tile by tile in raster order. ``rows`` (ny * nr,) and
-    ``cols`` (nx * nc,) hold each tile's rows and columns one tile after another. With a level
-    ``grid`` (float32, not empty): the samples less the level interpolated at each (``y0, y1,
-    wy`` per entry of ``rows``, ``x0, x1, wx`` per entry of ``cols``, float32 weights), and that
-    level written to ``level_out`` (len(rows), len(cols)) when it is not empty."""
+    (of the image's type), tile by tile in raster order. ``rows`` (ny * nr,) and ``cols``
+    (nx * nc,) hold each tile's rows and columns one tile after another."""
     ny, nx = out.shape[0], out.shape[1]
     nr, nc = rows.size // ny, cols.size // nx
-    residual, keep = grid.size > 0, level_out.size > 0
-    along_x = _along_x(grid, x0, x1, wx, False) if residual else np.zeros((0, 0), np.float32)
-    level = np.zeros(cols.size if residual else 0, np.float32)
-    flat = out.reshape(-1)
+    c0 = cols[0] if cols[-1] - cols[0] == cols.size - 1 else -1  # every column: no look-up
     for ty in range(ny):
-        for j in range(nr):
-            r = ty * nr + j
-            if residual:
-                _along_y(along_x, y0[r], y1[r], wy[r], level)
-                if keep:
-                    level_out[r] = level
-            _gather_row(image, rows[r], cols, level, flat, (ty * nx * nr + j) * nc, nr * nc, nc)
+        for tx in range(nx):  # tile by tile: the stack is written in order
+            dst = out[ty, tx]
+            for j in range(nr):
+                if c0 >= 0:
+                    src = image[rows[ty * nr + j], c0 + tx * nc: c0 + (tx + 1) * nc]
+                    for i in range(nc):
+                        dst[j * nc + i] = src[i]
+                else:
+                    for i in range(nc):
+                        dst[j * nc + i] = image[rows[ty * nr + j], cols[tx * nc + i]]
     return out
 
 
-@njit(cache=True)
-def _gather_row(image, row, cols, level, flat, start, tile_size, nc):
-    """Row ``row`` of the samples (less ``level`` when it is not empty) into the flat stack:
-    columns of tile tx go to ``flat[start + tx * tile_size + i]``, i < ``nc``."""
-    residual = level.size > 0
-    dense = cols[-1] - cols[0] == cols.size - 1  # every column from cols[0] on: no look-up
-    src = image[row, cols[0]: cols[0] + cols.size] if dense else image[row].copy()[cols]
-    for tx in range(cols.size // nc):
-        first, base = tx * nc, start + tx * tile_size
-        if residual:
-            for i in range(nc):
-                flat[base + i] = src[first + i] - level[first + i]
-        else:
-            for i in range(nc):
-                flat[base + i] = src[first + i]
+@njit(cache=True, error_model="numpy")
+def gather_residuals(image, rows, cols, grid, y0, y1, wy, x0, x1, wx, out, level_out):
+    """As :func:`gather_tiles`, the samples less the level of the float32 ``grid`` interpolated
+    bilinearly at each (``y0, y1, wy`` per entry of ``rows``, ``x0, x1, wx`` per entry of
+    ``cols``, float32 weights; the order of :func:`.background._grid_map`'s float32 arrays);
+    that level is written to ``level_out`` (len(rows), len(cols))."""
+    ny, nx = out.shape[0], out.shape[1]
+    nr, nc = rows.size // ny, cols.size // nx
+    along_x = _along_x(grid, x0, x1, wx, False)
+    c0 = cols[0] if cols[-1] - cols[0] == cols.size - 1 else -1
+    for ty in range(ny):
+        for tx in range(nx):
+            dst = out[ty, tx]
+            for j in range(nr):
+                r = ty * nr + j
+                low = along_x[y0[r], tx * nc: (tx + 1) * nc]
+                high, weight = along_x[y1[r], tx * nc: (tx + 1) * nc], wy[r]
+                level = level_out[r, tx * nc: (tx + 1) * nc]
+                for i in range(nc):
+                    level[i] = (high[i] - low[i]) * weight + low[i]
+                if c0 >= 0:
+                    src = image[rows[r], c0 + tx * nc: c0 + (tx + 1) * nc]
+                    for i in range(nc):
+                        dst[j * nc + i] = src[i] - level[i]
+                else:
+                    for i in range(nc):
+                        dst[j * nc + i] = image[rows[r], cols[tx * nc + i]] - level[i]
+    return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def median3(padded):
     """3 x 3 median of every inner cell of ``padded`` (ny + 2, nx + 2): shape (ny, nx), the
     middle of each neighbourhood's nine values sorted (as ``scipy.ndimage.median_filter``)."""
@@ -183,13 +185,14 @@ def median3(padded):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def significance(image, level, noise, y0, y1, wy, x0, x1, wx, mode):
     """(image - level) / noise of float32 ``image`` (h, w), float32 (h, w). ``mode`` 0: ``level``
     and ``noise`` hold the constant level and the inverse of the constant noise (``[0, 0]``);
     1: ``level`` is the level at every pixel (h, w) and ``noise`` a grid; 2: both are grids. A
     grid is interpolated bilinearly (``y0, y1, wy`` per row, ``x0, x1, wx`` per column, float32;
-    the noise's weights clipped to [0, 1], the level's as given)."""
+    the noise's weights clipped to [0, 1], the level's as given), in the order of
+    :func:`.background._grid_map`'s float32 arrays."""
     h, w = image.shape
     out = np.empty((h, w), np.float32)
     if mode == 0:
@@ -197,10 +200,10 @@ def significance(image, level, noise, y0, y1, wy, x0, x1, wx, mode):
             for j in range(w):
                 out[i, j] = (image[i, j] - level[0, 0]) * noise[0, 0]
         return out
-    zero, one = np.float32(0.0), np.float32(1.0)
     noise_x = _along_x(noise, x0, x1, wx, True)
-    level_x = _along_x(level, x0, x1, wx, False) if mode == 2 else np.zeros((0, 0), np.float32)
-    lvl, sd = np.empty(w, np.float32), np.empty(w, np.float32)
+    level_x = _along_x(level, x0, x1, wx, False) if mode == 2 else noise_x
+    sd, lvl = np.empty(w, np.float32), np.empty(w, np.float32)
+    zero, one = np.float32(0.0), np.float32(1.0)
     for i in range(h):
         _along_y(noise_x, y0[i], y1[i], min(max(wy[i], zero), one), sd)
         if mode == 2:
@@ -209,14 +212,23 @@ def significance(image, level, noise, y0, y1, wy, x0, x1, wx, mode):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
+def _along_y(rows, y0, y1, weight, out):
+    """Row ``out`` (n,) = ``low + (high - low) * weight`` between rows ``y0`` and ``y1`` of the
+    :func:`_along_x` grid ``rows`` -- the second half of :func:`.background._grid_map`."""
+    low, high = rows[y0], rows[y1]
+    for c in range(out.size):
+        out[c] = (high[c] - low[c]) * weight + low[c]
+
+
+@njit(cache=True, error_model="numpy")
 def _divide_row(row, level, noise, out):
     """out = (row - level) / noise, element by element (float32 rows of one length)."""
     for j in range(out.size):
         out[j] = (row[j] - level[j]) / noise[j]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _root(parent, a):
     while parent[a] != a:
         parent[a] = parent[parent[a]]
@@ -224,7 +236,7 @@ def _root(parent, a):
     return a
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _union(parent, a, b):
     """Join the sets of a and b under the smaller root (the earlier label in raster order)."""
     a, b = _root(parent, a), _root(parent, b)
@@ -234,7 +246,7 @@ def _union(parent, a, b):
         parent[a] = b
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _provisional(mask):
     """Raster scan of ``mask``: flat index and provisional label of every True pixel, and the
     union-find parents of the labels (8-connected to the row above and the pixel before)."""
@@ -270,7 +282,7 @@ def _provisional(mask):
     return flat[:m], label[:m], parent[:n]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def label8(mask):
     """8-connected regions of the True pixels of bool ``mask`` (H, W), numbered in raster order
     of their first pixels (``scipy.ndimage.label``'s order), each region's pixels in raster order.
