@@ -165,23 +165,34 @@ def gather_residuals(image, rows, cols, grid, y0, y1, wy, x0, x1, wx, out, level
 @njit(cache=True, error_model="numpy")
 def median3(padded):
     """3 x 3 median of every inner cell of ``padded`` (ny + 2, nx + 2): shape (ny, nx), the
-    middle of each neighbourhood's nine values sorted (as ``scipy.ndimage.median_filter``)."""
+    middle one of each neighbourhood's nine values (as ``scipy.ndimage.median_filter``), by a
+    19-exchange selection network (Paeth's ``opt_med9``) on NaN-free values."""
     ny, nx = padded.shape[0] - 2, padded.shape[1] - 2
     out = np.empty((ny, nx), padded.dtype)
-    values = np.empty(9, padded.dtype)
     for i in range(ny):
         for j in range(nx):
-            n = 0
-            for di in range(3):
-                for dj in range(3):
-                    v = padded[i + di, j + dj]
-                    k = n
-                    while k > 0 and values[k - 1] > v:  # insertion sort
-                        values[k] = values[k - 1]
-                        k -= 1
-                    values[k] = v
-                    n += 1
-            out[i, j] = values[4]
+            p0, p1, p2 = padded[i, j], padded[i, j + 1], padded[i, j + 2]
+            p3, p4, p5 = padded[i + 1, j], padded[i + 1, j + 1], padded[i + 1, j + 2]
+            p6, p7, p8 = padded[i + 2, j], padded[i + 2, j + 1], padded[i + 2, j + 2]
+            p1, p2 = min(p1, p2), max(p1, p2)
+            p4, p5 = min(p4, p5), max(p4, p5)
+            p7, p8 = min(p7, p8), max(p7, p8)
+            p0, p1 = min(p0, p1), max(p0, p1)
+            p3, p4 = min(p3, p4), max(p3, p4)
+            p6, p7 = min(p6, p7), max(p6, p7)
+            p1, p2 = min(p1, p2), max(p1, p2)
+            p4, p5 = min(p4, p5), max(p4, p5)
+            p7, p8 = min(p7, p8), max(p7, p8)
+            p3 = max(p0, p3)
+            p5 = min(p5, p8)
+            p4, p7 = min(p4, p7), max(p4, p7)
+            p6 = max(p3, p6)
+            p4 = max(p1, p4)
+            p2 = min(p2, p5)
+            p4 = min(p4, p7)
+            p4, p2 = min(p4, p2), max(p4, p2)
+            p4 = max(p6, p4)
+            out[i, j] = min(p4, p2)
     return out
 
 
