@@ -76,7 +76,7 @@ class SkyBands:
         if vectors.ndim != 2 or vectors.shape[1] != 3:
             raise ValueError(f"vectors must have shape (S, 3), got {vectors.shape}")
         self.order = np.argsort(vectors[:, 2], kind="stable")
-        self.sorted_vectors = np.ascontiguousarray(vectors[self.order])
+        self.sorted_vectors = np.take(vectors, self.order, axis=0)
         self.z_sorted = np.ascontiguousarray(self.sorted_vectors[:, 2])
 
     def query_ball_point(self, axis: NDArray, chord: float) -> NDArray[np.int64]:
