@@ -156,16 +156,10 @@ def _grid_map(grid: NDArray, centres_y: NDArray, centres_x: NDArray, ys: NDArray
               extrapolate: bool) -> NDArray[np.float32]:
     """Bilinear interpolation of ``grid`` (values at centres_y x centres_x) on the grid of rows
     ``ys`` x columns ``xs`` (beyond the outer centres: see :func:`_axis_weights`); float32
-    array of shape (len(ys), len(xs))."""
+    array of shape (len(ys), len(xs)), along x first (:func:`.frame_kernels.grid_map`)."""
     y0, y1, wy = _axis_weights(centres_y, np.asarray(ys, dtype=float), extrapolate)
     x0, x1, wx = _axis_weights(centres_x, np.asarray(xs, dtype=float), extrapolate)
-    grid = grid.astype(np.float32)
-    rows = grid[:, x0] + wx.astype(np.float32) * (grid[:, x1] - grid[:, x0])  # (ny, len(xs))
-    low, out = rows[y0], rows[y1]  # two (len(ys), len(xs)) gathers; the blend is done in place
-    out -= low
-    out *= wy.astype(np.float32)[:, None]
-    out += low
-    return out
+    return kernels().grid_map(grid.astype(np.float32), y0, y1, wy.astype(np.float32), x0, x1, wx.astype(np.float32))
 
 
 def global_background(image: NDArray) -> BackgroundModel:

@@ -111,6 +111,18 @@ def _along_x(grid, x0, x1, wx, clip):
 
 
 @njit(cache=True, error_model="numpy")
+def grid_map(grid, y0, y1, wy, x0, x1, wx):
+    """The float32 ``grid`` interpolated bilinearly on the rows and columns given by ``y0, y1,
+    wy`` (n_rows,) and ``x0, x1, wx`` (n_cols,) (float32 weights, used as they are): float32
+    (n_rows, n_cols), as :func:`.background._grid_map` did with numpy (along x first)."""
+    along_x = _along_x(grid, x0, x1, wx, False)
+    out = np.empty((y0.size, x0.size), np.float32)
+    for i in range(y0.size):
+        _along_y(along_x, y0[i], y1[i], wy[i], out[i])
+    return out
+
+
+@njit(cache=True, error_model="numpy")
 def gather_tiles(image, rows, cols, out):
     """The samples ``image[rows] x [cols]`` of an ny x nx grid of tiles into ``out`` (ny, nx, S)
     (of the image's type), tile by tile in raster order. ``rows`` (ny * nr,) and ``cols``
