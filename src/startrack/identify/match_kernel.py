@@ -137,9 +137,7 @@ def band_cone(sorted_vectors, order, z_sorted, axis, chord):
     ``cKDTree.query_ball_point``. ``sorted_vectors`` (S, 3) are the vectors in ascending order of
     z (``z_sorted`` (S,) their z, ``order`` (S,) their indices): a vector within the chord has
     |z - axis_z| <= chord, so only that band of z is read (bisection, then one pass)."""
-    pad = 1e-12  # the band only bounds the pass; the test itself is exact
-    lo = np.searchsorted(z_sorted, axis[2] - chord - pad)
-    hi = np.searchsorted(z_sorted, axis[2] + chord + pad, side="right")
+    lo, hi = _band(z_sorted, axis[2], chord)
     out = np.empty(hi - lo, np.int64)
     c2 = chord * chord
     n = 0
@@ -150,6 +148,39 @@ def band_cone(sorted_vectors, order, z_sorted, axis, chord):
             out[n] = order[k]
             n += 1
     return np.sort(out[:n])
+
+
+@njit(cache=True)
+def band_cone_stars(vectors, sorted_vectors, order, z_sorted, count, axis, cos_reach, neighbour_rad,
+                    min_neighbour_rad):
+    """:func:`cone_stars` on ``vectors`` (S, 3), also given as in :func:`band_cone`: the same
+    indices (ascending, those below ``count`` whose dot product with ``axis`` is at least
+    ``cos_reach``, computed alike, and whose ``neighbour_rad`` (S,) is at least
+    ``min_neighbour_rad``), reading only the band of z that such a vector lies in
+    (|z - axis_z| <= sqrt(2 - 2 cos_reach)), or the first ``count`` vectors when they are fewer."""
+    lo, hi = _band(z_sorted, axis[2], math.sqrt(max(0.0, 2.0 - 2.0 * cos_reach)))
+    if hi - lo >= count:
+        return cone_stars(vectors, count, axis, cos_reach, neighbour_rad, min_neighbour_rad)
+    out = np.empty(hi - lo, np.int64)
+    n = 0
+    for k in range(lo, hi):
+        i = order[k]
+        if i >= count:
+            continue
+        dot = sorted_vectors[k, 0] * axis[0] + sorted_vectors[k, 1] * axis[1] + sorted_vectors[k, 2] * axis[2]
+        if dot >= cos_reach and neighbour_rad[i] >= min_neighbour_rad:
+            out[n] = i
+            n += 1
+    return np.sort(out[:n])
+
+
+@njit(cache=True)
+def _band(z_sorted, z, half_width):
+    """First and one-past-last positions in ``z_sorted`` (ascending) of the values within
+    ``half_width`` of ``z``, padded by 1e-9 (the band only bounds a pass; its test is exact)."""
+    pad = 1e-9
+    return (np.searchsorted(z_sorted, z - half_width - pad),
+            np.searchsorted(z_sorted, z + half_width + pad, side="right"))
 
 
 @njit(cache=True, error_model="numpy")  # a zero determinant gives inf / NaN (a NaN point), not an exception

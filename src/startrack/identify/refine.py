@@ -287,8 +287,8 @@ def solution_terms(observed: NDArray, reference: NDArray, sigma_rad: float) -> t
 def warm_up_pose() -> None:
     """Compile (or load from the disk cache) the kernels of :func:`fit_pose`,
     :func:`leave_one_out_residuals`, :func:`wahba_equal_weights`, :func:`match_predicted`,
-    :func:`predicted_pairs`, :func:`pixel_vectors`, :func:`stars_in_cone` and :func:`solution_terms`, so that a
-    solve's time does not include it. Free after the first call."""
+    :func:`predicted_pairs`, :func:`pixel_vectors`, :func:`stars_in_cone`, :func:`solution_terms` and the cone
+    queries of :class:`.verify.SkyBands`, so that a solve's time does not include it. Free after the first call."""
     camera = Camera(width=64, height=64, fx=100.0, k1=1e-3)
     x, y = np.array([10.0, 50.0, 30.0, 20.0]), np.array([10.0, 20.0, 50.0, 40.0])
     ref = camera.pixel_to_vector(x, y)  # attitude: identity
@@ -299,4 +299,9 @@ def warm_up_pose() -> None:
     predicted_pairs(ref, matrix, camera, x, y, 1.0)
     pixel_vectors(camera, x, y)
     stars_in_cone(ref, len(ref), matrix[2], 0.1, np.zeros(len(ref)), 0.0)
+    from .verify import SkyBands  # the cone queries of the confirmation and the catalog choice
+
+    bands = SkyBands(ref)
+    bands.query_ball_point(matrix[2], 0.1)
+    bands.brightest_in_cone(len(ref), matrix[2], 0.1, np.zeros(len(ref)), 0.0)
     solution_terms(camera.pixel_to_vector(x, y), ref, 1e-4)

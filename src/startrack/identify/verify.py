@@ -22,6 +22,7 @@ import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from types import ModuleType
 
 import numpy as np
 from numpy.typing import NDArray
@@ -75,6 +76,7 @@ class SkyBands:
         vectors = np.asarray(vectors, dtype=np.float64)
         if vectors.ndim != 2 or vectors.shape[1] != 3:
             raise ValueError(f"vectors must have shape (S, 3), got {vectors.shape}")
+        self.vectors = np.ascontiguousarray(vectors)
         self.order = np.argsort(vectors[:, 2], kind="stable")
         self.sorted_vectors = np.take(vectors, self.order, axis=0)
         self.z_sorted = np.ascontiguousarray(self.sorted_vectors[:, 2])
@@ -82,16 +84,26 @@ class SkyBands:
     def query_ball_point(self, axis: NDArray, chord: float) -> NDArray[np.int64]:
         """Indices (ascending) of the vectors within ``chord`` (straight-line distance) of the
         unit vector ``axis`` (3,)."""
-        return _band_cone()(self.sorted_vectors, self.order, self.z_sorted,
-                            np.ascontiguousarray(axis, dtype=np.float64), float(chord))
+        return _kernel().band_cone(self.sorted_vectors, self.order, self.z_sorted,
+                                   np.ascontiguousarray(axis, dtype=np.float64), float(chord))
+
+    def brightest_in_cone(self, count: int, axis: NDArray, radius_rad: float, neighbour_rad: NDArray,
+                          min_neighbour_rad: float) -> NDArray[np.int64]:
+        """The indices (ascending) that :func:`.refine.stars_in_cone` finds on the unsorted
+        vectors: those among the first ``count`` within ``radius_rad`` of the unit vector ``axis``
+        (3,) whose ``neighbour_rad`` (S,) is at least ``min_neighbour_rad``, the same test on the
+        same numbers, reading one band of z (:func:`.match_kernel.band_cone_stars`)."""
+        return _kernel().band_cone_stars(self.vectors, self.sorted_vectors, self.order, self.z_sorted, int(count),
+                                         np.ascontiguousarray(axis, dtype=np.float64),
+                                         math.cos(min(radius_rad, math.pi)), neighbour_rad, float(min_neighbour_rad))
 
 
 @functools.cache
-def _band_cone() -> Callable:
-    """:func:`.match_kernel.band_cone` (numba is imported on first use)."""
-    from .match_kernel import band_cone
+def _kernel() -> ModuleType:
+    """:mod:`.match_kernel` (numba is imported on first use)."""
+    from . import match_kernel
 
-    return band_cone
+    return match_kernel
 
 
 def field_cone(tree: cKDTree | SkyBands, matrix_cam_from_icrs: NDArray, camera: Camera,
