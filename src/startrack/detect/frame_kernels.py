@@ -17,15 +17,14 @@ from numba import njit
 
 
 @njit(cache=True, error_model="numpy")
-def bin_mean(image, factor):
+def bin_mean(image, factor, out, row):
     """Mean over ``factor`` x ``factor`` blocks as float32, trailing rows and columns dropped:
     each block's rows summed first (in the wider of float32 and the image's type, rounded to
     float32), then its columns, then scaled, as :func:`.smooth.bin_mean` did with numpy.
-    ``image`` (H, W) of any real dtype; returns (H // factor, W // factor) float32."""
-    h, w = image.shape[0] // factor, image.shape[1] // factor
-    out = np.empty((h, w), np.float32)
+    ``image`` (H, W) of any real dtype, into float32 ``out`` (H // factor, W // factor); ``row``
+    (W // factor * factor,) float32 is the work row (see :func:`smooth`)."""
+    h, w = out.shape
     scale = np.float32(1.0 / (factor * factor))
-    row = np.empty(w * factor, np.float32)
     for i in range(h):
         src = image[i * factor]
         for j in range(w * factor):
@@ -47,24 +46,24 @@ def bin_mean(image, factor):
 
 
 @njit(cache=True, error_model="numpy")
-def smooth(image, weights):
+def smooth(image, weights, out, scratch):
     """Separable smoothing of float32 ``image`` (H, W) with the odd float32 ``weights`` (K,),
-    edges repeated: rows first, then columns, each ``sum_k weights[k] * shifted_k`` accumulated
-    in float32 from k = 0 (as :func:`.smooth.smooth` did with numpy). Returns (H, W) float32."""
-    h, w = image.shape
+    edges repeated, into float32 ``out`` (H, W): rows first, then columns, each
+    ``sum_k weights[k] * shifted_k`` accumulated in float32 from k = 0 (as
+    :func:`.smooth.smooth` did with numpy). Row by row: the first pass of a row goes to
+    ``scratch`` (W,), which the caller places away from the rows' addresses modulo 4 KiB (a
+    load from an address 4 KiB apart from a pending store waits for it)."""
+    h = image.shape[0]
     r = weights.size // 2
-    rows = np.empty((h, w), np.float32)
     for i in range(h):
-        acc, src, first = rows[i], image[min(max(i - r, 0), h - 1)], weights[0]
-        for j in range(w):
-            acc[j] = src[j] * first
+        src, first = image[min(max(i - r, 0), h - 1)], weights[0]
+        for j in range(scratch.size):
+            scratch[j] = src[j] * first
         for k in range(1, weights.size):
             src, weight = image[min(max(i - r + k, 0), h - 1)], weights[k]
-            for j in range(w):
-                acc[j] += weight * src[j]
-    out = np.empty((h, w), np.float32)
-    for i in range(h):
-        _smooth_row(rows[i], weights, out[i])
+            for j in range(scratch.size):
+                scratch[j] += weight * src[j]
+        _smooth_row(scratch, weights, out[i])
     return out
 
 
@@ -209,15 +208,14 @@ def median3(padded):
 
 
 @njit(cache=True, error_model="numpy")
-def significance(image, level, noise, y0, y1, wy, x0, x1, wx, mode):
+def significance(image, level, noise, y0, y1, wy, x0, x1, wx, mode, out):
     """(image - level) / noise of float32 ``image`` (h, w), float32 (h, w). ``mode`` 0: ``level``
     and ``noise`` hold the constant level and the inverse of the constant noise (``[0, 0]``);
     1: ``level`` is the level at every pixel (h, w) and ``noise`` a grid; 2: both are grids. A
     grid is interpolated bilinearly (``y0, y1, wy`` per row, ``x0, x1, wx`` per column, float32;
     the noise's weights clipped to [0, 1], the level's as given), in the order of
-    :func:`.background._grid_map`'s float32 arrays."""
+    :func:`.background._grid_map`'s float32 arrays. Written to float32 ``out`` (h, w)."""
     h, w = image.shape
-    out = np.empty((h, w), np.float32)
     if mode == 0:
         for i in range(h):
             for j in range(w):

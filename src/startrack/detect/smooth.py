@@ -33,7 +33,8 @@ def bin_mean(image: NDArray, factor: int) -> NDArray[np.float32]:
         return image.astype(np.float32, copy=False)
     if image.dtype == np.bool_:
         image = image.view(np.uint8)
-    return kernels().bin_mean(image, factor)
+    out = empty_apart((image.shape[0] // factor, image.shape[1] // factor), image)
+    return kernels().bin_mean(image, factor, out, scratch_row(out.shape[1] * factor, image, out))
 
 
 KERNELS = ("binomial", "box")
@@ -61,7 +62,41 @@ def smooth(image: NDArray[np.float32], kernel: str, size: int) -> NDArray[np.flo
     """
     if size == 1:
         return image
-    return kernels().smooth(np.asarray(image, dtype=np.float32), kernel_weights(kernel, size))
+    image = np.asarray(image, dtype=np.float32)
+    out = empty_apart(image.shape, image)
+    return kernels().smooth(image, kernel_weights(kernel, size), out, scratch_row(image.shape[1], image, out))
+
+
+PAGE_BYTES = 4096
+"""Loads and stores whose addresses agree modulo this many bytes are taken for the same one
+until the store's address is known (x86 "4K aliasing"): a loop that reads one frame row and
+writes another, both at the start of a 4 KiB-strided row, runs up to 10 times slower."""
+
+
+def _apart(n: int, dtype, arrays: tuple[NDArray, ...]) -> NDArray:
+    """A new 1-D array of ``n`` values of ``dtype`` that starts at least 1 KiB (modulo 4 KiB)
+    from where ``arrays`` start (rows of a stride that is a multiple of 4 KiB all start there)."""
+    itemsize = np.dtype(dtype).itemsize
+    buffer = np.empty(n + PAGE_BYTES // itemsize, dtype)
+    base = buffer.ctypes.data
+    starts = [a.ctypes.data % PAGE_BYTES for a in arrays]
+    for shift in range(0, PAGE_BYTES, 256):
+        here = (base + shift) % PAGE_BYTES
+        if all(min((here - s) % PAGE_BYTES, (s - here) % PAGE_BYTES) >= 1024 for s in starts):
+            return buffer[shift // itemsize: shift // itemsize + n]
+    return buffer[:n]
+
+
+def scratch_row(n: int, *arrays: NDArray) -> NDArray[np.float32]:
+    """A float32 work row of ``n`` values placed apart from ``arrays`` (:func:`_apart`)."""
+    return _apart(n, np.float32, arrays)
+
+
+def empty_apart(shape: tuple[int, int], *arrays: NDArray) -> NDArray[np.float32]:
+    """An uninitialised float32 array of ``shape`` placed apart from ``arrays`` (:func:`_apart`):
+    a loop reading their rows and writing its rows does not wait on false store-to-load
+    dependences."""
+    return _apart(shape[0] * shape[1], np.float32, arrays).reshape(shape)
 
 
 MIN_VALID_WEIGHT = 0.5

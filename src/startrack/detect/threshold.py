@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 
 from .background import BackgroundModel, _axis_weights
 from .compiled import kernels
+from .smooth import empty_apart
 
 
 def significance(image: NDArray[np.float32], model: BackgroundModel, binning: int = 1
@@ -41,13 +42,15 @@ def significance(image: NDArray[np.float32], model: BackgroundModel, binning: in
         level, inverse = np.full((1, 1), model.level, np.float32), np.full((1, 1), 1.0 / model.noise, np.float32)
         rows_i, rows_f = np.zeros(h, np.int64), np.zeros(h, np.float32)
         cols_i, cols_f = np.zeros(w, np.int64), np.zeros(w, np.float32)
-        return kernels().significance(image, level, inverse, rows_i, rows_i, rows_f, cols_i, cols_i, cols_f, 0)
+        return kernels().significance(image, level, inverse, rows_i, rows_i, rows_f, cols_i, cols_i, cols_f, 0,
+                                      empty_apart(image.shape, image))
     y0, y1, wy = _axis_weights(model.centres_y, ys, True)
     x0, x1, wx = _axis_weights(model.centres_x, xs, True)
     mapped = model.level_map is not None and model.level_map.shape == image.shape
     level = model.level_map if mapped else model.level_grid.astype(np.float32)
+    out = empty_apart(image.shape, image, level)
     return kernels().significance(image, level, model.noise_grid.astype(np.float32), y0, y1, wy.astype(np.float32),
-                                  x0, x1, wx.astype(np.float32), 1 if mapped else 2)
+                                  x0, x1, wx.astype(np.float32), 1 if mapped else 2, out)
 
 
 def threshold_mask(snr: NDArray, k_sigma: float) -> NDArray[np.bool_]:
