@@ -222,13 +222,14 @@ def _near_max(image: np.ndarray, x: float, y: float, half: int = 1) -> float:
 def misses(image: np.ndarray, detector: StarDetector, det, ref: Reference) -> list[Miss]:
     """The matched stars of ``ref`` that ``det`` (the detector's output) does not hold, each
     with its measurements and cause: *edge* (within 4 px of the border), *blend* (a detection or
-    another reference star 2-6 px away took it), *clutter* (a ring over 1.4 or a tile clutter
-    over the detector's limit), *faint* (fine significance under the detector's ``fine_sigma``),
+    another reference star 2-6 px away took it), *clutter* (a ring over 1.4 that the spot does not
+    stand 1.5 times the fine threshold above, :func:`startrack.detect.fine_pass.quiet_surroundings`,
+    or a tile clutter over the detector's limit), *faint* (fine significance under the detector's ``fine_sigma``),
     otherwise *filtered* (significant, alone, on open sky, yet a spot filter or a rule of the
     fine pass dropped it)."""
     from scipy.ndimage import maximum_filter
 
-    from startrack.detect.fine_pass import MAX_RING_NOISE, ring_noise_ratio
+    from startrack.detect.fine_pass import MAX_RING_NOISE, ring_noise_ratio, stands_above_ring
 
     fine, coarse, noise, (data, model) = significance_maps(image, detector)
     peaks = (fine == maximum_filter(fine, 5)) & (fine > 3.0)
@@ -249,7 +250,9 @@ def misses(image: np.ndarray, detector: StarDetector, det, ref: Reference) -> li
         ring = float(ring_noise_ratio(data, np.array([x]), np.array([y]), noise)[0])
         clutter = float(model.clutter_at(np.array([x]), np.array([y]))[0])
         edge = min(x, y, w - 1 - x, h - 1 - y)
-        cause = _cause(detector, edge, nearest, ring > MAX_RING_NOISE, clutter, sig)
+        busy = ring > MAX_RING_NOISE and not stands_above_ring(fine, np.array([x]), np.array([y]), np.array([sig]),
+                                                               detector.fine_sigma or detector.sigma)[0]
+        cause = _cause(detector, edge, nearest, busy, clutter, sig)
         out.append(Miss(x, y, sig, _near_max(coarse, x, y, 2), edge, nearest, ring, clutter,
                         int(np.sum(unconfirmed & (fine[py, px] >= sig))), cause))
     return out
