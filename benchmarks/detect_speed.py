@@ -8,8 +8,10 @@ before issue 17), for what that pass costs. Frames: 1024 x 1024 uint16, 30 stars
 detections per frame against the truth (2 px), the RMS centroid error over the stars it found
 and over the stars every method found (the same stars for all). The peers run in their own
 environment (``peers/detect_env.py``) in a subprocess reading the same frames from an ``.npz``.
-Also: the predictive pass over 20 windows, and with ``--huge`` the peak memory of a 20,000 x
-20,000 frame (``tracemalloc``).
+Also: each method's time as a multiple of SEP's (``x SEP``), the memory-bandwidth floor of the
+default detector (the bytes its whole-frame passes read and write, :func:`frame_passes`, at the
+bandwidth of a numpy copy of the frame), the predictive pass over 20 windows, and with
+``--huge`` the peak memory of a 20,000 x 20,000 frame (``tracemalloc``).
 
     .venv/bin/python benchmarks/detect_speed.py [--frames 5] [--repeats 15] [--no-peers] [--huge]
 """
@@ -121,7 +123,8 @@ def report(rows: dict, frames: list) -> None:
     scores = {name: score(frames, res) for name, (res, _, _) in rows.items()}
     common = np.all([np.isfinite(np.concatenate(s[2])) for s in scores.values()], axis=0)
     ref = np.median(rows["startrack (default)"][1])
-    print(f"\n{'method':<26}{'median ms':>10}{'best ms':>8}{'x ours':>8}{'complete':>10}"
+    sep = np.median(rows["SEP extract"][1]) if "SEP extract" in rows else np.nan
+    print(f"\n{'method':<26}{'median ms':>10}{'best ms':>8}{'x ours':>8}{'x SEP':>7}{'complete':>10}"
           f"{'false/fr':>9}{'rms px':>8}{'rms common':>11}")
     for name, (_, times, best) in rows.items():
         comp, false, errors = scores[name]
@@ -129,9 +132,50 @@ def report(rows: dict, frames: list) -> None:
         rms = np.sqrt(np.nanmean(err**2))
         rms_common = np.sqrt(np.mean(err[common] ** 2))
         ms = np.median(times) * 1e3
-        print(f"{name:<26}{ms:10.2f}{np.min(best) * 1e3:8.2f}{ms / (ref * 1e3):8.2f}{comp:10.3f}"
-              f"{false:9.1f}{rms:8.4f}{rms_common:11.4f}")
+        print(f"{name:<26}{ms:10.2f}{np.min(best) * 1e3:8.2f}{ms / (ref * 1e3):8.2f}{ms / (sep * 1e3):7.2f}"
+              f"{comp:10.3f}{false:9.1f}{rms:8.4f}{rms_common:11.4f}")
     print(f"(rms common: over the {common.sum()} of {common.size} stars every method found)")
+
+
+def frame_passes(shape: tuple[int, int], itemsize: int, binning: int = 2) -> list[tuple[str, int]]:
+    """The default detector's whole-frame passes on an (H, W) frame of ``itemsize``-byte pixels,
+    each with the bytes it reads and writes (the detection image and its maps are float32 on
+    the binned grid; the statistics' subsamples of the full frame, a few per cent of it, and
+    the per-spot work are left out)."""
+    frame = shape[0] * shape[1] * itemsize
+    binned = (shape[0] // binning) * (shape[1] // binning) * 4
+    return [
+        ("bin: read the frame, write the binned image", frame + binned),
+        ("smooth 3 x 3 (one fused pass): read, write", 2 * binned),
+        ("tile samples: read, write the stack", 2 * binned),
+        ("sort the stack in place", 2 * binned),
+        ("residuals: read, write the stack and the level map", 3 * binned),
+        ("sort the residual stack in place", 2 * binned),
+        ("significance: read image and level, write", 3 * binned),
+        ("threshold: read the significance, write the mask", binned + binned // 4),
+        ("label: read the mask", binned // 4),
+    ]
+
+
+def bandwidth_floor(frame: np.ndarray, repeats: int = 50) -> None:
+    """Print the copy bandwidth of the frame (bytes read + written by ``np.copyto``, median of
+    ``repeats``) and the time the default detector's passes (:func:`frame_passes`) take at it."""
+    out = np.empty_like(frame)
+    np.copyto(out, frame)
+    samples = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        np.copyto(out, frame)
+        samples.append(time.perf_counter() - t0)
+    rate = 2 * frame.nbytes / float(np.median(samples))
+    passes = frame_passes(frame.shape, frame.itemsize)
+    total = sum(n for _, n in passes)
+    print(f"\nmemory-bandwidth floor: a numpy copy of the {frame.shape[0]} x {frame.shape[1]} "
+          f"{frame.dtype} frame moves {rate / 1e9:.1f} GB/s ({np.median(samples) * 1e3:.3f} ms median)")
+    for name, n in passes:
+        print(f"  {name:<52}{n / frame.nbytes:6.2f} frames")
+    print(f"  total {total / frame.nbytes:.2f} frames = {total / 2**20:.1f} MiB: "
+          f"{total / rate * 1e3:.3f} ms at that bandwidth (the floor of these passes)")
 
 
 def huge_frame_memory(size: int = 20_000) -> None:
@@ -182,6 +226,7 @@ def main(argv: list[str] | None = None) -> int:
         rows["SEP extract + winpos"] = peer["sep_win"]
         rows["photutils DAOStarFinder"] = peer["dao"]
     report(rows, frames)
+    bandwidth_floor(frames[0].image)
     print()
     for centroid in ("windowed", "weighted"):
         t, best, n = predictive_time(frames[0], args.repeats, centroid)
