@@ -335,3 +335,33 @@ def label8(mask):
         fill[r] += 1
         index[p], y[p], x[p] = r, flat[k] // w, flat[k] % w
     return index, y, x, starts
+
+
+@njit(cache=True, error_model="numpy")
+def separable_moments(q, wx, dx, wy, dy):
+    """``M[k, n, a, b] = sum_j wy[n, j] dy[n, j]^a sum_i q[k, n, j, i] wx[n, i] dx[n, i]^b`` for
+    float64 ``q`` (K, N, S, S) and (N, S) axis weights and coordinates, a, b in 0, 1, 2: the sum
+    over i first, then over j (the order of :func:`.windows.separable_moments`'s two matrix
+    products). Returns (K, N, 3, 3) float64."""
+    n_stacks, n, s = q.shape[0], q.shape[1], q.shape[2]
+    out = np.zeros((n_stacks, n, 3, 3))
+    along = np.empty((s, 3))
+    for w in range(n):
+        for k in range(n_stacks):
+            for j in range(s):
+                m0 = m1 = m2 = 0.0
+                for i in range(s):
+                    v = q[k, w, j, i] * wx[w, i]
+                    m0 += v
+                    m1 += v * dx[w, i]
+                    m2 += v * dx[w, i] * dx[w, i]
+                along[j, 0], along[j, 1], along[j, 2] = m0, m1, m2
+            for j in range(s):
+                y0 = wy[w, j]
+                y1 = y0 * dy[w, j]
+                y2 = y1 * dy[w, j]
+                for b in range(3):
+                    out[k, w, 0, b] += y0 * along[j, b]
+                    out[k, w, 1, b] += y1 * along[j, b]
+                    out[k, w, 2, b] += y2 * along[j, b]
+    return out

@@ -14,6 +14,8 @@ from dataclasses import dataclass, fields
 import numpy as np
 from numpy.typing import NDArray
 
+from .compiled import kernels
+
 
 @dataclass(frozen=True)
 class Windows:
@@ -69,12 +71,17 @@ def separable_moments(q: NDArray, wx: NDArray, dx: NDArray, wy: NDArray, dy: NDA
     Returns
     -------
     ndarray, shape (..., N, 3, 3)
-        Moments for a, b in 0, 1, 2: two matrix products instead of (N, S, S) products, which
-        is what makes per-window sums cheap on small windows.
+        Moments for a, b in 0, 1, 2, float64: one compiled loop
+        (:func:`.frame_kernels.separable_moments`), the sum along x first, which is what makes
+        per-window sums cheap on small windows.
     """
-    along_x = np.stack([wx, wx * dx, wx * dx * dx], axis=2)  # (N, S, 3)
-    along_y = np.stack([wy, wy * dy, wy * dy * dy], axis=1)  # (N, 3, S)
-    return along_y @ (q @ along_x)
+    q = np.asarray(q, dtype=np.float64)
+    lead, (n, s) = q.shape[:-3], q.shape[-3:-1]
+    if q.size == 0:
+        return np.zeros((*lead, n, 3, 3))
+    plain = [np.ascontiguousarray(a, dtype=np.float64) for a in (wx, dx, wy, dy)]
+    out = kernels().separable_moments(np.ascontiguousarray(q).reshape(-1, n, s, s), *plain)
+    return out.reshape(*lead, n, 3, 3)
 
 
 def fast_median(values: NDArray) -> NDArray:
