@@ -24,7 +24,6 @@ margin (:class:`_Catalog`).
 from __future__ import annotations
 
 import math
-import weakref
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -36,7 +35,7 @@ from ..camera import Camera
 from .candidate import Candidate
 from .field_stars import FieldStars
 from .refine import fit_pose, leave_one_out_residuals, match_predicted, pixel_vectors
-from .verify import SkyBands, match_nearest
+from .verify import bands_of, match_nearest
 
 MAX_REFINE_ROUNDS = 4
 """Fit / re-match rounds after verification (usually two: the second changes nothing)."""
@@ -204,17 +203,19 @@ class _Catalog:
         depth, not blended) of the cone around the boresight that holds the whole image and the
         reach (:func:`_image_reach_rad`), found by one compiled scan of the field's brightest
         stars or of the band of z the cone lies in, whichever is shorter
-        (:meth:`.verify.SkyBands.brightest_in_cone`) or, when that would read more stars than
-        :data:`SCAN_PER_TREE_STAR` times those of the cone, by the KD-tree; for a lens whose
+        (:meth:`.verify.SkyBands.brightest_in_cone`) or, when the shorter would read more stars
+        than :data:`SCAN_PER_TREE_STAR` times those of the cone, by the KD-tree; for a lens whose
         corner cannot be inverted (or above :data:`CONE_SCAN_LIMIT`), those near each image star."""
         count = len(field.stars.rows) if field.depth is None else min(field.depth, len(field.stars.rows))
         reach_rad = _image_reach_rad(camera)
         if count > CONE_SCAN_LIMIT or not math.isfinite(reach_rad):
             return cls.around_stars(field, matrix, camera)
-        in_cone = 0.5 * (1.0 - math.cos(min(reach_rad, math.pi))) * len(field.stars.rows)  # expected, all depths
-        if count > SCAN_PER_TREE_STAR * in_cone:
+        n_all = len(field.stars.rows)
+        in_cone = 0.5 * (1.0 - math.cos(min(reach_rad, math.pi))) * n_all  # expected, all depths
+        band = 2.0 * math.sin(min(reach_rad, math.pi) / 2.0) * n_all  # expected in its band of z (z is uniform)
+        if min(count, band) > SCAN_PER_TREE_STAR * in_cone:
             return cls._kept(field, matrix, camera, np.sort(field.stars.near(matrix[2], reach_rad)))
-        near = field_bands(field.stars).brightest_in_cone(count, matrix[2], reach_rad,
+        near = bands_of(field.stars, field.stars.vectors).brightest_in_cone(count, matrix[2], reach_rad,
                                                           field.stars.brighter_neighbour_rad, BLEND_PX / camera.fx)
         return cls(matrix, camera, field.stars.rows[near], field.stars.vectors[near])
 
@@ -237,21 +238,6 @@ class _Catalog:
     def serves(self, matrix: NDArray, camera: Camera) -> bool:
         """Whether no image point moves more than the margin between the chosen pose and this one."""
         return _pose_shift_px(self.matrix, self.camera, matrix, camera) <= SELECT_MARGIN_PX
-
-
-_FIELD_BANDS: dict[int, SkyBands] = {}
-"""The :class:`.verify.SkyBands` of each FieldStars in use (keyed by ``id``; an entry goes with its stars)."""
-
-
-def field_bands(stars: FieldStars) -> SkyBands:
-    """The field stars' ICRS vectors indexed by z (:class:`.verify.SkyBands`), made on first use
-    (one sort, a few ms for 100,000 stars) and kept while the stars live: the catalog choice of
-    a narrow field reads the band of z its cone lies in rather than all of its depth's stars."""
-    bands = _FIELD_BANDS.get(id(stars))
-    if bands is None:
-        bands = _FIELD_BANDS[id(stars)] = SkyBands(stars.vectors)
-        weakref.finalize(stars, _FIELD_BANDS.pop, id(stars), None)
-    return bands
 
 
 CONE_SCAN_LIMIT = 1_000_000

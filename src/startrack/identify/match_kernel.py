@@ -152,12 +152,15 @@ def band_cone(sorted_vectors, order, z_sorted, axis, chord):
 
 @njit(cache=True)
 def band_cone_stars(vectors, sorted_vectors, order, z_sorted, count, axis, cos_reach, neighbour_rad,
-                    min_neighbour_rad):
-    """:func:`cone_stars` on ``vectors`` (S, 3), also given as in :func:`band_cone`: the same
+                    neighbour_sorted, min_neighbour_rad):
+    """:func:`cone_stars` on ``vectors`` (S, 3), also given as in :func:`band_cone`
+    (``neighbour_sorted`` is ``neighbour_rad`` in the order of ``sorted_vectors``): the same
     indices (ascending, those below ``count`` whose dot product with ``axis`` is at least
     ``cos_reach``, computed alike, and whose ``neighbour_rad`` (S,) is at least
     ``min_neighbour_rad``), reading only the band of z that such a vector lies in
-    (|z - axis_z| <= sqrt(2 - 2 cos_reach)), or the first ``count`` vectors when they are fewer."""
+    (|z - axis_z| <= sqrt(2 - 2 cos_reach)), or the first ``count`` vectors when they are fewer.
+    The band's pass has no branch (a test that fails half the time at random costs a
+    misprediction each)."""
     lo, hi = _band(z_sorted, axis[2], math.sqrt(max(0.0, 2.0 - 2.0 * cos_reach)))
     if hi - lo >= count:
         return cone_stars(vectors, count, axis, cos_reach, neighbour_rad, min_neighbour_rad)
@@ -165,12 +168,10 @@ def band_cone_stars(vectors, sorted_vectors, order, z_sorted, count, axis, cos_r
     n = 0
     for k in range(lo, hi):
         i = order[k]
-        if i >= count:
-            continue
         dot = sorted_vectors[k, 0] * axis[0] + sorted_vectors[k, 1] * axis[1] + sorted_vectors[k, 2] * axis[2]
-        if dot >= cos_reach and neighbour_rad[i] >= min_neighbour_rad:
-            out[n] = i
-            n += 1
+        keep = (i < count) & (dot >= cos_reach) & (neighbour_sorted[k] >= min_neighbour_rad)
+        out[n] = i
+        n += 1 if keep else 0
     return np.sort(out[:n])
 
 
