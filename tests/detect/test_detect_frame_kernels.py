@@ -1,0 +1,123 @@
+"""The compiled whole-frame passes (:mod:`startrack.detect.frame_kernels`) against the plain
+numpy or scipy computations they replace."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from startrack.detect import background, label, smooth, threshold, windows
+from startrack.detect.label import Regions
+
+
+def _scipy_regions(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(region of each True pixel in raster order, its y, its x) by scipy's 8-connected label."""
+    labels, _ = ndimage.label(mask, structure=np.ones((3, 3), dtype=bool))
+    y, x = np.nonzero(mask)
+    return labels[y, x] - 1, y, x
+
+
+@pytest.mark.parametrize("shape", [(97, 131), (1, 40), (40, 1), (5, 5)])
+@pytest.mark.parametrize("density", [0.0, 0.05, 0.4, 0.7, 1.0])
+def test_labels_are_scipys_numbering_and_pixel_order(shape, density):
+    mask = np.random.default_rng(3).uniform(size=shape) < density
+    regions = label.label_regions(mask)
+    index, y, x = _scipy_regions(mask)
+    order = np.argsort(index, kind="stable")  # region after region, raster order inside
+    np.testing.assert_array_equal(regions.index, index[order])
+    np.testing.assert_array_equal(regions.y, y[order])
+    np.testing.assert_array_equal(regions.x, x[order])
+    np.testing.assert_array_equal(regions.counts, np.bincount(index, minlength=len(regions)))
+
+
+def test_a_ring_and_a_spiral_are_one_region_each():
+    mask = np.zeros((20, 20), dtype=bool)
+    mask[2, 2:10] = mask[9, 2:10] = mask[2:10, 2] = mask[2:10, 9] = True  # ring
+    mask[12, 12:19] = mask[12:19, 18] = mask[18, 12:19] = mask[14:19, 12] = mask[14, 12:16] = True
+    regions = label.label_regions(mask)
+    assert len(regions) == 2
+    assert regions.counts.sum() == mask.sum()
+
+
+@pytest.mark.parametrize("linear", [False, True])
+def test_grid_median_is_scipys(linear):
+    rng = np.random.default_rng(4)
+    for shape in ((32, 32), (1, 1), (3, 7), (2, 40)):
+        grid = np.round(rng.normal(size=shape) * 2)  # ties
+        padded = np.pad(grid, 1, mode="reflect", reflect_type="odd") if linear else np.pad(grid, 1, mode="edge")
+        expected = ndimage.median_filter(padded, size=3)[1:-1, 1:-1]
+        np.testing.assert_array_equal(background._median3(grid, linear=linear), expected)
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.int32, np.float32, np.float64])
+@pytest.mark.parametrize("factor", [2, 3])
+def test_binning_sums_rows_then_columns_in_float32(dtype, factor):
+    image = (np.random.default_rng(5).uniform(0, 250, (61, 47))).astype(dtype)
+    h, w = 61 // factor, 47 // factor
+    cropped = image[: h * factor, : w * factor]
+    rows = cropped[0::factor].astype(np.float32)
+    for dy in range(1, factor):
+        rows += cropped[dy::factor]
+    expected = rows[:, 0::factor].copy()
+    for dx in range(1, factor):
+        expected += rows[:, dx::factor]
+    expected *= np.float32(1.0 / factor**2)
+    out = smooth.bin_mean(image, factor)
+    assert out.dtype == np.float32
+    np.testing.assert_array_equal(out, expected)
+
+
+@pytest.mark.parametrize(("kernel", "size"), [("binomial", 3), ("box", 5), ("box", 7)])
+@pytest.mark.parametrize("shape", [(64, 1024), (9, 5), (2, 3), (1, 1)])
+def test_smoothing_is_the_shifted_slice_sum(kernel, size, shape):
+    image = np.random.default_rng(6).normal(100.0, 5.0, shape).astype(np.float32)
+    weights = smooth.kernel_weights(kernel, size)
+    padded = np.pad(image, size // 2, mode="edge")
+    rows = padded[: shape[0]] * weights[0]
+    for k in range(1, size):
+        rows += weights[k] * padded[k: k + shape[0]]
+    expected = rows[:, : shape[1]] * weights[0]
+    for k in range(1, size):
+        expected += weights[k] * rows[:, k: k + shape[1]]
+    np.testing.assert_array_equal(smooth.smooth(image, kernel, size), expected)
+
+
+def test_significance_is_level_and_noise_interpolated():
+    rng = np.random.default_rng(7)
+    yy, xx = np.mgrid[0:96, 0:160]
+    image = (50.0 + 0.05 * xx + 0.02 * yy + rng.normal(0, 2.0, yy.shape)).astype(np.float32)
+    model = background.tiled_background(image, 16, scale=2.0, offset=0.5)
+    level, noise = model.maps(0.5 + 2 * np.arange(96), 0.5 + 2 * np.arange(160))
+    expected = (image.astype(np.float64) - level) / noise
+    np.testing.assert_allclose(threshold.significance(image, model, 2), expected, rtol=1e-5, atol=1e-5)
+    flat = background.global_background(image)
+    np.testing.assert_allclose(threshold.significance(image, flat, 2),
+                               (image - flat.level) / flat.noise, rtol=1e-5, atol=1e-5)
+
+
+def test_work_arrays_start_apart_from_the_frame_rows():
+    frame = np.zeros((8, 1024), np.float32)
+    for array in (smooth.scratch_row(1024, frame), smooth.empty_apart((8, 1024), frame)):
+        gap = (array.ctypes.data - frame.ctypes.data) % smooth.PAGE_BYTES
+        assert 1024 <= gap <= smooth.PAGE_BYTES - 1024  # bytes, modulo 4 KiB
+        assert array.size == 1024 or array.shape == (8, 1024)
+
+
+def test_separable_moments_are_the_weighted_sums():
+    rng = np.random.default_rng(8)
+    q = rng.normal(size=(2, 5, 7, 7))
+    wx, dx, wy, dy = (rng.normal(size=(5, 7)) for _ in range(4))
+    ax = np.stack([wx, wx * dx, wx * dx**2], axis=-1)  # (N, S, 3)
+    ay = np.stack([wy, wy * dy, wy * dy**2], axis=-1)
+    expected = np.einsum("nja,knji,nib->knab", ay, q, ax)
+    np.testing.assert_allclose(windows.separable_moments(q, wx, dx, wy, dy), expected, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(windows.separable_moments(q[0], wx, dx, wy, dy), expected[0], rtol=1e-12,
+                               atol=1e-12)
+
+
+def test_argmax_takes_the_last_of_equal_values_and_nan():
+    regions = Regions(index=np.array([0, 0, 0, 1, 1, 2]), y=np.zeros(6, np.int64), x=np.arange(6),
+                      starts=np.array([0, 3, 5]))
+    values = np.array([2.0, 5.0, 5.0, np.nan, 1.0, -1.0])
+    np.testing.assert_array_equal(regions.argmax(values), [2, 3, 5])
