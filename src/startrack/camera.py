@@ -1,8 +1,8 @@
 """The camera model: intrinsics, Brown-Conrady distortion, pixel <-> unit vector.
 
 Pixels follow :mod:`startrack.conventions` (0-based, pixel centres, (x, y) = (column, row)).
-The distortion is the Brown-Conrady model in the form OpenCV and Bouguet's toolbox use (seed 003
-§4.2, notes ``seed-003.md``): with normalised pinhole coordinates (a, b) = (v_x / v_z, v_y / v_z)
+The distortion is the Brown-Conrady model in the form OpenCV and Bouguet's toolbox use (Fowler 2013
+Ch. 4 §II.B): with normalised pinhole coordinates (a, b) = (v_x / v_z, v_y / v_z)
 and r^2 = a^2 + b^2::
 
     radial = 1 + k1 r^2 + k2 r^4 + k3 r^6
@@ -32,7 +32,7 @@ UNDISTORT_MAX_ITER = 50
 def focal_px_from_fov(size_px: float, fov_rad: float) -> float:
     """Pinhole focal length in pixels that spans ``size_px`` pixels with ``fov_rad``.
 
-    ``f = size / (2 tan(fov / 2))`` (seed 000 §2.3 eq. 2.1). The size is the full width in pixels
+    ``f = size / (2 tan(fov / 2))`` (Huffman 2006 §2.3 eq. 2.1). The size is the full width in pixels
     (edge to edge), so ``fov`` is the angle between the outer edges of the outer pixels.
     """
     if not 0.0 < fov_rad < math.pi:

@@ -3,7 +3,7 @@
 A :class:`CameraRig` is a tuple of named :class:`RigHead` s. Each head has a
 :class:`~startrack.camera.Camera` and its mounting ``rot_cam_from_body`` (DESIGN.md §3: it maps
 body-frame vectors into the head's camera frame, so ``rot_cam_from_icrs = rot_cam_from_body *
-rot_body_from_icrs``). A split field of view (seed 004 §2.5, StarNav II: two orthogonal fields
+rot_body_from_icrs``). A split field of view (Samaan 2002 Eq. 4–5, StarNav II: two orthogonal fields
 superimposed on one detector, told apart by deliberate astigmatism) is two heads that name the
 same ``detector``: each keeps its own mounting and camera model and has a :class:`PsfShape`, the
 elongated PSF that tags its stars.
@@ -47,7 +47,7 @@ orthonormal with determinant +1)."""
 
 @dataclass(frozen=True)
 class PsfShape:
-    """An elliptical Gaussian PSF: the astigmatism that tags the stars of one field (seed 004 §2.5).
+    """An elliptical Gaussian PSF: the astigmatism that tags the stars of one field (Samaan 2002 Eq. 4–5).
 
     Attributes
     ----------
@@ -80,7 +80,7 @@ class PsfShape:
 @dataclass(frozen=True)
 class Exclusion:
     """Half-angles (deg) of the cones around the boresight that the Sun, the Earth's limb and the
-    Moon must stay out of for the head to see stars (its baffle; seed 002 §7.6 gives 28.1 deg).
+    Moon must stay out of for the head to see stars (its baffle; Jacobs 1995 §7.6 gives 28.1 deg).
     An angle is measured from the boresight to the body's nearest edge."""
 
     sun_deg: float = 30.0

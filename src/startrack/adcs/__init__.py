@@ -1,5 +1,5 @@
-"""Closed-loop attitude control with the star tracker in the loop: seed 001 chapter 5 as a
-runnable demonstration (notes ``seed-001-004.md`` §1.24, §3.4; ``docs/adcs.md``).
+"""Closed-loop attitude control with the star tracker in the loop: Sease 2013 chapter 5 as a
+runnable demonstration (``docs/adcs.md``).
 
 A consumer of the library: the core never imports this package (DESIGN.md §2).
 

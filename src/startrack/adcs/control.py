@@ -1,5 +1,5 @@
 """Path tracking: the error quaternion, input-output linearisation, LQR and the PD baseline
-(seed 001 ch. 5, eq. 5.16-5.32; notes ``seed-001-004.md`` §1.24).
+(Sease 2013 ch. 5, eq. 5.16-5.32; Sease 2013 Chapter 5).
 
 Error. For a planned attitude p and an attitude q, both turns about y, the error quaternion
 (eq. 5.17) is ``q_E2 = -p4 q2 + q4 p2``, ``q_E4 = p4 q4 + q2 p2`` and the seed's error is

@@ -1,4 +1,4 @@
-"""The KnightCube of seed 001 ch. 5 (notes ``seed-001-004.md`` §1.24, §3.4): inertia, torque coil
+"""The KnightCube of Sease 2013 ch. 5 (Sease 2013 Chapter 5): inertia, torque coil
 and the Helmholtz field of its test bed, as one frozen set of parameters.
 
 From the seed: J = diag(1.10, 1.05, 0.99) 1e-2 kg m^2 (Table 5.1), coils of 80 turns and 15-25
@@ -11,7 +11,7 @@ Ours, because the seed does not give them:
 * the resistance, 23 ohm = 3.4 V / 0.148 A (inside the seed's 15-25 ohm, and the value that makes
   its current limit the H-bridge's full duty cycle);
 * the default inertia: the seed's printed J is about ten times that of a uniform 611 g, 10 cm
-  cube (m a^2 / 6 = 1.02e-3 kg m^2; the notes flag it as a possible typo). With it, 80 turns x
+  cube (m a^2 / 6 = 1.02e-3 kg m^2; possibly a typo). With it, 80 turns x
   0.0064 m^2 x 4.5 G x 0.148 A give 3.3e-3 rad/s^2, and a +0.1 step in q2 (about 0.2 rad) takes
   at least 16 s even bang-bang, which cannot meet the seed's own rise time (< 8 s, Table 5.3) or
   its 10 s plans. We take J scaled by 0.1 (J22 = 1.05e-3 kg m^2) by default; ``seed_printed()``
@@ -38,7 +38,7 @@ GAUSS_T = 1e-4
 MU0_T_M_A = 4e-7 * math.pi
 """Vacuum permeability, T m / A."""
 SEED_INERTIA_KG_M2 = (1.10e-2, 1.05e-2, 0.99e-2)
-"""Seed 001 Table 5.1, as printed (diagonal, kg m^2)."""
+"""Sease 2013 Table 5.1, as printed (diagonal, kg m^2)."""
 
 
 def helmholtz_field_t(turns: int, current_a: float, radius_m: float) -> float:

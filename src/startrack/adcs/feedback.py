@@ -4,7 +4,7 @@ Every source answers ``estimate(t_s, plant, log)`` at each control tick; sources
 true state during a plant step (cameras, :mod:`.star_tracker_feedback`) list those instants with
 ``sample_times`` and receive the states through ``observe``.
 
-IMU (seed 001 ch. 5 "Simulation Results", the VN-100 data sheet bounds): every tick, with no
+IMU (Sease 2013 ch. 5 "Simulation Results", the VN-100 data sheet bounds): every tick, with no
 latency, ``q = q_true + dq`` on each vector component of the quaternion (scalar recomputed) and
 ``w = w_true + dw`` on each axis, dq and dw uniform within |dq| <= 1.75e-3 and
 |dw| <= 1.75e-4 rad/s. On a turn about y the noise on q2 gives an angle error of about

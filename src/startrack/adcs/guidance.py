@@ -1,4 +1,4 @@
-"""Receding-horizon replanning (seed 001 ch. 5: a new path every 5 s from the current state).
+"""Receding-horizon replanning (Sease 2013 ch. 5: a new path every 5 s from the current state).
 
 At a new target, a path of ``tf_s`` (seed: 10 s) is planned from the estimated state; every
 ``replan_period_s`` (seed: 5 s) a new one starts from the estimate again. Two readings of the

@@ -1,6 +1,6 @@
 """Legendre-Gauss-Lobatto (LGL) nodes, quadrature weights and differentiation matrix.
 
-The pseudo-spectral discretisation of seed 001 ch. 5 eq. 5.8 (notes ``seed-001-004.md`` §1.24):
+The pseudo-spectral discretisation of Sease 2013 ch. 5 eq. 5.8 (Sease 2013 Chapter 5):
 N nodes on [-1, 1] made of the two ends and the N - 2 roots of P'_{N-1}, the derivative of the
 Legendre polynomial of degree N - 1. Standard results (Canuto, Hussaini, Quarteroni & Zang,
 *Spectral Methods*, 2006, §2.3; Fahroo & Ross 2002, J. Guid. Control Dyn. 25(1), 160):

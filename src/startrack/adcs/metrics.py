@@ -1,4 +1,4 @@
-"""Step-response metrics of a run, per step and overall (seed 001 Table 5.3's quantities).
+"""Step-response metrics of a run, per step and overall (Sease 2013 Table 5.3's quantities).
 
 For step k, over its window [t_k, t_k + period) and on the **true** angle theta about y, with
 ``delta = theta_target - theta(t_k)``:
@@ -29,9 +29,9 @@ from .loop import RunRecord
 METRIC_KEYS = ("steady_state_error_deg", "overshoot_pct", "rise_time_s", "settling_time_s", "avg_power_w",
                "peak_power_w")
 SEED_TABLE_5_3 = {"steady_state_error_deg": 4.5, "overshoot_pct": 20.0, "rise_time_s": 8.0, "settling_time_s": 30.0}
-"""Seed 001 Table 5.3: upper bounds from the hardware run."""
+"""Sease 2013 Table 5.3: upper bounds from the hardware run."""
 SEED_POWER_W = {"avg_power_w": 0.10, "peak_power_w": 0.5, "pid_avg_power_w": 0.15, "adaptive_avg_power_w": 0.66}
-"""Seed 001 p. 75: the hardware run's power (about 0.10 W average, 0.5 W peak) and the PID and
+"""Sease 2013 p. 75: the hardware run's power (about 0.10 W average, 0.5 W peak) and the PID and
 adaptive controllers' averages on the same test bed."""
 
 

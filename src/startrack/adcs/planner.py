@@ -1,5 +1,5 @@
-"""Minimum-energy slew planning by virtual motion camouflage on an LGL grid (seed 001 ch. 5,
-eq. 5.1-5.15 and 5.35-5.38; notes ``seed-001-004.md`` §1.24, §3.4).
+"""Minimum-energy slew planning by virtual motion camouflage on an LGL grid (Sease 2013 ch. 5,
+eq. 5.1-5.15 and 5.35-5.38; Sease 2013 Chapter 5).
 
 Minimise the coil energy ``1/2 int I^2 R dt`` of a single-axis slew from (q2, w) at t0 to
 (q2, w) at t0 + tf, with ``I = J22 w' / (n A |B| (1 - 2 q2^2))`` (eq. 5.6), under

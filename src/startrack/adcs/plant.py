@@ -1,6 +1,6 @@
 """The plant: a rigid cube turned by magnetic torque coils, integrated with scipy.
 
-* :class:`SingleAxisPlant` (seed 001 ch. 5, eq. 5.2-5.6): rotation by theta about y, one coil
+* :class:`SingleAxisPlant` (Sease 2013 ch. 5, eq. 5.2-5.6): rotation by theta about y, one coil
   with its normal on body +z, the test bed's field along reference +x, so
   ``J22 theta'' = n A |B| I (1 - 2 q2^2)`` with ``q2 = sin(theta / 2)``.
 * :class:`ThreeAxisPlant`: Euler's equations ``J w' = T - w x J w`` with three coils on body
@@ -93,7 +93,7 @@ def _rotate_inverse(q: Sequence[float], v: Sequence[float]) -> tuple[float, floa
 
 
 class SingleAxisPlant:
-    """Rotation about y with one coil (seed 001 eq. 5.6); state theta (rad) and omega (rad/s).
+    """Rotation about y with one coil (Sease 2013 eq. 5.6); state theta (rad) and omega (rad/s).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""The seed's run (seed 001 ch. 5, Fig. 5.7-5.11): seven steps of +0.1 in q2, one every 100 s.
+"""The seed's run (Sease 2013 ch. 5, Fig. 5.7-5.11): seven steps of +0.1 in q2, one every 100 s.
 
 From rest at q2 = -0.3, the target becomes -0.2 at t = 0, -0.1 at 100 s, ... and 0.4 at 600 s:
 seven steps from -0.3 to 0.4 over 700 s, as in the seed's hardware run ("7 attitude maneuvers

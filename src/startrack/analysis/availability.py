@@ -1,5 +1,5 @@
-"""Star availability: how many catalog stars a camera sees over random pointings (seed 002 §5.1,
-Fig. 5-1 and Table 5-1; seed 000 §5.1, Table 5.1).
+"""Star availability: how many catalog stars a camera sees over random pointings (Jacobs 1995 §5.1,
+Fig. 5-1 and Table 5-1; Huffman 2006 §5.1, Table 5.1).
 
 Boresights and rolls are uniformly random over SO(3); a star counts when it projects inside the
 image (the real rectangular field, through the camera model), not merely inside a cone.
@@ -68,7 +68,7 @@ def star_counts(camera: Camera, max_mag: float, n_pointings: int, rng: np.random
     max_mag : float
         Catalog limit (estimated Johnson V, see :mod:`startrack.catalog`).
     n_pointings : int
-        Random attitudes (uniform over SO(3)); seed 002 used 10^6.
+        Random attitudes (uniform over SO(3)); Jacobs 1995 used 10^6.
     rng : Generator, int or None
     progress : callable(done, total), optional
     """

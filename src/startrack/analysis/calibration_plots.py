@@ -1,5 +1,5 @@
 """Pictures of a calibration: residual maps, residual against radius, distortion field, and the
-fixed-mount repeatability errors over time (seed 003 Ch. 9 and App. C).
+fixed-mount repeatability errors over time (Fowler 2013 Ch. 9 and App. C).
 
 Plotting only: the numbers come from :mod:`startrack.calibrate`.
 """
@@ -30,7 +30,7 @@ def _save(fig: Figure, path: str | os.PathLike) -> None:
 def plot_residuals(x: np.ndarray, y: np.ndarray, residuals_px: np.ndarray, camera: Camera,
                    path: str | os.PathLike, *, scale: float = 200.0, title: str = "") -> None:
     """Residual vectors on the image (magnified ``scale`` times) and residual distance against the
-    distance from the principal point with a 2nd-order fit (seed 003 §VIII.C: an even-order trend
+    distance from the principal point with a 2nd-order fit (Fowler 2013 §VIII.C: an even-order trend
     means radial distortion is left)."""
     fig = new_figure(figsize=(12, 5), dpi=100)
     ax_map, ax_rad = fig.subplots(1, 2)

@@ -59,7 +59,7 @@ def _title(solution: AttitudeSolution) -> str:
 
 
 def plot_star_counts(availability, path: str | os.PathLike, *, title: str = "") -> None:
-    """Save a histogram of stars in the field over random pointings (seed 002 Fig. 5-1)."""
+    """Save a histogram of stars in the field over random pointings (Jacobs 1995 Fig. 5-1)."""
     hist = availability.histogram
     fig = new_figure(figsize=(7, 4), dpi=110)
     ax = fig.subplots()

@@ -1,8 +1,8 @@
 """What the post-processing analyses read: one :class:`ImageRecord` per processed image.
 
 A *result set* is a sequence of records: the images of one folder, one batch of the browser tool
-(``startrack.web``), or one campaign's re-runs. The analyses of seed 003 ch. 8 (notes
-``seed-003.md`` §1.11) take result sets and give figures with the numbers behind them.
+(``startrack.web``), or one campaign's re-runs. The analyses of Fowler 2013 ch. 8 take result sets
+and give figures with the numbers behind them.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
-"""Observation opportunities of an RSO from a spinning camera in orbit (seed 001 Tables 4.3-4.4).
+"""Observation opportunities of an RSO from a spinning camera in orbit (Sease 2013 Tables 4.3-4.4).
 
-Seed 001's 10-orbit simulation (notes ``seed-001-004.md`` §3.2): the camera's spacecraft and
+Sease 2013's 10-orbit simulation (Sease 2013 Chapter 4): the camera's spacecraft and
 the RSO fly the Keplerian orbits of Table 4.3 (two-body + J2, :class:`startrack.simulate.Orbit`);
 the camera turns at a constant rate about its focal-plane y axis (0.05 rad/s) from the identity
 attitude (quaternion [0 0 0 1]: camera axes = GCRS axes at the epoch), and "images were only

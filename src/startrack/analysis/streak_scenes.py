@@ -1,11 +1,11 @@
-"""Streaked and smeared frames with known truth, for the seed 001 and seed 004 campaigns.
+"""Streaked and smeared frames with known truth, for the Sease 2013 and Samaan 2002 campaigns.
 
 A thin set-up around :func:`startrack.simulate.render_stars` (its sub-step streaks, noise chain
 and truth; ``docs/simulation.md``): stars are placed where their whole path stays in the image
 (:func:`star_field`, and apart from each other with :func:`separated_field`), given the
 electrons asked for through the sensor's zero point, and rendered at a constant camera-frame
 rate. An RSO comes from a :class:`startrack.simulate.Snapshot` taken at mid-exposure: a real
-orbital scene (:mod:`startrack.analysis.rso_passes`, seed 001 Table 4.3) or
+orbital scene (:mod:`startrack.analysis.rso_passes`, Sease 2013 Table 4.3) or
 :func:`turning_rso_snapshot`, a satellite 200 km from the observer whose line of sight turns
 across the sky at a chosen angular rate. Noise: Poisson shot noise on signal + a flat sky,
 Gaussian read noise, no quantisation (float images), no bias, no full well.

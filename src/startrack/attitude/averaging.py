@@ -1,6 +1,6 @@
 """Averaging attitudes: Markley's eigenvector method.
 
-Seed 003 §7 eqs. 7.12-7.13 (notes seed-003 §1.8 item 4; Markley, Cheng, Crassidis and Oshman
+Fowler 2013 §7 eqs. 7.12-7.13 (Fowler 2013 Ch.7; Markley, Cheng, Crassidis and Oshman
 2007). The weighted average of unit quaternions q_k is the unit eigenvector of
 
     M = sum_k w_k q_k q_k^T           (4 x 4)
@@ -57,7 +57,7 @@ def average_quaternions(quaternions: ArrayLike, weights: ArrayLike | None = None
 
 
 def average_rotations(rotations: Rotation, weights: ArrayLike | None = None) -> Rotation:
-    """Markley average of a stack of K rotations (a single Rotation), seed 003 eq. 7.13."""
+    """Markley average of a stack of K rotations (a single Rotation), Fowler 2013 eq. 7.13."""
     quat = rotations.as_quat()
     if quat.ndim != 2:
         raise InvalidInputError("rotations must be a stack of rotations, not a single one")

@@ -1,6 +1,6 @@
 """QUEST measurement-model covariance of an attitude estimate.
 
-Seed 000 §6.1.3 eq. 6.36 (notes §1.26). Each observed unit vector w_i is modelled as the true
+Huffman 2006 §6.1.3 eq. 6.36. Each observed unit vector w_i is modelled as the true
 direction plus isotropic small-angle noise perpendicular to it, with per-axis standard deviation
 sigma_i (radians); the optimal weights are ``a_i = sigma_tot^2 / sigma_i^2`` with
 ``1 / sigma_tot^2 = sum_i 1 / sigma_i^2``. The covariance of the small-angle attitude error is
@@ -53,7 +53,7 @@ def attitude_covariance(observed: ArrayLike, sigma_rad: ArrayLike) -> NDArray[np
     Returns
     -------
     ndarray, shape (3, 3) or (M, 3, 3)
-        ``P = sigma_tot^2 [I - sum_i a_i w_i w_i^T]^-1`` (seed 000 eq. 6.36 times 4, see the
+        ``P = sigma_tot^2 [I - sum_i a_i w_i w_i^T]^-1`` (Huffman 2006 eq. 6.36 times 4, see the
         module docstring), the covariance of ``(truth * estimate.inv()).as_rotvec()``. All NaN
         for a problem with fewer than two non-parallel vectors.
 
@@ -87,7 +87,7 @@ def roll_cross_boresight(
     -------
     sigma_roll_rad, sigma_cross_rad : ndarray, shape (...)
         ``sqrt(u^T P u)`` for the boresight u, and the rms of the two cross-boresight sigmas,
-        ``sqrt((tr P - u^T P u) / 2)``. Seed 000 §7.2 (notes §1.30): for a narrow field the roll
+        ``sqrt((tr P - u^T P u) / 2)``. Huffman 2006 §7.2: for a narrow field the roll
         sigma is about ``f / d`` times the cross-boresight one (d the star spread in pixels).
     """
     cov = np.asarray(covariance_rad2, dtype=float)
@@ -110,8 +110,8 @@ def roll_cross_boresight_error(
 
     The error rotation ``truth * estimate.inv()`` acts on camera vectors; its rotation vector's
     z component is the roll error and the length of its (x, y) part the pointing error (the
-    angle between the true and estimated boresights, to first order). Seed 003 §7.III.B (notes
-    §1.9, "pointing and boresight-roll components", whose formula the seed does not give).
+    angle between the true and estimated boresights, to first order). Fowler 2013 Ch. 7 §III.B
+    ("pointing and boresight-roll components", whose formula the seed does not give).
     """
     error = (truth * estimate.inv()).as_rotvec()
     return np.abs(error[..., 2]), np.hypot(error[..., 0], error[..., 1])

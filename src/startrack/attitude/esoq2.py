@@ -1,7 +1,7 @@
 """Mortari's ESOQ2 (second EStimator of the Optimal Quaternion) for Wahba's problem.
 
-Seed 001 §3 eq. 3.23 (notes seed-001-004 §1.19, the solver Sease uses at both streak ends) and
-seed 004 step 5 (Mortari 1997). Writing the optimal quaternion as ``q = (e sin(phi/2),
+Sease 2013 §3 eq. 3.23 (Sease 2013 Eq. 3.22–3.23, the solver Sease uses at both streak ends) and
+Samaan 2002 step 5 (Mortari 2000). Writing the optimal quaternion as ``q = (e sin(phi/2),
 cos(phi/2))`` (rotation axis e, angle phi), the eigen-equation ``(K - lam I) q = 0`` of
 Davenport's K (:mod:`.wahba`, active convention) splits into
 

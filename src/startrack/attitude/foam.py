@@ -1,6 +1,6 @@
 """Markley's FOAM (Fast Optimal Attitude Matrix) for Wahba's problem.
 
-Seed 000 §6.1.5 eqs. 6.54-6.58 (notes §1.28; Markley 1993). Without a decomposition of B:
+Huffman 2006 §6.1.5 eqs. 6.54-6.58 (Markley 1993). Without a decomposition of B:
 
     R = [(kappa + |B|^2) B + lam adj(B^T) - B B^T B] / zeta
     kappa = (lam^2 - |B|^2) / 2,   zeta = kappa lam - det B
@@ -14,7 +14,7 @@ one; the iteration falls monotonically onto the root). FOAM has no 180-degree si
 QUEST it loses digits when the two largest eigenvalues of Davenport's K are close (a narrow
 field, two close stars), so the residual problem is solved again (:mod:`._refine`).
 
-Covariance (notes §1.28, standard form): ``P = sigma_tot^2 (kappa I + B B^T) / zeta`` (camera
+Covariance (Huffman 2006 §6.1.5, standard form): ``P = sigma_tot^2 (kappa I + B B^T) / zeta`` (camera
 frame, rad^2) with B built from the normalised weights ``sigma_tot^2 / sigma_i^2``; it equals the
 SVD covariance exactly.
 """

@@ -1,7 +1,7 @@
 """The mounting rotation between the camera and the spacecraft body.
 
-Seed 002 §1.3 (notes §1.1.6, star sensor -> body) and seed 001 eq. 3.27 (notes seed-001-004
-§1.20, whose ``R_cam^T [a x]`` is not a frame change: a vector turns as ``v_body = C v_cam``,
+Jacobs 1995 §1.3 (star sensor -> body) and Sease 2013 eq. 3.27 (Sease 2013 eqs. 3.24-3.27,
+whose ``R_cam^T [a x]`` is not a frame change: a vector turns as ``v_body = C v_cam``,
 a skew matrix as ``C [a x] C^T``). The mounting is ``rot_cam_from_body`` (constant), so
 
     rot_body_from_icrs = rot_cam_from_body.inv() * rot_cam_from_icrs
@@ -9,7 +9,7 @@ a skew matrix as ``C [a x] C^T``). The mounting is ``rot_cam_from_body`` (consta
     P_body = C^T P_cam C,    C = rot_cam_from_body.as_matrix()
 
 and it can be estimated from simultaneous camera and body attitudes (e.g. a gyro-propagated
-body attitude, or a fixed mount on the ground as in seed 003 eq. 7.18) as the Markley average of
+body attitude, or a fixed mount on the ground as in Fowler 2013 eq. 7.18) as the Markley average of
 ``rot_cam_from_icrs_k * rot_body_from_icrs_k.inv()``.
 """
 

@@ -1,6 +1,6 @@
 """OLAE, the Optimal Linear Attitude Estimator (Mortari, Markley and Singla 2007).
 
-Seed 001 ch. 4 eqs. 4.1-4.7 (notes seed-001-004 §1.21). With the sums and differences of each
+Sease 2013 ch. 4 eqs. 4.1-4.7 (Sease 2013 Ch.4 Eq. 4.1–4.10). With the sums and differences of each
 pair, ``s_i = b_i + r_i`` and ``d_i = b_i - r_i``, the Cayley form of a rotation with Gibbs
 (Rodrigues) vector g is exactly ``d_i = g x s_i``, linear in g. OLAE solves it in the
 least-squares sense,
@@ -10,8 +10,8 @@ least-squares sense,
 and returns ``q ~ (g, 1)``. The residuals ``e_i = |d_i + [s_i x] g|`` (eq. 4.7) flag the pairs
 that do not move with the rest (the RSO indicator of :mod:`startrack.rate.rso`).
 
-Seed 001 writes the system with factors of 1/2 that cancel; its eq. 4.8 (the attitude matrix)
-has sign typos, so the quaternion goes to scipy directly (notes §7 item 13).
+Sease 2013 writes the system with factors of 1/2 that cancel; its eq. 4.8 (the attitude matrix)
+has sign typos, so the quaternion goes to scipy directly (Sease 2013).
 
 As a Wahba solver: OLAE's loss is not Wahba's, so one solve is near-optimal only for small
 rotations; and g is infinite at 180 degrees. Here the first solve is done in whichever of the
@@ -62,7 +62,7 @@ def olae_gibbs(
 def olae_residuals(
     observed: NDArray[np.float64], reference: NDArray[np.float64], gibbs: NDArray[np.float64]
 ) -> NDArray[np.float64]:
-    """Per-pair residual norms ``|d_i + s_i x g|`` (..., N) of seed 001 eq. 4.7 (unitless)."""
+    """Per-pair residual norms ``|d_i + s_i x g|`` (..., N) of Sease 2013 eq. 4.7 (unitless)."""
     s = observed + reference
     d = observed - reference
     return np.linalg.norm(d + cross(s, gibbs[..., None, :]), axis=-1)

@@ -1,6 +1,6 @@
-"""Predictive attitude determination (Crassidis and Markley), seed 000 §6.1.2.
+"""Predictive attitude determination (Crassidis and Markley), Huffman 2006 §6.1.2.
 
-Seed 000 eqs. 6.9-6.17 (notes §1.29). A predicted attitude A (camera from reference) is
+Huffman 2006 eqs. 6.9-6.17. A predicted attitude A (camera from reference) is
 corrected by the small rotation phi that best explains the measured vectors:
 
     b_i ~ exp([phi x]) A r_i ~ p_i - [p_i x] phi,    p_i = A r_i
@@ -108,7 +108,7 @@ pad = wahba_solver(
 
 @dataclass(frozen=True)
 class PredictiveUpdate:
-    """One step of predictive attitude determination (seed 000 §6.1.2).
+    """One step of predictive attitude determination (Huffman 2006 §6.1.2).
 
     Attributes
     ----------

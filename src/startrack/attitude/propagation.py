@@ -7,12 +7,12 @@ turns with angular velocity omega (rad/s) relative to ICRS. With omega in camera
     dA/dt = -[omega x] A,        A(t + dt) = exp(-[omega x] dt) A(t)    (constant omega)
 
 and with omega in ICRS components (an inertially fixed axis, e.g. the Earth's spin for a camera
-on the ground, seed 003 eq. 7.14) ``A(t + dt) = A(t) exp(-[omega_icrs x] dt)``. The closed
-form is exact for a constant omega (seed 001 eq. 2.12, notes seed-001-004 §1.8: the quaternion
+on the ground, Fowler 2013 eq. 7.14) ``A(t + dt) = A(t) exp(-[omega_icrs x] dt)``. The closed
+form is exact for a constant omega (Sease 2013 eq. 2.12: the quaternion
 kinematics ``dq/dt = 1/2 Omega(omega) q`` integrated exactly; :func:`quaternion_derivative` is
 that equation in scipy's scalar-last active quaternions, for tests and integrators).
 
-Relative attitude (seed 000 §7.2, notes §1.30): ``rot_j = delta_ij * rot_i`` with
+Relative attitude (Huffman 2006 §7.2): ``rot_j = delta_ij * rot_i`` with
 ``delta_ij = rot_cam_j_from_cam_i``; an error e_i (rad, camera frame i) becomes ``delta_ij e_i``
 in frame j and adds to the error of delta_ij, so covariances add,
 ``P_j = delta_ij P_i delta_ij^T + P_ij``, and the angle error grows in quadrature
@@ -85,8 +85,8 @@ def propagate_steps(
 def quaternion_derivative(quat: ArrayLike, omega_rad_s: ArrayLike) -> NDArray[np.float64]:
     """dq/dt (..., 4) of the scalar-last quaternion of ``rot_cam_from_icrs`` (camera-frame omega).
 
-    ``dq/dt = 1/2 (-omega, 0) (x) q`` (Hamilton product), the kinematics of seed 001 eq. 2.12 /
-    seed 003 eq. A.12 rewritten for active rotations with ``dA/dt = -[omega x] A``.
+    ``dq/dt = 1/2 (-omega, 0) (x) q`` (Hamilton product), the kinematics of Sease 2013 eq. 2.12 /
+    Fowler 2013 eq. A.12 rewritten for active rotations with ``dA/dt = -[omega x] A``.
     """
     q = np.asarray(quat, dtype=float)
     omega = _omega(omega_rad_s)

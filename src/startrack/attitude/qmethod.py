@@ -1,6 +1,6 @@
 """Davenport's q-method for Wahba's problem.
 
-Seed 000 §6.1.3 (notes §1.25) and seed 003 §7 eqs. 7.4-7.10: the optimal quaternion maximises
+Huffman 2006 §6.1.3 and Fowler 2013 §7 eqs. 7.4-7.10: the optimal quaternion maximises
 the gain ``q^T K q`` on the unit sphere, so it is the eigenvector of Davenport's matrix K for its
 largest eigenvalue. K is symmetric, and ``numpy.linalg.eigh`` solves a whole batch at once. It
 is the most robust of the solvers (no characteristic polynomial, no singularity at 180 degrees)

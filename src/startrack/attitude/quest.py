@@ -1,6 +1,6 @@
 """Shuster's QUEST (QUaternion ESTimator) for Wahba's problem.
 
-Seed 000 §6.1.3 eqs. 6.30-6.35 (notes §1.26) and seed 003 §7 (notes §1.8, Shuster's
+Huffman 2006 §6.1.3 eqs. 6.30-6.35 and Fowler 2013 §7 (Fowler 2013 Ch.7, Shuster's
 coefficients). With ``sigma = tr B``, ``S = B + B^T``, ``kappa = tr adj S``, ``Delta = det S``
 and z (active sign, see :mod:`.wahba`), the largest eigenvalue of Davenport's K is the largest
 root of
@@ -80,7 +80,7 @@ def largest_eigenvalue(
 
     Takes ``sigma = tr B`` (M,), ``S`` (M, 3, 3), z (M, 3), ``kappa = tr adj S`` and
     ``Delta = det S`` (M,). Starting above the largest root, the iteration decreases
-    monotonically onto it (seed 000 §6.1.3; Shuster's Newton-Raphson).
+    monotonically onto it (Huffman 2006 §6.1.3; Shuster's Newton-Raphson).
     """
     ab, c, const = _polynomial(sigma, s, z, kappa, delta)
     lam = np.ones_like(sigma)

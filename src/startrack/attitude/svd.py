@@ -1,6 +1,6 @@
 """Markley's SVD method for Wahba's problem.
 
-Seed 000 §6.1.4 eqs. 6.37-6.53 (notes §1.27; Markley 1988). With the profile matrix
+Huffman 2006 §6.1.4 eqs. 6.37-6.53 (Markley 1988). With the profile matrix
 ``B = sum_i w_i b_i r_i^T = U diag(s1, s2, s3) V^T`` (s1 >= s2 >= s3 >= 0) and
 ``d = det U det V``, the optimum is
 
@@ -9,7 +9,7 @@ Seed 000 §6.1.4 eqs. 6.37-6.53 (notes §1.27; Markley 1988). With the profile m
 exact for any rotation angle and for rank-2 B (two vectors). ``numpy.linalg.svd`` decomposes a
 whole batch at once.
 
-Covariance (notes §1.27, the body-frame form): with ``U+ = U diag(1, 1, det U)``,
+Covariance (Huffman 2006 §6.1.4, the body-frame form): with ``U+ = U diag(1, 1, det U)``,
 
     P = sigma_tot^2 U+ diag(1 / (s2 + d s3), 1 / (d s3 + s1), 1 / (s1 + s2)) U+^T
 

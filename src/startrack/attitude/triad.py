@@ -1,6 +1,6 @@
 """TRIAD: the attitude from two vector pairs.
 
-Seed 002 §4.1.6.1 (notes §1.11.5, Shuster and Oh 1981) and seed 003 eqs. 7.1-7.3 (notes §1.8).
+Jacobs 1995 §4.1.6.1 (Shuster and Oh 1981) and Fowler 2013 eqs. 7.1-7.3 (Fowler 2013 Ch.7).
 Two orthonormal triads are built, one from the observed pair and one from the reference pair,
 
     t1 = v1,   t2 = v1 x v2 / |v1 x v2|,   t3 = t1 x t2

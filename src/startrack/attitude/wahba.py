@@ -1,6 +1,6 @@
 """Wahba's problem: shared pieces of every solver and the ``solve_wahba`` dispatcher.
 
-Wahba's problem (seed 000 §6.1.1 eq. 6.8, notes §1.24): find the rotation R minimising
+Wahba's problem (Huffman 2006 §6.1.1 eq. 6.8): find the rotation R minimising
 
     L(R) = 1/2 sum_i w_i |b_i - R r_i|^2
 
@@ -8,7 +8,7 @@ for observed (camera / body frame) unit vectors b_i and reference (e.g. ICRS cat
 vectors r_i. R is returned as a ``scipy.spatial.transform.Rotation`` that maps reference vectors
 onto observed ones, ``R.apply(r_i) ~ b_i``; with ICRS references it is ``rot_cam_from_icrs``.
 
-Quaternion convention (notes §1.32): scipy's scalar-last, active (Hamilton) quaternions
+Quaternion convention (Huffman 2006 Appendix A): scipy's scalar-last, active (Hamilton) quaternions
 ``q = (x, y, z, w)``. Shuster's Davenport matrix pairs with the *passive* attitude matrix
 A(q) = R(q)^T; written for the active convention the only change is the sign of z, which here is
 ``z = sum_i w_i (r_i x b_i)`` (Shuster's is ``sum_i w_i (b_i x r_i)``). With that z the top
@@ -109,7 +109,7 @@ def attitude_profile_matrix(
 ) -> NDArray[np.float64]:
     """Attitude profile matrix ``B = sum_i w_i b_i r_i^T``, shape (..., 3, 3).
 
-    Inputs are ``observed`` and ``reference`` (..., N, 3) and ``weights`` (..., N) (seed 000
+    Inputs are ``observed`` and ``reference`` (..., N, 3) and ``weights`` (..., N) (Huffman 2006
     §6.1.4 eq. 6.38). Wahba's problem is equivalent to maximising ``tr(R B^T)``.
     """
     return np.swapaxes(observed * weights[..., None], -1, -2) @ reference
@@ -137,7 +137,7 @@ def davenport_parts(
 def davenport_matrix(profile: NDArray[np.float64]) -> NDArray[np.float64]:
     """Davenport's symmetric K (..., 4, 4), scalar last, from B (..., 3, 3).
 
-    ``K = [[S - sigma I, z], [z^T, sigma]]`` (seed 000 §6.1.3, notes §1.25) with the
+    ``K = [[S - sigma I, z], [z^T, sigma]]`` (Huffman 2006 §6.1.3) with the
     active-convention z of :func:`davenport_parts`. ``q^T K q = tr(R(q) B^T)`` for a unit
     scipy quaternion q, so the eigenvector of the largest eigenvalue is the optimal attitude and
     that eigenvalue is ``sum(w) - loss``.
@@ -155,7 +155,7 @@ def davenport_matrix(profile: NDArray[np.float64]) -> NDArray[np.float64]:
 def weights_from_sigma(sigma_rad: ArrayLike) -> NDArray[np.float64]:
     """Inverse-variance weights ``1 / sigma_i^2`` (rad^-2) from per-vector 1-sigma errors (rad).
 
-    The seed's normalised weights ``a_i = sigma_tot^2 / sigma_i^2`` (notes §1.26) differ only by a
+    The seed's normalised weights ``a_i = sigma_tot^2 / sigma_i^2`` (Huffman 2006 §6.1.3) differ only by a
     common factor, which does not change the solution; these keep the loss equal to half the
     chi-square.
     """
@@ -208,14 +208,14 @@ def _solve_ok(core: SolverCore, obs, ref, w, ok) -> NDArray[np.float64]:
 def quest_covariance_core(
     observed: Vectors, reference: Vectors, weights: NDArray[np.float64], sigma_rad: NDArray[np.float64]
 ) -> NDArray[np.float64]:
-    """The default covariance core: the QUEST covariance of the observed vectors (seed 000 eq. 6.36)."""
+    """The default covariance core: the QUEST covariance of the observed vectors (Huffman 2006 eq. 6.36)."""
     return covariance_batch(observed, sigma_rad)
 
 
 def sigma_weighted_profile(observed: Vectors, reference: Vectors, sigma_rad: NDArray[np.float64]
                            ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """``sigma_tot^2`` (M,) and the attitude profile matrix B (M, 3, 3) with weights 1 / sigma^2
-    (normalised), the two pieces every closed-form covariance starts from (seed 000 §6.1.4)."""
+    (normalised), the two pieces every closed-form covariance starts from (Huffman 2006 §6.1.4)."""
     inv_var = 1.0 / sigma_rad**2
     profile = attitude_profile_matrix(observed, reference, normalised_weights(inv_var))
     return 1.0 / inv_var.sum(axis=-1), profile

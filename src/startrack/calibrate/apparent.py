@@ -10,7 +10,7 @@ Circular 179):
    :mod:`.deflection`);
 4. **aberration** from the observer's barycentric velocity: the Earth's orbital motion (annual
    aberration, up to 20.5 arcsec) plus, for a spacecraft, its velocity about the Earth (orbital
-   aberration, up to 5.1 arcsec in low orbit; seed 002 §7.5, notes ``seed-002.md`` §1.15 with the
+   aberration, up to 5.1 arcsec in low orbit; Jacobs 1995 §7.5, Jacobs 1995 Ch. 7 with the
    erratum: shift *towards* the velocity, ``ref' = normalize(ref + v / c)`` to first order; here the
    exact Lorentz form);
 5. optionally **precession-nutation** to the true equator and equinox of date (IAU 2006/2000A,
@@ -70,7 +70,7 @@ class ObserverState:
 
 @dataclass(frozen=True)
 class CircularOrbit:
-    """A circular Earth orbit, to give a spacecraft's velocity at any time (seed 002 §1.4 / §7.5).
+    """A circular Earth orbit, to give a spacecraft's velocity at any time (Jacobs 1995 §1.4 / §7.5).
 
     Parameters
     ----------
@@ -203,7 +203,7 @@ def aberrate(vectors: ArrayLike, velocity_m_s: ArrayLike) -> NDArray[np.float64]
         p' = (g^-1 p + (1 + d / (1 + g^-1)) beta) / (1 + d)
 
     The star moves towards the velocity by ``asin(beta sin a)`` to first order, ``a`` the angle
-    from the velocity (seed 002 §7.5 with its erratum fixed: towards ``v``, not away).
+    from the velocity (Jacobs 1995 §7.5 with its erratum fixed: towards ``v``, not away).
     """
     p = np.asarray(vectors, dtype=float)
     beta = _vector3(velocity_m_s, "velocity_m_s") / SPEED_OF_LIGHT_M_S
@@ -216,7 +216,7 @@ def aberrate(vectors: ArrayLike, velocity_m_s: ArrayLike) -> NDArray[np.float64]
 def aberration_angle_rad(speed_m_s: float, angle_from_velocity_rad: float = math.pi / 2) -> float:
     """Size of the aberration shift for a star ``angle_from_velocity_rad`` from the velocity.
 
-    seed 002 §7.5 (notes §2.6): 29.785 km/s gives 20.5 arcsec, 7.4 km/s gives 5.1 arcsec at 90 deg.
+    Jacobs 1995 §7.5 (Jacobs 1995 §7.5.1): 29.785 km/s gives 20.5 arcsec, 7.4 km/s gives 5.1 arcsec at 90 deg.
     """
     p = np.array([[math.cos(angle_from_velocity_rad), math.sin(angle_from_velocity_rad), 0.0]])
     q = aberrate(p, [speed_m_s, 0.0, 0.0])

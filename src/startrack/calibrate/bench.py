@@ -1,9 +1,9 @@
-"""Calibration on the bench: checkerboard images -> intrinsics and distortion (seed 003 Ch. 4).
+"""Calibration on the bench: checkerboard images -> intrinsics and distortion (Fowler 2013 Ch. 4).
 
-Seed 003 calibrated with Bouguet's toolbox (Zhang's method; notes ``seed-003.md`` §1.5); OpenCV's
+Fowler 2013 calibrated with Bouguet's toolbox (Zhang's method; Fowler 2013 Ch.4 §II.C and §IV); OpenCV's
 ``calibrateCamera`` is the same method and the same Brown-Conrady model as our
 :class:`~startrack.camera.Camera` (OpenCV order k1, k2, p1, p2, k3; pixel centres 0-based like
-ours). On top of it, seed 003's practice:
+ours). On top of it, Fowler 2013's practice:
 
 1. **outlier images**: a view whose RMS reprojection error lies beyond the main cluster (median +
    ``reject_sigma`` robust sigmas) is dropped and the calibration repeated;

@@ -1,5 +1,5 @@
 """Flags for what can spoil a frame: variable stars among the matches, and the Sun, Moon and bright
-planets near the field (seed 002 §7.4 and §7.6: variables act as false or missing stars; a bright
+planets near the field (Jacobs 1995 §7.4 and §7.6: variables act as false or missing stars; a bright
 body within the baffle's exclusion angle, 28 deg for Sunsat, floods the image).
 
 The ephemerides are astropy's built-in ones (ERFA's ``epv00`` / ``plan94`` and a lunar series;
@@ -24,7 +24,7 @@ from ..frames import angle_between, boresight, radec_to_vector
 
 BRIGHT_BODIES = ("sun", "moon", "mercury", "venus", "mars", "jupiter", "saturn")
 SUNSAT_EXCLUSION_DEG = 28.1
-"""seed 002 §7.6: the smallest off-axis angle at which direct light reaches the lens past the baffle."""
+"""Jacobs 1995 §7.6: the smallest off-axis angle at which direct light reaches the lens past the baffle."""
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,5 @@
 """Photos taken from the ground: when (EXIF / FITS headers), where (a :class:`~.sites.Site`), where the
-camera pointed in altitude / azimuth, and the atmosphere (seed 003 Ch. 2 and 5).
+camera pointed in altitude / azimuth, and the atmosphere (Fowler 2013 Ch. 2 and 5).
 
 The horizon frame is east, north, up (ENU). ``rotation_enu_from_icrs`` is the IAU 2006/2000A
 celestial-to-terrestrial rotation (``erfa.c2t06a``: precession-nutation, Earth rotation angle from
@@ -151,7 +151,7 @@ def pointing_altaz(rot_cam_from_icrs: Rotation, time: Time, site: Site, *,
 
 
 def rotation_cam_from_enu(rot_cam_from_icrs: Rotation, time: Time, site: Site) -> Rotation:
-    """The camera attitude relative to the local horizon (seed 003 eq. 7.17's camera -> ENU)."""
+    """The camera attitude relative to the local horizon (Fowler 2013 eq. 7.17's camera -> ENU)."""
     return rot_cam_from_icrs * rotation_enu_from_icrs(time, site).inv()
 
 
@@ -164,6 +164,6 @@ def refract_icrs(vectors_icrs: ArrayLike, time: Time, site: Site) -> NDArray[np.
 
 def unrefract_icrs(vectors_icrs: ArrayLike, time: Time, site: Site) -> NDArray[np.float64]:
     """Observed directions (N, 3, on ICRS axes through a preliminary attitude) -> refraction
-    removed (lowered towards the horizon; seed 003 §1.6 with the sign erratum fixed)."""
+    removed (lowered towards the horizon; Fowler 2013 Ch.5 with the sign erratum fixed)."""
     rot = rotation_enu_from_icrs(time, site)
     return rot.inv().apply(refraction.unrefract(rot.apply(vectors_icrs), site.temperature_c, site.pressure))

@@ -1,5 +1,5 @@
 """Solving a photo taken from the ground: where the camera pointed in RA / Dec and in altitude /
-azimuth, with the atmosphere taken into account (seed 003 Ch. 2 and 5; issue 7 item 4).
+azimuth, with the atmosphere taken into account (Fowler 2013 Ch. 2 and 5; issue 7 item 4).
 
 1. The time comes from the image header (EXIF ``DateTimeOriginal`` or FITS ``DATE-OBS``,
    :func:`.ground.time_from_header`) unless given.

@@ -3,13 +3,13 @@
 A model turns a vector of intrinsic parameters into per-star residuals in pixels, given the
 camera-frame directions of the catalog stars and the measured positions. Every parameter is written
 as an *offset from its null value* (principal point from the initial one, distortion from zero,
-pixel aspect as ln(fy / fx) from the initial ratio), so that seed 003's pruning rule ("fix a
-coefficient to zero when its 3-sigma uncertainty exceeds it", notes ``seed-003.md`` §1.5) applies
+pixel aspect as ln(fy / fx) from the initial ratio), so that Fowler 2013's pruning rule ("fix a
+coefficient to zero when its 3-sigma uncertainty exceeds it", Fowler 2013 Ch.4 §II.C and §IV) applies
 to every parameter but the focal length.
 
-- :class:`BrownConradyModel`: the :class:`startrack.camera.Camera` model (OpenCV form; seed 003
+- :class:`BrownConradyModel`: the :class:`startrack.camera.Camera` model (OpenCV form; Fowler 2013
   §4.2); residual = projected catalog star - measured position.
-- The tilted-CCD + cubic radial model of seed 002 is in :mod:`.tilted_ccd`.
+- The tilted-CCD + cubic radial model of Jacobs 1995 is in :mod:`.tilted_ccd`.
 """
 
 from __future__ import annotations

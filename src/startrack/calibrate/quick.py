@@ -1,4 +1,4 @@
-"""Seed 002's quick calibration methods (Ch. 6; notes ``seed-002.md`` §1.14.3-1.14.4).
+"""Jacobs 1995's quick calibration methods (Ch. 6; Jacobs 1995 §6.2.1, App F.2, §6.2.2).
 
 - **Focal length from one star pair** (§6.2.2, ``Estf.mod``): two identified stars at measured
   offsets (u1, v1), (u2, v2) from the optical centre and catalog separation theta satisfy
@@ -101,7 +101,7 @@ def centre_from_rotation(tracks: Sequence[tuple[ArrayLike, ArrayLike]]) -> tuple
 
 def seed002_focal_sensitivity(u1, v1, u2, v2, f_true: float, f_used: float) -> float:
     """Angular error (rad) of a pair's separation measured with the wrong focal length
-    (seed 002 §6.1; the angle with f_used minus the angle with f_true)."""
+    (Jacobs 1995 §6.1; the angle with f_used minus the angle with f_true)."""
     def angle(f):
         a = np.array([u1, v1, f])
         b = np.array([u2, v2, f])

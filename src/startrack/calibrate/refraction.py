@@ -1,14 +1,14 @@
-"""Atmospheric refraction for photographs taken from the ground (seed 003 Ch. 5).
+"""Atmospheric refraction for photographs taken from the ground (Fowler 2013 Ch. 5).
 
-Bennett (1982) gives the refraction R from the *apparent* (observed) altitude h_a (seed 003 eq. 5.1,
-notes ``seed-003.md`` §1.6; Meeus, *Astronomical Algorithms*, ch. 16)::
+Bennett (1982) gives the refraction R from the *apparent* (observed) altitude h_a (Fowler 2013 eq. 5.1,
+Fowler 2013 Ch.5; Meeus, *Astronomical Algorithms*, ch. 16)::
 
     R [arcmin] = cot(h_a + 7.31 / (h_a + 4.4)) * (P / 101) * (283 / (273 + T))
 
 with h_a and the inner sum in degrees, P in kPa and T in deg C; accurate to 0.07 arcmin (4.2 arcsec)
 for 0-90 deg at the standard 10 C and 101.0 kPa. Refraction lifts every star towards the zenith:
 ``h_a = h_true + R``. Correcting an *observed* direction therefore lowers it by R (the erratum to
-seed 003 eq. 5.5: rotate by ``-R`` about ``v x z``, or equivalently ``+R`` about ``z x v``); making a
+Fowler 2013 eq. 5.5: rotate by ``-R`` about ``v x z``, or equivalently ``+R`` about ``z x v``); making a
 catalog (true) direction apparent raises it, by the R of the apparent altitude (solved by
 iteration, or Saemundsson's formula from the true altitude, consistent with Bennett's to 0.1').
 
@@ -29,7 +29,7 @@ from ..units import ARCMIN, DEG
 STANDARD_TEMPERATURE_C: float = 10.0
 STANDARD_PRESSURE_KPA: float = 101.0
 BENNETT_ACCURACY_RAD: float = 0.07 * ARCMIN
-"""Bennett's stated accuracy, 4.2 arcsec, at the standard conditions (seed 003 Table 9.5)."""
+"""Bennett's stated accuracy, 4.2 arcsec, at the standard conditions (Fowler 2013 Table 9.5)."""
 LOWEST_ALTITUDE_RAD: float = -1.0 * DEG
 """Below this the formulas are not meant to be used; altitudes are clipped to it."""
 
@@ -45,7 +45,7 @@ def _scale(temperature_c: float, pressure_kpa: float) -> float:
 
 def bennett_refraction(apparent_altitude_rad: ArrayLike, temperature_c: float = STANDARD_TEMPERATURE_C,
                        pressure_kpa: float = STANDARD_PRESSURE_KPA) -> NDArray[np.float64]:
-    """Refraction R (radians) at the given apparent altitudes (radians); Bennett 1982, seed 003 eq. 5.1.
+    """Refraction R (radians) at the given apparent altitudes (radians); Bennett 1982, Fowler 2013 eq. 5.1.
 
     Altitudes below -1 deg are evaluated at -1 deg; at the zenith R is about -0.08 arcsec (Bennett's
     formula is not forced to zero there).
@@ -110,6 +110,6 @@ def refract(vectors_enu: ArrayLike, temperature_c: float = STANDARD_TEMPERATURE_
 def unrefract(vectors_enu: ArrayLike, temperature_c: float = STANDARD_TEMPERATURE_C,
               pressure_kpa: float = STANDARD_PRESSURE_KPA) -> NDArray[np.float64]:
     """Observed (apparent) directions (..., 3) in the horizon frame -> true ones: lowered by R
-    (seed 003 §1.6 step 5 with the sign erratum fixed)."""
+    (Fowler 2013 Ch.5 step 5 with the sign erratum fixed)."""
     v = np.asarray(vectors_enu, float)
     return _with_altitude(v, true_from_apparent_altitude(altitude_of(v), temperature_c, pressure_kpa))

@@ -1,5 +1,4 @@
-"""Repeatability of a fixed ground mount (seed 003 Ch. 7 §III.B and Ch. 9 §VI; notes
-``seed-003.md`` §1.9, with errata 2 and 4 resolved).
+"""Repeatability of a fixed ground mount (Fowler 2013 Ch. 7 §III.B and Ch. 9 §VI, with errata 2 and 4 resolved).
 
 With the camera fixed to the ground, its attitude relative to the local horizon is constant; the
 sky turns. For images i at times t_i with solved attitudes ``rot_cam_from_icrs_i``:
@@ -61,7 +60,7 @@ class Repeatability:
 
     def summary_arcmin(self) -> dict[str, tuple[float, float]]:
         """Mean and standard deviation of the total, pointing and roll errors, arcmin (the form of
-        seed 003's headline numbers: Aptina 1.5 +- 0.6 total)."""
+        Fowler 2013's headline numbers: Aptina 1.5 +- 0.6 total)."""
         return {name: (float(np.mean(v) / ARCMIN), float(np.std(v) / ARCMIN))
                 for name, v in (("total", self.total_rad), ("pointing", self.pointing_rad), ("roll", self.roll_rad))}
 
@@ -94,7 +93,7 @@ def repeatability(times: Time, rotations: list[Rotation], site: Site) -> Repeata
 
 def error_budget(result: Repeatability, *, lens_sigma_px: float, pixel_scale_arcsec: float,
                  threshold_rad: float = 0.0, atmosphere_rad: float = BENNETT_ACCURACY_RAD) -> dict[str, float]:
-    """seed 003 Table 9.5: the components and their linear and root-sum-square totals, radians.
+    """Fowler 2013 Table 9.5: the components and their linear and root-sum-square totals, radians.
 
     Parameters
     ----------

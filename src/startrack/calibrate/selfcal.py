@@ -32,7 +32,7 @@ PINHOLE_FIT = ("f",)
 MAX_ROUNDS = 4
 PRIORITY = ("f", "k1", "cx", "cy", "k2", "p1", "p2", "aspect", "k3")
 """Order in which parameters are admitted when there are few stars (largest effects first,
-seed 002 §6.2: optical centre and focal length, then distortion)."""
+Jacobs 1995 §6.2: optical centre and focal length, then distortion)."""
 STARS_PER_UNKNOWN = 1.5
 """At least this many stars (two residuals each) per unknown (parameters + 3 for the attitude)."""
 SIGNIFICANCE = 0.01

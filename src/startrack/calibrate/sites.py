@@ -2,7 +2,7 @@
 
 Sites are kept in a JSON file in the user's configuration folder: ``$STARTRACK_CONFIG_DIR/sites.json``
 when that variable is set, else ``$XDG_CONFIG_HOME/startrack/sites.json`` (``~/.config/startrack``).
-A few sites ship with the package (seed 003's, Table 2.1 and B.1); a saved site of the same name
+A few sites ship with the package (Fowler 2013's, Table 2.1 and B.1); a saved site of the same name
 replaces a built-in one.
 """
 
@@ -73,7 +73,7 @@ BUILTIN_SITES: dict[str, Site] = {
         Site("moab-ut", 38.77356, -109.58103, 1300.0),
     )
 }
-"""seed 003 Table 2.1 / B.1 sites (heights are ours, from the terrain; the thesis gives none)."""
+"""Fowler 2013 Table 2.1 / B.1 sites (heights are ours, from the terrain; the thesis gives none)."""
 
 
 def sites_file() -> Path:

@@ -5,11 +5,11 @@ For one or many solved frames this fits, by robust non-linear least squares (Lev
 with iteratively re-weighted normal equations: the soft-L1 loss of ``scipy.optimize.least_squares``,
 solved on the small normal matrix, which is much faster here than scipy's SVD of the whole
 Jacobian), the lens model's parameters (focal length, pixel
-aspect, principal point, Brown-Conrady k1, k2, k3, p1, p2; or seed 002's tilted-CCD model) together
+aspect, principal point, Brown-Conrady k1, k2, k3, p1, p2; or Jacobs 1995's tilted-CCD model) together
 with a small rotation of each frame's attitude, minimising the pixel residuals of all stars.
 
-Then, as in seed 003's checkerboard practice (notes ``seed-003.md`` §1.5 step 6) and seed 002's
-star-based calibration (notes ``seed-002.md`` §1.14):
+Then, as in Fowler 2013's checkerboard practice (Fowler 2013 Ch.4 §II.C and §IV step 6) and Jacobs 1995's
+star-based calibration (Jacobs 1995 Ch. 6, App F):
 
 1. **outliers** (a wrong match, a blended or hot pixel) are stars whose residual exceeds
    ``reject_sigma`` robust standard deviations; they are dropped and the fit repeated until the set

@@ -1,5 +1,4 @@
-"""Seed 002's lens model: a tilted CCD plus a cubic radial lens term (seed 002 §6.2.3, App. F;
-notes ``seed-002.md`` §1.14.5).
+"""Jacobs 1995's lens model: a tilted CCD plus a cubic radial lens term (Jacobs 1995 §6.2.3, App. F.2.3, App F.1).
 
 A CCD tilted by theta_max about an axis in the focal plane (the tilt is largest in the direction
 phi_max) stretches the image on one side and compresses it on the other; the lens adds a radial
@@ -33,7 +32,7 @@ TILTED_CCD_PARAMETERS: tuple[str, ...] = ("f", "cx", "cy", "tilt_x", "tilt_y", "
 
 @dataclass(frozen=True)
 class TiltedCcdCamera:
-    """A camera with seed 002's tilted-CCD + radial lens model.
+    """A camera with Jacobs 1995's tilted-CCD + radial lens model.
 
     Attributes
     ----------

@@ -1,5 +1,5 @@
 """Hipparcos-2 star catalog: loading, epoch propagation, magnitude filter, double stars, uniform
-thinning and cone search (DESIGN.md §2; seed 000 §5.5.4, seed 002 §5.2)."""
+thinning and cone search (DESIGN.md §2; Huffman 2006 §5.5.4, Jacobs 1995 §5.2)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Double stars: flag close pairs, or merge them into single catalog entries.
 
-Seed 000 §5.5.4 (notes seed-000 §1.14): stars closer than the optics can resolve become one
+Huffman 2006 §5.5.4: stars closer than the optics can resolve become one
 catalog entry, with the combined magnitude ``M = M2 - 2.5 log10(1 + 10^((M2 - M1)/2.5))`` and the
 flux-weighted direction ``v = sum_i v_i 10^((M - M_i)/2.5)``, normalised (the corrected forms of
 the thesis's eqs. "(6.1)" and "(6.2)"). Neighbours are found with a k-d tree on unit vectors,

@@ -1,8 +1,8 @@
 """Uniform thinning: an even sky density of bright stars (a reduced onboard catalog).
 
-Seed 000 §5.5.4 (notes seed-000 §1.14): step the boresight over the whole sky and keep the 8
-brightest stars in the field of view at each pointing; the union is the reduced catalog. Seed 002
-§5.2 (notes seed-002 §1.13) builds its sub-catalogues from sky regions in the same spirit. Here the
+Huffman 2006 §5.5.4: step the boresight over the whole sky and keep the 8
+brightest stars in the field of view at each pointing; the union is the reduced catalog. Jacobs 1995
+§5.2 builds its sub-catalogues from sky regions in the same spirit. Here the
 pointings are a Fibonacci lattice on the sphere with one point per ``spacing**2`` steradians
 (spacing = the region radius by default), so the regions overlap and cover every direction
 (the lattice's covering radius is about 0.77 of its spacing). The rule is deterministic: ties in
@@ -61,7 +61,7 @@ def thin_uniform(catalog: StarCatalog, max_per_region: int, region_radius_rad: f
     Parameters
     ----------
     catalog : the stars (positions at the catalog epoch).
-    max_per_region : how many of the brightest stars each region keeps (seed 000: 8 per FOV).
+    max_per_region : how many of the brightest stars each region keeps (Huffman 2006: 8 per FOV).
     region_radius_rad : radius of each circular region, e.g. half the field of view (radians).
     band : "v" or "hp", the magnitude that ranks brightness.
     spacing_rad : spacing of the sample points (:func:`sky_sample_points`); defaults to

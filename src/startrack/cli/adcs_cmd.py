@@ -1,4 +1,4 @@
-"""startrack adcs-demo: closed-loop attitude control of seed 001's KnightCube (ch. 5) with the
+"""startrack adcs-demo: closed-loop attitude control of Sease 2013's KnightCube (ch. 5) with the
 truth, an IMU or startrack itself in the loop. Seven steps of +0.1 in q2, one every 100 s, are
 planned for minimum coil energy (virtual motion camouflage on LGL nodes, SLSQP, replanned every
 5 s) and tracked at 40 Hz by an input-output-linearised LQR (Q = 20 I, R = 1). With

@@ -1,4 +1,4 @@
-"""startrack analyse: the post-processing analyses of seed 003 ch. 8 over result sets of images
+"""startrack analyse: the post-processing analyses of Fowler 2013 ch. 8 over result sets of images
 (figure as PNG, its numbers as CSV).
 
   startrack analyse list

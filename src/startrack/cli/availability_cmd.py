@@ -1,6 +1,6 @@
-"""startrack availability: how many catalog stars a camera sees over random pointings (seed 002
-Fig. 5-1 / Table 5-1; seed 000 Table 5.1), with a histogram plot; and the size of a uniform
-reduced onboard catalog (seed 000 §5.5.4: the N brightest stars at every pointing).
+"""startrack availability: how many catalog stars a camera sees over random pointings (Jacobs 1995
+Fig. 5-1 / Table 5-1; Huffman 2006 Table 5.1), with a histogram plot; and the size of a uniform
+reduced onboard catalog (Huffman 2006 §5.5.4: the N brightest stars at every pointing).
 
 With --rig RIG.json (a startrack.CameraRig): the fraction of random body attitudes where at least
 one head, and the joint solution, has enough stars (docs/rig.md), each head excluded when the Sun,
@@ -70,7 +70,7 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--height", type=positive_count, default=1024)
     parser.add_argument("--max-mag", type=float, default=6.0, help="catalog limit, V (default 6.0)")
     parser.add_argument("--pointings", type=positive_count, default=100_000,
-                        help=f"random pointings (seed 002 used 10^6; at most {MAX_POINTINGS:,})")
+                        help=f"random pointings (Jacobs 1995 used 10^6; at most {MAX_POINTINGS:,})")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--plot", help="write the histogram to this PNG")
     parser.add_argument("--reduced-per-fov", type=int, metavar="N",

@@ -1,7 +1,7 @@
 """startrack calibrate IMAGE [IMAGE ...]: calibrate a camera from star images (each is solved
 lost-in-space, then focal length, principal point, distortion and every attitude are fitted jointly,
 the camera re-solves every image and the fit is repeated), or from checkerboard images with
---checkerboard COLSxROWS --square-mm S (OpenCV, seed 003's method)."""
+--checkerboard COLSxROWS --square-mm S (OpenCV, Fowler 2013's method)."""
 
 from __future__ import annotations
 

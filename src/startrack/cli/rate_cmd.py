@@ -1,9 +1,9 @@
 """``startrack rate``: angular rate from one streaked image, or from a pair of images.
 
-One image (seed 001 ch. 4, no catalog): the streaks' two ends are located, grouped into the
+One image (Sease 2013 ch. 4, no catalog): the streaks' two ends are located, grouped into the
 start and end of the exposure, and the rate is solved between the groups (OLAE) with the RSO
-indicators; ``--exposure-s`` is the time between the ends. Two images (seed 004 step 6 /
-seed 000 §7.2): the stars found in both are matched frame to frame and the relative attitude
+indicators; ``--exposure-s`` is the time between the ends. Two images (Samaan 2002 step 6 /
+Huffman 2006 §7.2): the stars found in both are matched frame to frame and the relative attitude
 over ``--dt-s`` gives the rate. Either way no star catalog is used. A calibrated camera is
 needed (``--camera`` preset or ``--fov-deg``, pinhole at the image centre).
 """

@@ -4,7 +4,7 @@ A RAW file holds one count per photosite under a colour filter (the Bayer mosaic
 positions the honest image is the mosaic reduced cell by cell: each 2 x 2 cell (R, G, G, B in some
 order) becomes one pixel, either the **sum** of its four counts (the colour rule of
 :mod:`startrack.io.channels`: counts stay counts) or one colour (``"r"``, ``"g"`` = the sum of
-the two greens, ``"b"``; seed 003 used the green channel of its phone, the best SNR). The result
+the two greens, ``"b"``; Fowler 2013 used the green channel of its phone, the best SNR). The result
 has half the resolution. Pixel (i, j) of the reduced image samples the full-resolution position
 ``(2 i + ox, 2 j + oy)`` (our convention, pixel centres), where the *origin* ``(ox, oy)`` is the
 mean position of the sites used inside their cell: (0.5, 0.5) for the sum and for green (two

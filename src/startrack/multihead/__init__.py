@@ -1,5 +1,5 @@
 """Star trackers with several heads or a split field of view: one attitude from all cameras, star
-by star (issue 18; seed 004 §2.5, notes ``seed-001-004.md``).
+by star (issue 18; Samaan 2002 Eq. 4–5).
 
 The rig itself (:class:`startrack.CameraRig`, :class:`startrack.RigHead`) lives in
 :mod:`startrack.rig`. This package holds what works on it:

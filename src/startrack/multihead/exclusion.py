@@ -3,7 +3,7 @@
 A head is blinded when a bright body's nearest edge comes within its exclusion angle of its
 boresight (:class:`startrack.rig.Exclusion`, one set of angles per head, as its baffle allows):
 the edge angle is the angle from the boresight to the body's centre minus the body's angular
-radius ``asin(R / d)`` (the test of seed 001 eqs. 2.16-2.19, :meth:`startrack.simulate.rso.Snapshot.bright_bodies`).
+radius ``asin(R / d)`` (the test of Sease 2013 eqs. 2.16-2.19, :meth:`startrack.simulate.rso.Snapshot.bright_bodies`).
 The directions come from an observer position and a time (the Sun and the Moon from astropy's
 built-in ephemeris, :func:`startrack.simulate.orbits.sun_moon_km`), or from a simulator snapshot.
 """

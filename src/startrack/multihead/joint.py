@@ -1,10 +1,10 @@
-"""One Wahba solution over the matched stars of every head, in the body frame (seed 004 §2.5).
+"""One Wahba solution over the matched stars of every head, in the body frame (Samaan 2002 Eq. 4–5).
 
 Each head's matched camera-frame unit vectors are carried into the body frame through its mounting
 (``v_body = rot_cam_from_body.inv().apply(v_cam)``) and all of them go into one Wahba problem with
 the catalog vectors, each weighted by ``1 / sigma^2``, sigma its head's measured centroid noise
 over its focal length (Davenport's q-method, :func:`startrack.attitude.solve_wahba`). The QUEST
-covariance of that fit is the body-frame covariance (seed 000 §6.1.3 eq. 6.36); split about each
+covariance of that fit is the body-frame covariance (Huffman 2006 §6.1.3 eq. 6.36); split about each
 head's boresight it gives that head's cross-boresight and roll uncertainty. The wide baseline of
 two heads makes the weak roll axis of one the strong cross-boresight axis of the other.
 

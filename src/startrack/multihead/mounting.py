@@ -2,7 +2,7 @@
 
 From K rig frames, each head h whose own solution and the reference head's own solution exist in
 frame k gives one relative mounting ``R_k = rot_cam_from_icrs_h,k * rot_cam_from_icrs_ref,k^-1``
-(``rot_camh_from_camref``, independent of the body attitude). As in seed 003's repeatability of a
+(``rot_camh_from_camref``, independent of the body attitude). As in Fowler 2013's repeatability of a
 fixed mount (Ch. 7 eq. 7.18 and Ch. 9 eq. 9.1, :mod:`startrack.calibrate.repeatability`):
 
 1. the estimate is their Markley average (``Rotation.mean``), and the head's mounting is

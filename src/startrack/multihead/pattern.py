@@ -1,6 +1,6 @@
 """Identification on the combined star set of several heads when none can be identified alone.
 
-Seed 004 §2.5 cites SP-Search (Mortari & Junkins 1999): star identification on the combined
+Samaan 2002 Eq. 4–5 cites SP-Search (Mortari & Junkins 1999): star identification on the combined
 vector set of several fields of view. A field with three stars has a triangle but nothing to
 confirm it with: the lost-in-space matchers need a fourth star. Across a rig the other heads
 confirm it:

@@ -1,5 +1,5 @@
 """Stars of a head predicted through its mounting from a body attitude, and matched in windows
-(seed 004 §2.2 steps 2-4, per field of view: "prediction projects each FOV's corners separately").
+(Samaan 2002 Eq. 1–3 steps 2-4, per field of view: "prediction projects each FOV's corners separately").
 
 A body attitude ``rot_body_from_icrs`` and a head's mounting give the head's attitude
 ``rot_cam_from_body * rot_body_from_icrs``; the brightest catalog stars it puts inside the head's

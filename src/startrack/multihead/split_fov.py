@@ -1,5 +1,5 @@
-"""Which field of a split-FOV detector each spot came from, by the shape of its PSF (seed 004 §2.5,
-eqs. 4-5; notes ``seed-001-004.md`` §2.5).
+"""Which field of a split-FOV detector each spot came from, by the shape of its PSF (Samaan 2002 Eq. 4–5,
+eqs. 4-5).
 
 StarNav II superimposes two fields on one detector and tags them by deliberate astigmatism: one
 field's stars are stretched along one direction, the other's along another. The seed classifies a

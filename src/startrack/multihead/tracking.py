@@ -1,4 +1,4 @@
-"""Tracking with a rig: every head's windows predicted from the joint attitude and rate (seed 004
+"""Tracking with a rig: every head's windows predicted from the joint attitude and rate (Samaan 2002
 §2.2, per field of view), one joint fit, lost-in-space (:func:`.solve.solve_rig`) when it fails.
 
 Each frame, the body attitude is turned by the body-frame rate (a gyro's, or the smoothed

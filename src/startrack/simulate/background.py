@@ -8,7 +8,7 @@ s^-1 m^-2 per arcsec^2 (the V-band zero point of :mod:`.radiometry`), so a pixel
 
 electrons (the zodiacal light is scattered sunlight, so a sensor band other than V sees it with
 the Sun's colour). Natural and mechanical vignetting shape it across the field
-(:func:`.optics.background_illumination`). Stray light (baffle scatter, seed 000 §3.2's
+(:func:`.optics.background_illumination`). Stray light (baffle scatter, Huffman 2006 §3.2's
 "background ... stray light, Sun glint") is given directly in electrons per second per pixel,
 optionally with a linear gradient across the image.
 

@@ -1,4 +1,4 @@
-"""Real-sensor effects that are fixed per pixel, and blooming (seed 003 §1.2, seed 001 §1.6-1.7).
+"""Real-sensor effects that are fixed per pixel, and blooming (Fowler 2013 Ch.3, Sease 2013 Eq. 2.10–2.11).
 
 Fixed pattern (one map per sensor, drawn from ``Detector.pixel_map_seed`` and the image shape, so
 every frame of a sequence sees the same map; cached):

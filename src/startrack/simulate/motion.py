@@ -1,6 +1,6 @@
 """Attitude during an exposure and over a sequence: quaternion kinematics and attitude profiles.
 
-Kinematics (seed 001 §"Streaking Dynamics", eq. 2.12; notes ``seed-001-004.md`` §1.8, with the
+Kinematics (Sease 2013 §"Streaking Dynamics", eq. 2.12, with the
 sign fixed there): the camera turns at angular velocity omega, expressed in the **camera frame**
 (rad/s). The attitude ``A = rot_cam_from_icrs`` then obeys ``dA/dt = -[omega x] A``: a star fixed
 in ICRS moves in the camera frame as ``dv/dt = -omega x v``. As quaternions (scalar last, the

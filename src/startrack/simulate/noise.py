@@ -1,7 +1,7 @@
 """Detector noise and read-out: expected electrons in, ADU out.
 
-The noise terms are those of seed 000 §3.2 (notes ``seed-000.md`` §1.3), applied in the order the
-charge meets them, with the fixed-pattern effects of :mod:`.detector` (seed 003 §1.2):
+The noise terms are those of Huffman 2006 §3.2, applied in the order the
+charge meets them, with the fixed-pattern effects of :mod:`.detector` (Fowler 2013 Ch.3):
 
 1. expected electrons per pixel = (signal + sky background) x response (PRNU; 0 if dead)
    + dark current x time (x DSNU; a hot pixel's own rate; 0 if dead);
@@ -18,8 +18,8 @@ charge meets them, with the fixed-pattern effects of :mod:`.detector` (seed 003 
 Every term can be switched off through :class:`NoiseModel`; with all of them off the image is the
 expectation ``(signal + background + dark) / gain + bias``.
 
-Speed. Drawing a Poisson number per pixel costs about 55 ns with numpy, 55 ms for a megapixel.
-Most pixels of a star image share one expectation (sky + dark), and for them steps 2-6 give one
+Speed. Drawing a Poisson number per pixel is the cost of a frame (docs/simulation.md gives the
+measured figure). Most pixels of a star image share one expectation (sky + dark), and for them steps 2-6 give one
 discrete distribution of ADU values, which :func:`readout_table` computes exactly (Poisson
 probabilities times the normal probability of each rounding interval); those pixels are drawn
 from it by inverse-transform sampling with a guide table (one uniform number each). Pixels with

@@ -6,9 +6,9 @@ into per-star and per-pixel numbers for a :class:`startrack.camera.Camera`:
 - **Off-axis angle** theta of a pixel is the angle between its direction (distortion removed)
   and the boresight; ``r / r_corner`` is the distance from the principal point relative to the
   farthest image corner.
-- **Field curvature** (seed 000 §2.3, Table 2.4: a single lens's PSF grows away from the axis):
+- **Field curvature** (Huffman 2006 §2.3, Table 2.4: a single lens's PSF grows away from the axis):
   ``sigma(r) = sigma_0 * (1 + field_curvature * (r / r_corner)^2)``.
-- **Vignetting** (seed 003 §1.3): natural vignetting is the cos^4 law for extended light (the
+- **Vignetting** (Fowler 2013 Ch.4 §II.A): natural vignetting is the cos^4 law for extended light (the
   sky background per pixel), which for a point source is cos(theta) (the aperture seen obliquely;
   the other cos^3 is the shrinking pixel solid angle, which a star does not feel); mechanical or
   optical fall-off is ``1 - vignetting_edge * (r / r_corner)^2`` and multiplies both.

@@ -1,6 +1,6 @@
 """Orbits for the satellite scenes: Keplerian elements, two-body + J2 propagation, Earth shadow,
-and the Sun and Moon (seed 001 §"Resident Space Object Implementation", eqs. 2.13-2.15; notes
-``seed-001-004.md`` §1.9).
+and the Sun and Moon (Sease 2013 §"Resident Space Object Implementation", eqs. 2.13-2.15;
+Sease 2013 Eq. 2.13–2.19).
 
 Frame: a geocentric inertial frame with the axes of GCRS, which are those of ICRS to within the
 frame bias (23 mas) and aberration, so orbit positions and catalog directions are used in one
@@ -85,7 +85,7 @@ def _perifocal_to_inertial(raan: float, inc: float, argp: float) -> NDArray[np.f
 
 
 def acceleration(r_km: NDArray, j2: bool = True) -> NDArray[np.float64]:
-    """Two-body + J2 acceleration (km/s^2) at positions (..., 3) km (seed 001 eqs. 2.13-2.14)."""
+    """Two-body + J2 acceleration (km/s^2) at positions (..., 3) km (Sease 2013 eqs. 2.13-2.14)."""
     r = np.asarray(r_km, dtype=float)
     r2 = np.sum(r * r, axis=-1, keepdims=True)
     rn = np.sqrt(r2)
@@ -155,7 +155,7 @@ class Orbit:
 
 
 def in_earth_shadow(r_km: ArrayLike, sun_km: ArrayLike) -> NDArray[np.bool_]:
-    """True where positions (..., 3) lie in the Earth's cylindrical shadow (seed 001 eq. 2.15)."""
+    """True where positions (..., 3) lie in the Earth's cylindrical shadow (Sease 2013 eq. 2.15)."""
     r = np.asarray(r_km, dtype=float)
     s_hat = np.asarray(sun_km, dtype=float)
     s_hat = s_hat / np.linalg.norm(s_hat, axis=-1, keepdims=True)

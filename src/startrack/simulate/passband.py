@@ -17,7 +17,7 @@ relative response ``R(lambda)`` (peak 1) to its photons in the V top hat::
 
 For the V top hat itself the factor is exactly 1 for every colour. The blackbody is crude in the
 ultraviolet of hot stars and the molecular bands of M stars (errors of 10-20 % in the factor);
-it is the colour *dependence* that matters here (seed 000 §5.3: "spectral response differs
+it is the colour *dependence* that matters here (Huffman 2006 §5.3: "spectral response differs
 between imagers"), and the factor is tabulated once per passband on a grid of ``B - V``.
 """
 

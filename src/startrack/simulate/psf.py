@@ -1,6 +1,6 @@
 """Point-spread function rendering: pixel-integrated Gaussians added into an image.
 
-The PSF is the 2-D Gaussian of seed 000 §3.1 eq. 3.3 (notes ``seed-000.md`` §1.2), integrated
+The PSF is the 2-D Gaussian of Huffman 2006 §3.1 eq. 3.3, integrated
 over each pixel's area (the choice consistent with the seed's MLE centroider, eqs. 4.7-4.8). It is
 separable, so a pixel's share of a star's light is the product of two 1-D fractions::
 

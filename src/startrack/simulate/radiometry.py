@@ -1,7 +1,7 @@
 """Radiometry: from a star's visual magnitude to the electrons it frees in the detector.
 
-The signal model is seed 000 §3.1 eq. 3.4 (notes ``seed-000.md`` §1.2) with its ad-hoc zero point
-"28" replaced by a physical photon flux (errata in notes §5, item 1)::
+The signal model is Huffman 2006 §3.1 eq. 3.4 with its ad-hoc zero point
+"28" replaced by a physical photon flux (errata in Huffman 2006)::
 
     electrons = PHI_0 * 10**(-0.4 * m_V) * aperture_area * transmission * QE * exposure
 
@@ -13,8 +13,8 @@ lambda_eff ~ 550 nm. Counting photons over a passband of width 88 nm::
           = 8.78e9 photons s^-1 m^-2
 
 This agrees with the textbook rule of about 1000 photons s^-1 cm^-2 A^-1 at V for a
-magnitude-0 star (8.8e9 over 88 nm) and with the "about 1e10 photons s^-1 m^-2" of the notes
-(seed-001-004.md §1.4). It counts only V-band photons: an unfiltered silicon sensor collects
+magnitude-0 star (8.8e9 over 88 nm) and with the "about 1e10 photons s^-1 m^-2" that Sease 2013 implies
+(Sease 2013 Eq. 2.7–2.8). It counts only V-band photons: an unfiltered silicon sensor collects
 several times more from the same star, which a caller models with ``zero_point_photons_s_m2`` or
 an effective QE, or gives the sensor a :class:`.passband.Passband`: then each star's V-band
 photons are scaled by the colour factor of its ``B - V`` (a blackbody ratio, see
@@ -22,8 +22,8 @@ photons are scaled by the colour factor of its ``B - V`` (a blackbody ratio, see
 
 Settings are frozen dataclasses: :class:`Optics` (aperture, transmission, PSF width),
 :class:`Detector` (QE, gain, read noise, dark current, bias, full well, ADC bits) and
-:class:`Sensor` (optics + detector + exposure time). :data:`SENSOR_PRESETS` holds the seed 000
-Table 7.1 FAR-MST sensor (notes §3.1), which pairs with the ``"far-mst"`` camera preset, and a
+:class:`Sensor` (optics + detector + exposure time). :data:`SENSOR_PRESETS` holds the Huffman 2006
+Table 7.1 FAR-MST sensor, which pairs with the ``"far-mst"`` camera preset, and a
 variant with the seed's literal eq. 3.4 signal scale for reproducing its tables.
 
 With the physical V-band zero point the FAR-MST sensor is faint: a V = 2 star gives 6.7e3 e-, a
@@ -67,22 +67,22 @@ class Optics:
     transmission : float
         Fraction of the light entering the aperture that reaches the detector, in (0, 1].
     psf_sigma_px : float
-        Standard deviation of the Gaussian PSF per axis, in pixels (seed 000 §3.1 eq. 3.3;
-        sigma = psfWidth / 4, notes §1.2).
+        Standard deviation of the Gaussian PSF per axis, in pixels (Huffman 2006 §3.1 eq. 3.3;
+        sigma = psfWidth / 4).
     zero_point_photons_s_m2 : float
         Photon flux of a magnitude-0 star in the band the detector sees, photons s^-1 m^-2.
     psf : {"gaussian", "airy"}
-        PSF shape (see :mod:`.optics`): the pixel-integrated Gaussian of seed 000, or the Airy
+        PSF shape (see :mod:`.optics`): the pixel-integrated Gaussian of Huffman 2006, or the Airy
         pattern of a diffraction-limited circular aperture.
     airy_first_zero_px : float or None
         Radius of the Airy pattern's first dark ring (1.22 lambda N / pitch), px; None takes the
         Airy pattern whose best-fit Gaussian has ``psf_sigma_px`` (r0 = sigma / 0.3443).
     field_curvature : float
         PSF growth at the image corner: sigma(r) = sigma (1 + field_curvature (r / r_corner)^2)
-        (seed 000 §2.3: a single lens's field curvature), >= 0.
+        (Huffman 2006 §2.3: a single lens's field curvature), >= 0.
     natural_vignetting : bool
         Apply the cos^4 law: stars dim by cos(theta) (projected aperture), the sky background
-        per pixel by cos^4(theta) (seed 003 §1.3).
+        per pixel by cos^4(theta) (Fowler 2013 Ch.4 §II.A).
     vignetting_edge : float
         Extra (mechanical / optical) fall-off: the fraction of light lost at the image corner,
         with a (r / r_corner)^2 profile, in [0, 1).
@@ -137,11 +137,11 @@ class Detector:
     quantum_efficiency : float
         Electrons per photon reaching the detector (fill factor included), in (0, 1].
     gain_e_per_adu : float
-        Conversion gain, electrons per ADU (seed 000 §3.2.4 "Delta").
+        Conversion gain, electrons per ADU (Huffman 2006 §3.2.4 "Delta").
     read_noise_e : float
-        Read noise, electrons rms per pixel (seed 000 eq. 3.14).
+        Read noise, electrons rms per pixel (Huffman 2006 eq. 3.14).
     dark_current_e_s : float
-        Dark current, electrons per second per pixel (seed 000 eq. 3.8).
+        Dark current, electrons per second per pixel (Huffman 2006 eq. 3.8).
     bias_adu : float
         Constant offset added by the ADC, in ADU.
     full_well_e : float
@@ -278,7 +278,7 @@ def electrons_from_magnitude(mag: ArrayLike, *, aperture_area_m2: float, exposur
                              ) -> NDArray[np.float64]:
     """Expected signal electrons from stars of magnitude ``mag`` (any shape) in one exposure.
 
-    ``PHI_0 * 10**(-0.4 mag) * area * transmission * QE * exposure``: seed 000 §3.1 eq. 3.4 with
+    ``PHI_0 * 10**(-0.4 mag) * area * transmission * QE * exposure``: Huffman 2006 §3.1 eq. 3.4 with
     the physical zero point of this module's docstring in place of the seed's "28".
 
     Raises
@@ -309,9 +309,9 @@ _QE_FROM_FFSR = _FFSR_A_W * 1239.84198 / V_BAND_CENTER_NM  # R = QE * e * lambda
 
 SEED000_EQ34_ZERO_POINT_PHOTONS_S_M2: float = (
     _FFSR_A_W * 10.0 * 10.0 ** (28.0 / 2.5) / _QE_FROM_FFSR)
-"""The zero point that makes this model equal seed 000 eq. 3.4 literally (FFSR 0.12 A/W, g = 10,
-zero point "28"): 7.0e11 photons s^-1 m^-2, 80 times the V-band value. The notes (seed-000.md §5,
-item 1) judge that scale about 10 times too bright for the seed's own detection results; use it
+"""The zero point that makes this model equal Huffman 2006 eq. 3.4 literally (FFSR 0.12 A/W, g = 10,
+zero point "28"): 7.0e11 photons s^-1 m^-2, 80 times the V-band value. That scale is
+about 10 times too bright for the seed's own detection results (our reading of Huffman 2006); use it
 only to reproduce the seed's tables."""
 
 _FAR_MST = Sensor(
@@ -321,7 +321,7 @@ _FAR_MST = Sensor(
                       full_well_e=120_000.0, bit_depth=10),
     exposure_s=0.1,
     name="far-mst",
-    source=("seed 000 Table 7.1 (p.127), notes seed-000.md §3.1: lens area 1.77 cm^2, "
+    source=("Huffman 2006 Table 7.1 (p.127): lens area 1.77 cm^2, "
             "gain 10 e-/ADU, read noise 39 e-, dark 410 e-/s, t = 0.1 s, PSF width 10 px "
             "(sigma 2.5); QE 0.27 = FFSR 0.12 A/W at 550 nm; full well 120 000 e- and 10-bit "
             "ADC from §3.2.4 (IBIS5-A-1300). Assumed (not in the seed): transmission 1 "
@@ -345,7 +345,7 @@ SENSOR_PRESETS: dict[str, Sensor] = {
         optics=replace(_FAR_MST.optics,
                        zero_point_photons_s_m2=SEED000_EQ34_ZERO_POINT_PHOTONS_S_M2),
         name="far-mst-seed-eq34",
-        source="as 'far-mst', with the signal scale of seed 000 eq. 3.4 taken literally "
+        source="as 'far-mst', with the signal scale of Huffman 2006 eq. 3.4 taken literally "
                "(M_V 6 -> 1.34e4 e-); for reproducing the seed's tables only"),
 }
 

@@ -1,5 +1,5 @@
-"""Resident space objects (satellites) and bright bodies near the field (seed 001 §"Resident Space
-Object Implementation", eqs. 2.15-2.19; seed 002 §7.6; notes ``seed-001-004.md`` §1.9).
+"""Resident space objects (satellites) and bright bodies near the field (Sease 2013 §"Resident Space
+Object Implementation", eqs. 2.15-2.19; Jacobs 1995 §7.6; Sease 2013 Eq. 2.13–2.19).
 
 An :class:`OrbitalScene` holds the observer's orbit (the spacecraft carrying the camera), the
 objects' orbits and an exclusion angle. For one instant it gives a :class:`Snapshot`: positions and
@@ -18,7 +18,7 @@ velocities of everything, the Sun and the Moon. From a snapshot:
   observer) and the nearest point of the Earth's limb; a body is *in the field* when it comes
   within the half-diagonal field of view (the seed's ``asin(R / r) + FoV / 2`` test, eqs. 2.16-2.19,
   with the boresight the camera +z axis: the seed's erratum) and *near* when it comes within
-  ``exclusion_deg`` of the boresight (28.1 deg: seed 002's baffle, §7.6).
+  ``exclusion_deg`` of the boresight (28.1 deg: Jacobs 1995's baffle, §7.6).
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from .orbits import R_EARTH_KM, R_MOON_KM, R_SUN_KM, Orbit, acceleration, in_ear
 SUN_V_MAG: float = -26.74
 LIGHT_KM_S: float = 299_792.458
 DEFAULT_EXCLUSION_DEG: float = 28.1
-"""Seed 002 §7.6: direct light reaches the lens within 28.1 deg of the boresight."""
+"""Jacobs 1995 §7.6: direct light reaches the lens within 28.1 deg of the boresight."""
 
 
 @dataclass(frozen=True)
@@ -191,7 +191,7 @@ class BrightBodyFlags:
 
     @property
     def corrupted(self) -> bool:
-        """True if the Sun or the Earth is in the field (seed 001: the frame is discarded)."""
+        """True if the Sun or the Earth is in the field (Sease 2013: the frame is discarded)."""
         return self.sun_in_fov or self.earth_in_fov
 
 

@@ -1,8 +1,8 @@
 """Scene assembly: point sources and an attitude (or an attitude profile) in, an image and its
 truth out.
 
-The pipeline is the one of seed 000 Ch. 7 (notes ``seed-000.md`` §1.4) and of seed 001 Fig. 2.5
-(notes ``seed-001-004.md`` §1.2-1.9): rotate catalog vectors into the camera frame at each
+The pipeline is the one of Huffman 2006 Ch. 7 (Huffman 2006 Ch. 7 intro) and of Sease 2013 Fig. 2.5
+(Sease 2013 Eq. 2.1–2.2, Eq. 2.13–2.19): rotate catalog vectors into the camera frame at each
 sub-step of the exposure (:mod:`.motion`, :mod:`.sampling`), cull those behind or outside the
 field, project with the camera model (distortion included), turn magnitudes and colours into
 electrons (:mod:`.radiometry`, :mod:`.passband`) dimmed by vignetting (:mod:`.optics`), draw
@@ -171,7 +171,7 @@ def render_stars(camera: Camera, rot_cam_from_icrs: Rotation | AttitudeProfile, 
     ids : array_like of int, shape (N,)
         Their identifiers (Hipparcos numbers), copied into the truth.
     sensor : Sensor, optional
-        Optics, detector and exposure; the seed 000 FAR-MST sensor when None.
+        Optics, detector and exposure; the Huffman 2006 FAR-MST sensor when None.
     background_e : float or array_like, shape (height, width)
         Expected extra background electrons per pixel in the exposure (added to
         ``sky_background``).

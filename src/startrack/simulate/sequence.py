@@ -5,8 +5,8 @@ profile's clock (:mod:`.motion`: inertial hold, constant-rate slew, tumble about
 recorded profile from a file). Each frame's noise comes from its own generator,
 ``default_rng(SeedSequence(seed, spawn_key=(k,)))``, so frame k is the same whether it is
 rendered alone or in a sequence, and the frames are independent. Satellite geometry (orbits, Sun,
-Moon) is computed for blocks of frames at once. This is seed 000's "catalog sequence" (notes
-``seed-000.md`` §1.4) with the truth of every frame.
+Moon) is computed for blocks of frames at once. This is Huffman 2006's "catalog sequence" (
+Huffman 2006 Ch. 7 intro) with the truth of every frame.
 """
 
 from __future__ import annotations

@@ -4,8 +4,8 @@ A :class:`SkyModel` holds the stars down to a magnitude limit, as ICRS vectors a
 a cone-search index (:class:`startrack.catalog.ConeIndex`); :func:`simulate_frame` searches a cone
 around the boresight whose radius reaches the image corners plus the PSF stamp, and hands the
 stars to :func:`startrack.simulate.scene.render_stars`, which projects them and keeps those that
-light the detector. This is seed 000's "catalog sequence" simulator for one frame (notes
-``seed-000.md`` §1.4), with Hipparcos-2 in place of SKY2000.
+light the detector. This is Huffman 2006's "catalog sequence" simulator for one frame (
+Huffman 2006 Ch. 7 intro), with Hipparcos-2 in place of SKY2000.
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ if TYPE_CHECKING:
     from ..catalog import ConeIndex, StarCatalog
 
 DEFAULT_MAX_MAG: float = 6.0
-"""Faintest V magnitude rendered by default (seed 000 Table 7.1, "max M_V rendered")."""
+"""Faintest V magnitude rendered by default (Huffman 2006 Table 7.1, "max M_V rendered")."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -119,7 +119,7 @@ class SkyModel:
                          mag_range: tuple[float, float] = (2.0, 6.0)) -> SkyModel:
         """This sky plus ``count`` point sources that no catalog holds, uniform over the sphere.
 
-        They stand for seed 002's false stars (§7.4: novae, variables far from their catalog
+        They stand for Jacobs 1995's false stars (§7.4: novae, variables far from their catalog
         magnitude, planets) and for debris: identification must survive them. Their ids are
         -1, -2, ... (negative: never a HIP number), their magnitudes uniform in ``mag_range``.
         """
@@ -188,7 +188,7 @@ def simulate_frame(camera: Camera, rot_cam_from_icrs: Rotation | AttitudeProfile
         Epoch the catalog positions are propagated to (Julian year, TDB); None keeps the catalog
         epoch (1991.25 for Hipparcos). Ignored when ``sky`` is given (its epoch is used).
     sensor : Sensor, optional
-        The seed 000 FAR-MST sensor when None.
+        The Huffman 2006 FAR-MST sensor when None.
     background_e, rng, noise, radius_sigmas, rate_rad_s, timing, sky_background, orbital
         As in :func:`startrack.simulate.scene.render_stars`.
     sky : SkyModel, optional

@@ -1,6 +1,6 @@
 """Analytic companions of the simulator: SNR of a star, limiting magnitude, smear-limited rate.
 
-**SNR** (seed 000 §3.2, eq. 3.17, notes ``seed-000.md`` §1.3) of a star measured by summing a
+**SNR** (Huffman 2006 §3.2, eq. 3.17) of a star measured by summing a
 square box of ``box_px`` x ``box_px`` pixels centred on it, the known background subtracted::
 
     SNR = S_box / sqrt(S_box + n (B + D + R^2 + Q^2)),      Q^2 = g^2 / 12
@@ -8,14 +8,14 @@ square box of ``box_px`` x ``box_px`` pixels centred on it, the known background
 with S_box the star's electrons inside the box (the pixel-integrated Gaussian PSF centred on a
 pixel puts ``erf(box / (2 sqrt(2) sigma))^2`` of its light there), n = box^2 pixels, B the sky
 electrons per pixel, D the dark electrons per pixel, R the read noise (e-) and g the gain
-(e-/ADU; the quantisation noise of seed 000 eqs. 3.9-3.13). Each term can be left out, matching
+(e-/ADU; the quantisation noise of Huffman 2006 eqs. 3.9-3.13). Each term can be left out, matching
 the switches of :class:`startrack.simulate.noise.NoiseModel`. The **peak-pixel SNR** of eq. 3.18
 is the star's light in its brightest pixel over the per-pixel noise.
 
 **Limiting magnitude**: the magnitude whose SNR equals a target, from the quadratic
 ``S^2 = k^2 (S + N0)``.
 
-**Smear limit** (seed 004, "Maximum Angular Rate Estimation", Table 1; notes ``seed-001-004.md``
+**Smear limit** (Samaan 2002, "Maximum Angular Rate Estimation", Table 1
 §2.3): the image moves less than ``fraction_px`` of a pixel during the exposure when
 ``omega < fraction_px * IFOV / t``. IFOV is the angle of one pixel: ``1 / fx`` at the boresight
 (``ifov="center"``) or the field of view over the pixel count (``ifov="mean"``, the seed's
@@ -92,7 +92,7 @@ def star_snr(mag: ArrayLike, sensor: Sensor, *, box_px: int | None = None, backg
 
 def peak_snr(mag: ArrayLike, sensor: Sensor, *, background_e: float = 0.0, b_v: ArrayLike | None = None,
              noise: bool | NoiseModel = True, star_shot_noise: bool = False) -> NDArray[np.float64]:
-    """Seed 000 eq. 3.18: the star's light in its peak pixel (centred) over the pixel noise.
+    """Huffman 2006 eq. 3.18: the star's light in its peak pixel (centred) over the pixel noise.
 
     ``star_shot_noise`` adds the star's own shot noise to the denominator (the seed leaves it out).
     """
@@ -129,7 +129,7 @@ def ifov_rad(camera: Camera, ifov: str = "center") -> float:
 
 def max_rate_rad_s(camera: Camera, exposure_s: float, fraction_px: float = 0.1, ifov: str = "center") -> float:
     """Largest angular rate (rad/s, across the boresight) that smears a star by at most
-    ``fraction_px`` pixels in ``exposure_s`` (seed 004 Table 1 uses 0.1 px)."""
+    ``fraction_px`` pixels in ``exposure_s`` (Samaan 2002 Table 1 uses 0.1 px)."""
     t = _checks.positive("exposure_s", exposure_s)
     return _checks.positive("fraction_px", fraction_px) * ifov_rad(camera, ifov) / t
 

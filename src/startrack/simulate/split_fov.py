@@ -1,5 +1,5 @@
 """Split-field-of-view frames: two fields of the sky superimposed on one detector, each with its own
-astigmatic PSF (seed 004 §2.5, StarNav II; notes ``seed-001-004.md`` §2.5).
+astigmatic PSF (Samaan 2002 Eq. 4–5, StarNav II).
 
 Each field is a head of a :class:`startrack.CameraRig` that names the shared ``detector`` and has a
 :class:`startrack.rig.PsfShape`: an elliptical Gaussian with its own sigmas and direction

@@ -1,5 +1,5 @@
 """How many catalog stars a camera sees: the expected number in the field, and the magnitude limit
-that guarantees a minimum everywhere on the sky (seed 000 §5.1, Table 5.1; notes ``seed-000.md``
+that guarantees a minimum everywhere on the sky (Huffman 2006 §5.1, Table 5.1
 §1.13 and §2.2).
 
 **Expected count**: the stars brighter than ``max_mag`` over the whole sky times the fraction of

@@ -1,10 +1,10 @@
 """Light of moving point sources integrated over the exposure: points, streaks, rolling shutter.
 
 A source that moves during the exposure leaves the time integral of its PSF along its path
-(seed 001 §"Streaking Dynamics", seed 004 "The Effect of Image Smear": the total light is
+(Sease 2013 §"Streaking Dynamics", Samaan 2002 "The Effect of Image Smear": the total light is
 conserved, its footprint grows). We split the time a source is exposed into n sub-intervals,
 place the PSF at the source's position at the middle of each (the midpoint rule; the seed's
-fencepost erratum, notes ``seed-001-004.md`` §1.8, is avoided) and give it the share of the light
+fencepost erratum, Sease 2013 Eq. 2.12, is avoided) and give it the share of the light
 that falls in that sub-interval. n is chosen so that the source moves at most ``substep_px``
 between samples (0.25 px by default): with the PSF integrated over pixels the streak then has no
 gaps or ripples; at zero rate n = 1 and the image is the point-source image.

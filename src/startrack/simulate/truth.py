@@ -60,7 +60,7 @@ class Truth:
     ----------
     rot_cam_from_icrs : Rotation
         The attitude at the frame's mid time (mid-exposure; with a rolling shutter, of the middle
-        row), which is the time tag of the frame (seed 004 eq. 6).
+        row), which is the time tag of the frame (Samaan 2002 eq. 6).
     camera : Camera
     ids : ndarray of int64, shape (K,)
         Star identifiers (Hipparcos numbers for catalog frames) of every star that put light on

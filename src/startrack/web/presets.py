@@ -37,7 +37,7 @@ PRESETS: dict[str, DetectionPreset] = {p.name: p for p in (
     DetectionPreset("faint", "more stars from a low-signal frame: 3.5-sigma, spots of 3 px or more",
                     {"sigma": 3.5, "min_area_px": 3}),
     DetectionPreset("bright", "only clear stars: 8-sigma, spots of 6 px or more", {"sigma": 8.0, "min_area_px": 6}),
-    DetectionPreset("dynamic", "seed 000 §8.2.3's dynamic threshold: the lowest k >= 5 that leaves 30 spots",
+    DetectionPreset("dynamic", "Huffman 2006 §8.2.3's dynamic threshold: the lowest k >= 5 that leaves 30 spots",
                     {"threshold": "dynamic", "target_stars": 30}),
     DetectionPreset("cluttered", "ground photos with trees or roofs: stricter elongation and clutter tests",
                     {"max_elongation": 3.0, "max_clutter": 1.8}),

@@ -5,7 +5,7 @@ Each reference has a ``metric`` (``AGG:COLUMN[@ROWS]``, :func:`.stats.parse_metr
 pools their trials, computes the metric and sets it beside the seed's number::
 
     [[reference]]
-    title = "seed 000 Table 5.1: V limit for at least 4 stars in every field"
+    title = "Huffman 2006 Table 5.1: V limit for at least 4 stars in every field"
     source = "Huffman 2006, Table 5.1"
     metric = "min:n_stars"
     unit = "stars"

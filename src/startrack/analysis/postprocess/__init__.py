@@ -1,4 +1,4 @@
-"""Post-processing analyses over result sets (seed 003 ch. 8, notes ``seed-003.md`` §1.11): each
+"""Post-processing analyses over result sets (Fowler 2013 ch. 8): each
 a figure (matplotlib ``Figure``, object API) with the numbers behind it as tables.
 
 >>> from startrack.analysis.postprocess import ANALYSES, records_from_images, run_analysis

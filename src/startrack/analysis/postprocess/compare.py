@@ -1,7 +1,7 @@
 """Analysis 8: two result sets side by side, image by image (matched by record name), with their
 differences: solved or not, the angle between the two boresights (arcsec), the roll difference
 (the z component of the rotation ``b * a^-1`` in the camera frame, arcsec), the total angle
-between the attitudes, matches and rms residuals (seed 003 §1.11 "batch comparison of result
+between the attitudes, matches and rms residuals (Fowler 2013 Ch.8 "batch comparison of result
 sets", e.g. lens on against off).
 """
 

@@ -41,7 +41,7 @@ class AnalysisInfo:
     name : str
         Its key in :data:`startrack.analysis.postprocess.ANALYSES` (and the CLI's NAME).
     title, description : str
-        A heading and a paragraph: what the figure shows and where it comes from in seed 003.
+        A heading and a paragraph: what the figure shows and where it comes from in Fowler 2013.
     min_sets, max_sets : int
         How many result sets it takes.
     params : mapping

@@ -1,12 +1,12 @@
 """Analysis 5: attitude error with and without the lens correction and with and without the
-atmosphere correction (seed 003 Ch. 9 §VIII.B and §IX, notes §1.10; result sets 4 against 5 and
+atmosphere correction (Fowler 2013 Ch. 9 §VIII.B and §IX; result sets 4 against 5 and
 1 against 2 of Table 9.3).
 
 For each solved record the attitude is fitted again (Davenport's q-method,
 :func:`startrack.attitude.q_method`) to the *same* matched stars four ways:
 
 - **lens** on: the spots turned into directions through the calibrated lens model (distortion
-  included); off: through the pinhole with the same focal lengths and principal point (seed 003
+  included); off: through the pinhole with the same focal lengths and principal point (Fowler 2013
   §1.4, "Correct for Lens" switched off). The lens model is the ``camera`` parameter's preset,
   else the camera the record was solved with, else the simulator's camera, else the solution's;
 - **atmosphere** on: the catalog directions made what a camera on the ground sees, as

@@ -53,7 +53,7 @@ def no_data(ax: Axes, text: str = "no data") -> None:
 def draw_radial_fit(ax: Axes, radius: NDArray, value: NDArray, coef: Sequence[float] | None, *,
                     colour_name: str = "tab:blue", label: str = "") -> None:
     """Scatter of ``value`` against ``radius`` and the polynomial ``coef`` (highest power first,
-    as :func:`numpy.polyval` takes it) over 0..max radius (seed 003 §VIII.C)."""
+    as :func:`numpy.polyval` takes it) over 0..max radius (Fowler 2013 §VIII.C)."""
     ax.scatter(radius, value, s=6, color=colour_name, alpha=0.6, label=label or None)
     if coef is not None and radius.size:
         r = np.linspace(0.0, float(np.max(radius)), 100)

@@ -1,4 +1,4 @@
-"""Analysis 2: a gallery of spots, star against noise (seed 003 §1.11 "random starlight and noise
+"""Analysis 2: a gallery of spots, star against noise (Fowler 2013 Ch.8 "random starlight and noise
 spot pixel-cluster galleries"; Ch. 9 §V).
 
 Up to ``count`` matched (star) and ``count`` unmatched (noise) detections are drawn at random

@@ -2,7 +2,7 @@
 an attitude error split into pointing and roll.
 
 The error of an estimate against a reference attitude is the rotation ``estimate * reference^-1``
-expressed in the camera frame (seed 003 eq. 7.15 with the missing inverse, notes §1.9; the form of
+expressed in the camera frame (Fowler 2013 eq. 7.15 with the missing inverse, Fowler 2013 Ch.7 §III.B; the form of
 :mod:`startrack.calibrate.repeatability`): its rotation vector's length is the total error, the
 length of its (x, y) part the pointing error (the boresight's) and its z part the roll error.
 """

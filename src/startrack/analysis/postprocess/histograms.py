@@ -1,4 +1,4 @@
-"""Analysis 1: the image histogram and the spot histograms (seed 003 §1.11 "Histograms", Ch. 9
+"""Analysis 1: the image histogram and the spot histograms (Fowler 2013 Ch.8 "Histograms", Ch. 9
 §IV-V; Table 9.4's starlight and noise spots per image).
 
 For each result set, overlaid: the histogram of pixel values of all its images (log counts), and

@@ -1,12 +1,12 @@
 """Analysis 4: spot properties of the matched stars against their catalog magnitude and against
-their distance from the principal point (seed 003 §1.11 "Spot properties", Ch. 9 §V and App. C).
+their distance from the principal point (Fowler 2013 Ch.8 "Spot properties", Ch. 9 §V and App. C).
 
 Volume (flux), area, peak and elongation of every matched spot, against the catalog's V magnitude
 (``startrack.catalog``, estimated Johnson V of the Hipparcos star matched) and against the radius.
 The summary gives per result set the photometric zero point and its robust scatter
 (:func:`startrack.detect.magnitude.calibrate_zero_point`: the magnitude of a spot of volume 1) and
 the slope of log10(volume) against magnitude (-0.4 for a linear detector), and the per-image
-table the mean radius of the matched spots (seed 003 Fig. 9.23's "average radial distance").
+table the mean radius of the matched spots (Fowler 2013 Fig. 9.23's "average radial distance").
 """
 
 from __future__ import annotations

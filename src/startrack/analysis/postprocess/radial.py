@@ -1,5 +1,5 @@
 """Analysis 3: the residual of each matched star against its distance from the principal point,
-with a second-order fit (seed 003 Ch. 9 §VIII.C, notes §1.10: an even-order trend means radial
+with a second-order fit (Fowler 2013 Ch. 9 §VIII.C: an even-order trend means radial
 distortion is left in the lens model).
 
 The fit is ordinary least squares of ``residual = c0 + c1 r + c2 r^2`` per result set (r in px,

@@ -2,7 +2,7 @@
 
 To add an analysis: a module with ``INFO`` (an :class:`~.core.AnalysisInfo`) and
 ``run(result_sets, params) -> AnalysisResult`` (the sets and parameters already checked), listed
-in :data:`_MODULES` (seed 003's "AnalysisFns" registry, notes §1.11, without the restart).
+in :data:`_MODULES` (Fowler 2013's "AnalysisFns" registry, Fowler 2013 Ch.8, without the restart).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from .core import AnalysisInfo, AnalysisResult, ResultSet, check_params, check_s
 
 _MODULES = (histograms, gallery, radial, magnitude, corrections, repeatability, thresholds, compare, sweep)
 ANALYSES: Mapping[str, AnalysisInfo] = MappingProxyType({m.INFO.name: m.INFO for m in _MODULES})
-"""name -> :class:`AnalysisInfo`, in seed 003 §1.11's order."""
+"""name -> :class:`AnalysisInfo`, in Fowler 2013 Ch.8's order."""
 _RUNNERS: dict[str, Callable[[tuple[ResultSet, ...], dict], AnalysisResult]] = {m.INFO.name: m.run for m in _MODULES}
 
 

@@ -1,5 +1,5 @@
-"""Analysis 6: fixed-mount repeatability of a folder of ground photos (seed 003 Ch. 7 §III.B and
-Ch. 9 §VI, notes §1.9; Table 9.5's "truth" column).
+"""Analysis 6: fixed-mount repeatability of a folder of ground photos (Fowler 2013 Ch. 7 §III.B and
+Ch. 9 §VI; Table 9.5's "truth" column).
 
 The solved images that have a time are handed to
 :func:`startrack.calibrate.repeatability.repeatability` with the site: the mean mounting rotation

@@ -5,7 +5,7 @@ Each record's image is detected with its own detector (:func:`.records_io.detect
 setting changed, and solved as it was (:func:`.records_io.solve_kwargs_of`). Per value and image:
 solved, detections, matches, rms residual, time (detection + identification,
 ``AttitudeSolution.solve_time_s``), and for the stars matched both in the record and in the re-run
-(same HIP number) the mean change of their residual (seed 003 Ch. 9 §VII's threshold error).
+(same HIP number) the mean change of their residual (Fowler 2013 Ch. 9 §VII's threshold error).
 """
 
 from __future__ import annotations

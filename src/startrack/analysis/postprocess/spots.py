@@ -2,9 +2,9 @@
 matched star with its catalog magnitude, residual and distance from the principal point.
 
 A detection is a **star** spot when the identification matched it to a catalog star and a
-**noise** spot otherwise (seed 003 §1.7: with every starlight spot labelled, the rest is noise).
+**noise** spot otherwise (Fowler 2013 Ch.6: with every starlight spot labelled, the rest is noise).
 The peak fraction is the spot's brightest pixel over its volume (flux): 1 for a single hot
-pixel, small for a wide or flat spot. It stands in for seed 003's flatness factor (std / max of
+pixel, small for a wide or flat spot. It stands in for Fowler 2013's flatness factor (std / max of
 the spot's pixels), which needs the spot's pixels the detector does not keep.
 """
 
@@ -106,7 +106,7 @@ def _columns(rows: dict[str, list]) -> dict[str, NDArray]:
 
 
 def counts_table(result_sets: Sequence[ResultSet]) -> dict[str, list]:
-    """Per record: set, record, solved, n_detected, n_star, n_noise (seed 003 Table 9.4's
+    """Per record: set, record, solved, n_detected, n_star, n_noise (Fowler 2013 Table 9.4's
     starlight and noise spots per image)."""
     out: dict[str, list] = {k: [] for k in ("set", "record", "solved", "n_detected", "n_star", "n_noise")}
     for s in result_sets:

@@ -1,4 +1,4 @@
-"""Analysis 7: threshold comparison (seed 003 Ch. 9 §VII, notes §1.10: re-run with a lower
+"""Analysis 7: threshold comparison (Fowler 2013 Ch. 9 §VII: re-run with a lower
 threshold and compare; Table 9.5's "threshold" error of 0.15 arcmin).
 
 The images are detected again at each k-sigma detection threshold (:class:`StarDetector`'s

@@ -1,6 +1,6 @@
-"""Parameters and helpers of the streaked-frame levels ``streak`` and ``rso`` (seed 001).
+"""Parameters and helpers of the streaked-frame levels ``streak`` and ``rso`` (Sease 2013).
 
-Seed 001 states no camera (notes ``seed-001-004.md`` §4.3). The defaults are those of
+Sease 2013 states no camera. The defaults are those of
 ``benchmarks/streak_benchmark.py`` and ``docs/attitude_and_rate.md``: 1024 x 1024 px, 22.8 deg
 field (80 arcsec/px, matching the seed's "1/2 px = 40 arcsec"), Gaussian PSF sigma 1 px, sky
 20 e- and read noise 5 e- per pixel, stars of 1e5-5e5 e- per exposure
@@ -31,7 +31,7 @@ def camera_params(**defaults: Any) -> tuple[Param, ...]:
 
 
 STREAK_CAMERA_PARAMS = camera_params(fov_deg=22.8, width=1024, height=1024)
-"""The pinhole camera, with the seed 001 defaults above."""
+"""The pinhole camera, with the Sease 2013 defaults above."""
 
 STREAK_SCENE_PARAMS = (
     Param("psf_sigma_px", "float", 1.0, "Gaussian PSF sigma (px)", lo=0.3, hi=10.0),

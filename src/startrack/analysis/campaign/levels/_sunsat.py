@@ -1,4 +1,4 @@
-"""Seed 002's matching experiment (Jacobs 1995 §3.5, Tables 3-5 to 3-7; notes ``seed-002.md``
+"""Jacobs 1995's matching experiment (Jacobs 1995 §3.5, Tables 3-5 to 3-7
 §2.2): the Sunsat attitude region, its star lists and its guide catalogues, for the level
 :mod:`.groupmatch`.
 
@@ -42,13 +42,13 @@ from ....units import DEG
 CAMERA = get_preset("sunsat")
 MAX_EXTRACTED = 20
 MIN_SEPARATION_PX = 3.0
-"""A star closer than this to a brighter one is part of its spot (seed 002's stars are >= 3 px wide)."""
+"""A star closer than this to a brighter one is part of its spot (Jacobs 1995's stars are >= 3 px wide)."""
 INCLINATION = 97.0 * DEG
 REGION_SAMPLES = 20_000
 REGION_SEED = 20020
 """Seed of the boresights that mark the sub-catalogue's region (fixed: one catalogue for all trials)."""
 
-SEED_ROWS = {  # seed 002 §3.5 Tables 3-5/3-6/3-7 (notes seed-002.md §2.2)
+SEED_ROWS = {  # Jacobs 1995 §3.5 Tables 3-5/3-6/3-7 (Jacobs 1995 §3.5, Tables 3-5/3-6/3-7)
     1: {"sigma_p_urad": 50.0, "sigma_mv": 0.3, "d_uncert_urad": 50.0, "mv_uncert": 0.3},
     2: {"sigma_p_urad": 50.0, "sigma_mv": 0.3, "d_uncert_urad": 75.0, "mv_uncert": 0.45},
     3: {"sigma_p_urad": 50.0, "sigma_mv": 0.3, "d_uncert_urad": 100.0, "mv_uncert": 0.6},

@@ -1,5 +1,5 @@
 """Level "centroid": an image of ``stars_per_image`` synthetic stars of one magnitude, detected
-and centroided (seed 000 §4.2.2, Table 4.2: weighted sum against maximum likelihood).
+and centroided (Huffman 2006 §4.2.2, Table 4.2: weighted sum against maximum likelihood).
 
 The stars sit one per cell of a ``grid_px`` grid (a random whole-pixel offset within a quarter
 cell and a uniform sub-pixel phase; cells ``margin_px`` from the edges), so that none blend.

@@ -1,4 +1,4 @@
-"""Level "groupmatch": seed 002's lost-in-space matching trade, one star list in the Sunsat
+"""Level "groupmatch": Jacobs 1995's lost-in-space matching trade, one star list in the Sunsat
 attitude region matched by one method (Jacobs 1995 §3.5, Tables 3-5 to 3-7).
 
 The trial's attitude is drawn from the seed's orbit region, not from the campaign's attitudes;
@@ -51,7 +51,7 @@ METHODS = ("vb-sub", "vb-group", "vb-allsky", "quads")
 ROW_KEYS = tuple(SEED_ROWS[1])
 
 PARAMS = params_by_name((
-    Param("seed_row", "int", 2, "the row of seed 002's Tables 3-5 to 3-7 (noise and tolerances)", lo=1, hi=5),
+    Param("seed_row", "int", 2, "the row of Jacobs 1995's Tables 3-5 to 3-7 (noise and tolerances)", lo=1, hi=5),
     Param("sigma_p_urad", "float", None, "star position noise per axis (urad); auto: the row's", lo=0.0, hi=1e5,
           optional=True),
     Param("sigma_mv", "float", None, "magnitude noise (mag); auto: the row's", lo=0.0, hi=10.0, optional=True),

@@ -1,4 +1,4 @@
-"""Level "photometry": the magnitude error of thresholded weighted-sum photometry (seed 000 §5.3,
+"""Level "photometry": the magnitude error of thresholded weighted-sum photometry (Huffman 2006 §5.3,
 Tables 5.2 and 5.3).
 
 Each trial renders ``stars_per_image`` stars of magnitude ``mag_v`` at uniformly random

@@ -1,5 +1,5 @@
-"""Level "prefilter": the time of seed 000's 5 x 5 statistical pre-filter, and the stars the
-detector then centroids, on a rendered frame of the sky (seed 000 §7.1.1, Table 7.2).
+"""Level "prefilter": the time of Huffman 2006's 5 x 5 statistical pre-filter, and the stars the
+detector then centroids, on a rendered frame of the sky (Huffman 2006 §7.1.1, Table 7.2).
 
 The frame is the image level's (:func:`.image.render`: every simulator setting of that level is
 a parameter here), at the trial's attitude or at a fixed pointing (``pointing_radec_roll_deg``)

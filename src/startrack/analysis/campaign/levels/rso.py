@@ -1,5 +1,5 @@
 """Level "rso": one streaked frame, its catalog-free rate and the three RSO indicators
-(seed 001 ch. 4: Tables 4.1, 4.2 and, with ``scenario = "orbits"``, Tables 4.3-4.4).
+(Sease 2013 ch. 4: Tables 4.1, 4.2 and, with ``scenario = "orbits"``, Tables 4.3-4.4).
 
 Scenario "slew" (Tables 4.1, 4.2): the camera turns at ``rate_rad_s`` about ``axis`` (camera
 frame) from the trial's attitude; with ``rso = true`` the frame also holds a satellite of V

@@ -1,5 +1,5 @@
 """Level "seqmatch": the attitude of every frame of a slow sequence by one matching method, and
-the time the whole chain takes (seed 000 §7.2-7.4, Table 8.2).
+the time the whole chain takes (Huffman 2006 §7.2-7.4, Table 8.2).
 
 The sequence: ``n_frames`` frames at ``frame_rate_hz`` (:func:`startrack.simulate.simulate_sequence`,
 the image level's simulator settings), the camera turning at ``turn_rate_deg_s`` about a random

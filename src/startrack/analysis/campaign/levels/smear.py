@@ -1,9 +1,9 @@
 """Level "smear": one smeared point-star image, first-moment centroids, and the two centroid-error
-metrics of seed 004 (Samaan et al. 2002, Table 2: the interstar-angle sigma, eq. 7, and the
+metrics of Samaan 2002 (Samaan et al. 2002, Table 2: the interstar-angle sigma, eq. 7, and the
 image-plane STD, eq. 8, in microradians).
 
 The camera is StarNav I as Table 1 implies it (512 x 512 px, 8 deg field: IFOV 0.015625 deg =
-272.7 urad; the text says 7 deg, notes ``seed-001-004.md`` §3.5). ``stars`` stars are placed where
+272.7 urad; the text says 7 deg, Samaan 2002 Table 1). ``stars`` stars are placed where
 their path stays ``margin_px`` inside the image and rendered from the trial's attitude while the
 camera turns at ``rate_deg_s`` about a uniformly random axis for ``exposure_s``; each keeps its
 electrons (uniform in ``star_electrons``) whatever the smear, as the seed's rule says ("the
@@ -13,7 +13,7 @@ The image is segmented (:func:`startrack.rate.streak_detect.find_streaks`, ``min
 each blob's intensity centroid is the measurement (``centroider = "moments"``, the seed's first
 moments), or the stars are found and centroided by :class:`startrack.detect.StarDetector` with the
 ``centroider`` named (e.g. ``"mle"``, the maximum-likelihood pixel-integrated Gaussian fit);
-each true star (its mid-exposure position, the time tag of seed 004 eq. 6) takes its nearest
+each true star (its mid-exposure position, the time tag of Samaan 2002 eq. 6) takes its nearest
 centroid within ``match_px``, and stars with another star within ``crowd_px`` are left out (a
 blend is not a centroid error).
 

@@ -1,5 +1,5 @@
 """Level "smearlimit": the largest rate at which a star smears by at most a tenth of a pixel in
-one exposure, and the smear the simulator then renders (seed 004 "Maximum Angular Rate
+one exposure, and the smear the simulator then renders (Samaan 2002 "Maximum Angular Rate
 Estimation", Table 1).
 
 The rate is :func:`startrack.simulate.max_rate_rad_s`: ``smear_fraction_px`` pixel angles

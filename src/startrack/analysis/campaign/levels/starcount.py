@@ -1,5 +1,5 @@
 """Level "starcount": the catalog stars in the field at the trial's attitude (star availability;
-seed 002 §5.1 Fig. 5-1, seed 000 §5.1 Table 5.1).
+Jacobs 1995 §5.1 Fig. 5-1, Huffman 2006 §5.1 Table 5.1).
 
 A field is the camera's image (``shape = "image"``: a camera preset, or a pinhole of
 ``fov_deg`` x the aspect of ``width`` x ``height``; a star counts when it projects inside the
@@ -9,7 +9,7 @@ stars (estimated Johnson V, at ``epoch_jyear``) are counted to ``max_mag`` (``n_
 the field's ``min_stars``-th brightest star to ``catalog_max_mag`` gives the limit this
 pointing needs to hold ``min_stars`` stars (``mag_needed_v``; inf when not even
 ``catalog_max_mag`` suffices). Over a Fibonacci lattice of boresights (``attitudes =
-"fibonacci"``), ``max:mag_needed_v`` is the seed 000 Table 5.1 limit "at least n stars in
+"fibonacci"``), ``max:mag_needed_v`` is the Huffman 2006 Table 5.1 limit "at least n stars in
 every field"; over uniform attitudes, ``rate:too_few`` is the share of pointings with fewer
 than ``min_stars`` stars to ``max_mag``.
 

@@ -1,5 +1,5 @@
 """Level "streak": one streaked frame, its streak ends located by a corner detector, and the
-attitudes at both ends and the rate between them (seed 001 ch. 3, Table 3.1).
+attitudes at both ends and the rate between them (Sease 2013 ch. 3, Table 3.1).
 
 The camera spins at ``rate_rad_s`` about an axis ``theta`` from the boresight (uniform in
 ``theta_range_deg``, the seed's "precise region" by default) at a uniform azimuth; the exposure
@@ -56,7 +56,7 @@ CALIBRATION_FRACTION = 0.1
 CALIBRATION_STARS = 10
 
 STREAK_PARAMS = (
-    Param("detector", "str", "harris", "endpoint detector (seed 001 §3: Harris, minimum eigenvalue, Trajkovic "
+    Param("detector", "str", "harris", "endpoint detector (Sease 2013 §3: Harris, minimum eigenvalue, Trajkovic "
           "4 / 8; or the segment fit)", choices=(*DETECTORS, SEGMENT)),
     Param("streak_fraction", "float", 0.1, "streak length |omega| T / FoV (seed eq. 3.28)", lo=0.01, hi=0.9),
     Param("rate_rad_s", "float", 0.05, "the camera's rate (rad/s); the exposure sets the streak length",

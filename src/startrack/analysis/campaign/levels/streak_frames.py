@@ -4,7 +4,7 @@ lost-in-space from its streaks (issue 19: :func:`startrack.rate.streak_solve.sol
 The camera turns at ``rate_deg_s`` about an axis uniform on the sphere (camera frame), plus,
 with ``accel_deg_s2``, a constant angular acceleration of that size about another uniform axis;
 the exposure makes the streaks ``streak_fraction`` of the field long (uniform in the range per
-frame; |omega| T / FoV, seed 001 eq. 3.28); the trial's attitude holds at mid-exposure. The
+frame; |omega| T / FoV, Sease 2013 eq. 3.28); the trial's attitude holds at mid-exposure. The
 Hipparcos sky to ``max_mag`` at ``epoch_jyear`` is rendered through the ``sensor`` preset (every
 Optics / Detector field and ``noise_<field>`` switch is a parameter, as in the image level) with
 the rolling-shutter ``line_time_s``. The solver gets the field of view (``fov_known``: trusted to
@@ -27,7 +27,7 @@ simulator's), ``streak_fraction`` (drawn), ``exposure_s``, ``streak_px`` (the tr
 length of the stars in the image), ``n_true`` (those stars), ``cpu_s`` (process time of the
 solve), ``time_order_known``, ``five_streaks`` (solved with at least five identified streaks: the
 frames the issue's target is about) and ``meets_target`` (a trusted rate within 1 % and an axis
-within 0.5 deg, the target of issue 19 and seed 001 ch. 6).
+within 0.5 deg, the target of issue 19 and Sease 2013 ch. 6).
 """
 
 from __future__ import annotations
