@@ -158,7 +158,7 @@ class _Field:
     def __init__(self, stars: StarSet, matrix: NDArray, camera: Camera, xs: NDArray, ys: NDArray, reach_px: float):
         self.stars, self.matrix, self.camera, self.xs, self.ys = stars, matrix, camera, xs, ys
         self.index = field_cone(stars.tree, matrix, camera, stars.keep)
-        self.vectors = stars.vectors[self.index]
+        self.vectors = np.take(stars.vectors, self.index, axis=0)  # fancy indexing of (S, 3) costs several times more
         self.tight_catalog = np.zeros(0, np.int64)
         self.reach_px = reach_px
         self._pairs: tuple | None = None
