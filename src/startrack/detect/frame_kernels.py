@@ -268,48 +268,40 @@ def _union(parent, a, b):
 
 
 @njit(cache=True, error_model="numpy")
-def _provisional(mask):
-    """Raster scan of ``mask``: flat index and provisional label of every True pixel, and the
-    union-find parents of the labels (8-connected to the row above and the pixel before)."""
-    h, w = mask.shape
-    flat = np.empty(16, np.int64)
-    label = np.empty(16, np.int64)
-    parent = np.empty(16, np.int64)
-    previous, current = np.full(w, -1, np.int64), np.full(w, -1, np.int64)
-    m = n = 0
-    for i in range(h):
-        for j in range(w):
-            current[j] = -1
-            if not mask[i, j]:
-                continue
-            mine = current[j - 1] if j > 0 else -1
-            for dj in (-1, 0, 1):
-                if 0 <= j + dj < w and previous[j + dj] >= 0:
-                    if mine < 0:
-                        mine = previous[j + dj]
-                    else:
-                        _union(parent, mine, previous[j + dj])
-            if mine < 0:
-                if n == parent.size:
-                    parent = np.concatenate((parent, np.empty(n, np.int64)))
-                parent[n] = mine = n
-                n += 1
-            if m == flat.size:
-                flat = np.concatenate((flat, np.empty(m, np.int64)))
-                label = np.concatenate((label, np.empty(m, np.int64)))
-            flat[m], label[m], current[j] = i * w + j, mine, mine
-            m += 1
-        previous, current = current, previous
-    return flat[:m], label[:m], parent[:n]
+def _provisional(flat, w):
+    """Raster scan of the True pixels (flat indices ``flat``, increasing, of an image ``w`` wide):
+    the provisional label of each, and the union-find parents of the labels (8-connected to the
+    row above and the pixel before). Two rows of labels, stamped with their row, stand for the
+    mask's rows, so that only the True pixels are visited."""
+    label = np.empty(flat.size, np.int64)
+    parent = np.empty(max(flat.size, 1), np.int64)
+    row_label = np.empty((2, w), np.int64)
+    stamp = np.full((2, w), -2, np.int64)
+    n = 0
+    for m in range(flat.size):
+        i, j = flat[m] // w, flat[m] % w
+        here, above = i & 1, (i - 1) & 1
+        mine = row_label[here, j - 1] if j > 0 and stamp[here, j - 1] == i else -1
+        for jj in range(max(j - 1, 0), min(j + 2, w)):
+            if stamp[above, jj] == i - 1:
+                if mine < 0:
+                    mine = row_label[above, jj]
+                else:
+                    _union(parent, mine, row_label[above, jj])
+        if mine < 0:
+            parent[n] = mine = n
+            n += 1
+        label[m], row_label[here, j], stamp[here, j] = mine, mine, i
+    return label, parent[:n]
 
 
 @njit(cache=True, error_model="numpy")
-def label8(mask):
-    """8-connected regions of the True pixels of bool ``mask`` (H, W), numbered in raster order
-    of their first pixels (``scipy.ndimage.label``'s order), each region's pixels in raster order.
-    Returns (index, y, x) of shape (M,) grouped region after region, and starts (N,), int64."""
-    w = mask.shape[1]
-    flat, label, parent = _provisional(mask)
+def label8(flat, w):
+    """8-connected regions of the True pixels of a mask ``w`` pixels wide, given by their flat
+    indices ``flat`` (increasing), numbered in raster order of their first pixels
+    (``scipy.ndimage.label``'s order), each region's pixels in raster order. Returns (index, y,
+    x) of shape (M,) grouped region after region, and starts (N,), int64."""
+    label, parent = _provisional(flat, w)
     final = np.empty(parent.size, np.int64)
     n = 0
     for a in range(parent.size):  # a root precedes the labels joined to it

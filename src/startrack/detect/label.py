@@ -107,9 +107,10 @@ def regions_from_index(index: NDArray, y: NDArray, x: NDArray, n: int) -> Region
 def label_regions(mask: NDArray[np.bool_]) -> Regions:
     """8-connected regions of the True pixels of ``mask`` (shape (H, W)), as :class:`Regions`:
     numbered in raster order of their first pixels (``scipy.ndimage.label``'s order, with its
-    3 x 3 structuring element), each region's pixels in raster order. One compiled union-find
-    scan (:func:`.frame_kernels.label8`)."""
-    index, y, x, starts = kernels().label8(np.ascontiguousarray(mask, dtype=np.bool_))
+    3 x 3 structuring element), each region's pixels in raster order. One compiled
+    union-find scan over the True pixels only (:func:`.frame_kernels.label8`)."""
+    mask = np.asarray(mask, dtype=np.bool_)
+    index, y, x, starts = kernels().label8(np.flatnonzero(mask), mask.shape[1])
     return Regions(index, y, x, starts)
 
 
