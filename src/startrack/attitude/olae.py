@@ -56,7 +56,7 @@ def olae_gibbs(
 ) -> NDArray[np.float64]:
     """One OLAE solve: the Gibbs vectors g (..., 3) (no frame turn; singular at 180 degrees)."""
     matrix, rhs = olae_system(observed, reference, weights)
-    return np.linalg.solve(matrix, rhs[..., None])[..., 0]
+    return np.asarray(np.linalg.solve(matrix, rhs[..., None])[..., 0], dtype=np.float64)
 
 
 def olae_residuals(
