@@ -43,6 +43,7 @@ from ....simulate import ConstantRate, simulate_sequence
 from ....solve import solve_stars
 from ....track.relative import rate_match, triangle_match
 from ....units import DEG
+from ...errors import require
 from ..outcome import error_columns, solution_columns
 from ..params import Param, params_by_name
 from . import Level, TrialOutput, register
@@ -119,7 +120,8 @@ def relative_chain(found: list[Detections], camera: Camera, method: str, dt_s: f
             pairs = -1
             continue
         prev, cur = (camera.pixel_to_vector(f.x, f.y) for f in (found[k - 1], found[k]))
-        rel = rate_match(prev, cur, rate, dt_s, tol) if method == "rate" else triangle_match(prev, cur, tol)
+        rel = (rate_match(prev, cur, require(rate, "the rate"), dt_s, tol) if method == "rate"
+               else triangle_match(prev, cur, tol))
         rot = None if rel.rot_cam2_from_cam1 is None else rel.rot_cam2_from_cam1 * out[-1].rot_cam_from_icrs
         out.append(AttitudeSolution(status=rel.status if rot is not None else Status.NO_MATCH, reason=rel.reason,
                                     rot_cam_from_icrs=rot))
