@@ -35,6 +35,7 @@ import pyarrow as pa
 from scipy.spatial.transform import Rotation
 
 from ....camera import Camera
+from ....errors import require
 from ....frames import attitude_error
 from ....identify.registry import MATCHERS
 from ....rate.from_attitudes import rate_between
@@ -43,7 +44,6 @@ from ....simulate import ConstantRate, simulate_sequence
 from ....solve import solve_stars
 from ....track.relative import rate_match, triangle_match
 from ....units import DEG
-from ...errors import require
 from ..outcome import error_columns, solution_columns
 from ..params import Param, params_by_name
 from . import Level, TrialOutput, register

@@ -24,12 +24,12 @@ import numpy as np
 import pyarrow as pa
 from scipy.spatial.transform import Rotation
 
+from ....errors import require
 from ....results import AttitudeSolution
 from ....simulate import ConstantRate, simulate_sequence
 from ....track import Tracker, TrackerOptions
 from ....track.tracker import TRACKING
 from ....units import DEG
-from ...errors import require
 from ..outcome import error_columns, solution_columns
 from ..params import Param, params_by_name
 from . import Level, TrialOutput, register

@@ -47,9 +47,9 @@ from ....attitude import solve_wahba
 from ....camera import Camera
 from ....detect import StarDetector
 from ....detect.centroiders import CENTROIDERS
+from ....errors import require
 from ....rate.streak_detect import find_streaks
 from ....units import DEG
-from ...errors import require
 from ...streak_scenes import StreakScene, render_streak_scene, star_field, star_paths
 from ..outcome import NAN, error_columns, truth_columns
 from ..params import Param, params_by_name
