@@ -125,8 +125,8 @@ class Truth:
     y_end: NDArray[np.float64] = None  # type: ignore[assignment]
     b_v: NDArray[np.float64] = None  # type: ignore[assignment]
     rate_cam_rad_s: NDArray[np.float64] = None  # type: ignore[assignment]
-    rot_start: Rotation = None  # type: ignore[assignment]
-    rot_end: Rotation = None  # type: ignore[assignment]
+    rot_start: Rotation = None
+    rot_end: Rotation = None
     t_mid_s: float = 0.0
     time_mid: Time | None = None
     line_time_s: float = 0.0
