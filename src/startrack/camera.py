@@ -73,9 +73,10 @@ class Camera:
     width: int
     height: int
     fx: float
-    fy: float | None = None
-    cx: float | None = None
-    cy: float | None = None
+    # fy, cx and cy default to None and are always floats once __post_init__ has filled them.
+    fy: float = None  # type: ignore[assignment]
+    cx: float = None  # type: ignore[assignment]
+    cy: float = None  # type: ignore[assignment]
     k1: float = 0.0
     k2: float = 0.0
     k3: float = 0.0
@@ -305,8 +306,9 @@ class Camera:
             bad = ~(np.hypot(fa - ad, fb - bd) < tol)
         return np.where(bad, np.nan, a), np.where(bad, np.nan, b)
 
-    def in_image(self, x: ArrayLike, y: ArrayLike, margin_px: float = 0.0) -> NDArray[np.bool_]:
-        """True where (x, y) lies inside the image, at least ``margin_px`` from its outer edge."""
+    def in_image(self, x: ArrayLike, y: ArrayLike, margin_px: float | NDArray[np.float64] = 0.0) -> NDArray[np.bool_]:
+        """True where (x, y) lies inside the image, at least ``margin_px`` (a number, or an array
+        broadcasting against x) from its outer edge."""
         x = np.asarray(x, dtype=float)
         y = np.asarray(y, dtype=float)
         lo = -0.5 + margin_px

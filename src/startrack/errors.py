@@ -6,6 +6,10 @@ exceptions; see :mod:`startrack.results`.
 
 from __future__ import annotations
 
+from typing import TypeVar
+
+_T = TypeVar("_T")
+
 
 class StartrackError(Exception):
     """Base class of every startrack exception."""
@@ -29,3 +33,16 @@ class OutputError(StartrackError, OSError):
 
 class CacheWarning(UserWarning):
     """The user cache could not be used (e.g. a read-only folder); startrack went on without it."""
+
+
+def require(value: _T | None, what: str) -> _T:
+    """``value`` itself when it is set: for a field a result fills only on success.
+
+    A result's optional fields (an unsolved solution has no camera) are None only with a failure
+    status; code that has checked the status reads them through this, so that a reader and a type
+    checker both see the field cannot be None there. Raises :class:`StartrackError` naming ``what``
+    if it is (a broken invariant, not a user's input).
+    """
+    if value is None:
+        raise StartrackError(f"{what} is not set (the result it belongs to did not succeed)")
+    return value

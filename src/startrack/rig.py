@@ -179,6 +179,13 @@ class RigHead:
         return self.detector if self.detector is not None else self.name
 
     @property
+    def field_psf(self) -> PsfShape:
+        """The PSF of a field of a shared detector (InvalidInputError if the head has none)."""
+        if self.psf is None:
+            raise InvalidInputError(f"head {self.name!r} has no psf; the fields of a shared detector need one")
+        return self.psf
+
+    @property
     def boresight_body(self) -> np.ndarray:
         """The head's +z axis in body-frame components, shape (3,)."""
         return self.rot_cam_from_body.inv().apply([0.0, 0.0, 1.0])

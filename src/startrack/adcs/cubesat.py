@@ -46,6 +46,12 @@ def helmholtz_field_t(turns: int, current_a: float, radius_m: float) -> float:
     return (0.8 ** 1.5) * MU0_T_M_A * turns * current_a / radius_m
 
 
+def _scaled(values: tuple[float, float, float], factor: float) -> tuple[float, float, float]:
+    """Three values times ``factor``."""
+    a, b, c = values
+    return a * factor, b * factor, c * factor
+
+
 @dataclass(frozen=True)
 class CubeSat:
     """Inertia and magnetic torque coils of the satellite, and the field strength it sits in.
@@ -70,7 +76,7 @@ class CubeSat:
     """
 
     inertia_kg_m2: tuple[float, float, float] = field(
-        default_factory=lambda: tuple(0.1 * j for j in SEED_INERTIA_KG_M2))
+        default_factory=lambda: _scaled(SEED_INERTIA_KG_M2, 0.1))
     turns: int = 80
     coil_area_m2: float = 0.0064
     resistance_ohm: float = 23.0
@@ -98,7 +104,7 @@ class CubeSat:
     def with_j22(self, j22_kg_m2: float) -> CubeSat:
         """The same satellite with another J22 (the other moments scaled alike)."""
         scale = _positive("j22_kg_m2", j22_kg_m2) / self.j22
-        return replace(self, inertia_kg_m2=tuple(j * scale for j in self.inertia_kg_m2))
+        return replace(self, inertia_kg_m2=_scaled(self.inertia_kg_m2, scale))
 
     @property
     def j22(self) -> float:

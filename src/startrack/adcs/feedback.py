@@ -85,12 +85,12 @@ class ImuFeedback(TickFeedback):
             value = getattr(self, label)
             if not (math.isfinite(value) and 0 <= value < 1):
                 raise InvalidInputError(f"{label} must be in [0, 1), got {value!r}")
-        self.rng = np.random.default_rng(self.rng)
+        self._generator = np.random.default_rng(self.rng)
 
     def estimate(self, t_s: float, plant: Plant, log: CommandLog) -> Estimate:
         q = plant.rot_ref_from_body().as_quat()
-        vec = q[:3] + self.rng.uniform(-self.quaternion_bound, self.quaternion_bound, 3)
+        vec = q[:3] + self._generator.uniform(-self.quaternion_bound, self.quaternion_bound, 3)
         scalar = math.copysign(math.sqrt(max(0.0, 1.0 - float(vec @ vec))), q[3])
-        rate = plant.rate_body() + self.rng.uniform(-self.rate_bound_rad_s, self.rate_bound_rad_s, 3)
+        rate = plant.rate_body() + self._generator.uniform(-self.rate_bound_rad_s, self.rate_bound_rad_s, 3)
         return Estimate(t_s, Rotation.from_quat([*vec, scalar]), rate, True)
 

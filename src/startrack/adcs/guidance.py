@@ -20,7 +20,7 @@ import math
 import time
 from dataclasses import dataclass, field
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, require
 from .cubesat import CubeSat
 from .planner import Boundary, PlannedPath, PlannerOptions, plan_path
 
@@ -93,12 +93,12 @@ class Guidance:
             else:
                 self.plan = PlannedPath.hold(target_q2, t_s)
                 self._next_replan = t_s + opt.replan_period_s
-        return self.plan
+        return require(self.plan, "the guidance plan")
 
     def _replan(self, t_s: float, theta_rad: float, omega_rad_s: float, horizon_s: float) -> None:
         opt = self.options
         start_q2 = max(-MAX_START_Q2, min(MAX_START_Q2, math.sin(0.5 * theta_rad)))
-        start, end = Boundary(start_q2, omega_rad_s), Boundary(self._target, 0.0)
+        start, end = Boundary(start_q2, omega_rad_s), Boundary(require(self._target, "the guidance target"), 0.0)
         while True:
             wall = time.perf_counter()
             plan = plan_path(self.cubesat, start, end, t_s, horizon_s, opt.planner)

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, require
 from .actuation import allocate
 from .control import tracking_law
 from .cubesat import CubeSat
@@ -126,7 +126,7 @@ def make_feedback(config: LoopConfig, log: CommandLog) -> Feedback:
         return ImuFeedback(rng)
     if config.feedback == "tracker":
         return StarTrackerFeedback(config.tracker, log)
-    return ModelTrackerFeedback(config.tracker, log, config.noise_model, rng)
+    return ModelTrackerFeedback(config.tracker, log, require(config.noise_model, "noise_model"), rng)
 
 
 class _Controller:
@@ -163,7 +163,7 @@ def run_loop(config: LoopConfig, progress=None) -> RunRecord:
     feedback, controller = make_feedback(config, log), _Controller(config, plant)
     pwm = np.random.default_rng([config.seed, 2])
     n, dt = sc.n_ticks, sc.dt_s
-    t_s = np.arange(n) * dt
+    t_s = np.arange(n, dtype=np.float64) * dt
     rec = {name: np.full(n, np.nan) for name in RECORDED}
     inertia = np.asarray(sat.inertia_kg_m2)
     wall = time.perf_counter()

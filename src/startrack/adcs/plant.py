@@ -39,9 +39,11 @@ class Plant(Protocol):
     """What the closed loop needs from a plant."""
 
     cubesat: CubeSat
-    field: FieldModel
     coil_normals_body: NDArray[np.float64]
     t_s: float
+
+    @property
+    def field(self) -> FieldModel: ...
 
     def rot_ref_from_body(self) -> Rotation: ...
 
@@ -84,7 +86,7 @@ def _checked_step(currents_a: ArrayLike, n_coils: int, dt_s: float) -> NDArray[n
     return currents
 
 
-def _rotate_inverse(q: Sequence[float], v: Sequence[float]) -> tuple[float, float, float]:
+def _rotate_inverse(q: Sequence[float], v: Sequence[float] | NDArray[np.float64]) -> tuple[float, float, float]:
     """``Rotation.from_quat(q).inv().apply(v)`` for one unit quaternion (scalar last), in floats."""
     ux, uy, uz, w = -q[0], -q[1], -q[2], q[3]
     vx, vy, vz = v

@@ -176,7 +176,7 @@ def find_passes(camera: Camera, observer: KeplerElements, rso: KeplerElements, e
     scene = OrbitalScene(obs_orbit, (RSO(rso_orbit, 1, rso_mag),))
     mids = starts + exposure_s / 2
     snapshots = scene.snapshots(epoch + TimeDelta(mids, format="sec"))
-    passes = []
+    passes: list[Pass] = []
     for start, mid, snap in zip(starts, mids, snapshots, strict=True):
         rot_mid = camera_rotation(omega, mid)[0]
         boresight = rot_mid.inv().apply([0.0, 0.0, 1.0])

@@ -30,11 +30,12 @@ from .quest import quest
 from .residuals import angle_residuals
 from .svd import svd_method
 from .triad import triad
-from .wahba import METHODS, WahbaResult, solve_wahba
+from .wahba import METHODS, WahbaMethod, WahbaResult, solve_wahba
 
 __all__ = [
     "METHODS",
     "PredictiveUpdate",
+    "WahbaMethod",
     "WahbaResult",
     "angle_residuals",
     "attitude_covariance",

@@ -23,12 +23,12 @@ turned by 180 degrees about x, for the same reason.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ..frames import cross
 from ._refine import FLIP_QUATS, refine, unflip
 from .quest import frame_invariants, largest_eigenvalue
-from .wahba import attitude_profile_matrix, wahba_solver
+from .wahba import WahbaResult, attitude_profile_matrix, solve_with
 
 REFINE_PASSES = 2
 
@@ -68,7 +68,11 @@ def esoq2_quaternions(
     return refine(esoq2_step, profile, esoq2_step(profile), REFINE_PASSES, offset_quat=FLIP_QUATS[1])
 
 
-esoq2 = wahba_solver(
-    esoq2_quaternions, name="esoq2", module=__name__,
-    summary="Solve Wahba's problem by Mortari's ESOQ2.",
-)
+def esoq2(observed: ArrayLike, reference: ArrayLike, weights: ArrayLike | None = None, *,
+          sigma_rad: ArrayLike | None = None) -> WahbaResult:
+    """Solve Wahba's problem by Mortari's ESOQ2.
+
+    Parameters and result as :func:`~startrack.attitude.solve_wahba` (without ``method``):
+    ``result.rotation.apply(reference) ~ observed``, with the QUEST covariance when ``sigma_rad`` is given.
+    """
+    return solve_with(esoq2_quaternions, observed, reference, weights, sigma_rad=sigma_rad)

@@ -22,12 +22,12 @@ SVD covariance exactly.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..frames import cross
 from ._refine import refine
-from .wahba import attitude_profile_matrix, sigma_weighted_profile, wahba_solver
+from .wahba import WahbaResult, attitude_profile_matrix, sigma_weighted_profile, solve_with
 
 NEWTON_MAX_ITER = 60
 NEWTON_TOL = 1e-15
@@ -90,8 +90,11 @@ def foam_covariance(
     return (sigma_tot2 / zeta)[:, None, None] * (kappa[:, None, None] * np.eye(3) + bbt)
 
 
-foam = wahba_solver(
-    foam_quaternions, foam_covariance, name="foam", module=__name__,
-    summary="Solve Wahba's problem by Markley's FOAM.",
-    covariance_name="the FOAM covariance",
-)
+def foam(observed: ArrayLike, reference: ArrayLike, weights: ArrayLike | None = None, *,
+         sigma_rad: ArrayLike | None = None) -> WahbaResult:
+    """Solve Wahba's problem by Markley's FOAM.
+
+    Parameters and result as :func:`~startrack.attitude.solve_wahba` (without ``method``):
+    ``result.rotation.apply(reference) ~ observed``, with the FOAM covariance when ``sigma_rad`` is given.
+    """
+    return solve_with(foam_quaternions, observed, reference, weights, sigma_rad=sigma_rad, covariance=foam_covariance)

@@ -24,13 +24,13 @@ as ``q ~ (adj(M) v, det M)`` (no division), the first solve stays finite at 180 
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..frames import cross
 from ._linalg import quat_product
 from ._refine import FLIP_DIAGONALS, unflip
-from .wahba import wahba_solver
+from .wahba import WahbaResult, solve_with
 
 MAX_PASSES = 8
 """Most OLAE solves of the residual problem after the first."""
@@ -56,7 +56,7 @@ def olae_gibbs(
 ) -> NDArray[np.float64]:
     """One OLAE solve: the Gibbs vectors g (..., 3) (no frame turn; singular at 180 degrees)."""
     matrix, rhs = olae_system(observed, reference, weights)
-    return np.linalg.solve(matrix, rhs[..., None])[..., 0]
+    return np.asarray(np.linalg.solve(matrix, rhs[..., None])[..., 0], dtype=np.float64)
 
 
 def olae_residuals(
@@ -109,7 +109,11 @@ def olae_quaternions(
     return quat
 
 
-olae = wahba_solver(
-    olae_quaternions, name="olae", module=__name__,
-    summary="Solve Wahba's problem by OLAE with residual passes (module docstring).",
-)
+def olae(observed: ArrayLike, reference: ArrayLike, weights: ArrayLike | None = None, *,
+         sigma_rad: ArrayLike | None = None) -> WahbaResult:
+    """Solve Wahba's problem by OLAE with residual passes (module docstring).
+
+    Parameters and result as :func:`~startrack.attitude.solve_wahba` (without ``method``):
+    ``result.rotation.apply(reference) ~ observed``, with the QUEST covariance when ``sigma_rad`` is given.
+    """
+    return solve_with(olae_quaternions, observed, reference, weights, sigma_rad=sigma_rad)

@@ -30,7 +30,7 @@ from ..errors import InvalidInputError
 from ..frames import cross
 from ._inputs import as_per_vector, as_vector_pair
 from .triad import triad_quaternions
-from .wahba import wahba_solver
+from .wahba import WahbaResult, solve_with
 
 MAX_PASSES = 10
 PASS_TOL_RAD = 1e-12
@@ -100,10 +100,14 @@ def pad_quaternions(
     return rotation.as_quat()
 
 
-pad = wahba_solver(
-    pad_quaternions, name="pad", module=__name__,
-    summary="Solve Wahba's problem by iterated predictive attitude determination (module docstring).",
-)
+def pad(observed: ArrayLike, reference: ArrayLike, weights: ArrayLike | None = None, *,
+        sigma_rad: ArrayLike | None = None) -> WahbaResult:
+    """Solve Wahba's problem by iterated predictive attitude determination (module docstring).
+
+    Parameters and result as :func:`~startrack.attitude.solve_wahba` (without ``method``):
+    ``result.rotation.apply(reference) ~ observed``, with the QUEST covariance when ``sigma_rad`` is given.
+    """
+    return solve_with(pad_quaternions, observed, reference, weights, sigma_rad=sigma_rad)
 
 
 @dataclass(frozen=True)

@@ -10,9 +10,9 @@ and the reference the faster ones are compared with.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
-from .wahba import attitude_profile_matrix, davenport_matrix, wahba_solver
+from .wahba import WahbaResult, attitude_profile_matrix, davenport_matrix, solve_with
 
 
 def q_method_quaternions(
@@ -28,7 +28,11 @@ def q_method_quaternions(
     return vectors[..., :, 3]
 
 
-q_method = wahba_solver(
-    q_method_quaternions, name="q_method", module=__name__,
-    summary="Solve Wahba's problem by Davenport's q-method.",
-)
+def q_method(observed: ArrayLike, reference: ArrayLike, weights: ArrayLike | None = None, *,
+             sigma_rad: ArrayLike | None = None) -> WahbaResult:
+    """Solve Wahba's problem by Davenport's q-method.
+
+    Parameters and result as :func:`~startrack.attitude.solve_wahba` (without ``method``):
+    ``result.rotation.apply(reference) ~ observed``, with the QUEST covariance when ``sigma_rad`` is given.
+    """
+    return solve_with(q_method_quaternions, observed, reference, weights, sigma_rad=sigma_rad)

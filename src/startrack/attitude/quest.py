@@ -42,11 +42,11 @@ it is cubic when the first pass is good but converges to the wrong eigenvector w
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ._linalg import matvec
 from ._refine import FLIP_DIAGONALS, flipped_profiles, refine, unflip
-from .wahba import attitude_profile_matrix, davenport_parts, wahba_solver
+from .wahba import WahbaResult, attitude_profile_matrix, davenport_parts, solve_with
 
 NEWTON_MAX_ITER = 60
 NEWTON_TOL = 1e-15
@@ -143,8 +143,12 @@ def quest_quaternions(
     return refine(quest_step, profile, quest_step(profile), REFINE_PASSES)
 
 
-quest = wahba_solver(
-    quest_quaternions, name="quest", module=__name__,
-    summary="Solve Wahba's problem by Shuster's QUEST (accurate through 180-degree rotations by "
-            "sequential rotations, and for close star pairs by one refinement pass).",
-)
+def quest(observed: ArrayLike, reference: ArrayLike, weights: ArrayLike | None = None, *,
+          sigma_rad: ArrayLike | None = None) -> WahbaResult:
+    """Solve Wahba's problem by Shuster's QUEST (accurate through 180-degree rotations by
+    sequential rotations, and for close star pairs by one refinement pass).
+
+    Parameters and result as :func:`~startrack.attitude.solve_wahba` (without ``method``):
+    ``result.rotation.apply(reference) ~ observed``, with the QUEST covariance when ``sigma_rad`` is given.
+    """
+    return solve_with(quest_quaternions, observed, reference, weights, sigma_rad=sigma_rad)

@@ -21,10 +21,10 @@ differs from it at second order in the noise.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from .wahba import attitude_profile_matrix, sigma_weighted_profile, wahba_solver
+from .wahba import WahbaResult, attitude_profile_matrix, sigma_weighted_profile, solve_with
 
 
 def _signed_svd(profile: NDArray[np.float64]):
@@ -59,8 +59,11 @@ def svd_covariance(
     return sigma_tot2[:, None, None] * (u * diag[:, None, :]) @ np.swapaxes(u, -1, -2)
 
 
-svd_method = wahba_solver(
-    svd_quaternions, svd_covariance, name="svd_method", module=__name__,
-    summary="Solve Wahba's problem by Markley's SVD method.",
-    covariance_name="the SVD covariance",
-)
+def svd_method(observed: ArrayLike, reference: ArrayLike, weights: ArrayLike | None = None, *,
+               sigma_rad: ArrayLike | None = None) -> WahbaResult:
+    """Solve Wahba's problem by Markley's SVD method.
+
+    Parameters and result as :func:`~startrack.attitude.solve_wahba` (without ``method``):
+    ``result.rotation.apply(reference) ~ observed``, with the SVD covariance when ``sigma_rad`` is given.
+    """
+    return solve_with(svd_quaternions, observed, reference, weights, sigma_rad=sigma_rad, covariance=svd_covariance)

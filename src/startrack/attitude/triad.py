@@ -24,11 +24,11 @@ derived for this module from the first-order error of each triad axis.)
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..frames import cross
-from .wahba import wahba_solver
+from .wahba import WahbaResult, solve_with
 
 
 def triad_pair(
@@ -81,9 +81,12 @@ def triad_covariance(
     return (s1**2)[:, None, None] * np.eye(3) + bracket / sine2[:, None, None]
 
 
-triad = wahba_solver(
-    triad_quaternions, triad_covariance, name="triad", module=__name__,
-    summary="Attitude by TRIAD from the best pair of the given vectors (module docstring); exact on "
-            "noise-free data, not the optimum of more than two noisy vectors.",
-    covariance_name="TRIAD's own covariance",
-)
+def triad(observed: ArrayLike, reference: ArrayLike, weights: ArrayLike | None = None, *,
+          sigma_rad: ArrayLike | None = None) -> WahbaResult:
+    """Attitude by TRIAD from the best pair of the given vectors (module docstring); exact on
+    noise-free data, not the optimum of more than two noisy vectors.
+
+    Parameters and result as :func:`~startrack.attitude.solve_wahba` (without ``method``):
+    ``result.rotation.apply(reference) ~ observed``, with TRIAD's own covariance when ``sigma_rad`` is given.
+    """
+    return solve_with(triad_quaternions, observed, reference, weights, sigma_rad=sigma_rad, covariance=triad_covariance)

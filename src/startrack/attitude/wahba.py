@@ -16,10 +16,10 @@ eigenvector of K is directly the scipy quaternion of R (the tests check ``R.appl
 
 Every solver (one module each) provides a *core*: a function of batched, normalised inputs
 ``(observed (M, N, 3), reference (M, N, 3), weights (M, N) summing to 1)`` returning scalar-last
-quaternions (M, 4). :func:`solve_with` wraps a core with the input checks, the degeneracy test,
-the loss and the covariance, so every solver has the same signature and result. A solver whose
-error statistics differ from the optimum's (TRIAD) or that has its own closed form (SVD, FOAM)
-also passes a *covariance core* ``(observed, reference, weights, sigma_rad) -> (M, 3, 3)``; the
+quaternions (M, 4). Each module's public solver is a plain function with the same signature and
+result, which runs its core through :func:`solve_with`: the input checks, the degeneracy test,
+the loss and the covariance. A solver whose error statistics differ from the optimum's (TRIAD)
+or that has its own closed form (SVD, FOAM) also passes a *covariance core* ``(observed, reference, weights, sigma_rad) -> (M, 3, 3)``; the
 default is the QUEST covariance, which is that of every solver reaching the Wahba optimum.
 
 Why :class:`WahbaResult` and not :class:`startrack.results.AttitudeSolution`: a solver works on
@@ -33,6 +33,7 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -52,8 +53,11 @@ DEGENERATE_REASON = (
     "direction is undetermined"
 )
 
-METHODS: tuple[str, ...] = ("quest", "qmethod", "svd", "foam", "esoq2", "olae", "pad", "triad")
-"""Names accepted by :func:`solve_wahba`'s ``method`` (one module each)."""
+WahbaMethod = Literal["quest", "qmethod", "svd", "foam", "esoq2", "olae", "pad", "triad"]
+"""The solvers :func:`solve_wahba` selects by name (one module each)."""
+
+METHODS: tuple[str, ...] = get_args(WahbaMethod)
+"""Names accepted by :func:`solve_wahba`'s ``method``, in :data:`WahbaMethod`'s order."""
 
 _MODULES = {
     "quest": ("quest", "quest"),
@@ -255,38 +259,12 @@ def solve_with(
     return WahbaResult(rotation[0], float(loss[0]), cov0, status[0], reason[0])
 
 
-SOLVER_DOC = """
-
-    Same parameters and result as :func:`solve_wahba` (without ``method``):
-    ``result.rotation.apply(reference) ~ observed``, with {covariance}."""
-
-
-def wahba_solver(core: SolverCore, covariance: CovarianceCore = quest_covariance_core, *, name: str,
-                 module: str, summary: str, covariance_name: str = "the QUEST covariance"
-                 ) -> Callable[..., WahbaResult]:
-    """The public function of a solver module: its core run through :func:`solve_with`.
-
-    Every solver has the same signature ``(observed, reference, weights=None, *,
-    sigma_rad=None) -> WahbaResult``; this builds it once instead of in every module.
-    ``summary`` is the first line of its docstring, ``name`` and ``module`` its identity.
-    """
-
-    def solve(observed: ArrayLike, reference: ArrayLike, weights: ArrayLike | None = None, *,
-              sigma_rad: ArrayLike | None = None) -> WahbaResult:
-        return solve_with(core, observed, reference, weights, sigma_rad=sigma_rad, covariance=covariance)
-
-    solve.__name__ = solve.__qualname__ = name
-    solve.__module__ = module
-    solve.__doc__ = summary + SOLVER_DOC.format(covariance=covariance_name)
-    return solve
-
-
 def solve_wahba(
     observed: ArrayLike,
     reference: ArrayLike,
     weights: ArrayLike | None = None,
     *,
-    method: str = "quest",
+    method: WahbaMethod = "quest",
     sigma_rad: ArrayLike | None = None,
 ) -> WahbaResult:
     """Best rotation mapping reference unit vectors onto observed ones (Wahba's problem).

@@ -127,7 +127,7 @@ def _weakest(dist, std, fixed) -> str | None:
             ratios[name] = 3 * s / max(abs(value), 1e-300)
     if "p" not in fixed and all(3 * std[_STD_INDEX[q]] > abs(dist[i]) for q, i in (("p1", 2), ("p2", 3))):
         ratios["p"] = min(3 * std[6] / max(abs(dist[2]), 1e-300), 3 * std[7] / max(abs(dist[3]), 1e-300))
-    return max(ratios, key=ratios.get) if ratios else None
+    return max(ratios, key=lambda k: ratios[k]) if ratios else None
 
 
 def _outlier_views(view_rms: NDArray, reject_sigma: float) -> NDArray[np.bool_]:

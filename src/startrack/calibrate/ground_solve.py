@@ -26,6 +26,7 @@ from scipy.spatial.transform import Rotation
 
 from ..attitude.qmethod import q_method_quaternions
 from ..catalog import load_catalog
+from ..errors import require
 from ..frames import angle_between, radec_roll_from_rotation
 from ..io import Image, read_image
 from ..results import AttitudeSolution
@@ -77,9 +78,9 @@ def _refit_to_sky(solution: AttitudeSolution, when: Time, site: Site) -> Attitud
     catalog = load_catalog()
     rows = np.searchsorted(catalog.hip, solution.matches.hip)  # the catalog is sorted by HIP
     reference = refract_icrs(apparent_vectors(catalog.take(rows), when), when, site)
-    det = solution.detections
+    det = require(solution.detections, "the solution's detections")
     idx = solution.matches.det_index
-    observed = solution.camera.pixel_to_vector(det.x[idx], det.y[idx])
+    observed = require(solution.camera, "the solution's camera").pixel_to_vector(det.x[idx], det.y[idx])
     weights = np.full((1, len(idx)), 1.0 / len(idx))
     rot = Rotation.from_quat(q_method_quaternions(observed[None], reference[None], weights)[0])
     ra, dec, roll = (float(np.degrees(a)) for a in radec_roll_from_rotation(rot))

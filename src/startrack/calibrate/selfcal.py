@@ -24,6 +24,7 @@ import numpy as np
 from scipy.stats import f as f_dist
 
 from ..camera import Camera
+from ..errors import require
 from ..results import AttitudeSolution, Status
 from ..solve import solve_image
 from .stars import DEFAULT_FIT, CalibrationFrame, CalibrationResult, calibrate_from_stars
@@ -103,12 +104,17 @@ def pinhole_of(camera: Camera) -> Camera:
     return Camera(width=camera.width, height=camera.height, fx=camera.fx, fy=camera.fx)
 
 
+def _camera_of(cal: CalibrationResult) -> Camera:
+    """The camera of a calibration that succeeded."""
+    return require(cal.camera, "the calibrated camera")
+
+
 def _pinhole_on_the_same_stars(frame: CalibrationFrame, cal: CalibrationResult) -> CalibrationResult:
     """Attitude + focal length (no distortion, centred principal point) fitted by plain least
     squares to the stars the calibrated model kept."""
     keep = cal.inliers[0]
     sub = CalibrationFrame(frame.x[keep], frame.y[keep], frame.vectors_icrs[keep], cal.rotations[0])
-    return calibrate_from_stars(sub, pinhole_of(cal.camera), fit=PINHOLE_FIT, prune=False, reject_sigma=np.inf)
+    return calibrate_from_stars(sub, pinhole_of(_camera_of(cal)), fit=PINHOLE_FIT, prune=False, reject_sigma=np.inf)
 
 
 def justified(frame: CalibrationFrame, cal: CalibrationResult) -> CalibrationResult:
@@ -129,7 +135,7 @@ def justified(frame: CalibrationFrame, cal: CalibrationResult) -> CalibrationRes
     f_value = ((rss_pinhole - rss_cal) / extra_terms) / max(rss_cal / (n_res - p_cal), 1e-300)
     if f_dist.sf(f_value, extra_terms, n_res - p_cal) < SIGNIFICANCE:
         return cal
-    return calibrate_from_stars(frame, pinhole_of(cal.camera), fit=PINHOLE_FIT, prune=False)
+    return calibrate_from_stars(frame, pinhole_of(_camera_of(cal)), fit=PINHOLE_FIT, prune=False)
 
 
 def _calibrated(frame: CalibrationFrame, camera: Camera, fit: tuple[str, ...]) -> CalibrationResult:
@@ -167,7 +173,7 @@ def self_calibrate(image, *, fov_deg: float | None = None, fov_range_deg: tuple[
     first_rms = float(np.sqrt(np.mean(solution.residuals_arcsec**2)))
     cal, rounds = None, 0
     for rounds in range(1, max_rounds + 1):  # noqa: B007 (rounds is reported)
-        new_cal = _calibrated(frame, solution.camera, fit)
+        new_cal = _calibrated(frame, require(solution.camera, "the solution's camera"), fit)
         if not new_cal.status:
             break
         new_solution = solve_image(img, camera=new_cal.camera, epoch=epoch)
@@ -180,11 +186,11 @@ def self_calibrate(image, *, fov_deg: float | None = None, fov_range_deg: tuple[
     if cal is None:
         return SelfCalibration(status=Status.OK, reason="too few stars to calibrate; the first solve is kept",
                                solution=solution, first_solve_rms_arcsec=first_rms)
-    final = _calibrated(frame, cal.camera, fit)
+    final = _calibrated(frame, _camera_of(cal), fit)
     final = final if final.status else cal
     pinhole = _pinhole_on_the_same_stars(frame, final)
     n = int(np.count_nonzero(final.inliers[0]))
     return SelfCalibration(
         status=Status.OK, reason="", solution=solution, calibration=final, pinhole_rms_px=pinhole.rms_px,
-        calibrated_rms_px=final.rms_px, pixel_scale_arcsec=final.camera.pixel_scale_arcsec, n_pinhole=n,
+        calibrated_rms_px=final.rms_px, pixel_scale_arcsec=_camera_of(final).pixel_scale_arcsec, n_pinhole=n,
         n_calibrated=n, rounds=rounds, first_solve_rms_arcsec=first_rms)

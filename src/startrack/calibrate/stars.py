@@ -391,7 +391,7 @@ def _weakest(names, free, fitted, sigma) -> int | None:
     for k, i in enumerate(np.flatnonzero(free)):
         if names[i] not in NEVER_PRUNED and 3.0 * sigma[k] > abs(fitted[i]):
             ratios[i] = 3.0 * sigma[k] / max(abs(fitted[i]), 1e-300)
-    return max(ratios, key=ratios.get) if ratios else None
+    return int(max(ratios, key=lambda k: ratios[k])) if ratios else None
 
 
 def _result(model, problem: _Problem, p: NDArray, sigma: NDArray, mask: NDArray, frames,

@@ -62,7 +62,8 @@ class StarCatalog:
     v_mag: NDArray[np.float64]
     variable: NDArray[np.bool_]
     epoch_jyear: float
-    pm_radial_mas_yr: NDArray[np.float64] | None = field(default=None)
+    # None means zeros; __post_init__ fills it, so it is always an array once built.
+    pm_radial_mas_yr: NDArray[np.float64] = field(default=None)  # type: ignore[arg-type]
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -89,7 +90,7 @@ class StarCatalog:
         ra = np.asarray(ra_rad, dtype=float)
         dec, v = np.broadcast_to(dec_rad, ra.shape), np.broadcast_to(v_mag, ra.shape)
         zeros = np.zeros(ra.shape)
-        hip = np.arange(1, ra.size + 1) if hip is None else hip
+        hip = np.arange(1, ra.size + 1) if hip is None else np.asarray(hip)
         return cls(hip=hip, ra_rad=ra, dec_rad=dec, pm_ra_mas_yr=zeros, pm_dec_mas_yr=zeros,
                    parallax_mas=zeros, hp_mag=v, b_v=np.full(ra.shape, np.nan), v_mag=v,
                    variable=np.zeros(ra.shape, dtype=bool), epoch_jyear=epoch_jyear)

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..camera import Camera
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, require
 from ..io import read_image
 from ..io.atomic import atomic_path
 from ..solve import solve_image
@@ -93,19 +93,20 @@ def _from_stars(args) -> dict[str, Any]:
     solved = [i for i, s in enumerate(solutions) if s.solved]
     if not solved:
         return {"status": "not_solved", "reason": "no image could be solved", "images": _per_image(args, solutions)}
-    first = solutions[solved[0]].camera
-    start = Camera(width=first.width, height=first.height,
-                   fx=float(np.median([solutions[i].camera.fx for i in solved])))
+    cameras = [require(solutions[i].camera, "a solved image's camera") for i in solved]
+    start = Camera(width=cameras[0].width, height=cameras[0].height, fx=float(np.median([c.fx for c in cameras])))
     result = calibrate_from_stars([CalibrationFrame.from_solution(solutions[i]) for i in solved], start, fit=fit)
     if result.status:  # one self-improving round: re-solve with the calibrated camera, fit again
-        again = [solve_image(images[i], camera=result.camera, epoch=solve_kw["epoch"]) for i in solved]
+        calibrated = require(result.camera, "the calibrated camera")
+        again = [solve_image(images[i], camera=calibrated, epoch=solve_kw["epoch"]) for i in solved]
         if all(s.solved for s in again):
             solutions = [again[solved.index(i)] if i in solved else s for i, s in enumerate(solutions)]
-            redo = calibrate_from_stars([CalibrationFrame.from_solution(s) for s in again], result.camera, fit=fit)
+            redo = calibrate_from_stars([CalibrationFrame.from_solution(s) for s in again], calibrated, fit=fit)
             result = redo if redo.status else result
     if not result.status:
         return {"status": result.status.value, "reason": result.reason, "images": _per_image(args, solutions)}
-    return {"status": "ok", "camera": camera_to_dict(result.camera), "sigma": result.sigma, "pruned": result.pruned,
+    camera = require(result.camera, "the calibrated camera")
+    return {"status": "ok", "camera": camera_to_dict(camera), "sigma": result.sigma, "pruned": result.pruned,
             "rms_px": result.rms_px, "n_outliers": result.n_outliers, "images": _per_image(args, solutions)}
 
 
@@ -142,7 +143,8 @@ def _from_checkerboard(args) -> dict[str, Any]:
     _same_size(args.images, [img.shape for img in images])
     height, width = images[0].shape
     result = calibrate_checkerboard([find_corners(img, board) for img in images], board, width, height)
-    return {"status": "ok", "camera": camera_to_dict(result.camera), "sigma": result.sigma, "pruned": result.pruned,
+    camera = require(result.camera, "the calibrated camera")
+    return {"status": "ok", "camera": camera_to_dict(camera), "sigma": result.sigma, "pruned": result.pruned,
             "rms_px": result.rms_px, "sigma_xy_px": list(result.sigma_xy_px),
             "used_views": [str(args.images[i]) for i in result.used_views],
             "rejected_views": [str(args.images[i]) for i in result.rejected_views]}

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..camera import Camera, get_preset
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, require
 from ..identify.registry import MATCHERS
 from ..io.solution_json import solution_to_dict, streak_fields
 from ..results import AttitudeSolution, Detections
@@ -198,18 +198,19 @@ def solution_table(solution: AttitudeSolution, detections: Detections | None = N
         lines.append(("time", f"{solution.solve_time_s * 1e3:.1f} ms"))
         return _table(lines)
     rms = float(np.sqrt(np.mean(solution.residuals_arcsec**2)))
+    camera = require(solution.camera, "a solved frame's camera")
     return _table([
         ("status", "solved"),
         ("RA, Dec", f"{solution.ra_deg:.5f} deg, {solution.dec_deg:+.5f} deg (boresight, ICRS)"),
         ("roll", f"{solution.roll_deg:.4f} deg"),
-        ("FOV", f"{solution.fov_deg:.4f} deg horizontal (focal length {solution.camera.fx:.1f} px)"),
+        ("FOV", f"{solution.fov_deg:.4f} deg horizontal (focal length {camera.fx:.1f} px)"),
         ("stars", f"{len(solution.matches)} matched{n_det}"),
         ("residual", f"{rms:.2f} arcsec rms"),
         ("1-sigma", f"{solution.sigma_cross_boresight_arcsec:.2f} arcsec cross-boresight, "
                     f"{solution.sigma_roll_arcsec:.2f} arcsec roll"),
         ("false match", f"{solution.false_match_prob:.1e} (upper bound)"),
         ("time", f"{solution.solve_time_s * 1e3:.1f} ms"),
-        ("qx qy qz qw", " ".join(f"{v:+.9f}" for v in solution.quaternion_xyzw)),
+        ("qx qy qz qw", " ".join(f"{v:+.9f}" for v in require(solution.quaternion_xyzw, "the quaternion"))),
     ])
 
 

@@ -9,7 +9,7 @@ import argparse
 from pathlib import Path
 
 from ..analysis.plots import plot_solution
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, require
 from ..frames import angle_between, attitude_error, boresight
 from ..io.solution_json import solution_to_dict
 from ..io.truth_files import write_frame
@@ -45,7 +45,7 @@ def main(argv: list[str]) -> int:
     written = write_frame(out / "demo.png", sim.image, sim.truth)
     ensure_database(DEFAULT_FOV_RANGE_DEG)
     solution = solve_image(sim.image, epoch=scene_epoch(args))
-    detections = solution.detections
+    detections = require(solution.detections, "the demo frame's detections")
     inside = sim.truth.inside()
     plot_solution(sim.image, detections, solution, out / "demo_solved.png",
                   truth_xy=(sim.truth.x[inside], sim.truth.y[inside]))

@@ -16,6 +16,7 @@ from ..detect import StarDetector
 from ..detect.centroiders import CENTROIDERS
 from ..detect.details import DetectionDetails
 from ..detect.detector import THRESHOLDS
+from ..errors import require
 from ..io import read_image
 from .batch import BATCH_EPILOG, add_batch_options, is_batch
 from .common import add_max_pixels_option, apply_max_pixels_option, positive_int, print_json
@@ -69,7 +70,7 @@ def main(argv: list[str]) -> int:
         from .batch_detect import detect_spec
 
         return run_batch(detect_spec(detector), args.image, as_json=args.json, csv_out=args.csv, jobs=args.jobs)
-    details = detector.detect_details(image.data)
+    details = detector.detect_details(require(image, "the image").data)
     if args.json:
         print_json(json_record(args.image[0], details, detector))
     else:

@@ -69,7 +69,7 @@ def _run(name: str, argv: list[str]) -> int:
             return module.main(argv)
     except Terminated as exc:  # outputs already cleaned up by their finally blocks
         print(f"startrack {name}: terminated", file=sys.stderr)
-        return exc.code
+        return exc.code if isinstance(exc.code, int) else 1
     except SystemExit as exc:  # argparse: --help (0) or a usage error (2, already printed)
         return exc.code if isinstance(exc.code, int) else int(exc.code is not None)
     except BrokenPipeError:  # e.g. `startrack solve x.fits --json | head`: stop quietly, as on SIGPIPE

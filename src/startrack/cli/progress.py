@@ -46,7 +46,8 @@ def ensure_database(fov_range_deg: tuple[float, float] | None = None) -> None:
     from ..identify.database import is_cached
     from ..identify.registry import DEFAULT_FOV_RANGE_DEG, database_settings_for
 
-    settings = database_settings_for(tuple(fov_range_deg) if fov_range_deg else DEFAULT_FOV_RANGE_DEG)
+    low, high = fov_range_deg if fov_range_deg else DEFAULT_FOV_RANGE_DEG
+    settings = database_settings_for((low, high))
     if not is_cached(settings):
         sys.stderr.write("building the star-pattern database (first run only; it is cached)\n")
         load_database(settings, progress=ProgressBar("  FOV levels"))

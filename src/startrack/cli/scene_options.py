@@ -92,7 +92,7 @@ def scene_epoch(args: argparse.Namespace) -> float:
 def scene_seed(args: argparse.Namespace) -> int:
     """The seed to use: the given one, or a fresh one (printed so the run can be repeated)."""
     if args.seed is None:
-        return int(np.random.SeedSequence().entropy % 2**31)
+        return int(np.random.default_rng().integers(2**31))
     if args.seed < 0:
         raise InvalidInputError(f"--seed must be a whole number >= 0, got {args.seed}")
     return args.seed

@@ -17,7 +17,7 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import InvalidInputError, StartrackError
+from ..errors import InvalidInputError, StartrackError, require
 from ..io import read_image
 from ..io.image import IMAGE_SUFFIXES
 from ..io.limits import max_pixels_limit
@@ -98,7 +98,7 @@ class _Sequence:
             img = read_image(path)
             self._check_size(img.data.shape[1], img.data.shape[0], path)
             exposure = self.exposure_s if self.exposure_s is not None else header_exposure_s(img.header)
-            step = self.tracker.update_image(img.data, t_s, streak_exposure_s=exposure)
+            step = self._tracker.update_image(img.data, t_s, streak_exposure_s=exposure)
         except (StartrackError, ValueError) as exc:
             self.unusable.append(path.name)
             return error_row(k, path.name, t_s, str(exc))
@@ -110,12 +110,21 @@ class _Sequence:
         if exposure is None:
             return
         if not self.limits_told:
-            self.notes.append(self.tracker.smear_limits(exposure, *self.size).describe())
+            self.notes.append(self._tracker.smear_limits(exposure, *self._size).describe())
             self.limits_told = True
         if step.extra.get("switched"):
-            other = "streak" if self.tracker.mode == "point" else "point"
-            self.notes.append(f"frame {k} ({name}, t = {step.t_s:g} s): {other} -> {self.tracker.mode} mode "
+            other = "streak" if self._tracker.mode == "point" else "point"
+            self.notes.append(f"frame {k} ({name}, t = {step.t_s:g} s): {other} -> {self._tracker.mode} mode "
                               f"(smear {step.extra['streak_px']:.1f} px)")
+
+    @property
+    def _tracker(self) -> Tracker:
+        """The tracker, made by ``__post_init__`` (a camera given) or by the first readable frame."""
+        return require(self.tracker, "the sequence's tracker")
+
+    @property
+    def _size(self) -> tuple[int, int]:
+        return require(self.size, "the sequence's frame size")
 
     def _check_size(self, width: int, height: int, path: Path) -> None:
         if self.size is None:

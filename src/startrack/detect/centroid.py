@@ -30,6 +30,7 @@ Uncertainty, two models (per axis, 1 sigma, pixels):
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
+from typing import Literal, get_args
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,7 +43,10 @@ PIXEL_VARIANCE = 1.0 / 12.0
 EQ42_FLOOR_PX, EQ42_SCALE_PX, EQ42_EXPONENT = 0.11, 0.5, -1.3
 """Coefficients of seed 000 eq. 4.2."""
 
-UNCERTAINTY_MODELS = ("propagated", "eq4.2")
+UncertaintyModel = Literal["propagated", "eq4.2"]
+"""A centroid's error: the method's own (propagated noise or fit covariance) or seed 000 eq. 4.2."""
+
+UNCERTAINTY_MODELS: tuple[str, ...] = get_args(UncertaintyModel)
 
 SIGMA_FLOOR_PX = 0.01
 """Systematic floor of the propagated model, px: the weighted sum's own pixel-phase bias is

@@ -55,7 +55,7 @@ def pixel_variance(signal: NDArray, noise: NDArray, gain_e_per_adu: float | None
 
 
 def windowed_centroid(windows: Windows, level: NDArray, noise: NDArray, x_start: NDArray,
-                      y_start: NDArray, window_sigma_px: NDArray, *,
+                      y_start: NDArray, window_sigma_px: NDArray | float, *,
                       psf_sigma_px: NDArray | None = None,
                       gain_e_per_adu: float | None = None) -> Centroids:
     """Gaussian-windowed centroid of N windows (module docstring).
@@ -97,28 +97,34 @@ def windowed_centroid(windows: Windows, level: NDArray, noise: NDArray, x_start:
 
 
 @dataclass(frozen=True)
+class _Centred:
+    """Per-axis offsets of N windows' pixels from centres (cx, cy) and their Gaussian weights,
+    shape (N, S) each."""
+
+    dx: NDArray
+    dy: NDArray
+    wx: NDArray
+    wy: NDArray
+
+
+@dataclass(frozen=True)
 class _Axes:
     """Per-axis pixel coordinates of N windows, shape (N, S) each, and the Gaussian weight's
-    ``-1 / (2 s_w^2)``, shape (N, 1); with a centre, the per-axis offsets and weights."""
+    ``-1 / (2 s_w^2)``, shape (N, 1)."""
 
     px: NDArray
     py: NDArray
     inv: NDArray
-    dx: NDArray | None = None
-    dy: NDArray | None = None
-    wx: NDArray | None = None
-    wy: NDArray | None = None
 
     @classmethod
     def of(cls, windows: Windows, sw: NDArray) -> _Axes:
         k = np.arange(windows.values.shape[1], dtype=np.float64)
         return cls(windows.x0[:, None] + k, windows.y0[:, None] + k, (-0.5 / (sw * sw))[:, None])
 
-    def at(self, cx: NDArray, cy: NDArray) -> _Axes:
+    def at(self, cx: NDArray, cy: NDArray) -> _Centred:
         """Offsets and Gaussian weights about the centres (cx, cy), shape (N,) each."""
         dx, dy = self.px - cx[:, None], self.py - cy[:, None]
-        return _Axes(self.px, self.py, self.inv, dx, dy, np.exp(dx * dx * self.inv),
-                     np.exp(dy * dy * self.inv))
+        return _Centred(dx, dy, np.exp(dx * dx * self.inv), np.exp(dy * dy * self.inv))
 
 
 def _iterate(axes: _Axes, signal: NDArray, cx: NDArray, cy: NDArray) -> tuple[NDArray, NDArray, NDArray]:
@@ -143,7 +149,7 @@ def _iterate(axes: _Axes, signal: NDArray, cx: NDArray, cy: NDArray) -> tuple[ND
     return cx, cy, total
 
 
-def _sigma(at: _Axes, signal: NDArray, valid: NDArray, sw2: NDArray, psf_sigma_px: NDArray | None,
+def _sigma(at: _Centred, signal: NDArray, valid: NDArray, sw2: NDArray, psf_sigma_px: NDArray | None,
            noise: NDArray, gain_e_per_adu: float | None) -> NDArray[np.float64]:
     """Linearised 1-sigma error per axis (module docstring), the mean of the x and y terms.
 
@@ -179,7 +185,7 @@ def _residual(signal: NDArray, shape: NDArray, valid: NDArray) -> NDArray:
     return (signal - a[:, None, None] * shape - b[:, None, None]) * valid
 
 
-def _pixel_gaussian(at: _Axes, s: NDArray) -> NDArray:
+def _pixel_gaussian(at: _Centred, s: NDArray) -> NDArray:
     """Pixel-integrated unit Gaussian of width ``s`` (N,) centred on the axes' centre, (N, S, S):
     per axis, the differences of erf at the S + 1 pixel edges (both axes in one erf call)."""
     d = np.stack([at.dy, at.dx])  # (2, N, S)

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal, get_args
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,7 +33,10 @@ from .centroid_windowed import windowed_centroid
 from .label import Regions
 from .windows import Centroids, extract_windows
 
-CENTROIDERS = ("peak", "area", "weighted", "weighted-raw", "windowed", "mle")
+CentroidMethod = Literal["peak", "area", "weighted", "weighted-raw", "windowed", "mle"]
+"""The centroiders by name (module docstring)."""
+
+CENTROIDERS: tuple[str, ...] = get_args(CentroidMethod)
 WINDOW_METHODS = ("windowed", "mle")
 MIN_PSF_SIGMA_PX, MAX_HALF_PX = 0.5, 16
 SIZE_TO_SIGMA = 1.1

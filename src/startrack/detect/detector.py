@@ -7,6 +7,7 @@ See the package docstring of :mod:`startrack.detect` for the pipeline and its de
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
+from typing import Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -16,17 +17,20 @@ from ..io.channels import channel_index
 from ..results import Detections
 from . import settings_checks as checks
 from .blocks import detect_in_strips
-from .centroid import UNCERTAINTY_MODELS
-from .centroiders import CENTROIDERS
+from .centroid import UNCERTAINTY_MODELS, UncertaintyModel
+from .centroiders import CENTROIDERS, CentroidMethod
 from .denoise import DENOISE_METHODS
 from .details import DetectionDetails
 from .pipeline import detect_frame
 from .predictive import WindowDetections, measure_windows
 from .smooth import KERNELS
 
-BACKGROUND_MODES = ("tiled", "global")
-THRESHOLDS = ("ksigma", "dynamic", "prefilter-window", "prefilter-grid")
-GROUPINGS = ("label8", "region-grow")
+BackgroundMode = Literal["tiled", "global"]
+ThresholdMethod = Literal["ksigma", "dynamic", "prefilter-window", "prefilter-grid"]
+GroupingMethod = Literal["label8", "region-grow"]
+BACKGROUND_MODES: tuple[str, ...] = get_args(BackgroundMode)
+THRESHOLDS: tuple[str, ...] = get_args(ThresholdMethod)
+GROUPINGS: tuple[str, ...] = get_args(GroupingMethod)
 DEFAULT_MAX_BLOCK_PX = 1 << 24
 
 
@@ -78,7 +82,7 @@ class StarDetector:
 
     dark_frame: NDArray | None = field(default=None, repr=False, compare=False)
     dark_columns: tuple[int, int] = (0, 0)
-    background: str = "tiled"
+    background: BackgroundMode = "tiled"
     tile_px: int = 32
     denoise: str = "none"
     denoise_sigma_px: float = 1.0
@@ -87,7 +91,7 @@ class StarDetector:
     binning: int = 2
     kernel: str = "binomial"
     kernel_px: int = 3
-    threshold: str = "ksigma"
+    threshold: ThresholdMethod = "ksigma"
     sigma: float = 5.0
     grow_sigma: float = 3.0
     fine_sigma: float | None = 6.5
@@ -95,7 +99,7 @@ class StarDetector:
     max_sigma: float = 1000.0
     pixel_sigma: float = 2.0
     prefilter_count: int = 9
-    grouping: str = "label8"
+    grouping: GroupingMethod = "label8"
     jump_px: int = 3
     deblend: bool = True
     reject_edge: bool = True
@@ -111,11 +115,11 @@ class StarDetector:
     smear_tolerance_px: float = 2.0
     smear_angle_deg: float = 30.0
     max_axis_difference_px: float | None = None
-    centroid: str = "windowed"
+    centroid: CentroidMethod = "windowed"
     psf_sigma_px: float | None = None
     window_half_px: int | None = None
     gain_e_per_adu: float | None = None
-    uncertainty: str = "propagated"
+    uncertainty: UncertaintyModel = "propagated"
     mag_zero_point: float = 0.0
     channel: str | int | None = None
     max_stars: int | None = None

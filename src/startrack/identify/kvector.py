@@ -33,7 +33,7 @@ class KVector:
     """
 
     keys: NDArray
-    k: NDArray[np.int64]
+    k: NDArray[np.int32] | NDArray[np.int64]
     slope: float
     intercept: float
     max_bucket: int = 0
@@ -54,7 +54,8 @@ class KVector:
         slope = (hi - lo + 2 * margin) / n
         intercept = lo - margin
         grid = slope * np.arange(n + 1) + intercept
-        k = np.searchsorted(keys, grid, side="right").astype(np.int32 if n < 2**31 - 1 else np.int64)
+        found = np.searchsorted(keys, grid, side="right")
+        k = found.astype(np.int32) if n < 2**31 - 1 else found.astype(np.int64)
         max_bucket = int(np.max(np.diff(k))) if n > 1 else 1
         return cls(keys=keys, k=k, slope=slope, intercept=intercept, max_bucket=max_bucket)
 

@@ -101,7 +101,7 @@ class GroupProblem:
 
     obs_vec: NDArray[np.float64]
     guide_vec: NDArray[np.float64]
-    tolerance: Callable[[NDArray], NDArray]
+    tolerance: Callable[[NDArray | float], NDArray | float]
 
     @cached_property
     def obs_angles(self) -> NDArray[np.float64]:
@@ -140,7 +140,7 @@ def match_pairs(problem: GroupProblem, pdb: PairDatabase, obs_mag: NDArray | Non
         tol = float(problem.tolerance(d))
         guide = pdb.pairs_between(d - tol, d + tol).astype(np.int64)
         guide = np.concatenate([guide, guide[:, ::-1]])
-        if obs_mag is not None:
+        if obs_mag is not None and guide_mag is not None:
             ok = (np.abs(guide_mag[guide[:, 0]] - obs_mag[i]) <= mag_tolerance) & (
                 np.abs(guide_mag[guide[:, 1]] - obs_mag[j]) <= mag_tolerance)
             guide = guide[ok]
@@ -286,9 +286,9 @@ def _level_groups(problem: GroupProblem, assoc: Associations, conf: NDArray, lev
     (``memo`` keeps each kernel's groups for its list of associates across levels)."""
     alive = conf > level
     alive_assoc = alive[np.searchsorted(assoc.kernels, assoc.associates)]
-    groups = []
+    groups: list[frozenset] = []
     for k in np.flatnonzero(alive & (assoc.confidence(len(problem.guide_vec), alive) > level)):
-        members = assoc.of(k)[alive_assoc[assoc.start[k]:assoc.start[k + 1]]]
+        members = assoc.of(int(k))[alive_assoc[assoc.start[k]:assoc.start[k + 1]]]
         key = (int(k), members.tobytes())
         if key not in memo:
             memo[key] = kernel_groups(problem, int(assoc.kernels[k]), members)
@@ -303,7 +303,8 @@ def candidate_groups(problem: GroupProblem, rows: NDArray, deadline: float) -> I
     the number of groups generated so far (match keys (m,), count)."""
     assoc = Associations.from_rows(rows)
     conf = assoc.confidence(len(problem.guide_vec))
-    n_groups, tried, memo = 0, set(), {}
+    n_groups, tried = 0, set()
+    memo: dict[tuple[int, bytes], list[frozenset]] = {}
 
     def quality(group: frozenset) -> float:
         return float(np.triu(problem.misfit(np.array(sorted(group)))).sum())

@@ -156,7 +156,7 @@ def _search_grid(camera: Camera, span: float, radius_px: float, bin_px: float | 
     width = (bin_px / camera.fx) if bin_px else max(4.0 * radius_px / camera.fx, span * tan_edge**2)
     step = width / tan_edge
     n_roll = int(math.ceil(span / step))
-    return _Search(max(span, width), width, step * np.arange(-n_roll, n_roll + 1))
+    return _Search(max(span, width), width, step * np.arange(-n_roll, n_roll + 1, dtype=np.float64))
 
 
 def _gnomonic(v: NDArray) -> NDArray[np.float64]:

@@ -120,8 +120,8 @@ def _keep_mode(tmp: Path, target: Path) -> None:
 
 def _commit(tmp: Path, target: OutputTarget) -> None:
     """Rename a finished (fsynced) temporary file over a regular target, keeping its permissions."""
-    _keep_mode(tmp, target.path)
-    os.replace(tmp, target.path)
+    _keep_mode(tmp, target.file)
+    os.replace(tmp, target.file)
 
 
 # --- writing through ---------------------------------------------------------------------------
@@ -141,7 +141,7 @@ def _stdout_write(data: bytes) -> None:
 
 def _open_through(target: OutputTarget) -> IO[bytes]:
     """The existing device, FIFO or /dev path, opened for writing without creating or truncating it."""
-    fd = os.open(target.path, os.O_WRONLY | os.O_APPEND)
+    fd = os.open(target.file, os.O_WRONLY | os.O_APPEND)
     return os.fdopen(fd, "wb")
 
 
@@ -161,8 +161,8 @@ def _scratch(target: OutputTarget, stack: ExitStack) -> Path:
     if target.through:
         folder = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="startrack-out-")))
         return folder / (Path(target.given).name or "stdout")
-    remove_stale_temps(target.path.parent, target.path.name)
-    return temp_name(target.path)
+    remove_stale_temps(target.file.parent, target.file.name)
+    return temp_name(target.file)
 
 
 @contextmanager
@@ -208,7 +208,7 @@ def atomic_group(paths: Sequence[str | os.PathLike], *,
             raise
         except OSError as exc:
             failed = next((t for t, tmp in zip(targets, tmps, strict=True) if exc.filename in (
-                str(tmp), str(t.path))), targets[0])
+                str(tmp), str(t.path or ""))), targets[0])
             raise _write_error(failed, exc) from exc
         finally:
             for tmp, target in zip(tmps, targets, strict=True):
@@ -218,11 +218,11 @@ def atomic_group(paths: Sequence[str | os.PathLike], *,
 
 def _backup(target: OutputTarget) -> Path | None:
     """A hard link to the current content of a regular target (None if it has none or links fail)."""
-    if not target.path.is_file():
+    if not target.file.is_file():
         return None
-    backup = temp_name(target.path)
+    backup = temp_name(target.file)
     try:
-        os.link(target.path, backup)
+        os.link(target.file, backup)
     except OSError:
         return None
     return backup
@@ -231,14 +231,14 @@ def _backup(target: OutputTarget) -> Path | None:
 def _undo(target: OutputTarget, backup: Path | None, existed: bool) -> None:
     """Put back what a regular target held before the group replaced it."""
     if backup is not None:
-        os.replace(backup, target.path)
+        os.replace(backup, target.file)
     elif not existed:
-        target.path.unlink(missing_ok=True)
+        target.file.unlink(missing_ok=True)
 
 
 def _replace_all(regular: list[tuple[OutputTarget, Path]]) -> None:
     """Rename every temporary file over its target; on a failure undo the renames already done."""
-    existed = [t.path.exists() for t, _ in regular]
+    existed = [t.file.exists() for t, _ in regular]
     backups = [_backup(t) for t, _ in regular] if len(regular) > 1 else [None] * len(regular)
     done = 0
     try:
@@ -301,7 +301,7 @@ def open_output(path: str | os.PathLike, mode: str = "w", *, inputs: Iterable[st
             yield fh
         return
     with atomic_path(path, inputs=inputs) as tmp, open(tmp, mode, newline=newline,
-                                                        **({} if mode == "wb" else {"encoding": "utf-8"})) as fh:
+                                                        encoding=None if mode == "wb" else "utf-8") as fh:
         yield fh
 
 

@@ -37,7 +37,7 @@ from typing import Any, BinaryIO
 
 import numpy as np
 from numpy.typing import NDArray
-from PIL import ExifTags, ImageFile, UnidentifiedImageError
+from PIL import ExifTags, ImageFile, TiffImagePlugin, UnidentifiedImageError
 from PIL import Image as PILImage
 
 from ..errors import ImageReadError
@@ -125,7 +125,7 @@ def _declared_bits(image: PILImage.Image, head: bytes) -> int | None:
     """Bits per sample the file declares (PNG IHDR or TIFF BitsPerSample), if known."""
     if image.format == "PNG" and len(head) > 25:
         return head[24]
-    if image.format == "TIFF":
+    if isinstance(image, TiffImagePlugin.TiffImageFile):
         bits = image.tag_v2.get(258)
         return int(max(bits) if isinstance(bits, tuple) else bits) if bits else None
     return None
@@ -168,7 +168,7 @@ def _check_png16_colour(head: bytes, path: Path) -> None:
 
 
 def _decode(image: PILImage.Image, head: bytes, fh: BinaryIO, path: Path) -> tuple[NDArray, int]:
-    if image.format == "TIFF" and is_tiff16_colour(image.tag_v2):
+    if isinstance(image, TiffImagePlugin.TiffImageFile) and is_tiff16_colour(image.tag_v2):
         return read_tiff16_colour(path, fh, image.tag_v2), 16
     try:
         with _strict_pillow():

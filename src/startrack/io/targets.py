@@ -58,6 +58,13 @@ class OutputTarget:
     def is_stdout(self) -> bool:
         return self.path is None
 
+    @property
+    def file(self) -> Path:
+        """The file of a target that is not standard output (ValueError for standard output)."""
+        if self.path is None:
+            raise ValueError("standard output has no file path")
+        return self.path
+
 
 def _identity(path: str | os.PathLike) -> tuple[int, int] | None:
     try:
@@ -80,7 +87,9 @@ def protect_inputs() -> Iterator[None]:
 def note_input(path: str | os.PathLike) -> None:
     """Record ``path`` as an input of the running command (no-op outside :func:`protect_inputs`)."""
     inputs = _READ_INPUTS.get()
-    identity = _identity(path) if inputs is not None else None
+    if inputs is None:
+        return
+    identity = _identity(path)
     if identity is not None:
         inputs.add(identity)
 

@@ -19,7 +19,7 @@ import struct
 import zlib
 from collections.abc import Mapping
 from pathlib import Path
-from typing import BinaryIO
+from typing import Any, BinaryIO
 
 import numpy as np
 from numpy.typing import NDArray
@@ -101,14 +101,14 @@ def tiff_bytes(array: NDArray) -> bytes:
 
 
 # --- reading 16-bit colour -------------------------------------------------------------------
-def is_tiff16_colour(tags: Mapping[int, object]) -> bool:
+def is_tiff16_colour(tags: Mapping[int, Any]) -> bool:
     """True if Pillow's TIFF tags describe 16-bit samples with more than one sample per pixel."""
     bits = tags.get(258, (8,))
     bits = bits if isinstance(bits, tuple) else (bits,)
     return int(tags.get(277, 1)) > 1 and max(bits) == 16
 
 
-def _as_tuple(value: object) -> tuple[int, ...]:
+def _as_tuple(value: Any) -> tuple[int, ...]:
     return tuple(value) if isinstance(value, tuple | list) else (int(value),)
 
 
@@ -132,7 +132,7 @@ def _inflate(chunk: bytes, limit: int, path: Path) -> bytes:
     return data
 
 
-def _strip_bytes(fh: BinaryIO, tags: Mapping[int, object], expected: int, path: Path) -> bytes:
+def _strip_bytes(fh: BinaryIO, tags: Mapping[int, Any], expected: int, path: Path) -> bytes:
     """The concatenated, decompressed strips of a TIFF file's first image, at most ``expected`` bytes."""
     compression = int(tags.get(259, 1))
     if compression != 1 and compression not in _DEFLATE:
@@ -153,7 +153,7 @@ def _strip_bytes(fh: BinaryIO, tags: Mapping[int, object], expected: int, path: 
     return b"".join(chunks)
 
 
-def read_tiff16_colour(path: Path, fh: BinaryIO, tags: Mapping[int, object]) -> NDArray[np.uint16]:
+def read_tiff16_colour(path: Path, fh: BinaryIO, tags: Mapping[int, Any]) -> NDArray[np.uint16]:
     """Decode a 16-bit RGB(A) TIFF that Pillow would truncate to 8 bits.
 
     Parameters

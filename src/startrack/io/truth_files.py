@@ -74,7 +74,7 @@ def _rsos(rsos) -> list[dict[str, Any]]:
     columns = [getattr(rsos, name) for name in ("ids", *RSO_COLUMNS[1:])]
     out = []
     for row in zip(*columns, strict=True):
-        item = {"id": int(row[0])}
+        item: dict[str, Any] = {"id": int(row[0])}
         item.update({k: _num(v) for k, v in zip(RSO_COLUMNS[1:-2], row[1:-2], strict=True)})
         item.update({"lit": bool(row[-2]), "rendered": bool(row[-1])})
         out.append(item)

@@ -28,6 +28,7 @@ from ..attitude._inputs import degenerate_mask
 from ..attitude.covariance import covariance_batch
 from ..attitude.qmethod import q_method_quaternions
 from ..catalog import load_catalog
+from ..errors import require
 from ..frames import angle_between, radec_roll_from_rotation
 from ..results import AttitudeSolution, StarMatches, Status
 from ..rig import RigHead
@@ -169,8 +170,8 @@ def own_solution(match: HeadMatch, floor_px: float, min_stars: int, false_match_
 
 def own_body(solution: AttitudeSolution, head: RigHead) -> tuple[Rotation, NDArray[np.float64]]:
     """A head's own attitude carried into the body frame, and its covariance in body axes."""
-    rot = head.rot_cam_from_body.inv() * solution.rot_cam_from_icrs
-    return rot, covariance_to_body(solution.covariance_rad2, head.rot_cam_from_body)
+    rot = head.rot_cam_from_body.inv() * require(solution.rot_cam_from_icrs, "the head's attitude")
+    return rot, covariance_to_body(require(solution.covariance_rad2, "the head's covariance"), head.rot_cam_from_body)
 
 
 def disagreement(rot_a: Rotation, cov_a: NDArray, rot_b: Rotation, cov_b: NDArray) -> tuple[float, float]:

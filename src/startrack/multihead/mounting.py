@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, require
 from ..rig import CameraRig
 from .solution import RigSolution
 
@@ -90,7 +90,8 @@ def relative_mountings(solutions: Sequence[RigSolution], head: str, reference: s
     for k, sol in enumerate(solutions):
         own, ref = sol.heads.get(head), sol.heads.get(reference)
         if own is not None and ref is not None and own.solved and ref.solved:
-            rotations.append(own.rot_cam_from_icrs * ref.rot_cam_from_icrs.inv())
+            rotations.append(require(own.rot_cam_from_icrs, "a head's attitude")
+                             * require(ref.rot_cam_from_icrs, "the reference head's attitude").inv())
             frames.append(k)
     if not rotations:
         return None, np.zeros(0, dtype=np.int64)

@@ -42,6 +42,7 @@ from scipy.spatial.transform import Rotation
 from ..attitude import covariance_to_body
 from ..attitude.covariance import covariance_batch
 from ..attitude.qmethod import q_method_quaternions
+from ..errors import require
 from ..identify.field_stars import FieldStars
 from ..identify.pair_database import PairDatabase, PairSettings, load_pair_database
 from ..identify.pyramid import candidate_triangles
@@ -139,7 +140,8 @@ def _confirmed(hyp: _Hypothesis, pattern: HeadStars, stars: dict[str, HeadStars]
                matchers: dict[str, WindowMatcher], options: RigOptions, trials: int) -> PatternOutcome | None:
     """The outcome if the other heads' stars confirm the hypothesis, else None (module docstring)."""
     sigma = {n: s.head.centroid_sigma_px for n, s in stars.items()}
-    pairs = {n: ([], []) for n in stars}  # per head: matched star rows, catalog indices (of the matcher's set)
+    # per head: matched star rows, catalog indices (of the matcher's set)
+    pairs: dict[str, tuple[list[int], list[int]]] = {n: ([], []) for n in stars}
     pairs[pattern.name] = (list(hyp.pattern), list(hyp.catalog))
     rot, cov, log_p, tested = hyp.rot_body, hyp.cov_body, 0.0, 0
     for name in sorted(stars, key=lambda n: n == pattern.name):  # the pattern head's own stars last
@@ -154,7 +156,8 @@ def _confirmed(hyp: _Hypothesis, pattern: HeadStars, stars: dict[str, HeadStars]
             log_p += math.log(p)
             pairs[name][0].append(row)
             pairs[name][1].append(index)
-            fit = fit_joint(list(_matches(stars, matchers, pairs).values()), sigma)
+            fit = require(fit_joint(list(_matches(stars, matchers, pairs).values()), sigma),
+                          "the fit of three or more matched stars")
             rot, cov = fit.rot_body_from_icrs, fit.covariance_rad2
     confirming = sum(len(v[0]) for v in pairs.values()) - 3
     prob = min(1.0, trials * math.comb(tested, confirming) * math.exp(log_p)) if confirming else 1.0
@@ -185,7 +188,7 @@ def _matches(stars: dict[str, HeadStars], matchers: dict[str, WindowMatcher],
     out = {}
     for name, (rows, index) in pairs.items():
         catalog = matchers[name].stars
-        index = np.asarray(index, dtype=np.int64)
-        out[name] = HeadMatch(stars[name], np.asarray(rows, dtype=np.int64), catalog.rows[index],
-                              catalog.vectors[index])
+        picked = np.asarray(index, dtype=np.int64)
+        out[name] = HeadMatch(stars[name], np.asarray(rows, dtype=np.int64), catalog.rows[picked],
+                              catalog.vectors[picked])
     return out

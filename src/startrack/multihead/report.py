@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import require
 from ..results import AttitudeSolution
 from ..rig import CameraRig
 from ..units import ARCSEC
@@ -51,7 +52,8 @@ def rig_solution_to_dict(solution: RigSolution, rig: CameraRig, n_stars: dict[st
     out: dict[str, Any] = {"status": solution.status.value, "reason": solution.reason}
     if solution.rot_body_from_icrs is not None:
         ra, dec, roll = solution.radec_roll_deg()
-        sigma = np.sqrt(np.clip(np.diag(solution.covariance_rad2), 0.0, None)) / ARCSEC
+        cov = require(solution.covariance_rad2, "the rig solution's covariance")
+        sigma = np.sqrt(np.clip(np.diag(cov), 0.0, None)) / ARCSEC
         out.update({**_quat(solution.rot_body_from_icrs), "ra_deg": ra, "dec_deg": dec, "roll_deg": roll,
                     "sigma_body_arcsec": [_num(v) for v in sigma], "consistency_deg": _num(solution.consistency_deg),
                     "mode": solution.mode, "seed_head": solution.seed_head, "heads_used": list(solution.heads_used),

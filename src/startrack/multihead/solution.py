@@ -167,4 +167,5 @@ class RigSolution:
         """RA, Dec of the body +z axis and roll about it (the :mod:`startrack.frames` format), deg."""
         if self.rot_body_from_icrs is None:
             return (math.nan, math.nan, math.nan)
-        return tuple(math.degrees(float(a)) for a in radec_roll_from_rotation(self.rot_body_from_icrs))
+        ra, dec, roll = (math.degrees(float(a)) for a in radec_roll_from_rotation(self.rot_body_from_icrs))
+        return ra, dec, roll

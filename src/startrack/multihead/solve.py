@@ -33,7 +33,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..catalog import load_catalog
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, require
 from ..frames import angle_between
 from ..identify.field_stars import field_stars
 from ..identify.registry import MATCHERS
@@ -140,7 +140,8 @@ def solve_head_stars(stars: dict[str, HeadStars], rig: CameraRig, epoch: float, 
     if seed is None:
         seed, failure = _seed_jointly(work)
         if seed is None:
-            return replace(failure, heads=dict(work.lis), solve_time_s=time.perf_counter() - t0)
+            return replace(require(failure, "the failed joint solve"), heads=dict(work.lis),
+                           solve_time_s=time.perf_counter() - t0)
     solution = _settled(work, rig, seed)
     return replace(solution, solve_time_s=time.perf_counter() - t0)
 
@@ -180,7 +181,7 @@ def _seed_jointly(work: _Work) -> tuple[_Seed | None, RigSolution | None]:
     found = joint_pattern(work.stars, work.matchers, work.options)
     if found.status is Status.OK:
         sigma = {n: s.head.centroid_sigma_px for n, s in work.stars.items()}
-        fit = fit_joint(list(found.matches.values()), sigma)
+        fit = fit_joint(list(require(found.matches, "the joint pattern's matches").values()), sigma)
         if fit is not None:
             return _Seed(fit.rot_body_from_icrs, fit.covariance_rad2, found.seed_head, IDENTIFIED_JOINTLY,
                          found.false_match_prob), None
@@ -196,7 +197,8 @@ def _refined(work: _Work, rot: Rotation, cov: np.ndarray, used: list[str]
     opt = work.options
     sigma = {n: work.stars[n].head.centroid_sigma_px for n in used}
     radius = {n: max(opt.window_px, opt.window_sigmas * predicted_sigma_px(cov, work.stars[n].head)) for n in used}
-    matches, fit = {}, None
+    matches: dict[str, HeadMatch] = {}
+    fit: JointFit | None = None
     for round_ in range(opt.refine_rounds):
         before = matches
         matches = {n: match_predicted(work.stars[n], work.matchers[n], rot, radius[n])[0] for n in used}
@@ -288,7 +290,9 @@ def _settled(work: _Work, rig: CameraRig, seed: _Seed) -> RigSolution:
         matches, fit, sigma = _refined(work, rot, cov, [n for n in work.stars if n not in excluded])
         own = _own_solutions(work, matches, seed.false_match_prob)
         anchor = _anchor(rig, own)
-        new = set() if anchor is None else _disagreeing(rig, own, anchor, work.options.consistency_chi2) - excluded
+        if anchor is None:
+            break
+        new = _disagreeing(rig, own, anchor, work.options.consistency_chi2) - excluded
         if not new:
             break
         excluded |= new
@@ -342,7 +346,7 @@ def consistency_chi2(solution: RigSolution, rig: CameraRig, name: str) -> float:
     if own is None or not own.solved or not solution.solved:
         return float("nan")
     rot, cov = own_body(own, rig.head(name))
-    joint = JointFit(solution.rot_body_from_icrs, solution.covariance_rad2)
+    joint = JointFit(solution.rot_body_from_icrs, require(solution.covariance_rad2, "the rig solution's covariance"))
     return chi2_against_joint(rot, cov, joint, name in solution.heads_used)
 
 

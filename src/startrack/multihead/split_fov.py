@@ -103,8 +103,9 @@ def spot_moments(image, x, y, *, background: float, noise: float, radius_px: flo
 
 def expected_ellipticity(head: RigHead) -> NDArray[np.float64]:
     """A field's PSF ellipticity (2,) (module docstring), pixel size included."""
-    a2, b2 = head.psf.sigma_major_px**2 + 1.0 / 12.0, head.psf.sigma_minor_px**2 + 1.0 / 12.0
-    two_theta = 2.0 * math.radians(head.psf.angle_deg)
+    psf = head.field_psf
+    a2, b2 = psf.sigma_major_px**2 + 1.0 / 12.0, psf.sigma_minor_px**2 + 1.0 / 12.0
+    two_theta = 2.0 * math.radians(psf.angle_deg)
     return (a2 - b2) / (a2 + b2) * np.array([math.cos(two_theta), math.sin(two_theta)])
 
 
@@ -159,4 +160,4 @@ def classify_fields(moments: SpotMoments, fields: tuple[RigHead, ...] | list[Rig
 
 def moments_radius_px(fields: tuple[RigHead, ...] | list[RigHead]) -> float:
     """The moments window for these fields: :data:`WINDOW_SIGMAS` of the largest PSF sigma (>= 2 px)."""
-    return max(2.0, WINDOW_SIGMAS * max(h.psf.sigma_major_px for h in fields))
+    return max(2.0, WINDOW_SIGMAS * max(h.field_psf.sigma_major_px for h in fields))

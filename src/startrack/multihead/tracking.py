@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, require
 from ..identify.field_stars import field_stars
 from ..results import Status
 from ..rig import CameraRig
@@ -136,7 +136,7 @@ class RigTracker:
 
     def _track(self, lists: dict[str, HeadStars], t_s: float) -> RigTrackStep | None:
         opt = self.options
-        dt = t_s - self._t
+        dt = t_s - require(self._t, "the time of the last tracked frame")
         rot = self._predicted(dt)
         radius = {n: self._window_px(dt, s.head.camera.fx) for n, s in lists.items()}
         sigma = {n: s.head.centroid_sigma_px for n, s in lists.items()}

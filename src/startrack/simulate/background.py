@@ -102,7 +102,7 @@ class SkyBackground:
     def electrons(self, camera: Camera, sensor: Sensor) -> float | NDArray[np.float64]:
         """Expected background electrons per pixel in one exposure: a scalar or (H, W)."""
         sky = self.sky_electrons_px(camera, sensor) * background_illumination(camera, sensor.optics)
-        stray = self.stray_e_s_px * sensor.exposure_s
+        stray: float | NDArray[np.float64] = self.stray_e_s_px * sensor.exposure_s
         if stray > 0 and self.stray_gradient != 0.0:
             stray = stray * self._gradient(camera)
         total = sky + stray

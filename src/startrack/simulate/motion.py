@@ -244,6 +244,7 @@ class RecordedProfile:
 
     times_s: NDArray[np.float64]
     rotations: Rotation
+    _slerp: Slerp = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         t = _times(self.times_s)

@@ -149,14 +149,17 @@ def _expectation(light: NDArray, sensor: Sensor, maps: PixelMaps, model: NoiseMo
 
     if maps.response is not None:
         light *= pick(maps.response)
+    dark: float | NDArray[np.float64]
     if not model.dark:
         dark = 0.0
     elif maps.dark_scale is not None:
         dark = sensor.dark_e * pick(maps.dark_scale)
     else:
-        dark = np.full(light.shape, sensor.dark_e) if maps.hot is not None else sensor.dark_e
-    if maps.hot is not None:
-        dark[pick(maps.hot)] = sensor.detector.hot_pixel_dark_e_s * sensor.exposure_s
+        dark = sensor.dark_e
+    if maps.hot is not None:  # hot pixels come only with the dark current (_active_maps)
+        with_hot = np.array(np.broadcast_to(dark, light.shape), dtype=float)
+        with_hot[pick(maps.hot)] = sensor.detector.hot_pixel_dark_e_s * sensor.exposure_s
+        dark = with_hot
     light += dark
     if maps.dead is not None:
         light[pick(maps.dead)] = 0.0
@@ -334,7 +337,7 @@ def readout_table(level_e: float, det: Detector, model: NoiseModel
     values = np.clip(adu, 0, det.max_adu)
     uniq, inverse = np.unique(values, return_inverse=True)
     cdf = np.cumsum(np.bincount(inverse, weights=pmf))
-    cdf /= cdf[-1]
+    cdf = cdf / cdf[-1]
     return _frozen_table(uniq.astype(np.uint16), cdf)
 
 

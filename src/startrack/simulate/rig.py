@@ -199,7 +199,7 @@ def simulate_rig(rig: CameraRig, rot_body_from_icrs: Rotation, *, rate_body_rad_
                for h in rig}
     detectors = rig.detectors
     streams = dict(zip(detectors, np.random.default_rng(rng).spawn(len(detectors)), strict=True))
-    frames = {}
+    frames: dict[str, SimulatedImage | SplitFieldFrame] = {}
     for name, heads in detectors.items():
         det_sensor = _sensor_for(sensor, name)
         stray = BLINDING_WELLS * det_sensor.detector.full_well_e if any(blinded[h.name] for h in heads) else 0.0

@@ -150,9 +150,10 @@ class Snapshot:
             dist = float(np.linalg.norm(rel))
             edge = _angle(boresight_icrs, rel) - math.asin(min(1.0, radius / dist))
             angles[name] = edge
-        return BrightBodyFlags(**{f"{k}_edge_deg": math.degrees(v) for k, v in angles.items()},
-                               **{f"{k}_in_fov": bool(v < half_fov) for k, v in angles.items()},
-                               **{f"{k}_near": bool(v < limit) for k, v in angles.items()})
+        flags: dict[str, float | bool] = {f"{k}_edge_deg": math.degrees(v) for k, v in angles.items()}
+        flags.update({f"{k}_in_fov": bool(v < half_fov) for k, v in angles.items()})
+        flags.update({f"{k}_near": bool(v < limit) for k, v in angles.items()})
+        return BrightBodyFlags(**flags)  # type: ignore[arg-type]  # (names and types as declared)
 
 
 @dataclass(frozen=True, eq=False)

@@ -136,7 +136,7 @@ def attitude_profile(attitude: Rotation | AttitudeProfile,
     if isinstance(attitude, Rotation):
         if not attitude.single:
             raise InvalidInputError("rot_cam_from_icrs must be a single scipy Rotation (not a stack)")
-        profile = ConstantRate(attitude, np.zeros(3) if rate_rad_s is None else rate_rad_s)
+        profile = ConstantRate(attitude, np.zeros(3) if rate_rad_s is None else np.asarray(rate_rad_s, dtype=float))
         return profile, not profile.static
     if not (hasattr(attitude, "attitudes") and hasattr(attitude, "rates")):
         raise InvalidInputError("the attitude must be a single scipy Rotation or an attitude profile "

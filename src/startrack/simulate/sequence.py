@@ -85,7 +85,7 @@ def simulate_sequence(camera: Camera, profile: AttitudeProfile, n_frames: int, *
     if orbital is not None and epoch is None:
         raise InvalidInputError("satellites need epoch=Time(...) (the absolute time of t = 0)")
     if seed is None:
-        seed = int(np.random.SeedSequence().entropy % 2**63)
+        seed = int(np.random.default_rng().integers(2**63))  # fresh OS entropy
     starts = float(start_s) + period * np.arange(n)
     mids = starts + 0.5 * sensor.exposure_s + 0.5 * (camera.height - 1) * line_time_s
     snapshots: list = []

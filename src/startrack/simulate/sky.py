@@ -74,7 +74,8 @@ class SkyModel:
     mags: NDArray[np.float64]
     ids: NDArray[np.int64]
     epoch_jyear: float | None = None
-    b_v: NDArray[np.float64] | None = None
+    # None means unknown colours (NaN); __post_init__ fills it, so it is always an array once built.
+    b_v: NDArray[np.float64] = None  # type: ignore[assignment]
     index: ConeIndex = field(init=False, repr=False)
 
     def __post_init__(self) -> None:

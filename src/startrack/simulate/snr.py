@@ -82,8 +82,8 @@ def star_snr(mag: ArrayLike, sensor: Sensor, *, box_px: int | None = None, backg
     box = _box(sensor, box_px)
     model = NoiseModel.coerce(noise)
     signal = sensor.electrons(mag, b_v) * box_fraction(sensor.psf_sigma_px, box)
-    var = box * box * noise_per_pixel_e2(sensor, _checks.positive("background_e", background_e, allow_zero=True),
-                                          model)
+    background = _checks.positive("background_e", background_e, allow_zero=True)
+    var: float | NDArray[np.float64] = box * box * noise_per_pixel_e2(sensor, background, model)
     if model.shot:
         var = var + signal
     with np.errstate(divide="ignore"):

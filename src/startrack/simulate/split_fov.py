@@ -102,7 +102,7 @@ class SplitFieldFrame:
 
 def _field_stars(head: RigHead, rot_cam: Rotation, sky: SkyModel, sensor: Sensor, max_mag: float):
     """(x, y, ids, mags, electrons) of the stars of one field whose stamp reaches the detector."""
-    radius = stamp_radius_px(head.psf.sigma_major_px)
+    radius = stamp_radius_px(head.field_psf.sigma_major_px)
     boresight = rot_cam.inv().apply([0.0, 0.0, 1.0])
     idx = sky.cone(boresight, field_radius_rad(head.camera, radius))
     idx = idx[sky.mags[idx] <= max_mag]
@@ -147,7 +147,7 @@ def simulate_split_frame(rig: CameraRig, detector: str, rot_body_from_icrs: Rota
         rot_cam = head.rot_cam_from_icrs(rot_body_from_icrs)
         x, y, ids, mags, electrons = _field_stars(head, rot_cam, sky, sensor, max_mag)
         if len(ids):
-            add_stamps(signal, *elliptical_stamps(x, y, electrons, head.psf))
+            add_stamps(signal, *elliptical_stamps(x, y, electrons, head.field_psf))
         parts.append((np.full(len(ids), head.name), ids, x, y, mags, electrons))
     model = NoiseModel.coerce(noise)
     image = read_out(signal, sensor, background_e=background_e, noise=model, rng=rng)

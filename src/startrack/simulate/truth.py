@@ -117,14 +117,16 @@ class Truth:
     noise: NoiseModel = field(default_factory=NoiseModel)
     background_e: float | NDArray[np.float64] = 0.0
     epoch_jyear: float | None = None
-    x_start: NDArray[np.float64] | None = None
-    y_start: NDArray[np.float64] | None = None
-    x_end: NDArray[np.float64] | None = None
-    y_end: NDArray[np.float64] | None = None
-    b_v: NDArray[np.float64] | None = None
-    rate_cam_rad_s: NDArray[np.float64] | None = None
-    rot_start: Rotation | None = None
-    rot_end: Rotation | None = None
+    # These default to None and __post_init__ fills them (the positions and attitude of a still
+    # frame, no colours, no rate), so they are always set once built.
+    x_start: NDArray[np.float64] = None  # type: ignore[assignment]
+    y_start: NDArray[np.float64] = None  # type: ignore[assignment]
+    x_end: NDArray[np.float64] = None  # type: ignore[assignment]
+    y_end: NDArray[np.float64] = None  # type: ignore[assignment]
+    b_v: NDArray[np.float64] = None  # type: ignore[assignment]
+    rate_cam_rad_s: NDArray[np.float64] = None  # type: ignore[assignment]
+    rot_start: Rotation = None
+    rot_end: Rotation = None
     t_mid_s: float = 0.0
     time_mid: Time | None = None
     line_time_s: float = 0.0

@@ -45,10 +45,16 @@ def service_of(request: Request) -> Service:
     return request.app.state.service
 
 
+def _first(fields: dict[str, list[str]], name: str) -> str | None:
+    """The first value of a form field, None if the form has none."""
+    values = fields.get(name)
+    return values[0] if values else None
+
+
 def options_of(fields: dict[str, list[str]], service: Service) -> dict[str, Any]:
     """The checked ``options`` field (422 naming the bad option)."""
     try:
-        return parse_options((fields.get("options") or [None])[0], service.config.cameras_dir)
+        return parse_options(_first(fields, "options"), service.config.cameras_dir)
     except OptionError as exc:
         raise option_refusal(exc) from None
 
@@ -134,7 +140,7 @@ async def post_batch(request: Request) -> JSONResponse:
     fields, files = await read_form(request, service.config.max_upload_bytes)
     try:
         options = options_of(fields, service)
-        name = (fields.get("name") or [None])[0]
+        name = _first(fields, "name")
         if fields.get("folder") and not files:
             data = await service.create_folder_batch(fields["folder"][0], options, name)
         else:

@@ -10,6 +10,7 @@ through the user's browser.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from contextlib import asynccontextmanager
 from pathlib import Path
 from urllib.parse import urlsplit
@@ -68,7 +69,7 @@ def _cross_site(scope: Scope) -> bool:
 
 
 def _refusal(request: Request, status: int, message: str, field: str | None = None,
-             headers: dict[str, str] | None = None) -> Response:
+             headers: Mapping[str, str] | None = None) -> Response:
     if request.url.path.startswith("/api"):
         body = {"error": message, **({"field": field} if field else {})}
         return JSONResponse(body, status, headers=headers)

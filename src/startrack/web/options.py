@@ -188,7 +188,7 @@ def _site(options: dict, out: dict) -> None:
     elif (lat is None) != (lon is None):
         raise OptionError("options.longitude_deg" if lon is None else "options.latitude_deg",
                           "give both latitude_deg and longitude_deg (or site)")
-    elif lat is not None:
+    elif lat is not None and lon is not None:
         out["site"] = dataclasses.asdict(Site("custom", lat, lon, height or 0.0))
 
 

@@ -28,8 +28,10 @@ import numpy as np
 
 from .. import __version__
 from ..analysis.postprocess.core import csv_cell
+from ..camera import Camera
 from ..catalog import load_catalog
 from ..detect.details import DetectionDetails
+from ..errors import require
 from ..frames import vector_to_radec
 from ..io.atomic import atomic_path
 from ..io.solution_json import solution_to_dict
@@ -71,13 +73,13 @@ def result_dict(solution: AttitudeSolution, times_s: dict[str, float], extra: di
             "residual_arcsec", "sigma_cross_boresight_arcsec", "sigma_roll_arcsec", "focal_px")
     out.update(dict.fromkeys(keys))
     if solution.solved:
-        qx, qy, qz, qw = solution.quaternion_xyzw
+        qx, qy, qz, qw = require(solution.quaternion_xyzw, "a solved frame's quaternion")
         out.update(ra_deg=num(solution.ra_deg), dec_deg=num(solution.dec_deg), roll_deg=num(solution.roll_deg),
                    fov_deg=num(solution.fov_deg), qx=float(qx), qy=float(qy), qz=float(qz), qw=float(qw),
                    false_match_prob=num(solution.false_match_prob),
                    residual_arcsec=num(np.sqrt(np.mean(solution.residuals_arcsec**2))),
                    sigma_cross_boresight_arcsec=num(solution.sigma_cross_boresight_arcsec),
-                   sigma_roll_arcsec=num(solution.sigma_roll_arcsec), focal_px=num(solution.camera.fx))
+                   sigma_roll_arcsec=num(solution.sigma_roll_arcsec), focal_px=num(_camera(solution).fx))
     out["times_s"] = {k: round(v, 6) for k, v in times_s.items()}
     out.update(extra)
     return out
@@ -97,7 +99,7 @@ def matches_table(solution: AttitudeSolution) -> dict[str, list]:
     cols: dict[str, list] = {k: [] for k in ("x", "y", "hip", "ra_deg", "dec_deg", "v_mag", "residual_arcsec")}
     if not solution.solved:
         return cols
-    det, m = solution.detections, solution.matches
+    det, m = require(solution.detections, "a solved frame's detections"), solution.matches
     catalog = load_catalog()
     ra, dec = vector_to_radec(m.cat_vectors)
     mags = catalog.v_mag[np.searchsorted(catalog.hip, m.hip)]
@@ -125,13 +127,18 @@ def detections_table(details: DetectionDetails, solution: AttitudeSolution) -> d
     return cols
 
 
+def _camera(solution: AttitudeSolution) -> Camera:
+    """The camera of a solved frame."""
+    return require(solution.camera, "a solved frame's camera")
+
+
 def write_solution_files(folder: Path, solution: AttitudeSolution, details: DetectionDetails,
                          rejects: dict[str, list], result: dict[str, Any], date_obs: str | None) -> None:
     """solution.json, solution.wcs (when solved), matches.csv, detections.csv, rejected.csv."""
     extra = {k: result.get(k) for k in ("altitude_deg", "azimuth_deg", "time_utc", "site", "truth")}
     write_json(folder / "solution.json", {**solution_to_dict(solution, solution.detections), **extra})
     if solution.solved:
-        write_wcs(folder / "solution.wcs", solution.rot_cam_from_icrs, solution.camera, date_obs=date_obs)
+        write_wcs(folder / "solution.wcs", solution.rot_cam_from_icrs, _camera(solution), date_obs=date_obs)
     write_table(folder / "matches.csv", matches_table(solution))
     write_table(folder / "detections.csv", detections_table(details, solution))
     write_table(folder / "rejected.csv", rejects)

@@ -45,7 +45,7 @@ from ..calibrate.ground import pointing_altaz, time_from_header
 from ..calibrate.sites import Site
 from ..camera import Camera
 from ..detect import StarDetector
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, require
 from ..io import Image, read_image
 from ..results import AttitudeSolution
 from ..solve import DEFAULT_EPOCH_JYEAR, solve_image
@@ -196,7 +196,7 @@ def _truth_error(solution: AttitudeSolution, image: Image) -> dict[str, Any] | N
     if solution.solved:
         total, pointing, roll = error_arcsec(solution.rot_cam_from_icrs, truth)
         out.update(error_total_arcsec=total, error_pointing_arcsec=pointing, error_roll_arcsec=roll,
-                   error_px=total / solution.camera.pixel_scale_arcsec)
+                   error_px=total / require(solution.camera, "a solved frame's camera").pixel_scale_arcsec)
     return out
 
 

@@ -13,6 +13,7 @@ from typing import Any
 from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 
+from ..errors import require
 from .analysis_jobs import validate_request
 from .batches import BatchStore, clean_name, folder_images
 from .config import WebConfig
@@ -87,8 +88,8 @@ class Service:
             for job_id, _ in done:
                 self.jobs.discard(self.jobs.root / job_id)
             raise
-        for job_id, stored in done:
-            self._new_job(stored, job_id, options, batch)
+        for job_id, kept in done:
+            self._new_job(require(kept, "a stored upload"), job_id, options, batch)
         return [job_id for job_id, _ in done]
 
     def create_simulated(self, params: Any, options: dict) -> dict[str, Any]:
@@ -129,7 +130,8 @@ class Service:
             for job_id in ids:
                 self.jobs.discard(self.jobs.root / job_id)
             raise
-        source = {"kind": "folder", "folder": str(folder.relative_to(self.config.root)), "skipped": skipped}
+        root = require(self.config.root, "the server's folder root")
+        source = {"kind": "folder", "folder": str(folder.relative_to(root)), "skipped": skipped}
         return self._queue_batch(batch_id, ids, name or folder.name or "root", source)
 
     def _queue_batch(self, batch_id: str, ids: list[str], name: str, source: dict) -> dict[str, Any]:

@@ -200,7 +200,8 @@ def _owned(table: Mapping[str, Any], where: str) -> None:
 def _cases(spec: CampaignSpec, cases: Any) -> list[tuple[str, dict[str, Any]]]:
     if not isinstance(cases, list) or not cases or not all(isinstance(c, dict) for c in cases):
         raise SpecError("[budget] case: must be a list of tables (write each as [[budget.case]] with a name)")
-    params, out = spec.level_def.params, []
+    params = spec.level_def.params
+    out: list[tuple[str, dict[str, Any]]] = []
     for i, case in enumerate(cases):
         name = case.get("name")
         if not isinstance(name, str) or not name or name in (n for n, _ in out):

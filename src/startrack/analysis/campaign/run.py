@@ -118,7 +118,7 @@ def run_campaign(spec: CampaignSpec | str | Path, out: str | Path, *, workers: i
     if chunk_size is not None and chunk_size < 1:
         raise InvalidInputError(f"--chunk-size must be at least 1, got {chunk_size}")
     fresh = manifest is None
-    if fresh:
+    if manifest is None:
         manifest = _manifest(spec, chunk_size or default_chunk_size(spec, n_workers))
         store.write_manifest(manifest)
     done = store.done_keys()

@@ -236,7 +236,9 @@ def _check_cells(spec: CampaignSpec) -> None:
     except InvalidInputError as exc:
         raise SpecError(f"[[reference]] {exc}") from None
     check = spec.level_def.check
-    for cell in cells if check is not None else ():
+    if check is None:
+        return
+    for cell in cells:
         try:
             check(cell.params)
         except SpecError as exc:

@@ -17,14 +17,14 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
-from ...errors import InvalidInputError
+from ...errors import InvalidInputError, require
 
 PERCENTILES: tuple[float, ...] = (50.0, 68.0, 95.0, 99.7)
 """The error percentiles every table and figure reports (the 1-, 2- and 3-sigma levels of a normal
@@ -99,7 +99,7 @@ def finite(values: ArrayLike) -> NDArray[np.float64]:
     return arr[np.isfinite(arr)]
 
 
-def percentiles(values: ArrayLike, qs: Sequence[float] = PERCENTILES) -> NDArray[np.float64]:
+def percentiles(values: ArrayLike, qs: Sequence[float] | NDArray[np.float64] = PERCENTILES) -> NDArray[np.float64]:
     """Percentiles ``qs`` (in [0, 100]) of the finite ``values``; all NaN when there are none.
 
     Returns
@@ -126,7 +126,7 @@ def _std(data: NDArray[np.float64]) -> float:
     return float(np.std(data, ddof=1)) if data.size > 1 else math.nan
 
 
-_REDUCERS = {
+_REDUCERS: dict[str, Callable[[NDArray[np.float64]], float]] = {
     "mean": np.mean, "median": np.median, "min": np.min, "max": np.max,
     "std": _std, "rms": lambda d: float(np.sqrt(np.mean(d * d))),
 }
@@ -195,7 +195,7 @@ class Metric:
         if values.size == 0:
             return (math.nan, 0)
         if self.agg == "percentile":
-            return (float(np.percentile(values, self.q)), int(values.size))
+            return (float(np.percentile(values, require(self.q, "the percentile of the metric"))), int(values.size))
         return (float(_REDUCERS[self.agg](values)), int(values.size))
 
 

@@ -66,7 +66,7 @@ def trial_schema(spec: CampaignSpec) -> pa.Schema:
 
 
 def _keys(spec: CampaignSpec, cell: Cell, k: int) -> dict[str, Any]:
-    keys = {"cell": cell.index, "trial": k}
+    keys: dict[str, Any] = {"cell": cell.index, "trial": k}
     keys.update({name: as_column_value(cell.params[name]) for name in spec.swept})
     if spec.mode == "budget":
         keys["source"] = cell.source or ""

@@ -33,7 +33,7 @@ from ...calibrate.apparent import apparent_vectors
 from ...calibrate.ground import refract_icrs
 from ...camera import Camera, get_preset
 from ...catalog import load_catalog
-from ...errors import InvalidInputError
+from ...errors import InvalidInputError, require
 from ...frames import angle_between
 from ...units import ARCSEC
 from ..records import ImageRecord
@@ -67,7 +67,7 @@ def pinhole(camera: Camera) -> Camera:
 
 def lens_model(record: ImageRecord, override: Camera | None) -> Camera:
     """The lens model of ``record`` (module docstring), checked against its image size."""
-    det = record.solution.detections
+    det = require(record.solution.detections, "the record's detections")
     truth_camera = None if record.truth is None else record.truth.camera
     camera = next(c for c in (override, record.camera, truth_camera, record.solution.camera) if c is not None)
     if (camera.width, camera.height) != (det.width, det.height):
@@ -117,7 +117,8 @@ def _variants(record: ImageRecord, camera: Camera, site) -> dict[tuple[bool, boo
     """The refitted attitude, rms residual (arcsec) and star count of each variant available."""
     sol = record.solution
     idx = sol.matches.det_index
-    x, y = sol.detections.x[idx], sol.detections.y[idx]
+    det = require(sol.detections, "the solution's detections")
+    x, y = det.x[idx], det.y[idx]
     observed = {True: camera.pixel_to_vector(x, y), False: pinhole(camera).pixel_to_vector(x, y)}
     references = {False: sol.matches.cat_vectors}
     if site is not None and record.time is not None:
@@ -132,7 +133,7 @@ def _variants(record: ImageRecord, camera: Camera, site) -> dict[tuple[bool, boo
 
 
 def _fit(observed: NDArray, reference: NDArray) -> tuple[Rotation, float, int]:
-    rotation = q_method(observed, reference).rotation
+    rotation = require(q_method(observed, reference).rotation, "the q-method attitude")
     residual = angle_between(rotation.apply(reference), observed) / ARCSEC
     return rotation, float(np.sqrt(np.mean(residual**2))), int(len(observed))
 

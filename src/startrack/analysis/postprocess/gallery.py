@@ -15,7 +15,8 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import InvalidInputError
+from ...errors import InvalidInputError, require
+from ..records import ImageRecord
 from .core import AnalysisInfo, AnalysisResult, ResultSet
 from .figures import new_figure, no_data
 from .records_io import record_pixels
@@ -51,9 +52,10 @@ def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
     for kind, chosen in picks.items():
         for set_name, record, i in chosen:
             pixels = cache.setdefault(id(record), np.asarray(record_pixels(record), float))
-            stamp = _stamp(pixels, record.solution.detections.x[i], record.solution.detections.y[i], half)
+            det = require(record.solution.detections, "a spot's detections")
+            stamp = _stamp(pixels, det.x[i], det.y[i], half)
             hip = _hip(record, i)
-            area = int(record.solution.detections.area_px[i])
+            area = int(det.area_px[i])
             stamps[kind].append((stamp, f"{f'HIP {hip}' if hip is not None else 'noise'}, {area} px"))
             _row(table, set_name, record, i, kind, hip, stamp)
     fig = _draw(stamps, params["count"])
@@ -62,8 +64,8 @@ def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
     return AnalysisResult(INFO.name, INFO.title, fig, {"stamps": table}, summary)
 
 
-def _candidates(sets, kind: str) -> list[tuple[str, object, int]]:
-    out = []
+def _candidates(sets, kind: str) -> list[tuple[str, ImageRecord, int]]:
+    out: list[tuple[str, ImageRecord, int]] = []
     for s in sets:
         for record in s.records:
             mask = matched_mask(record.solution)
@@ -76,7 +78,7 @@ def _available(sets, kind: str) -> int:
     return len(_candidates(sets, kind))
 
 
-def _pick(sets, kind: str, count: int, rng: np.random.Generator) -> list[tuple[str, object, int]]:
+def _pick(sets, kind: str, count: int, rng: np.random.Generator) -> list[tuple[str, ImageRecord, int]]:
     """Up to ``count`` spots of ``kind``, chosen at random without repetition (in table order)."""
     pool = _candidates(sets, kind)
     if len(pool) <= count:

@@ -40,7 +40,7 @@ def site_from_params(analysis: str, params: Mapping[str, Any], records: Sequence
     lat, lon = params.get("latitude_deg"), params.get("longitude_deg")
     if (lat is None) != (lon is None):
         raise InvalidInputError(f"{analysis}: give both 'latitude_deg' and 'longitude_deg' (or 'site')")
-    if lat is not None:
+    if lat is not None and lon is not None:
         return Site("parameters", float(lat), float(lon), float(params.get("height_m") or 0.0))
     return next((r.site for r in records if r.site is not None), None)
 

@@ -10,6 +10,7 @@ bin.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -41,7 +42,8 @@ def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
     :func:`~.registry.run_analysis` (see :data:`INFO` and the module docstring)."""
     spots = detection_table(sets)
     fig, axes = new_figure(2, 3, title=INFO.title)
-    tables = {"spots": spots, "spot_histograms": _spot_histograms(sets, spots, params["bins"], axes.ravel()[1:5]),
+    histograms = _spot_histograms(sets, spots, params["bins"], axes.ravel()[1:5])
+    tables: dict[str, Any] = {"spots": spots, "spot_histograms": histograms,
               "counts": counts_table(sets)}
     ax_image = axes[0, 0]
     if params["image"]:

@@ -17,7 +17,7 @@ from astropy.time import Time
 
 from ...calibrate.ground import altaz_from_vectors
 from ...calibrate.repeatability import repeatability
-from ...errors import InvalidInputError
+from ...errors import InvalidInputError, require
 from ...units import ARCMIN
 from .core import AnalysisInfo, AnalysisResult, ResultSet
 from .figures import draw_repeatability, new_figure
@@ -44,13 +44,14 @@ def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
     if site is None:
         raise InvalidInputError("repeatability: give parameter 'site' (a site name) or 'latitude_deg' and "
                                 "'longitude_deg'; the records carry no site")
-    usable = sorted((r for r in records if r.solution.solved and r.time is not None), key=lambda r: r.time.utc.jd)
+    usable = sorted((r for r in records if r.solution.solved and r.time is not None),
+                    key=lambda r: require(r.time, "the image time").utc.jd)
     if len(usable) < 2:
         no_time = sum(1 for r in records if r.solution.solved and r.time is None)
         raise InvalidInputError(f"repeatability needs at least two solved images with a time; set {sets[0].name!r} "
                                 f"has {len(usable)} ({no_time} solved without a time: give the images a DATE-OBS or "
                                 "EXIF time)")
-    times = Time([r.time.utc.isot for r in usable], format="isot", scale="utc")
+    times = Time([require(r.time, "the image time").utc.isot for r in usable], format="isot", scale="utc")
     result = repeatability(times, [r.solution.rot_cam_from_icrs for r in usable], site)
     fig, axes = new_figure(1, 2, width_in=5.2, height_in=3.8, title=INFO.title)
     draw_repeatability(axes[0, 0], result)

@@ -63,7 +63,8 @@ def rerun(analysis: str, param: str, sets: Sequence[ResultSet], setting: str,
 def _append(table: dict[str, list], set_name: str, record, value, solution: AttitudeSolution) -> None:
     n_common, change = _residual_change(record.solution, solution)
     rms = float(np.sqrt(np.mean(solution.residuals_arcsec**2))) if solution.solved else float("nan")
-    row = (set_name, record.name, value, solution.solved, len(solution.detections), len(solution.matches)
+    row = (set_name, record.name, value, solution.solved,
+           len(solution.detections) if solution.detections is not None else 0, len(solution.matches)
            if solution.solved else 0, rms, solution.solve_time_s, n_common, change)
     for key, item in zip(PER_IMAGE, row, strict=True):
         table[key].append(item)

@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...catalog import load_catalog
+from ...errors import require
 from ...results import AttitudeSolution
 from ..records import ImageRecord
 from .core import ResultSet
@@ -36,7 +37,10 @@ def principal_point(record: ImageRecord) -> tuple[float, float]:
     if camera is not None:
         return float(camera.cx), float(camera.cy)
     det = record.solution.detections
-    height, width = (det.height, det.width) if det is not None else np.shape(record.image)[:2]
+    if det is not None:
+        height, width = det.height, det.width
+    else:
+        height, width = np.shape(require(record.image, "the record's image"))[:2]
     return (width - 1) / 2.0, (height - 1) / 2.0
 
 

@@ -67,7 +67,8 @@ def render(params: Mapping[str, Any], rot_start: Rotation, omega: NDArray, expos
 
 def star_flux(params: Mapping[str, Any], count: int, rng: np.random.Generator, scale: float = 1.0) -> NDArray:
     """Electrons of ``count`` stars, uniform in ``star_electrons`` times ``scale``."""
-    return rng.uniform(*params["star_electrons"], count) * scale
+    low, high = params["star_electrons"]
+    return rng.uniform(low, high, count) * scale
 
 
 def truth_pairs(scene: StreakScene, ends_a: NDArray, ends_b: NDArray) -> tuple[NDArray[np.intp], NDArray[np.bool_]]:

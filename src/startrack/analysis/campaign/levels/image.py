@@ -136,7 +136,7 @@ def trial_attitude(params: Mapping[str, Any], rot: Rotation, rng: np.random.Gene
         return rot
     seed, _, trial = key
     field, dither = field_and_dither(trial, params)
-    out = random_rotations(rng=np.random.SeedSequence(seed, spawn_key=(ATTITUDE_STREAM, field)))
+    out = random_rotations(rng=np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(ATTITUDE_STREAM, field))))
     if params["attitudes_per_field"] == 1 or params["dither_px"] == 0.0:
         return out
     dx, dy = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(ATTITUDE_STREAM, field, dither))

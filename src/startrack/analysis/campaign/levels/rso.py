@@ -198,7 +198,7 @@ def indicator_columns(scene: StreakScene, result: StreakRate) -> dict[str, Any]:
         flags = result.rso.flags[name] if result.rso is not None else np.zeros(len(others), dtype=bool)
         row[f"found_{name}"] = bool(index is not None and flags[index])
         row[f"false_{name}"] = int(np.sum(flags[others]))
-        row[f"rso_z_{name}"] = float(abs(result.rso.z[name][index])) if index is not None else NAN
+        row[f"rso_z_{name}"] = float(abs(result.rso.z[name][index])) if index is not None and result.rso else NAN
     return row
 
 

@@ -35,6 +35,7 @@ import pyarrow as pa
 from scipy.spatial.transform import Rotation
 
 from ....camera import Camera
+from ....errors import require
 from ....frames import attitude_error
 from ....identify.registry import MATCHERS
 from ....rate.from_attitudes import rate_between
@@ -119,7 +120,8 @@ def relative_chain(found: list[Detections], camera: Camera, method: str, dt_s: f
             pairs = -1
             continue
         prev, cur = (camera.pixel_to_vector(f.x, f.y) for f in (found[k - 1], found[k]))
-        rel = rate_match(prev, cur, rate, dt_s, tol) if method == "rate" else triangle_match(prev, cur, tol)
+        rel = (rate_match(prev, cur, require(rate, "the rate"), dt_s, tol) if method == "rate"
+               else triangle_match(prev, cur, tol))
         rot = None if rel.rot_cam2_from_cam1 is None else rel.rot_cam2_from_cam1 * out[-1].rot_cam_from_icrs
         out.append(AttitudeSolution(status=rel.status if rot is not None else Status.NO_MATCH, reason=rel.reason,
                                     rot_cam_from_icrs=rot))

@@ -24,6 +24,7 @@ import numpy as np
 import pyarrow as pa
 from scipy.spatial.transform import Rotation
 
+from ....errors import require
 from ....results import AttitudeSolution
 from ....simulate import ConstantRate, simulate_sequence
 from ....track import Tracker, TrackerOptions
@@ -93,7 +94,8 @@ def run(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generator, tole
     """Track one simulated sequence (see the module docstring)."""
     camera, frames = _frames(params, rot, rng)
     tracker, detector = make_tracker(params, camera), frame_detector(params)
-    errors, times = [], {"lis": [], "track": []}
+    errors: list[float] = []
+    times: dict[str, list[float]] = {"lis": [], "track": []}
     solved = correct = tracked = 0
     acquire, last, n_stars = -1, None, 0
     for k, sim in enumerate(frames):
@@ -110,7 +112,7 @@ def run(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generator, tole
             correct += 1
             acquire = k if acquire < 0 else acquire
             errors.append(judged["err_total_arcsec"])
-    sim, step = last
+    sim, step = require(last, "the last frame of the sequence")
     row = solution_columns(_as_solution(step), sim.truth.rot_cam_from_icrs, camera, tolerance_px, n_stars)
     row.update(frames_solved=solved, frames_correct=correct, frames_tracked=tracked, acquire_frame=acquire,
                err_rms_arcsec=float(np.sqrt(np.mean(np.square(errors)))) if errors else float("nan"),

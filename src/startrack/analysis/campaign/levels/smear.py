@@ -47,6 +47,7 @@ from ....attitude import solve_wahba
 from ....camera import Camera
 from ....detect import StarDetector
 from ....detect.centroiders import CENTROIDERS
+from ....errors import require
 from ....rate.streak_detect import find_streaks
 from ....units import DEG
 from ...streak_scenes import StreakScene, render_streak_scene, star_field, star_paths
@@ -89,7 +90,8 @@ def draw_image(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generato
     omega = params["rate_deg_s"] * DEG * random_axis(rng)
     exposure, n = params["exposure_s"], params["stars"]
     vectors = star_field(camera, omega, exposure, n, rng, margin_px=params["margin_px"])
-    return render_streak_scene(camera, rot, omega, exposure, vectors, rng.uniform(*params["star_electrons"], n),
+    low, high = params["star_electrons"]
+    return render_streak_scene(camera, rot, omega, exposure, vectors, rng.uniform(low, high, n),
                                psf_sigma_px=params["psf_sigma_px"], background_e=params["sky_e"],
                                read_noise_e=params["read_noise_e"], rng=rng)
 
@@ -148,7 +150,7 @@ def run(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generator, tole
                    sigma_urad=NAN, std_urad=NAN, std_truth_urad=NAN)
         return TrialOutput(row, image=scene.image, truth=scene.truth)
     measured = camera.pixel_to_vector(xy[:, 0], xy[:, 1])
-    fit = solve_wahba(measured, scene.icrs[stars]).rotation
+    fit = require(solve_wahba(measured, scene.icrs[stars]).rotation, "the attitude of three or more stars")
     row.update(status="OK", solved=True, **error_columns(truth_mid, fit, camera, tolerance_px),
                sigma_urad=1e6 * interstar_rms_rad(measured, truth_mid.apply(scene.icrs[stars])),
                std_urad=1e6 * image_rms_rad(camera, xy, fit.apply(scene.icrs[stars])),
