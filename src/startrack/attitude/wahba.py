@@ -19,8 +19,9 @@ Every solver (one module each) provides a *core*: a function of batched, normali
 quaternions (M, 4). Each module's public solver is a plain function with the same signature and
 result, which runs its core through :func:`solve_with`: the input checks, the degeneracy test,
 the loss and the covariance. A solver whose error statistics differ from the optimum's (TRIAD)
-or that has its own closed form (SVD, FOAM) also passes a *covariance core* ``(observed, reference, weights, sigma_rad) -> (M, 3, 3)``; the
-default is the QUEST covariance, which is that of every solver reaching the Wahba optimum.
+or that has its own closed form (SVD, FOAM) also passes a *covariance core* ``(observed,
+reference, weights, sigma_rad) -> (M, 3, 3)``; the default is the QUEST covariance, which is that
+of every solver reaching the Wahba optimum.
 
 Why :class:`WahbaResult` and not :class:`startrack.results.AttitudeSolution`: a solver works on
 a batch of M problems at once and knows nothing of images, so its result holds stacked arrays
