@@ -17,12 +17,13 @@ from numba import njit
 
 
 @njit(cache=True, error_model="numpy")
-def bin_mean(image, factor, out, row):
+def bin_mean(image, factor, out, row, exact):
     """Mean over ``factor`` x ``factor`` blocks as float32, trailing rows and columns dropped:
     each block's rows summed first (in the wider of float32 and the image's type, rounded to
     float32), then its columns, then scaled, as :func:`.smooth.bin_mean` did with numpy.
     ``image`` (H, W) of any real dtype, into float32 ``out`` (H // factor, W // factor); ``row``
-    (W // factor * factor,) float32 is the work row (see :func:`smooth`)."""
+    (W // factor * factor,) float32 is the work row (see :func:`smooth`); ``exact``: the image
+    holds integers of at most 16 bits, whose float32 sums are exact (added in float32)."""
     h, w = out.shape
     scale = np.float32(1.0 / (factor * factor))
     for i in range(h):
@@ -31,11 +32,16 @@ def bin_mean(image, factor, out, row):
             row[j] = src[j]
         for dy in range(1, factor):  # added in the wider of float32 and the image's type
             src = image[i * factor + dy]
-            for j in range(w * factor):
-                row[j] += src[j]
+            if exact:  # small integers: float32 holds them and their sums exactly
+                for j in range(w * factor):
+                    row[j] += np.float32(src[j])
+            else:
+                for j in range(w * factor):
+                    row[j] += src[j]
         if factor == 2:
+            dst = out[i]
             for j in range(w):
-                out[i, j] = (row[2 * j] + row[2 * j + 1]) * scale
+                dst[j] = (row[2 * j] + row[2 * j + 1]) * scale
             continue
         for j in range(w):
             total = row[j * factor]

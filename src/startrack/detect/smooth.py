@@ -34,7 +34,8 @@ def bin_mean(image: NDArray, factor: int) -> NDArray[np.float32]:
     if image.dtype == np.bool_:
         image = image.view(np.uint8)
     out = empty_apart((image.shape[0] // factor, image.shape[1] // factor), image)
-    return kernels().bin_mean(image, factor, out, scratch_row(out.shape[1] * factor, image, out))
+    exact = image.dtype in (np.uint8, np.int8, np.uint16, np.int16) and factor <= 16  # sums < 2**24
+    return kernels().bin_mean(image, factor, out, scratch_row(out.shape[1] * factor, image, out), exact)
 
 
 KERNELS = ("binomial", "box")
