@@ -87,7 +87,7 @@ def split_regions(regions: Regions, snr: NDArray, min_sigma: float,
     index = regions.index.copy()
     n_total = len(regions)
     for r in multi:
-        n_total = _split_one(regions, snr, is_peak, r, valley, index, n_total)
+        n_total = _split_one(regions, snr, is_peak, int(r), valley, index, n_total)
     used, index = np.unique(index, return_inverse=True)
     return regions_from_index(index, regions.y, regions.x, used.size)
 

@@ -128,8 +128,8 @@ def fine_significance(data: NDArray, invalid: NDArray[np.bool_] | None, kernel: 
         return None
     h, w = det.shape  # the local contrast has one level over the frame (its median, below 0 for
     # skewed noise): only the noise is mapped
-    return (det - np.float32(model.level)) / np.asarray(model.noise_map(np.arange(h), np.arange(w)),
-                                                        dtype=np.float32)
+    noise = np.asarray(model.noise_map(np.arange(h), np.arange(w)), dtype=np.float32)
+    return np.asarray((det - np.float32(model.level)) / noise, dtype=np.float32)
 
 
 def local_contrast(image: NDArray[np.float32]) -> NDArray[np.float32]:
