@@ -25,9 +25,11 @@ def warm_up_fov_deg(fov_deg: float | None, fov_range_deg: tuple[float, float] | 
 
 
 def solve_catalog_stars(fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
-                        camera: Camera | None = None) -> None:
+                        camera: Camera | None = None, epoch: float | None = None) -> None:
     """Solve the 30 brightest catalog stars a camera pointed at RA 90, Dec 30 deg sees, with the
-    field-of-view options of the command (so the same pattern database is used)."""
+    field-of-view options of the command (so the same pattern database is used), at the catalog
+    ``epoch`` (Julian year, default J2000.0; the solver's catalog stars of that epoch are then
+    ready for the solve to come)."""
     import numpy as np
 
     from .catalog import load_catalog
@@ -43,4 +45,4 @@ def solve_catalog_stars(fov_deg: float | None = None, fov_range_deg: tuple[float
     seen = np.flatnonzero(view.in_image(x, y, margin_px=2.0))
     order = seen[np.argsort(catalog.v_mag[ahead][seen], kind="stable")[:30]]
     options = {"camera": camera} if camera is not None else {"fov_deg": fov_deg, "fov_range_deg": fov_range_deg}
-    solve_stars(x[order], y[order], width=view.width, height=view.height, **options)
+    solve_stars(x[order], y[order], width=view.width, height=view.height, epoch=epoch, **options)

@@ -18,12 +18,10 @@ from __future__ import annotations
 
 import csv
 import json
-import multiprocessing
 import os
 import sys
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
@@ -135,6 +133,9 @@ def _records(spec: BatchSpec, images: list[Path], jobs: int, stack: ExitStack) -
     task = _SafeProcess(spec.process)
     if jobs <= 1 or len(images) == 1:
         return map(task, images)
+    import multiprocessing  # a single image's command does not pay for importing them
+    from concurrent.futures import ProcessPoolExecutor
+
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
     pool = stack.enter_context(ProcessPoolExecutor(max_workers=min(jobs, len(images)),
                                                    mp_context=multiprocessing.get_context(method)))

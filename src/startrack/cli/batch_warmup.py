@@ -54,14 +54,16 @@ class _CompileNotice:
 
 
 def warm_up(fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
-            camera: Camera | None = None) -> None:
+            camera: Camera | None = None, epoch: float | None = None) -> None:
     """Load (or, the first time, compile with a message on stderr) the solver's compiled kernels
-    by solving catalog stars with these field-of-view options (checked, as the solvers take them)."""
+    by solving catalog stars with these field-of-view options (checked, as the solvers take them)
+    at the catalog ``epoch`` (Julian year; default J2000.0) of the solve to come, whose catalog
+    stars are then prepared too."""
     from numba.core import event
 
     notice = _CompileNotice()
     with event.install_listener("numba:compile", notice.listener):
-        solve_catalog_stars(fov_deg, fov_range_deg, camera)
+        solve_catalog_stars(fov_deg, fov_range_deg, camera, epoch=epoch)
     notice.finished()
 
 

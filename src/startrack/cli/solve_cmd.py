@@ -16,6 +16,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import InvalidInputError
+from ..identify.image_epoch import resolve_epoch
 from ..io import Image, read_image
 from ..results import AttitudeSolution, Detections, Status
 from ..solve import solve_image
@@ -91,7 +92,9 @@ def main(argv: list[str]) -> int:
     image = read_image(args.image, channel=args.channel)
     ensure_database_for(**fov_options)
     site = _site(args)
-    warm_up(**fov_options)  # the compiled kernels loaded (or compiled, with a message) outside the solve time
+    # the compiled kernels loaded (or compiled, with a message) outside the solve time, and the catalog stars
+    # of the image's epoch prepared
+    warm_up(**fov_options, epoch=None if site is not None else _image_epoch(image, solver_options["epoch"]))
     try:
         if site is None:
             solution, ground = solve_image(image, **solver_options), None
@@ -122,6 +125,15 @@ def _batch(args: argparse.Namespace, solver_options: dict, fov_options: dict) ->
     warm_up(**fov_options)
     return run_batch(solve_spec(solver_options, args.channel), args.image, as_json=args.json,
                      csv_out=args.csv, jobs=args.jobs)
+
+
+def _image_epoch(image: Image, epoch) -> float | None:
+    """The catalog epoch the solve of ``image`` will take (Julian year), or None when its header
+    states a time that cannot be read (the solve then says so, naming the file)."""
+    try:
+        return resolve_epoch(epoch, image.header).jyear
+    except InvalidInputError:
+        return None
 
 
 def _solve_ground(image, site, args, solver_options):
