@@ -11,7 +11,9 @@ Measured, each in fresh processes (the median of ``--repeat`` runs where it says
   the first and second ``solve_image`` of a real photo, and the same first solve with no warm-up
   (loading then falls inside it); and what each compiled function costs to load (numba's
   ``load_overload`` timed per function, largest first);
-* ``startrack solve IMAGE`` wall time (the console script in a new process);
+* ``startrack solve IMAGE`` wall and CPU time (the console script in a new process), with
+  startrack's bytecode kept as an install has it (see :func:`_with_bytecode`) and, when this
+  environment turned bytecode off, once more as it runs here (compiled from source);
 * a batch of 20 real photos: ``startrack solve FOLDER`` (one process) against 20 commands one
   after the other, total and per image;
 * cedar-solve (its own virtual environment, ``benchmarks/peers/cedar_env.py``): a new process
@@ -35,6 +37,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import shutil
 import statistics
 import subprocess
@@ -122,15 +125,22 @@ def _wall(cmd: list[str], env: dict | None = None) -> tuple[float, subprocess.Co
     return time.perf_counter() - t0, done
 
 
-def _median_wall(cmd: list[str], repeat: int) -> tuple[float, float]:
-    """(median, min) wall time of ``cmd`` over ``repeat`` runs, s."""
-    runs = []
+def _children_cpu_s() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def _median_wall(cmd: list[str], repeat: int, env: dict | None = None) -> tuple[float, float, float]:
+    """(median, min) wall time and median CPU time (user + system) of ``cmd`` over ``repeat`` runs, s."""
+    runs, cpu = [], []
     for _ in range(repeat):
-        elapsed, done = _wall(cmd)
+        before = _children_cpu_s()
+        elapsed, done = _wall(cmd, env=env)
+        cpu.append(_children_cpu_s() - before)
         if done.returncode not in (0, 1):
             raise RuntimeError(f"{' '.join(cmd)} failed: {done.stderr.strip()[-500:]}")
         runs.append(elapsed)
-    return statistics.median(runs), min(runs)
+    return statistics.median(runs), min(runs), statistics.median(cpu)
 
 
 def _import_s(module: str, repeat: int) -> list[float]:
@@ -180,12 +190,17 @@ def measure_first_solve(repeat: int) -> None:
         print(f"    {name:<34} {1e3 * seconds:7.1f} ms   (loaded {order[name] + 1}.)")
 
 
-def measure_cli(repeat: int) -> None:
-    print("\nstartrack solve IMAGE, wall time of the command (s)")
-    med, low = _median_wall([str(STARTRACK), "solve", str(PHOTO), *SOLVE_ARGS], repeat)
-    print(f"  one image            median {med:6.3f}  min {low:6.3f}")
-    med, low = _median_wall([str(STARTRACK), "detect", str(PHOTO)], repeat)
-    print(f"  detect, one image    median {med:6.3f}  min {low:6.3f}")
+def measure_cli(repeat: int, source_env: dict | None) -> None:
+    print("\nstartrack solve IMAGE, wall time of the command (s; CPU = user + system time of the process)")
+    solve = [str(STARTRACK), "solve", str(PHOTO), *SOLVE_ARGS]
+    med, low, cpu = _median_wall(solve, repeat)
+    print(f"  one image            median {med:6.3f}  min {low:6.3f}  CPU {cpu:6.3f}")
+    if source_env is not None:
+        med, low, cpu = _median_wall(solve, repeat, env=source_env)
+        print(f"  one image, startrack compiled from source in each process (PYTHONDONTWRITEBYTECODE, as this "
+              f"environment set it)\n                       median {med:6.3f}  min {low:6.3f}  CPU {cpu:6.3f}")
+    med, low, cpu = _median_wall([str(STARTRACK), "detect", str(PHOTO)], repeat)
+    print(f"  detect, one image    median {med:6.3f}  min {low:6.3f}  CPU {cpu:6.3f}")
 
 
 def _batch_folder(root: Path) -> list[Path]:
@@ -296,23 +311,43 @@ def main(argv: list[str] | None = None) -> int:
         print(f"the real photos are absent ({REALDATA}); nothing measured")
         return 1
     print(f"startup benchmark: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at the start")
-    with tempfile.TemporaryDirectory() as numba_dir:
+    with tempfile.TemporaryDirectory() as numba_dir, tempfile.TemporaryDirectory() as pycache:
+        source_env = _with_bytecode(Path(pycache))
         if args.cold:
             measure_cold_compile(Path(numba_dir))
             os.environ["NUMBA_CACHE_DIR"] = numba_dir  # every later process: the fresh cache
-        measure_warm(args)
+        measure_warm(args, source_env)
     print(f"\nload average {os.getloadavg()[0]:.2f} at the end (2 shared cores: figures vary with it)")
     return 0
 
 
-def measure_warm(args: argparse.Namespace) -> None:
+def _with_bytecode(pycache: Path) -> dict | None:
+    """Let the measured processes keep startrack's bytecode, as an installed package has it.
+
+    With ``PYTHONDONTWRITEBYTECODE`` set (as in this project's development environment) every
+    process of an editable checkout compiles startrack's ~80 modules from source, which no user of
+    an install pays. The benchmark's processes then write and reuse bytecode under ``pycache``
+    (``PYTHONPYCACHEPREFIX``; nothing is written into the checkout). Returns the environment as it
+    was (for the one measurement that shows the difference), or None when bytecode was not off.
+    """
+    if not os.environ.get("PYTHONDONTWRITEBYTECODE"):
+        return None
+    as_set = dict(os.environ)
+    del os.environ["PYTHONDONTWRITEBYTECODE"]
+    os.environ["PYTHONPYCACHEPREFIX"] = str(pycache)
+    print(f"PYTHONDONTWRITEBYTECODE was set: the measured processes keep bytecode under {pycache} "
+          "(PYTHONPYCACHEPREFIX), as an installed package does")
+    return as_set
+
+
+def measure_warm(args: argparse.Namespace, source_env: dict | None = None) -> None:
     """Everything but the compile, with the caches present."""
     _wall([str(STARTRACK), "warm-up"])  # caches present: default database built, kernels compiled
     _wall([str(STARTRACK), "solve", str(PHOTO), *SOLVE_ARGS])  # and the 10.2 deg database, its kernels' types
     describe_numba_cache()
     measure_imports(args.repeat)
     measure_first_solve(args.repeat)
-    measure_cli(args.repeat)
+    measure_cli(args.repeat, source_env)
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp) / "batch"
         folder.mkdir()
