@@ -3,9 +3,17 @@
 from __future__ import annotations
 
 import csv
+import os
 from pathlib import Path
 
 import pytest
+
+TEST_CACHE_DIR = Path(__file__).resolve().parents[1] / ".test-cache"
+"""The tests' own cache folder (catalog tables, pattern databases, numba's compiled kernels), inside
+the checkout and kept between runs so that a run does not rebuild the databases; never the
+user's cache. Set here, when pytest imports this file, before any test imports startrack; child
+processes (the CLI tests) inherit it."""
+os.environ["STARTRACK_CACHE_DIR"] = str(TEST_CACHE_DIR)
 
 REALDATA_DIR = Path(__file__).resolve().parents[1].parent / "shared" / "realdata"
 """``<repo>/../shared/realdata`` (see its README.md); never copied into the repository."""

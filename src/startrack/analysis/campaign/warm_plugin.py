@@ -22,7 +22,7 @@ def undo_malloc_trim() -> bool:
     """Undo the ``MALLOC_TRIM_THRESHOLD_`` a Dask nanny sets in its worker's environment.
 
     That variable fixes glibc's mmap threshold at 128 KiB, so every image-sized array is mapped,
-    zeroed and unmapped afresh: an image-level trial took 60 ms instead of 39 (measured). On glibc,
+    zeroed and unmapped afresh, which slows image-level trials (docs/campaigns.md gives the figure). On glibc,
     with the variable set, raise both thresholds to :data:`ARRAY_HEAP_BYTES`; elsewhere do
     nothing. Returns whether it changed anything.
     """
