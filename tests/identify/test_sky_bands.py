@@ -27,13 +27,14 @@ def _unit(rng: np.random.Generator, n: int) -> np.ndarray:
     return v / np.linalg.norm(v, axis=1)[:, None]
 
 
-@pytest.mark.parametrize("chord", [0.0, 0.02, 0.3, 1.9, 2.5])
+@pytest.mark.parametrize("chord", [0.0, 0.005, 0.02, 0.3, 1.2, 1.9, 2.5])
 def test_band_cone_finds_the_kd_tree_stars(chord):
     rng = np.random.default_rng(4)
     vectors = _unit(rng, 20_000)
-    vectors[:3] = [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]]  # the poles, a band's ends
+    vectors[:4] = [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]]  # poles, sector ends
     bands, tree = SkyBands(vectors), cKDTree(vectors)
-    for axis in [*_unit(rng, 20), np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.0, -1.0])]:
+    edges = [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [-1.0, 1e-12, 0.0], [-1.0, -1e-12, 0.0], [0.3, 0.0, 0.954]]
+    for axis in [*_unit(rng, 40), *(np.array(e) / np.linalg.norm(e) for e in edges)]:  # poles, longitude +-180
         got = bands.query_ball_point(axis, chord)
         assert np.array_equal(got, np.sort(tree.query_ball_point(axis, chord)))
         assert got.dtype == np.int64

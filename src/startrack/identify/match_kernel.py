@@ -131,57 +131,90 @@ def cone_stars(vectors, count, axis, cos_reach, neighbour_rad, min_neighbour_rad
     return out[:n]
 
 @njit(cache=True)
-def band_cone(sorted_vectors, order, z_sorted, axis, chord):
+def band_cone(sorted_vectors, order, z_sorted, sector_starts, axis, chord):
     """Indices (ascending, into the unsorted vectors) of the unit vectors within the chord
     ``chord`` of the unit vector ``axis`` (3,): |v - axis|^2 <= chord^2, the test of
-    ``cKDTree.query_ball_point``. ``sorted_vectors`` (S, 3) are the vectors in ascending order of
-    z (``z_sorted`` (S,) their z, ``order`` (S,) their indices): a vector within the chord has
-    |z - axis_z| <= chord, so only that band of z is read (bisection, then one pass)."""
-    lo, hi = _band(z_sorted, axis[2], chord)
-    out = np.empty(hi - lo, np.int64)
+    ``cKDTree.query_ball_point``. The vectors are given in sectors of longitude, each in ascending
+    order of z (:class:`.verify.SkyBands`): ``sorted_vectors`` (S, 3), their z ``z_sorted`` (S,),
+    their indices ``order`` (S,), and the first position of each of the K sectors
+    ``sector_starts`` (K + 1,). Only the sectors the cone can reach are read, and in each the
+    band of z within the chord of the axis' (:func:`_scan_ranges`)."""
+    ranges = _scan_ranges(z_sorted, sector_starts, axis, chord)
+    out = np.empty(_total(ranges), np.int64)
     c2 = chord * chord
     n = 0
-    for k in range(lo, hi):
-        d0, d1 = sorted_vectors[k, 0] - axis[0], sorted_vectors[k, 1] - axis[1]
-        d2 = sorted_vectors[k, 2] - axis[2]
-        if d0 * d0 + d1 * d1 + d2 * d2 <= c2:
-            out[n] = order[k]
-            n += 1
+    for r in range(ranges.shape[0]):
+        for k in range(ranges[r, 0], ranges[r, 1]):
+            d0, d1 = sorted_vectors[k, 0] - axis[0], sorted_vectors[k, 1] - axis[1]
+            d2 = sorted_vectors[k, 2] - axis[2]
+            if d0 * d0 + d1 * d1 + d2 * d2 <= c2:
+                out[n] = order[k]
+                n += 1
     return np.sort(out[:n])
 
 
 @njit(cache=True)
-def band_cone_stars(vectors, sorted_vectors, order, z_sorted, count, axis, cos_reach, neighbour_rad,
+def band_cone_stars(vectors, sorted_vectors, order, z_sorted, sector_starts, count, axis, cos_reach, neighbour_rad,
                     neighbour_sorted, min_neighbour_rad):
     """:func:`cone_stars` on ``vectors`` (S, 3), also given as in :func:`band_cone`
     (``neighbour_sorted`` is ``neighbour_rad`` in the order of ``sorted_vectors``): the same
     indices (ascending, those below ``count`` whose dot product with ``axis`` is at least
     ``cos_reach``, computed alike, and whose ``neighbour_rad`` (S,) is at least
-    ``min_neighbour_rad``), reading only the band of z that such a vector lies in
-    (|z - axis_z| <= sqrt(2 - 2 cos_reach)), or the first ``count`` vectors when they are fewer.
-    The band's pass has no branch (a test that fails half the time at random costs a
+    ``min_neighbour_rad``), reading only the sectors and bands of z that such a vector can lie
+    in (within the chord sqrt(2 - 2 cos_reach)), or the first ``count`` vectors when they are
+    fewer. The pass has no branch (a test that fails half the time at random costs a
     misprediction each)."""
-    lo, hi = _band(z_sorted, axis[2], math.sqrt(max(0.0, 2.0 - 2.0 * cos_reach)))
-    if hi - lo >= count:
+    ranges = _scan_ranges(z_sorted, sector_starts, axis, math.sqrt(max(0.0, 2.0 - 2.0 * cos_reach)))
+    total = _total(ranges)
+    if total >= count:
         return cone_stars(vectors, count, axis, cos_reach, neighbour_rad, min_neighbour_rad)
-    out = np.empty(hi - lo, np.int64)
+    out = np.empty(total, np.int64)
     n = 0
-    for k in range(lo, hi):
-        i = order[k]
-        dot = sorted_vectors[k, 0] * axis[0] + sorted_vectors[k, 1] * axis[1] + sorted_vectors[k, 2] * axis[2]
-        keep = (i < count) & (dot >= cos_reach) & (neighbour_sorted[k] >= min_neighbour_rad)
-        out[n] = i
-        n += 1 if keep else 0
+    for r in range(ranges.shape[0]):
+        for k in range(ranges[r, 0], ranges[r, 1]):
+            i = order[k]
+            dot = sorted_vectors[k, 0] * axis[0] + sorted_vectors[k, 1] * axis[1] + sorted_vectors[k, 2] * axis[2]
+            keep = (i < count) & (dot >= cos_reach) & (neighbour_sorted[k] >= min_neighbour_rad)
+            out[n] = i
+            n += 1 if keep else 0
     return np.sort(out[:n])
 
 
 @njit(cache=True)
-def _band(z_sorted, z, half_width):
-    """First and one-past-last positions in ``z_sorted`` (ascending) of the values within
-    ``half_width`` of ``z``, padded by 1e-9 (the band only bounds a pass; its test is exact)."""
+def _scan_ranges(z_sorted, sector_starts, axis, chord):
+    """Positions [start, stop) (R, 2) to read for the vectors within ``chord`` of ``axis``: in each
+    sector of longitude the cone reaches, the values of z within the chord of the axis' (padded
+    by 1e-9; the test itself is exact). A cone around axis colatitude t of angular radius p
+    spans longitudes within asin(sin p / sin t) of the axis' when it holds no pole; else all."""
+    sectors = sector_starts.size - 1
+    rho = 2.0 * math.asin(min(1.0, 0.5 * chord))
+    colat = math.acos(max(-1.0, min(1.0, axis[2])))
+    first, last = 0, sectors - 1
+    if rho + 1e-6 < colat and rho + 1e-6 < math.pi - colat:
+        half = math.asin(min(1.0, math.sin(rho) / math.sin(colat))) + 1e-6
+        lon = math.atan2(axis[1], axis[0])
+        first = int(math.floor((lon - half + math.pi) / (2.0 * math.pi) * sectors))
+        last = int(math.floor((lon + half + math.pi) / (2.0 * math.pi) * sectors))
+        if last - first + 1 >= sectors:
+            first, last = 0, sectors - 1
+    out = np.empty((last - first + 1, 2), np.int64)
     pad = 1e-9
-    return (np.searchsorted(z_sorted, z - half_width - pad),
-            np.searchsorted(z_sorted, z + half_width + pad, side="right"))
+    for j in range(first, last + 1):
+        sector = j % sectors
+        lo, hi = sector_starts[sector], sector_starts[sector + 1]
+        part = z_sorted[lo:hi]
+        out[j - first, 0] = lo + np.searchsorted(part, axis[2] - chord - pad)
+        out[j - first, 1] = lo + np.searchsorted(part, axis[2] + chord + pad, side="right")
+    return out
+
+
+@njit(cache=True)
+def _total(ranges):
+    """How many positions the ranges (R, 2) of :func:`_scan_ranges` hold."""
+    total = 0
+    for r in range(ranges.shape[0]):
+        total += ranges[r, 1] - ranges[r, 0]
+    return total
 
 
 @njit(cache=True, error_model="numpy")  # a zero determinant gives inf / NaN (a NaN point), not an exception
