@@ -151,15 +151,6 @@ def field_cone(tree: cKDTree | SkyBands, matrix_cam_from_icrs: NDArray, camera: 
     return idx
 
 
-def count_in_image(vectors_icrs: NDArray, matrix_cam_from_icrs: NDArray, camera: Camera) -> int:
-    """How many of the ICRS unit vectors (S, 3), all in front of the camera (as those of
-    :func:`field_cone`), an attitude matrix (3, 3) puts inside the image."""
-    if len(vectors_icrs) == 0:
-        return 0
-    x, y = camera.vector_to_pixel(vectors_icrs @ matrix_cam_from_icrs.T)
-    return int(np.count_nonzero(camera.in_image(x, y)))
-
-
 def match_nearest(img_x: NDArray, img_y: NDArray, cat_x: NDArray, cat_y: NDArray,
                   radius_px: float) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """Pairs (image index, catalog index), each star used once, closest pairs first, within the radius.
