@@ -47,7 +47,7 @@ INFO = AnalysisInfo(
     description="The attitude of each solved image fitted again to the same matched stars with the lens "
                 "model on or off (pinhole) and with the atmosphere correction (apparent place and "
                 "refraction at the site and time) on or off; errors against the truth for simulated "
-                "images, otherwise against the fully corrected attitude. Seed 003 Ch. 9 §VIII.B, §IX.",
+                "images, otherwise against the fully corrected attitude. Fowler 2013 Ch. 9 §VIII.B, §IX.",
     min_sets=1, max_sets=6,
     params={"camera": (str, None, "camera preset of the lens model (default: the records' camera)"), **SITE_PARAMS},
     limits=SITE_LIMITS,

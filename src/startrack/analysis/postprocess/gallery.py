@@ -27,7 +27,7 @@ INFO = AnalysisInfo(
     title="Spot gallery: star spots against noise spots",
     description="Stamps around randomly chosen matched (star) and unmatched (noise) detections, each with "
                 "its own grey scale, so that the shapes of starlight and noise spots can be compared. "
-                "Seed 003 Ch. 9 §V.",
+                "Fowler 2013 Ch. 9 §V.",
     min_sets=1, max_sets=6, needs_images=True,
     params={"count": (int, 8, "spots of each kind shown"),
             "stamp_px": (int, 15, "side of each stamp, px (odd)"),

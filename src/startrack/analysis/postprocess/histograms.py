@@ -24,7 +24,7 @@ INFO = AnalysisInfo(
     title="Image and spot histograms",
     description="Pixel values of the images (log counts) and, for star spots (matched) and noise spots "
                 "(unmatched), the volume (flux), area, peak fraction (peak / volume) and elongation; one "
-                "colour per result set, stars solid and noise dashed. Seed 003 Ch. 9 §IV-V.",
+                "colour per result set, stars solid and noise dashed. Fowler 2013 Ch. 9 §IV-V.",
     min_sets=1, max_sets=6,
     params={"bins": (int, 30, "bins of each spot histogram"),
             "image_bins": (int, 256, "bins of the image histogram (one per value when the range allows)"),

@@ -26,7 +26,7 @@ INFO = AnalysisInfo(
     description="Volume (flux), area, peak and elongation of the matched spots against the catalog V "
                 "magnitude of their star and against their distance from the principal point, one colour "
                 "per result set; the photometric zero point and the slope of log10(volume) against "
-                "magnitude (-0.4 for a linear detector). Seed 003 Ch. 9 §V, App. C.",
+                "magnitude (-0.4 for a linear detector). Fowler 2013 Ch. 9 §V, App. C.",
     min_sets=1, max_sets=6,
 )
 PROPERTIES = (("flux", "volume (flux), counts", True), ("area_px", "area, px", False),

@@ -24,7 +24,7 @@ INFO = AnalysisInfo(
     description="Angle between each matched star and its catalog star after the fit, against the "
                 "distance of the spot from the principal point (the image centre for an uncalibrated "
                 "camera), with the least-squares fit c0 + c1 r + c2 r^2 per result set. A significant c2 "
-                "means radial distortion is left. Seed 003 Ch. 9 §VIII.C.",
+                "means radial distortion is left. Fowler 2013 Ch. 9 §VIII.C.",
     min_sets=1, max_sets=6,
 )
 COEFFICIENTS = (("c0", "arcsec"), ("c1", "arcsec/px"), ("c2", "arcsec/px^2"))

@@ -28,7 +28,7 @@ INFO = AnalysisInfo(
     title="Fixed-mount repeatability",
     description="For images from a camera fixed to the ground: the mean mounting rotation (camera from "
                 "east-north-up), its standard error, and each image's total, pointing and roll error "
-                "against it over time, in arcmin. Needs each image's time and the site. Seed 003 Ch. 7 "
+                "against it over time, in arcmin. Needs each image's time and the site. Fowler 2013 Ch. 7 "
                 "§III.B, Ch. 9 §VI.",
     min_sets=1, max_sets=1,
     params=dict(SITE_PARAMS),

@@ -20,7 +20,7 @@ INFO = AnalysisInfo(
     title="Threshold comparison",
     description="The images detected again at several k-sigma thresholds and solved as before: success, "
                 "detections, matches, rms residual and time per threshold, and the mean change of the "
-                "residual of the stars matched at both (seed 003's threshold error). Seed 003 Ch. 9 §VII.",
+                "residual of the stars matched at both (Fowler 2013's threshold error). Fowler 2013 Ch. 9 §VII.",
     min_sets=1, max_sets=1, needs_images=True,
     params={"sigmas": (list, [3.0, 4.0, 5.0, 6.0, 8.0], "detection thresholds, in noise units (k of k-sigma)")},
     limits={"sigmas": (1, 20)},
