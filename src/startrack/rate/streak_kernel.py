@@ -223,13 +223,37 @@ def _weights(p, xs, ys, n, var_bg, shot, wts):
         wts[i] = 1.0 / (var_bg + shot * max(signal, 0.0))
 
 
+STEP_SIGMAS = 0.2
+"""A fit has converged when a step moves each end, the sag and the blur by less than this many of
+their own 1-sigma (or by less than the fit's ``tol_px``)."""
+
+
+@njit(cache=True)
+def _small_step(step, jtj, fraction):
+    """Whether ``step`` (9,) moves each end (in x and in y), the sag and the blur by less than
+    ``fraction`` of its 1-sigma, the sigmas from the inverse of ``jtj`` (9, 9)."""
+    try:
+        inv = np.linalg.inv(jtj)
+    except Exception:  # noqa: BLE001 - numba raises a generic error on a singular system
+        return False
+    for a, b in ((CX, HX), (CY, HY)):  # an end moves by |dc| + |dh| at most; var(end) ~ var(c) + var(h)
+        if not (abs(step[a]) + abs(step[b])) ** 2 <= fraction * fraction * (inv[a, a] + inv[b, b]):
+            return False
+    for a in (SAG, SIG):
+        if not step[a] * step[a] <= fraction * fraction * inv[a, a]:
+            return False
+    return True
+
+
 @njit(cache=True)
 def levenberg_marquardt(p, xs, ys, vs, wts, n, max_iter, tol_px, cov):
     """Fit ``p`` (9,) in place to n pixels; ``cov`` (9, 9) gets (J^T W J)^-1 at the end.
 
     Returns (chi^2, iterations, flag) with flag :data:`FIT_OK`, :data:`FIT_NOT_CONVERGED` or
     :data:`FIT_SINGULAR`. Converged: a step moves no end, the sag or the blur by more than
-    ``tol_px`` or 20 % of the centre's precision (a lower bound of it, ``1 / sqrt(J^T W J)``)."""
+    ``tol_px``, or moves each of them by less than :data:`STEP_SIGMAS` of its own 1-sigma
+    (:func:`_small_step`: a faint streak's ends are known to a pixel or so, and chasing them to
+    ``tol_px`` took most of the iterations)."""
     jtj = np.zeros((NPAR, NPAR))
     jtr = np.zeros(NPAR)
     jac = np.zeros(NPAR)
@@ -257,8 +281,7 @@ def levenberg_marquardt(p, xs, ys, vs, wts, n, max_iter, tol_px, cov):
             p[:] = trial
             chi2 = _system(p, xs, ys, vs, wts, n, jtj, jtr, jac)
             lam = max(lam / 3.0, 1e-9)
-            floor = 0.2 / math.sqrt(max(min(jtj[CX, CX], jtj[CY, CY]), 1e-300))  # 20 % of a lower bound of sigma
-            if moved < max(tol_px, floor):
+            if moved < tol_px or _small_step(step, jtj, STEP_SIGMAS):
                 flag = FIT_OK
                 break
         else:
