@@ -363,3 +363,24 @@ def separable_moments(q, wx, dx, wy, dy):
                     out[k, w, 1, b] += y1 * along[j, b]
                     out[k, w, 2, b] += y2 * along[j, b]
     return out
+
+
+@njit(cache=True, error_model="numpy")
+def extract_windows(data, cx, cy, half, invalid):
+    """(2 half + 1)-pixel windows of ``data`` (H, W) centred on pixels (cx, cy) (N,) as float64
+    (N, S, S), ``values[n, j, i]`` = pixel (cx - half + i, cy - half + j); NaN beyond the border
+    and where bool ``invalid`` (H, W) is True (``invalid`` may be empty: none)."""
+    h, w = data.shape
+    size = 2 * half + 1
+    check = invalid.size > 0
+    out = np.empty((cx.size, size, size))
+    for n in range(cx.size):
+        for j in range(size):
+            y = cy[n] - half + j
+            for i in range(size):
+                x = cx[n] - half + i
+                if 0 <= y < h and 0 <= x < w and not (check and invalid[y, x]):
+                    out[n, j, i] = data[y, x]
+                else:
+                    out[n, j, i] = np.nan
+    return out

@@ -113,20 +113,12 @@ def extract_windows(data: NDArray, cx: NDArray, cy: NDArray, half: int,
     Returns
     -------
     Windows
+        One compiled loop (:func:`.frame_kernels.extract_windows`).
     """
-    h, w = data.shape
-    cx = np.asarray(cx, dtype=np.int64)
-    cy = np.asarray(cy, dtype=np.int64)
-    k = np.arange(-half, half + 1)
-    cols = cx[:, None] + k  # (N, S)
-    rows = cy[:, None] + k
-    inside = ((rows >= 0) & (rows < h))[:, :, None] & ((cols >= 0) & (cols < w))[:, None, :]
-    r = np.clip(rows, 0, h - 1)[:, :, None]
-    c = np.clip(cols, 0, w - 1)[:, None, :]
-    values = data[r, c].astype(np.float64)
-    if invalid is not None:
-        inside &= ~invalid[r, c]
-    values[~inside] = np.nan
+    cx = np.ascontiguousarray(cx, dtype=np.int64)
+    cy = np.ascontiguousarray(cy, dtype=np.int64)
+    none = np.zeros((0, 0), dtype=np.bool_)
+    values = kernels().extract_windows(data, cx, cy, int(half), none if invalid is None else invalid)
     return Windows(values, cx - half, cy - half)
 
 
