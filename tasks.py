@@ -4,7 +4,7 @@
 Usage::
 
     python3 tasks.py demo     # create .venv, install startrack, simulate and solve a star image
-    python3 tasks.py test     # create .venv, install startrack with test tools, run the suite
+    python3 tasks.py test     # create .venv, install startrack with test tools, run ruff, mypy, pytest
     python3 tasks.py bench    # run the benchmarks in benchmarks/ (installs their peers)
 
 The virtual environment lives in ``.venv`` next to this file; it is created on first use and
@@ -84,6 +84,7 @@ def main(argv: list[str]) -> int:
         elif task == "test":
             ensure_browser()
             _run(PY, "-m", "ruff", "check", "src", "tests", "benchmarks")
+            _run(PY, "-m", "mypy")  # files and settings: [tool.mypy] in pyproject.toml
             _run(PY, "-m", "pytest", *rest)
         else:
             _run(PY, "benchmarks/run_all.py", *rest)
