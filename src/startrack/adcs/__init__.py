@@ -28,14 +28,33 @@ from .. import _lazy_exports
 
 _EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
     "CubeSat": ".cubesat",
+    "CommandLog": ".estimate",
+    "DipoleField": ".field",
+    "GuidanceOptions": ".guidance",
+    "HORIZONS": ".guidance",
+    "FEEDBACKS": ".loop",
+    "FIELDS": ".loop",
     "LoopConfig": ".loop",
+    "PLANTS": ".loop",
     "RunRecord": ".loop",
     "run_loop": ".loop",
+    "METRIC_KEYS": ".metrics",
+    "SEED_POWER_W": ".metrics",
+    "SEED_TABLE_5_3": ".metrics",
     "StepMetrics": ".metrics",
     "run_metrics": ".metrics",
+    "Boundary": ".planner",
+    "ThreeAxisPlant": ".plant",
+    "save_run_plots": ".plots",
+    "summary": ".report",
+    "table": ".report",
+    "write_files": ".report",
     "Scenario": ".scenario",
+    "StarTrackerSetup": ".star_tracker_feedback",
+    "TrackerNoiseModel": ".star_tracker_feedback",
+    "fit_noise_model": ".star_tracker_feedback",
 }
 
-__all__ = ["CubeSat", "LoopConfig", "RunRecord", "Scenario", "StepMetrics", "run_loop", "run_metrics"]
+__all__ = sorted(_EXPORTS)
 
 __getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS)

@@ -12,11 +12,11 @@ per-star fit residuals; :mod:`.averaging` (Markley's quaternion average), :mod:`
 """
 
 from .averaging import attitude_scatter, average_quaternions, average_rotations
-from .covariance import attitude_covariance, roll_cross_boresight, roll_cross_boresight_error
+from .covariance import attitude_covariance, covariance_batch, roll_cross_boresight, roll_cross_boresight_error
 from .esoq2 import esoq2
 from .foam import foam
 from .mounting import body_attitude, camera_attitude, covariance_to_body, estimate_mounting, to_body
-from .olae import olae
+from .olae import olae, olae_gibbs, olae_residuals
 from .pad import PredictiveUpdate, pad, predictive_update
 from .propagation import (
     chain_relative,
@@ -25,7 +25,7 @@ from .propagation import (
     quaternion_derivative,
     relative_attitude,
 )
-from .qmethod import q_method
+from .qmethod import q_method, q_method_quaternions
 from .quest import quest
 from .residuals import angle_residuals
 from .svd import svd_method
@@ -45,16 +45,20 @@ __all__ = [
     "body_attitude",
     "camera_attitude",
     "chain_relative",
+    "covariance_batch",
     "covariance_to_body",
     "esoq2",
     "estimate_mounting",
     "foam",
     "olae",
+    "olae_gibbs",
+    "olae_residuals",
     "pad",
     "predictive_update",
     "propagate",
     "propagate_steps",
     "q_method",
+    "q_method_quaternions",
     "quaternion_derivative",
     "quest",
     "relative_attitude",

@@ -13,18 +13,10 @@ _EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 5
     "load_catalog": ".hipparcos",
     "propagate": ".propagation",
     "StarCatalog": ".star_catalog",
+    "fibonacci_sphere": ".thinning",
     "thin_uniform": ".thinning",
 }
 
-__all__ = [
-    "ConeIndex",
-    "StarCatalog",
-    "cone_search",
-    "flag_doubles",
-    "load_catalog",
-    "merge_doubles",
-    "propagate",
-    "thin_uniform",
-]
+__all__ = sorted(_EXPORTS)
 
 __getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS)

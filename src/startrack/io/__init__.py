@@ -17,32 +17,60 @@ not load astropy's FITS code or Pillow.
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from .. import _lazy_exports
 
-_EXPORTS = {
-    "DEFAULT_MAX_PIXELS": ".limits",
-    "SUPPORTED_FORMATS": ".image",
-    "Image": ".image",
-    "read_image": ".image",
-    "read_star_list": ".starlist",
+_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
+    "atomic_path": ".atomic",
+    "discard": ".atomic",
+    "open_output": ".atomic",
+    "remove_stale_temps": ".atomic",
+    "temp_name": ".atomic",
+    "write_output": ".atomic",
+    "channel_index": ".channels",
     "to_single_channel": ".channels",
+    "fits_bytes": ".fitsfile",
     "write_fits": ".fitsfile",
+    "IMAGE_SUFFIXES": ".image",
+    "Image": ".image",
+    "RAW_SUFFIXES": ".image",
+    "SUPPORTED_FORMATS": ".image",
+    "read_image": ".image",
+    "DEFAULT_MAX_PIXELS": ".limits",
+    "ENV_VAR": ".limits",
+    "check_image_size": ".limits",
+    "max_pixels_limit": ".limits",
+    "resolve_max_pixels": ".limits",
+    "set_max_pixels": ".limits",
+    "bayer_cells": ".raw",
+    "cell_origin": ".raw",
+    "full_resolution_xy": ".raw",
+    "read_raw": ".raw",
+    "solution_to_dict": ".solution_json",
+    "streak_fields": ".solution_json",
+    "read_star_list": ".starlist",
+    "STDOUT": ".targets",
+    "output_target": ".targets",
+    "protect_inputs": ".targets",
+    "tiff_bytes": ".tiff",
+    "COLUMNS": ".track_csv",
+    "error_row": ".track_csv",
+    "track_csv_writer": ".track_csv",
+    "track_row": ".track_csv",
+    "check_frame_path": ".truth_files",
+    "index_row": ".truth_files",
+    "truth_to_dict": ".truth_files",
+    "write_frame": ".truth_files",
+    "write_index": ".truth_files",
+    "write_with_sidecar": ".truth_files",
+    "read_wcs": ".wcs",
+    "solution_wcs": ".wcs",
+    "wcs_header": ".wcs",
+    "write_wcs": ".wcs",
+    "png_bytes": ".writers",
     "write_png": ".writers",
     "write_tiff": ".writers",
 }
 
 __all__ = sorted(_EXPORTS)
 
-
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'startrack.io' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module, __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted({*globals(), *__all__})
+__getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS)

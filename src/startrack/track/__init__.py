@@ -7,25 +7,23 @@ from __future__ import annotations
 from .. import _lazy_exports
 
 _EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
+    "checked_rate": ".inputs",
     "RelativeMatch": ".relative",
     "rate_match": ".relative",
     "triangle_match": ".relative",
+    "LOST_IN_SPACE": ".tracker",
+    "TRACKING": ".tracker",
+    "TrackStep": ".tracker",
     "Tracker": ".tracker",
     "TrackerOptions": ".tracker",
-    "TrackStep": ".tracker",
+    "EXTRA_PREDICTED": ".windows",
     "WindowMatch": ".windows",
+    "WindowMatcher": ".windows",
     "match_in_windows": ".windows",
+    "one_to_one": ".windows",
+    "project": ".windows",
 }
 
-__all__ = [
-    "RelativeMatch",
-    "TrackStep",
-    "Tracker",
-    "TrackerOptions",
-    "WindowMatch",
-    "match_in_windows",
-    "rate_match",
-    "triangle_match",
-]
+__all__ = sorted(_EXPORTS)
 
 __getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS)

@@ -24,13 +24,18 @@ See ``docs/web.md``.
 
 from __future__ import annotations
 
-from .config import WebConfig
+from .. import _lazy_exports
 
-__all__ = ["WebConfig", "create_app"]
+_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
+    "create_app": ".app",
+    "DEFAULT_MAX_QUEUED": ".config",
+    "DEFAULT_MAX_UPLOAD_MB": ".config",
+    "DEFAULT_PORT": ".config",
+    "DEFAULT_TIME_LIMIT_S": ".config",
+    "WebConfig": ".config",
+    "default_data_dir": ".config",
+}
 
+__all__ = sorted(_EXPORTS)
 
-def create_app(config: WebConfig):
-    """The Starlette application for ``config`` (see :func:`startrack.web.app.create_app`)."""
-    from .app import create_app as _create
-
-    return _create(config)
+__getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS)

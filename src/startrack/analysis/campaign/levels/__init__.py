@@ -30,6 +30,8 @@ from scipy.spatial.transform import Rotation
 
 from ..params import Param, SpecError
 
+__all__ = ["HELPERS", "WARM_ROTATION", "Level", "TrialOutput", "get_level", "level_names", "register", "warm"]
+
 
 @dataclass(frozen=True)
 class TrialOutput:
