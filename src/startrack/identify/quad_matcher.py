@@ -277,6 +277,23 @@ def level_stars(db: PatternDatabase, level: int) -> StarSet:
     return stars.levels[level]
 
 
+_INDEXED: set[tuple] = set()
+"""(id of the database, id of the focal grid, short side, nominal focal length) of the searches
+whose levels :func:`_index_levels` has indexed (the grids are cached by :func:`.quad_search.focal_grid`)."""
+
+
+def _index_levels(db: PatternDatabase, searches: list[_Search]) -> None:
+    """Index (:func:`level_stars`) the verification stars of every level the searches can reach,
+    once per database and search geometry: a level first used inside a solve cost up to 10 ms
+    there, a check here costs a set look-up."""
+    for search in searches:
+        key = (id(db), id(search.setup.grid), search.setup.short_px, search.setup.focal_nominal)
+        if key not in _INDEXED:
+            for level in search.reachable_levels().tolist():
+                level_stars(db, level)
+            _INDEXED.add(key)
+
+
 CONFIRM_K1_FOV_DEG = 25.0
 """The confirmation of a candidate from a lens that is not calibrated fits k1 when the nominal
 field is at least this wide (narrower, k1 is poorly determined by a few stars and moves them by
@@ -337,8 +354,7 @@ def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatab
         searches = [_Search(x, y, camera.with_focal(camera.fx, camera.fx / a), focal_range_px, db, options, trials,
                             ASPECT_TOLERANCE, True) for a in aspect_trials(aspect_range)]
     warm_up(db)  # compiling is not searching: before the clock starts
-    for level in np.unique(np.concatenate([search.reachable_levels() for search in searches])).tolist():
-        level_stars(db, level)  # nor is indexing a level's verification stars (once per process and level)
+    _index_levels(db, searches)  # nor is indexing the levels' verification stars (once per process)
     deadline = time.perf_counter() + options.timeout_s
     n_stars = searches[0].pattern_index.size
     for start, first_new in pattern_pools(n_stars, options.pattern_stars, options.max_pattern_stars):
