@@ -6,6 +6,7 @@ Plotting only: no I/O beyond saving the figure, no maths beyond display scaling.
 from __future__ import annotations
 
 import os
+from typing import IO
 
 import numpy as np
 
@@ -58,8 +59,9 @@ def _title(solution: AttitudeSolution) -> str:
             f"FOV {solution.fov_deg:.3f} deg  {len(solution.matches)} stars")
 
 
-def plot_star_counts(availability, path: str | os.PathLike, *, title: str = "") -> None:
-    """Save a histogram of stars in the field over random pointings (Jacobs 1995 Fig. 5-1)."""
+def plot_star_counts(availability, path: str | os.PathLike | IO, *, title: str = "") -> None:
+    """Save a histogram of stars in the field over random pointings (Jacobs 1995 Fig. 5-1) to a
+    PNG file (a path or a binary file object)."""
     hist = availability.histogram
     fig = new_figure(figsize=(7, 4), dpi=110)
     ax = fig.subplots()

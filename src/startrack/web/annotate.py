@@ -17,16 +17,22 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..analysis.plots import display_stretch
+from ..camera import Camera
 from ..catalog import load_catalog
+from ..errors import require
 from ..frames import radec_to_vector
 from ..io.atomic import atomic_path
 from ..plotting import new_figure
 from ..results import AttitudeSolution, Detections
+
+if TYPE_CHECKING:
+    from scipy.spatial.transform import Rotation
 
 REJECT_COLOURS = {"area": "tab:orange", "elongation": "tab:purple", "edge": "tab:brown", "hot pixel": "magenta",
                   "peak SNR": "tab:olive", "clutter": "tab:red", "other": "tab:pink"}
@@ -65,6 +71,14 @@ def write_annotated(path: Path, image: NDArray, solution: AttitudeSolution, dete
         fig.savefig(tmp, format="png", pil_kwargs={"compress_level": 1})
 
 
+def _camera(solution: AttitudeSolution) -> Camera:
+    return require(solution.camera, "a solved frame's camera")
+
+
+def _rotation(solution: AttitudeSolution) -> Rotation:
+    return require(solution.rot_cam_from_icrs, "a solved frame's attitude")
+
+
 def _title(solution: AttitudeSolution) -> str:
     if not solution.solved:
         return f"not solved: {solution.reason}"
@@ -90,7 +104,7 @@ def _draw_matches(ax, solution: AttitudeSolution, det: Detections) -> None:
     for i in range(min(len(idx), MAX_LABELS)):
         ax.annotate(f"HIP {hip[i]}  V{mags[i]:.1f}", (x[i], y[i]), xytext=(7, -7), textcoords="offset points",
                     color="lime", fontsize=6.5)
-    px, py = solution.camera.vector_to_pixel(solution.rot_cam_from_icrs.apply(solution.matches.cat_vectors))
+    px, py = _camera(solution).vector_to_pixel(_rotation(solution).apply(solution.matches.cat_vectors))
     dx, dy = px - x, py - y
     gain = residual_gain(np.hypot(dx, dy), det.width or int(ax.get_xlim()[1]))
     ax.quiver(x, y, dx * gain, dy * gain, angles="xy", scale_units="xy", scale=1.0, color="yellow", width=0.003,
@@ -115,13 +129,13 @@ def grid_step_deg(fov_deg: float) -> float:
 
 def _project(solution: AttitudeSolution, ra_deg: NDArray, dec_deg: NDArray) -> tuple[NDArray, NDArray]:
     vectors = radec_to_vector(np.radians(ra_deg), np.radians(dec_deg))
-    return solution.camera.vector_to_pixel(solution.rot_cam_from_icrs.apply(vectors))
+    return _camera(solution).vector_to_pixel(_rotation(solution).apply(vectors))
 
 
 def _draw_grid(ax, solution: AttitudeSolution) -> None:
     """Lines of constant RA and Dec at a round spacing, labelled where they cross the frame's middle."""
     step = grid_step_deg(solution.fov_deg)
-    span = solution.camera.fov_diagonal_deg
+    span = _camera(solution).fov_diagonal_deg
     dec0 = solution.dec_deg
     near_pole = abs(dec0) + span > 80
     ra_span = 180.0 if near_pole else min(180.0, span / max(math.cos(math.radians(abs(dec0) + span / 2)), 0.05))
@@ -135,7 +149,7 @@ def _draw_grid(ax, solution: AttitudeSolution) -> None:
               for dec in decs if abs(dec) < 90]
     for ra, dec, label in lines:
         x, y = _project(solution, ra, np.clip(dec, -90, 90))
-        inside = solution.camera.in_image(x, y)
+        inside = _camera(solution).in_image(x, y)
         if np.count_nonzero(inside) < 2:
             continue
         ax.plot(np.where(inside, x, np.nan), np.where(inside, y, np.nan), ":", color="deepskyblue", linewidth=0.7)
@@ -147,12 +161,12 @@ def _draw_grid(ax, solution: AttitudeSolution) -> None:
 def _draw_compass(ax, solution: AttitudeSolution, width: int, height: int) -> None:
     """North and east arrows of ~1/8 of the width at the image centre."""
     cx, cy = (width - 1) / 2, (height - 1) / 2
-    centre_icrs = solution.rot_cam_from_icrs.inv().apply(solution.camera.pixel_to_vector(cx, cy))
+    centre_icrs = _rotation(solution).inv().apply(_camera(solution).pixel_to_vector(cx, cy))
     ra, dec = math.atan2(centre_icrs[1], centre_icrs[0]), math.asin(np.clip(centre_icrs[2], -1, 1))
-    arm = 0.12 * width / solution.camera.fx  # radians
+    arm = 0.12 * width / _camera(solution).fx  # radians
     for name, (dra, ddec) in (("N", (0.0, arm)), ("E", (arm / max(math.cos(dec), 1e-3), 0.0))):
         tip = radec_to_vector(ra + dra, np.clip(dec + ddec, -math.pi / 2, math.pi / 2))
-        x, y = solution.camera.vector_to_pixel(solution.rot_cam_from_icrs.apply(tip))
+        x, y = _camera(solution).vector_to_pixel(_rotation(solution).apply(tip))
         ax.annotate("", xy=(float(x), float(y)), xytext=(cx, cy),
                     arrowprops={"arrowstyle": "->", "color": "orange", "lw": 1.4})
         ax.text(float(x), float(y), name, color="orange", fontsize=9, fontweight="bold", ha="center", va="center")

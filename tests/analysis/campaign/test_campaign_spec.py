@@ -90,8 +90,15 @@ def test_a_missing_name_is_refused():
 
 
 def test_image_level_refuses_a_detector_setting_the_detector_refuses():
+    text = '[campaign]\nname = "x"\nlevel = "image"\ntrials = 1\n[base]\ndetect_kernel_px = 2\n'
+    with pytest.raises(SpecError, match="detector settings.*kernel_px"):
+        parse_spec(text)
+
+
+def test_image_level_names_the_valid_detector_methods():
+    """A method name of the detector (a Literal of StarDetector) is checked with the spec, naming the valid ones."""
     text = '[campaign]\nname = "x"\nlevel = "image"\ntrials = 1\n[base]\ndetect_threshold = "guess"\n'
-    with pytest.raises(SpecError, match="detector settings.*threshold"):
+    with pytest.raises(SpecError, match="detect_threshold: must be one of 'ksigma', 'dynamic'"):
         parse_spec(text)
 
 

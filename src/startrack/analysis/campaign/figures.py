@@ -266,7 +266,7 @@ def time_figure(histogram: pa.Table, summary: pa.Table, title: str = "") -> Figu
     for i, name in enumerate(stages):
         ax.stairs(histogram[name].to_numpy(), edges, color=f"C{i + 1}", lw=1.5,
                   label=name.removeprefix("time_").removesuffix("_s") + " stage")
-    stats = {r["time"]: r for r in summary.to_pylist()}.get("time_s")
+    stats = {r["time"]: r for r in summary.to_pylist()}.get("time_s") or {}
     for key, style in (("p50", "-"), ("p95", "--"), ("p99", "-."), ("max", ":")) if stats else ():
         ax.axvline(stats[f"{key}_ms"], color="k", ls=style, lw=1, label=f"{key} {stats[f'{key}_ms']:.3g} ms")
     ax.set_xscale("log")

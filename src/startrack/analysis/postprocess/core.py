@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ...errors import InvalidInputError
 from ...io.atomic import atomic_path
@@ -100,7 +101,7 @@ class AnalysisResult:
     name: str
     title: str
     figure: Figure
-    tables: Mapping[str, Mapping[str, Sequence]]
+    tables: Mapping[str, Mapping[str, Sequence | NDArray]]
     summary: Mapping[str, float | int | str]
 
     def __post_init__(self) -> None:
@@ -127,7 +128,7 @@ class AnalysisResult:
         return written
 
 
-def write_csv(fh, columns: Mapping[str, Sequence]) -> None:
+def write_csv(fh, columns: Mapping[str, Sequence | NDArray]) -> None:
     """Columns as CSV rows: numbers in full precision, NaN and None as empty cells."""
     writer = csv.writer(fh)
     writer.writerow(list(columns))

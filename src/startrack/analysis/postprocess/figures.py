@@ -50,7 +50,7 @@ def no_data(ax: Axes, text: str = "no data") -> None:
     ax.set_yticks([])
 
 
-def draw_radial_fit(ax: Axes, radius: NDArray, value: NDArray, coef: Sequence[float] | None, *,
+def draw_radial_fit(ax: Axes, radius: NDArray, value: NDArray, coef: Sequence[float] | NDArray | None, *,
                     colour_name: str = "tab:blue", label: str = "") -> None:
     """Scatter of ``value`` against ``radius`` and the polynomial ``coef`` (highest power first,
     as :func:`numpy.polyval` takes it) over 0..max radius (Fowler 2013 §VIII.C)."""

@@ -12,6 +12,7 @@ table the mean radius of the matched spots (Fowler 2013 Fig. 9.23's "average rad
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -54,7 +55,7 @@ def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
     for row in range(2):
         if stars["hip"].size:
             axes[row, 0].legend(fontsize=7)
-    tables = {"stars": stars, "per_image": _per_image(stars)}
+    tables: dict[str, Any] = {"stars": stars, "per_image": _per_image(stars)}
     return AnalysisResult(INFO.name, INFO.title, fig, tables, summary)
 
 

@@ -14,8 +14,9 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import sys
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, Literal, get_args, get_origin
 
 import numpy as np
 from astropy.time import Time
@@ -31,14 +32,18 @@ from ..params import Param, SpecError
 _SCALARS = {"float": "float", "int": "int", "bool": "bool", "str": "str"}
 
 
-def _kind(annotation: str) -> tuple[str, bool] | None:
-    """(kind, optional) of a dataclass field's annotation, or None when it is not a scalar."""
+def _kind(cls: type, annotation: str) -> tuple[str, bool, tuple[str, ...] | None] | None:
+    """(kind, optional, choices) of a field of ``cls`` by its annotation, or None when it is not a
+    scalar; a ``Literal`` alias of the class's module (``ThresholdMethod``) is a str with its choices."""
     parts = [p.strip() for p in annotation.split("|")]
     optional = "None" in parts
     parts = [p for p in parts if p != "None"]
-    if len(parts) != 1 or parts[0] not in _SCALARS:
+    if len(parts) != 1:
         return None
-    return _SCALARS[parts[0]], optional
+    alias = vars(sys.modules[cls.__module__]).get(parts[0])
+    if get_origin(alias) is Literal:
+        return "str", optional, get_args(alias)
+    return (_SCALARS[parts[0]], optional, None) if parts[0] in _SCALARS else None
 
 
 def dataclass_params(cls: type, prefix: str, doc: str, *, auto: bool, skip: tuple[str, ...] = ()) -> tuple[Param, ...]:
@@ -49,11 +54,12 @@ def dataclass_params(cls: type, prefix: str, doc: str, *, auto: bool, skip: tupl
     """
     out = []
     for f in dataclasses.fields(cls):
-        kind = _kind(str(f.type))
+        kind = _kind(cls, str(f.type))
         if kind is None or f.name in skip or (f.default is dataclasses.MISSING and not auto):
             continue
         default = None if auto else f.default
-        out.append(Param(prefix + f.name, kind[0], default, f"{doc}.{f.name}", optional=auto or kind[1]))
+        out.append(Param(prefix + f.name, kind[0], default, f"{doc}.{f.name}", optional=auto or kind[1],
+                         choices=kind[2]))
     return tuple(out)
 
 
