@@ -2,7 +2,11 @@
 
 The default lost-in-space matcher is :func:`match_lost_in_space` (four-star patterns with a
 k-vector index per field-of-view scale, see :mod:`.quad_matcher`), backed by the pattern
-database of :mod:`.database`.
+database of :mod:`.database`. The other matchers, each with its options class and selectable by
+name through :data:`MATCHERS` / :data:`OPTIONS` (``solve_stars(method=...)``):
+:func:`match_pyramid`, :func:`match_angle_pivot`, :func:`match_triangles`, :func:`match_nvertex`,
+:func:`match_van_bezooijen` (on the pair database of :mod:`.pair_database`) and
+:func:`match_overlay` (with a prior attitude).
 """
 
 from __future__ import annotations
@@ -10,6 +14,8 @@ from __future__ import annotations
 from .. import _lazy_exports
 
 _EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
+    "AnglePivotOptions": ".angle_pivot",
+    "match_angle_pivot": ".angle_pivot",
     "Candidate": ".candidate",
     "MatchOutcome": ".candidate",
     "DB_KIND": ".database",
@@ -34,10 +40,16 @@ _EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 5
     "match_van_bezooijen": ".match_groups",
     "region_mask": ".match_groups",
     "sub_catalogue": ".match_groups",
+    "NVertexOptions": ".nvertex",
+    "match_nvertex": ".nvertex",
+    "OverlayOptions": ".overlay",
+    "match_overlay": ".overlay",
     "PairDatabase": ".pair_database",
     "PairSettings": ".pair_database",
     "load_pair_database": ".pair_database",
+    "PyramidOptions": ".pyramid",
     "candidate_triangles": ".pyramid",
+    "match_pyramid": ".pyramid",
     "pyramid_triads": ".pyramid",
     "MatcherOptions": ".quad_matcher",
     "match_lost_in_space": ".quad_matcher",
@@ -57,6 +69,8 @@ _EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 5
     "check_pixel_aspect": ".request",
     "star_arrays": ".request",
     "ordered_star_sets": ".star_order",
+    "TriangleOptions": ".triangles",
+    "match_triangles": ".triangles",
     "closest_pairs_first": ".verify",
     "match_nearest": ".verify",
 }
