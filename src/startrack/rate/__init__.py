@@ -12,6 +12,7 @@ from __future__ import annotations
 from .. import _lazy_exports
 
 _EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
+    "catalog_free_rate": ".catalog_free",
     "DETECTORS": ".endpoints",
     "EndpointBias": ".endpoints",
     "calibrate_bias": ".endpoints",
