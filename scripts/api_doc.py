@@ -17,6 +17,7 @@ import ast
 import dataclasses
 import enum
 import importlib
+import importlib.util
 import inspect
 import pkgutil
 import sys

@@ -371,8 +371,9 @@ def _targets(path: Path):
                 head = package.split(".")[: package.count(".") + 2 - node.level]
                 base = ".".join(head + ([node.module] if node.module else []))
             names = [f"{base}.{alias.name}" for alias in node.names]
-            yield from [n for n in names if _is_module(n)] or [base]
-            if not all(_is_module(n) for n in names):
+            modules = [n for n in names if _is_module(n)]
+            yield from modules
+            if len(modules) < len(names):
                 yield base
 
 
