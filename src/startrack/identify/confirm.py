@@ -114,7 +114,7 @@ class Confirmer:
             if extra < MIN_EXTRA_MATCHES:
                 return None
             fitted = np.union1d(fitted, img_i[_not_in(img_i, tight) & _not_in(img_i, pattern_img)])
-            lens = extra >= MIN_EXTRA_FOR_LENS
+            lens = bool(extra >= MIN_EXTRA_FOR_LENS)
             refit, camera, _ = fit_pose(field.matrix, field.camera, field.vectors[cat_j], xs[img_i], ys[img_i],
                                         fit_focal=self.fit_focal, fit_k1=self.fit_distortion and lens,
                                         fit_aspect=self.fit_aspect and lens)

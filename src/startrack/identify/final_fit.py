@@ -397,7 +397,8 @@ def settle_matches(x: NDArray, y: NDArray, stars: FieldStars, cand: Candidate,
     """
     fit_focal = focal_range is not None
     wide = fit_focal and cand.camera.fov_deg >= WIDE_FOV_DEG
-    fit_k1 = wide or (fit_focal and (focal_range[1] > focal_range[0] * (1 + K1_FOCAL_SPAN) or cand.camera.k1 != 0))
+    fit_k1 = wide or (focal_range is not None
+                      and (focal_range[1] > focal_range[0] * (1 + K1_FOCAL_SPAN) or cand.camera.k1 != 0))
     field = _Field(x, y, stars, fit_focal, fit_aspect and fit_focal, wide, wide,
                    depth_limit(len(x), cand.camera, len(stars.rows)))
     matrix, camera, img, rows = cand.rot_cam_from_icrs.as_matrix(), cand.camera, cand.image_index, cand.catalog_rows
