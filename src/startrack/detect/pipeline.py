@@ -31,9 +31,10 @@ from .details import DetectionDetails
 from .fine_pass import (
     BLEND_RING_PX,
     MAX_BLEND_RING_NOISE,
-    MAX_RING_NOISE,
     add_new_regions,
     fine_regions,
+    fine_significance,
+    quiet_surroundings,
     ring_noise_ratio,
     touches,
 )
@@ -215,15 +216,16 @@ def with_fine_pass(cfg: StarDetector, frame: Frame, kept: MeasuredRegions, found
             not stars_are_sharp(frame, kept):
         return kept
     data, regions = frame.prepared.data, kept.regions
-    fine = fine_regions(data, frame.prepared.invalid, cfg.kernel, cfg.kernel_px, cfg.tile_px,
-                        max(cfg.fine_sigma, k_sigma), cfg.grow_sigma, 1 if cfg.reject_edge else 0, cfg.deblend,
-                        frame.skewed)
+    fine_sigma = max(cfg.fine_sigma, k_sigma)
+    snr = fine_significance(data, frame.prepared.invalid, cfg.kernel, cfg.kernel_px, cfg.tile_px, frame.skewed)
+    fine = fine_regions(data, frame.prepared.invalid, cfg.kernel, cfg.kernel_px, cfg.tile_px, fine_sigma,
+                        cfg.grow_sigma, 1 if cfg.reject_edge else 0, cfg.deblend, frame.skewed, snr=snr)
     base = kept.spots
     unsplit = saturated_spots(regions, kept.raw, data) | (not cfg.deblend)
     unsplit |= ring_noise_ratio(data, base.x, base.y, frame.noise_px, BLEND_RING_PX) > MAX_BLEND_RING_NOISE
     extra = filter_spots(cfg, frame, measure_regions(frame, fine))
     spots = extra.spots
-    quiet = ring_noise_ratio(data, spots.x, spots.y, frame.noise_px) <= MAX_RING_NOISE
+    quiet = quiet_surroundings(data, snr, extra.regions, spots.x, spots.y, frame.noise_px, fine_sigma)
     taken = np.zeros(data.shape, dtype=bool)
     taken[found.y, found.x] = True
     # a saturated star the binned pass left out was cut by the border or rejected for its shape;
