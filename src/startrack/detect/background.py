@@ -381,11 +381,12 @@ def pixel_noise(image: NDArray, model: BackgroundModel) -> float:
                           step * np.arange(sample.shape[1]), True)
     else:
         level = model.level
+    finite = np.ravel if np.issubdtype(sample.dtype, np.integer) else _finite  # integers are finite (so is the level)
     sample = sample.astype(np.float64)
-    q = quantization_step(_finite(sample))
+    q = quantization_step(finite(sample))
     if q > 0:
         level = q * np.round(np.asarray(level, dtype=np.float64) / q)
-    residual = _finite(sample - level)
+    residual = finite(sample - level)
     return clipped_level_noise(residual, q, upper_half=True)[1] if residual.size else 0.0
 
 
