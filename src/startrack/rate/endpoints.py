@@ -197,7 +197,7 @@ class StreakPath:
     coeffs: NDArray[np.float64]
     t_range: NDArray[np.float64]
 
-    def _frame(self, points: NDArray) -> tuple[NDArray, NDArray]:
+    def _frame(self, points: ArrayLike) -> tuple[NDArray, NDArray]:
         rel = np.asarray(points, dtype=float) - self.centre
         return rel @ self.axis, rel @ np.array([-self.axis[1], self.axis[0]])
 

@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, require
 from ..results import Status
 from .estimate import RateEstimate
 
@@ -74,7 +74,7 @@ class RateFilter:
         self.state: FilterState | None = None
 
     def _predict(self, time_s: float) -> FilterState:
-        s = self.state
+        s = require(self.state, "the filter's state (set by its first update)")
         dt = time_s - s.time_s
         if not dt >= 0:
             raise InvalidInputError(f"time_s must not go back, got {time_s} after {s.time_s}")

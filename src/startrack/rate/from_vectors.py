@@ -19,8 +19,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
-from ..attitude import solve_wahba
-from ..errors import InvalidInputError
+from ..attitude import WahbaMethod, solve_wahba
+from ..errors import InvalidInputError, require
 from ..results import Status
 from .estimate import RateEstimate, failed
 
@@ -33,7 +33,7 @@ def rate_from_vectors(
     dt_s: float,
     *,
     sigma_rad: ArrayLike | None = None,
-    method: str = "quest",
+    method: WahbaMethod = "quest",
 ) -> RateEstimate:
     """Camera-frame rate from N matched star directions in two frames ``dt_s`` apart.
 
@@ -61,8 +61,8 @@ def rate_from_vectors(
         raise InvalidInputError(f"vectors_a must have shape (N, 3), got {a.shape}")
     result = solve_wahba(vectors_b, a, method=method, sigma_rad=sigma_rad)
     if not result.ok:
-        return failed(Status.DEGENERATE, result.reason, METHOD)
-    omega = -result.rotation.as_rotvec() / dt_s
+        return failed(Status.DEGENERATE, str(result.reason), METHOD)
+    omega = -require(result.rotation, "the rotation between the frames").as_rotvec() / dt_s
     cov = None if result.covariance_rad2 is None else result.covariance_rad2 / dt_s**2
     return RateEstimate(Status.OK, omega_rad_s=omega, covariance_rad2_s2=cov, method=METHOD)
 
@@ -116,5 +116,6 @@ def match_frames(
     if len(pairs) >= 2:
         fit = solve_wahba(b[pairs[:, 1]], a[pairs[:, 0]])
         if fit.ok:
-            pairs = _mutual_nearest(fit.rotation.apply(a), b, max(0.1 * max_angle_rad, 1e-4))
+            pairs = _mutual_nearest(require(fit.rotation, "the pairs' rotation").apply(a), b,
+                                    max(0.1 * max_angle_rad, 1e-4))
     return pairs

@@ -149,8 +149,8 @@ def find_streak_candidates(image: ArrayLike, *, bin_px: int = BIN_PX, line_bins:
     keep = np.flatnonzero(snr >= min_snr)
     keep = keep[np.argsort(-total[keep], kind="stable")][:max_candidates]
     boxes = ndimage.find_objects(labels)
-    rows = [_candidate(blocks, labels, boxes[i], i + 1, bin_px) for i in keep]
-    rows = [(i, r) for i, r in zip(keep, rows, strict=True) if r is not None]
+    found = [(int(i), _candidate(blocks, labels, boxes[i], int(i) + 1, bin_px)) for i in keep]
+    rows = [(i, r) for i, r in found if r is not None]
     if not rows:
         return _empty(background, noise, labels, bin_px)
     index = np.array([i for i, _ in rows])

@@ -32,12 +32,12 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
 from scipy.spatial.transform import Rotation
 
-from ..attitude import solve_wahba
+from ..attitude import WahbaMethod, solve_wahba
 from ..camera import Camera
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, require
 from ..results import AttitudeSolution, Status
 from .catalog_free import CatalogFreeRate, catalog_free_rate, consensus, regroup
-from .endpoints import DETECTORS, locate_endpoints
+from .endpoints import DETECTORS, EndpointBias, locate_endpoints
 from .estimate import RateEstimate, failed
 from .from_attitudes import rate_between
 from .grouping import CentreOfRotation, centre_of_rotation, group_endpoints
@@ -157,7 +157,7 @@ def measure_streaks(
     camera: Camera | None = None,
     *,
     detector: str = SEGMENT,
-    bias_px: float = 0.0,
+    bias_px: float | EndpointBias = 0.0,
     min_length_px: float = 6.0,
     length_tolerance: tuple[float, float] = LENGTH_TOLERANCE,
     find_options: dict | None = None,
@@ -224,7 +224,8 @@ def _checked_groups(ends: NDArray, cor: CentreOfRotation, camera: Camera) -> tup
     Each candidate is corrected streak by streak (:func:`.catalog_free.regroup`); the one with
     the smaller median OLAE residual wins.
     """
-    best, best_cost = None, np.inf
+    best: tuple[NDArray, NDArray] | None = None
+    best_cost = np.inf
     for as_parallel in (False, True):
         if cor.parallel and not as_parallel:
             continue
@@ -234,10 +235,10 @@ def _checked_groups(ends: NDArray, cor: CentreOfRotation, camera: Camera) -> tup
         swap = regroup(va, vb)
         va, vb = np.where(swap[:, None], vb, va), np.where(swap[:, None], va, vb)
         cost = float(np.median(catalog_free_rate(va, vb, 1.0, floor_rad=1e-9).residuals))
-        if cost < best_cost:
+        if best is None or cost < best_cost:  # (the first kept when every cost is NaN)
             group_a, group_b = np.where(swap[:, None], group_b, group_a), np.where(swap[:, None], group_a, group_b)
             best, best_cost = (group_a, group_b), cost
-    return best
+    return require(best, "a grouping of the streak ends")
 
 
 @dataclass(frozen=True)
@@ -276,7 +277,7 @@ def streak_rate(
     exposure_s: float,
     *,
     detector: str = SEGMENT,
-    bias_px: float = 0.0,
+    bias_px: float | EndpointBias = 0.0,
     prior_omega_rad_s: ArrayLike | None = None,
     k_sigma: float = 2.5,
     endpoint_sigma_px: float | None = None,
@@ -336,7 +337,7 @@ def _checked(fit: CatalogFreeRate, meas: StreakMeasurement, camera: Camera, vect
     est = fit.estimate
     if not est.ok:
         return fit
-    status, reason = consistency(est.used, fit.residuals * camera.fx, meas.end_sigma_px)
+    status, reason = consistency(require(est.used, "the streaks used"), fit.residuals * camera.fx, meas.end_sigma_px)
     cov = None
     if status is Status.OK and len(meas.end_sigma_px) == len(vectors):
         sigma = meas.end_sigma_px[est.used]
@@ -368,7 +369,7 @@ class StreakAttitudes:
 
 
 def attitudes_from_matches(
-    vectors_a: ArrayLike, vectors_b: ArrayLike, catalog_icrs: ArrayLike, *, method: str = "esoq2"
+    vectors_a: ArrayLike, vectors_b: ArrayLike, catalog_icrs: ArrayLike, *, method: WahbaMethod = "esoq2"
 ) -> tuple[Rotation, Rotation]:
     """Attitudes (rot_cam_from_icrs) of both ends from the same identified stars (N, 3) each."""
     rot_a = solve_wahba(vectors_a, catalog_icrs, method=method)

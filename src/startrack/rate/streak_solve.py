@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..attitude.covariance import roll_cross_boresight
 from ..camera import Camera
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, require
 from ..frames import radec_roll_from_rotation
 from ..identify.field_stars import field_stars
 from ..results import AttitudeSolution, StarMatches, Status
@@ -177,6 +177,8 @@ def header_exposure_s(header) -> float | None:
     ``ExposureTime``; seconds), or None."""
     for key in ("EXPTIME", "EXPOSURE", "ExposureTime"):
         value = header.get(key) if header else None
+        if value is None:
+            continue
         try:
             seconds = float(value)
         except (TypeError, ValueError):
@@ -190,7 +192,7 @@ def centroid_sigma_px(length_px: ArrayLike) -> float:
     """The identification's position tolerance (1 sigma, px) for streaks of these lengths:
     0.5 px plus 0.4 % of the median length (the light centroid departs from the mid-exposure
     position with the path's curvature and speed changes, which grow with the length)."""
-    return 0.5 + 0.004 * float(np.median(length_px))
+    return 0.5 + 0.004 * float(np.median(np.asarray(length_px, dtype=float)))
 
 
 def agreement_tolerance_px(length_px: ArrayLike) -> NDArray[np.float64]:
@@ -252,6 +254,7 @@ def solve_streaked(
         clock.mark("identify")
         if lis.solved or len(fits) >= len(guesses[0]):
             break
+    fits = require(fits, "the streak fits")  # (the loop runs at least once)
     if lis is None:
         return failed_solution(Status.TOO_FEW_STARS, f"{good.size} clean streaks ({opts.min_streaks} needed)", fits,
                                timing, clock)
@@ -265,7 +268,8 @@ def solve_streaked(
         return failed_solution(Status.NO_MATCH, f"only {keep.sum()} of {rows.size} identified streaks move as the "
                                "frame's streaks do: the identification is not confirmed", fits, timing, clock, omega0)
     fit_focal = camera is None
-    joint = fit_joint(lis.camera, lis.matches.cat_vectors[keep], measured[rows[keep]], cov[rows[keep]],
+    lis_camera = require(lis.camera, "the identification's camera")
+    joint = fit_joint(lis_camera, lis.matches.cat_vectors[keep], measured[rows[keep]], cov[rows[keep]],
                       lis.rot_cam_from_icrs, omega0, timing, fit_alpha=opts.fit_alpha, fit_focal=fit_focal)
     clock.mark("joint")
     found = Identified(fits, rows[keep], lis.matches.cat_vectors[keep], lis.matches.hip[keep])
@@ -364,7 +368,8 @@ def _agreeing(lis: AttitudeSolution, fits: StreakFits, rows: NDArray, measured: 
     under the identified attitude and the consensus rate (either time order)."""
     if not np.all(np.isfinite(omega0)):
         return np.zeros(rows.size, dtype=bool)
-    predicted = predict(lis.camera, lis.rot_cam_from_icrs, omega0, np.zeros(3), lis.matches.cat_vectors, timing)
+    lis_camera = require(lis.camera, "the identification's camera")
+    predicted = predict(lis_camera, lis.rot_cam_from_icrs, omega0, np.zeros(3), lis.matches.cat_vectors, timing)
     m = measured[rows]
     swapped = m[:, [2, 3, 0, 1, 4, 5]]
 
@@ -426,7 +431,8 @@ def rate_verdict(joint: JointFit, opts: StreakOptions, known_exposure: bool) -> 
         return Status.DEGENERATE, "the exposure time is unknown: the turn per exposure is in turn_rad"
     if joint.birge > opts.max_birge:
         return Status.DEGENERATE, f"the streaks misfit one rotation (rms {joint.birge:.1f} sigma > {opts.max_birge:g})"
-    relative = 3.0 * math.sqrt(float(np.trace(joint.rate_covariance))) / max(np.linalg.norm(joint.omega_rad_s), 1e-300)
+    relative = 3.0 * math.sqrt(float(np.trace(joint.rate_covariance))) / max(float(np.linalg.norm(joint.omega_rad_s)),
+                                                                              1e-300)
     if relative > opts.max_rate_uncertainty:
         return Status.DEGENERATE, (f"rate uncertain by {100 * relative:.1f} % (3 sigma, > "
                                    f"{100 * opts.max_rate_uncertainty:g} %): too few or too imprecise streaks")

@@ -77,8 +77,8 @@ def track_streaks(
                                 passes=2)
     clock.mark("fit")
     if fits is None or fits.ok.sum() < opts.min_streaks:
-        found = 0 if fits is None else int(fits.ok.sum())
-        return failed_solution(Status.TOO_FEW_STARS, f"{found} predicted streaks found ({opts.min_streaks} needed)",
+        n_found = 0 if fits is None else int(fits.ok.sum())
+        return failed_solution(Status.TOO_FEW_STARS, f"{n_found} predicted streaks found ({opts.min_streaks} needed)",
                        fits if fits is not None else _no_fits(noise, background), timing, clock)
     ok = np.flatnonzero(fits.ok)
     found = Identified(fits, ok, field.vectors[index[ok]], field.hips[index[ok]])

@@ -112,7 +112,7 @@ def triangle_match(first: ArrayLike, second: ArrayLike, tol_rad: float, max_star
 def _triangles_in(angles2: NDArray, legs: NDArray, tol_rad: float) -> list[NDArray]:
     """Triples (a, b, c) of second-frame stars whose angles a-b, a-c, b-c fit ``legs``."""
     ab = np.argwhere(np.abs(angles2 - legs[0]) <= tol_rad)
-    out = []
+    out: list[NDArray] = []
     for a, b in ab:
         cs = np.flatnonzero((np.abs(angles2[a] - legs[1]) <= tol_rad) & (np.abs(angles2[b] - legs[2]) <= tol_rad))
         out.extend(np.array([a, b, c]) for c in cs if c not in (a, b))

@@ -44,7 +44,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, require
 from ..frames import radec_roll_from_rotation
 from ..identify.field_stars import field_stars
 from ..rate.smear_mode import SmearLimits, image_smear_px, usable_for_prediction
@@ -133,7 +133,8 @@ class TrackStep:
         """Boresight RA, Dec and roll in degrees (NaN when there is no attitude)."""
         if self.rot_cam_from_icrs is None:
             return (math.nan, math.nan, math.nan)
-        return tuple(float(np.degrees(a)) for a in radec_roll_from_rotation(self.rot_cam_from_icrs))
+        ra, dec, roll = (float(np.degrees(a)) for a in radec_roll_from_rotation(self.rot_cam_from_icrs))
+        return ra, dec, roll
 
 
 class Tracker:
@@ -323,7 +324,8 @@ class Tracker:
         self._take_streak(solution, t_s)
         extra = {"rate_status": solution.rate.status.name, "n_streaks": solution.n_streaks,
                  "t_mid_s": solution.t_mid_s, "time_order_known": solution.time_order_known}
-        rms = float(np.sqrt(np.mean(solution.residuals_arcsec**2)) / solution.camera.pixel_scale_arcsec)
+        scale = require(solution.camera, "the solution's camera").pixel_scale_arcsec
+        rms = float(np.sqrt(np.mean(solution.residuals_arcsec**2)) / scale)
         return TrackStep(t_s, mode, Status.OK, "", solution.rot_cam_from_icrs, self._rate_copy(), solution.n_streaks,
                          rms, extra=extra)
 
@@ -337,15 +339,17 @@ class Tracker:
         rate's time order is not known yet)."""
         from ..rate.streak_track import prediction_slack_px, track_streaks
 
-        dt = t_s - self._t
+        dt = t_s - self._last_t
         memory = self._streak_memory
         signs = (1.0,) if memory.get("order_known", True) else (1.0, -1.0)
         solution = None
+        rate = require(self._rate, "the rate of the last frames")
         for sign in signs:
-            omega = sign * self._rate
-            rot = Rotation.from_quat(quat_product(rotvec_quat(-omega * dt), self._quat))
-            slack = prediction_slack_px(self._camera, omega, dt, self.options.rate_error_fraction, 2.0)
-            solution = track_streaks(data, self._camera, rot, omega, exposure_s, epoch_jyear=epoch_jyear(self._epoch),
+            omega = sign * rate
+            rot = Rotation.from_quat(quat_product(rotvec_quat(-omega * dt), self._last_quat))
+            camera = self._known_camera
+            slack = prediction_slack_px(camera, omega, dt, self.options.rate_error_fraction, 2.0)
+            solution = track_streaks(data, camera, rot, omega, exposure_s, epoch_jyear=epoch_jyear(self._epoch),
                                      slack_px=slack, options=self._streak_options(),
                                      zero_point=memory.get("zero_point", 0.0), blur_px=memory.get("blur_px", 1.0),
                                      shot=memory.get("shot"))
@@ -377,7 +381,8 @@ class Tracker:
         known = solution.time_order_known or differenced
         if solution.rate.ok or usable_for_prediction(solution):
             omega = solution.turn_rad / solution.exposure_s
-            if not solution.time_order_known and differenced and np.dot(omega, self._rate) < 0:
+            if (not solution.time_order_known and differenced and self._rate is not None
+                    and np.dot(omega, self._rate) < 0):
                 omega = -omega  # the attitudes of two frames tell the time order one frame cannot
             self._rate = omega
         self._streak_memory["order_known"] = known
@@ -399,30 +404,42 @@ class Tracker:
             self._rig.reset()
 
     # --- modes ----------------------------------------------------------------------------------
+    @property
+    def _last_t(self) -> float:
+        return require(self._t, "the time of the last attitude")
+
+    @property
+    def _last_quat(self) -> Quat:
+        return require(self._quat, "the last attitude")
+
+    @property
+    def _known_camera(self) -> Camera:
+        return require(self._camera, "the tracker's camera (given, or fitted by the first solve)")
+
     def _window_px(self, dt: float) -> float:
         opt = self.options
         if self._rate is None:
             motion = math.radians(opt.max_rate_deg_s) * abs(dt)
         else:
             motion = opt.rate_error_fraction * math.hypot(*self._rate.tolist()) * abs(dt)
-        return opt.window_px + motion * self._camera.fx
+        return opt.window_px + motion * self._known_camera.fx
 
     def _window_matcher(self) -> WindowMatcher:
         """The matcher of the current camera and catalog limit (it keeps the stars near the boresight)."""
         stars = field_stars(self.options.catalog_max_mag, epoch_jyear(self._epoch))
         if self._matcher is None or self._matcher.camera is not self._camera or self._matcher.stars is not stars:
-            self._matcher = WindowMatcher(self._camera, stars)
+            self._matcher = WindowMatcher(self._known_camera, stars)
         return self._matcher
 
     def _predicted_quat(self, dt: float) -> Quat:
         """The attitude turned by the rate for ``dt`` seconds: ``exp(-[omega x] dt) A`` (camera-frame omega)."""
         if self._rate is None:
-            return self._quat
-        return quat_product(rotvec_quat(-self._rate * dt), self._quat)
+            return self._last_quat
+        return quat_product(rotvec_quat(-self._rate * dt), self._last_quat)
 
     def _track(self, x: NDArray, y: NDArray, t_s: float) -> TrackStep | None:
         opt = self.options
-        dt = t_s - self._t
+        dt = t_s - self._last_t
         found = self._window_matcher().match(x, y, quat_matrix(self._predicted_quat(dt)),
                                              window_px=self._window_px(dt), match_px=opt.match_px,
                                              min_stars=opt.min_stars)
@@ -440,7 +457,8 @@ class Tracker:
             return TrackStep(t_s, LOST_IN_SPACE, solution.status, solution.reason)
         self._camera = self._camera or solution.camera  # with the fitted focal length (and k1)
         self._advance(solution.rot_cam_from_icrs, t_s)
-        rms = float(np.sqrt(np.mean(solution.residuals_arcsec**2)) / solution.camera.pixel_scale_arcsec)
+        scale = require(solution.camera, "the solution's camera").pixel_scale_arcsec
+        rms = float(np.sqrt(np.mean(solution.residuals_arcsec**2)) / scale)
         return TrackStep(t_s, LOST_IN_SPACE, Status.OK, "", solution.rot_cam_from_icrs, self._rate_copy(),
                          len(solution.matches), rms)
 

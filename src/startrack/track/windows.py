@@ -147,9 +147,11 @@ class WindowMatcher:
         found = self._inside(idx[:first], vectors[:, :first], matrix, cone)
         if found[0].size < count and first < len(idx):  # too few in the brightest prefix: all of them
             found = self._inside(idx, vectors, matrix, cone)
-        return tuple(part[:count] for part in found)
+        idx, x, y = found
+        return idx[:count], x[:count], y[:count]
 
-    def _inside(self, idx: NDArray, vectors: NDArray, matrix: NDArray, cone_rad: float) -> tuple[NDArray, ...]:
+    def _inside(self, idx: NDArray, vectors: NDArray, matrix: NDArray, cone_rad: float
+                ) -> tuple[NDArray, NDArray, NDArray]:
         """Those of the stars within ``cone_rad`` of the boresight that fall inside the image, and
         their pixel positions."""
         cam = matrix @ vectors
