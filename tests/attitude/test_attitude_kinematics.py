@@ -92,7 +92,7 @@ def test_relative_chain_reproduces_attitudes_and_grows_errors_in_quadrature():
     deltas = relative_attitude(attitudes[:-1], attitudes[1:])
     chained, covs = chain_relative(attitudes[0], deltas, np.eye(3) * 4e-10, np.eye(3) * 1e-10)
     assert np.max(angle_rad(chained, attitudes)) < 1e-14 * RAD
-    # eps_j^2 = eps_i^2 + eps_ij^2 (seed 000 eq. 7.1): isotropic traces add.
+    # eps_j^2 = eps_i^2 + eps_ij^2 (Huffman 2006 eq. 7.1): isotropic traces add.
     np.testing.assert_allclose(np.trace(covs, axis1=1, axis2=2), 3e-10 * (4 + np.arange(6)), rtol=1e-12)
     assert chain_relative(attitudes[0], deltas)[1] is None
 
@@ -128,7 +128,7 @@ def test_mounting_round_trip_and_estimate():
 
 
 def test_predictive_update_recovers_rate_and_handles_anisotropic_errors():
-    # Seed 000 §6.1.2: the model error d is the rate carrying A(t_k) to the attitude at t_k+1.
+    # Huffman 2006 §6.1.2: the model error d is the rate carrying A(t_k) to the attitude at t_k+1.
     rng = np.random.default_rng(57)
     start = Rotation.random(random_state=rng)
     omega = np.array([0.002, -0.001, 0.003])

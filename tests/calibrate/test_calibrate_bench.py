@@ -1,4 +1,4 @@
-"""Checkerboard calibration with OpenCV (seed 003 Ch. 4): corners from rendered images, the
+"""Checkerboard calibration with OpenCV (Fowler 2013 Ch. 4): corners from rendered images, the
 3-sigma pruning rule, rejection of a bad view, and the residual report."""
 
 import numpy as np

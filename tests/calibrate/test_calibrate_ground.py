@@ -26,7 +26,7 @@ from startrack.io.raw import bayer_cells, full_resolution_xy
 from startrack.units import ARCSEC, DEG
 
 SITE = BUILTIN_SITES["logan-ut-2012"]
-TIME = Time("2012-10-05T04:30:00", scale="utc")  # seed 003's RS1 night
+TIME = Time("2012-10-05T04:30:00", scale="utc")  # Fowler 2013's RS1 night
 
 
 def test_fits_and_exif_times():

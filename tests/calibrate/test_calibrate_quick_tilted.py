@@ -1,4 +1,4 @@
-"""Seed 002's quick methods (single-pair focal length, optical centre by rotation) and its
+"""Jacobs 1995's quick methods (single-pair focal length, optical centre by rotation) and its
 tilted-CCD + radial model, fitted by the joint calibration."""
 
 import math
@@ -30,7 +30,7 @@ def test_single_pair_focal_length_is_exact_for_a_pinhole():
 
 
 def test_focal_from_identified_stars():
-    camera = Camera(width=752, height=582, fx=3846.15)  # seed 002's 25 mm lens, square pixels
+    camera = Camera(width=752, height=582, fx=3846.15)  # Jacobs 1995's 25 mm lens, square pixels
     frames, rots = make_frames(camera, 1, rng=4, sigma_px=0.1)
     fr = frames[0]
     vec_cam = rots[0].apply(fr.vectors_icrs)
@@ -42,7 +42,7 @@ def test_focal_from_identified_stars():
 
 
 def test_seed002_sensitivity_25_um_of_focal_error_is_about_one_pixel_corner_to_corner():
-    """seed 002 §6.1: stars at opposite corners (+-2.44, +-1.82) mm, f 25 mm: 25 um -> 0.23 mrad."""
+    """Jacobs 1995 §6.1: stars at opposite corners (+-2.44, +-1.82) mm, f 25 mm: 25 um -> 0.23 mrad."""
     err = seed002_focal_sensitivity(2.44, 1.82, -2.44, -1.82, 25.0, 25.025)
     assert abs(err) == pytest.approx(0.23e-3, rel=0.1)
 
@@ -50,7 +50,7 @@ def test_seed002_sensitivity_25_um_of_focal_error_is_about_one_pixel_corner_to_c
 def test_optical_centre_from_rotation_tracks():
     rng = np.random.default_rng(1)
     cx, cy = 377.3, 290.8
-    angles = np.radians(np.arange(0, 360, 10))  # 36 images at 10 deg steps, as in seed 002 App. F
+    angles = np.radians(np.arange(0, 360, 10))  # 36 images at 10 deg steps, as in Jacobs 1995 App. F
     tracks = []
     for radius in (6.0, 150.0, 260.0):
         phase = rng.uniform(0, 2 * np.pi)

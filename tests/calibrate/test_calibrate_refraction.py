@@ -18,7 +18,7 @@ from startrack.calibrate.refraction import (
 from startrack.errors import InvalidInputError
 from startrack.units import ARCMIN, ARCSEC, DEG
 
-# seed 003 notes §1.6: Bennett at 10 C, 101 kPa, in arcmin (the thesis: ~10' at 5 deg, ~1.25' at 40 deg)
+# Fowler 2013 Fowler 2013 Ch.5: Bennett at 10 C, 101 kPa, in arcmin (the thesis: ~10' at 5 deg, ~1.25' at 40 deg)
 NOTE_TABLE_ARCMIN = {5: 9.88, 10: 5.39, 20: 2.70, 30: 1.72, 40: 1.19, 60: 0.58}
 
 
@@ -44,7 +44,7 @@ def test_bennett_within_its_stated_accuracy_of_the_erfa_model():
 
 
 def test_pressure_and_temperature_scaling():
-    """About 1 % per 0.9 kPa of pressure and 1 % per 3 C of temperature (seed 003 Ch. 5)."""
+    """About 1 % per 0.9 kPa of pressure and 1 % per 3 C of temperature (Fowler 2013 Ch. 5)."""
     base = bennett_refraction(30 * DEG)
     assert bennett_refraction(30 * DEG, pressure_kpa=101.9) / base == pytest.approx(1.0089, abs=5e-4)
     assert bennett_refraction(30 * DEG, temperature_c=7.0) / base == pytest.approx(1.0107, abs=5e-4)
@@ -60,7 +60,7 @@ def test_saemundsson_consistent_with_bennett_to_0_1_arcmin():
 
 def test_refraction_moves_stars_the_right_way():
     """Refraction lifts stars: apparent altitude > true. Correcting an observation lowers it
-    (seed 003 eq. 5.5 erratum), keeping the azimuth, and the two are inverse."""
+    (Fowler 2013 eq. 5.5 erratum), keeping the azimuth, and the two are inverse."""
     az = np.radians([10.0, 100.0, 250.0])
     alt = np.radians([5.0, 30.0, 60.0])
     true = np.stack([np.cos(alt) * np.sin(az), np.cos(alt) * np.cos(az), np.sin(alt)], axis=-1)

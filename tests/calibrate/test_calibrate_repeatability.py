@@ -1,4 +1,4 @@
-"""Fixed-mount repeatability (seed 003 Ch. 7 / 9) on a synthetic night, and its plots."""
+"""Fixed-mount repeatability (Fowler 2013 Ch. 7 / 9) on a synthetic night, and its plots."""
 
 import numpy as np
 import pytest
@@ -45,7 +45,7 @@ def test_pointing_and_roll_are_separated():
     assert result.mount_standard_error_rad == pytest.approx(np.sqrt((0.25 + 0.25 + 4) / 3) * ARCMIN / np.sqrt(200),
                                                             rel=0.2)
     budget = error_budget(result, lens_sigma_px=0.259, pixel_scale_arcsec=1.14 * 60, threshold_rad=0.15 * ARCMIN)
-    assert budget["lens"] / ARCMIN == pytest.approx(0.295, abs=0.001)  # seed 003 Table 4.4: 0.2953'
+    assert budget["lens"] / ARCMIN == pytest.approx(0.295, abs=0.001)  # Fowler 2013 Table 4.4: 0.2953'
     assert budget["atmosphere"] / ARCSEC == pytest.approx(4.2)
     assert budget["rss"] < budget["linear_sum"]
 

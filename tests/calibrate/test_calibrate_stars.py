@@ -1,4 +1,4 @@
-"""Calibration from identified stars on simulated frames of the seed 003 cameras (their published
+"""Calibration from identified stars on simulated frames of the Fowler 2013 cameras (their published
 focal lengths, principal points and Brown-Conrady distortion), from 1 frame and from 20."""
 
 import numpy as np

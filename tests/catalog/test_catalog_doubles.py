@@ -1,4 +1,4 @@
-"""Double stars: the exact merge formulas (seed 000 §5.5.4, corrected) and the real catalog."""
+"""Double stars: the exact merge formulas (Huffman 2006 §5.5.4, corrected) and the real catalog."""
 
 import dataclasses
 

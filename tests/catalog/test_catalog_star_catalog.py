@@ -37,7 +37,7 @@ def test_brighter_than(catalog, band):
     bright = catalog.brighter_than(6.0, band=band)
     assert len(bright) == np.count_nonzero(mags <= 6.0)
     assert np.all(bright.magnitudes(band) <= 6.0)
-    assert 4500 < len(bright) < 5500  # about 5,000 naked-eye stars (seed 000: 5,060 in SKY2000)
+    assert 4500 < len(bright) < 5500  # about 5,000 naked-eye stars (Huffman 2006: 5,060 in SKY2000)
     np.testing.assert_array_equal(bright.hip, catalog.hip[mags <= 6.0])
 
 

@@ -1,4 +1,4 @@
-"""Uniform thinning (seed 000 §5.5.4): the union of each region's brightest stars."""
+"""Uniform thinning (Huffman 2006 §5.5.4): the union of each region's brightest stars."""
 
 import numpy as np
 import pytest
@@ -76,7 +76,7 @@ def test_full_catalog_no_empty_region():
 
 
 def test_huffman_reduced_catalog_size():
-    # Seed 000: 5,060 stars brighter than V 6, 8 brightest per 30 deg FOV -> 540 stars.
+    # Huffman 2006: 5,060 stars brighter than V 6, 8 brightest per 30 deg FOV -> 540 stars.
     thinned = thin_uniform(load_catalog().brighter_than(6.0), 8, 15 * DEG)
     assert 400 < len(thinned) < 800
     assert thinned.hip[0] == 32349  # Sirius first

@@ -8,7 +8,7 @@ detection lies within 2 px; a detection is *unconfirmed* when it is near neither
 Hipparcos star (astrometry.net's WCS).
 
 Goal (issue 17): at least 90 % of the matched stars on every image, with no more false
-detections than before. The openstartracker frames are scored with the seed 000 §4.1 median
+detections than before. The openstartracker frames are scored with the Huffman 2006 §4.1 median
 dark built from the three frames (their own ``median_image.png`` is truncated), the camera's
 fixed pattern. Measured (benchmark), before issue 17 -> now: img3 12 -> 12 of 12, img4 11 -> 11
 of 12, img6 15 -> 15 of 16 (with the dark; 12 -> 15 without), crappy 11 -> 11 of 12, orion_trees

@@ -1,4 +1,4 @@
-"""The angle method with pivoting on the star-pair directory (seed 000 §5.4.1, notes §1.16), and
+"""The angle method with pivoting on the star-pair directory (Huffman 2006 §5.4.1), and
 the shared search pieces: star-set order, row joins, pivoting."""
 
 import itertools

@@ -1,4 +1,4 @@
-"""Van Bezooijen's match-group matcher (seed 002 §3, notes seed-002.md §1.8)."""
+"""Van Bezooijen's match-group matcher (Jacobs 1995 §3, Jacobs 1995 Ch. 3 and App D)."""
 
 import math
 
@@ -26,9 +26,9 @@ from startrack.identify.match_groups import (
 from startrack.identify.pair_database import PairSettings, load_pair_database
 from startrack.units import ARCSEC, PIXEL
 
-CAMERA = get_preset("sunsat")  # seed 002's camera: 752 x 582 px, 11.2 x 8.3 deg
+CAMERA = get_preset("sunsat")  # Jacobs 1995's camera: 752 x 582 px, 11.2 x 8.3 deg
 PDB = load_pair_database(PairSettings(fov_deg=14.0, stars_per_field=64, max_mag=6.0))  # every star to V 6
-OPTIONS = VanBezooijenOptions(distance_tolerance_rad=150e-6, timeout_s=5.0)  # seed 002 Table 3-5 row 4
+OPTIONS = VanBezooijenOptions(distance_tolerance_rad=150e-6, timeout_s=5.0)  # Jacobs 1995 Table 3-5 row 4
 PIXEL_ANGLE = CAMERA.pixel_scale_arcsec * ARCSEC
 
 

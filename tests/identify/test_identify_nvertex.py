@@ -1,4 +1,4 @@
-"""The n-vertex match (seed 000 §5.5.4 pp.111-113, Table 5.4; notes §1.23): C and S matrices, the
+"""The n-vertex match (Huffman 2006 §5.5.4 pp.111-113, Table 5.4): C and S matrices, the
 self-consistency check, and the matcher for n = 3, 4, 5."""
 
 import numpy as np
@@ -20,7 +20,7 @@ from startrack.units import ARCSEC, DEG
 
 TABLE_5_4_C = [np.array([[45, 46]]), np.array([[45, 47]]), np.array([[45, 48]]),
                np.array([[46, 47]]), np.array([[46, 48]]), np.array([[47, 48]])]
-"""The C matrix behind seed 000 Table 5.4: one catalog pair per baseline AB, AC, AD, BC, BD, CD."""
+"""The C matrix behind Huffman 2006 Table 5.4: one catalog pair per baseline AB, AC, AD, BC, BD, CD."""
 
 
 def test_baselines_are_numbered_as_in_the_seed():

@@ -1,4 +1,4 @@
-"""Star overlay from a prior attitude (seed 003 Ch. 6, notes seed-003.md §1.7)."""
+"""Star overlay from a prior attitude (Fowler 2013 Ch. 6)."""
 
 import math
 
@@ -72,7 +72,7 @@ def test_confirms_a_good_attitude_with_the_direct_overlay():
 
 
 def test_wide_distorted_camera_of_seed_003():
-    camera = get_preset("aptina-mt9p031")  # 50 deg field, radial distortion; seed 003 overlays to V 4
+    camera = get_preset("aptina-mt9p031")  # 50 deg field, radial distortion; Fowler 2013 overlays to V 4
     stars = catalog_star_set(4.0)
     truth, x, y, hip = _star_list(5, camera, stars)
     outcome = match_overlay(x, y, camera, stars, _off(truth, 3.0, np.random.default_rng(5)), prior_sigma_deg=1.5)

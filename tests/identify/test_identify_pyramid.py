@@ -1,4 +1,4 @@
-"""The Pyramid matcher on the star-pair directory (seed 000 §5.4-5.5)."""
+"""The Pyramid matcher on the star-pair directory (Huffman 2006 §5.4-5.5)."""
 
 import itertools
 import math

@@ -1,5 +1,5 @@
-"""Triangle matching by area and polar moment, planar and spherical (Cole & Crassidis; seed 000
-§5.4.2, notes §1.20-1.21): the features against known values, their errors against Monte Carlo,
+"""Triangle matching by area and polar moment, planar and spherical (Cole & Crassidis; Huffman 2006
+§5.4.2): the features against known values, their errors against Monte Carlo,
 the triangle directory, and the matcher."""
 
 import math

@@ -24,7 +24,7 @@ def _random_pixels(camera, n=3000, seed=0):
 
 @pytest.mark.parametrize("preset", ["aptina-mt9p031", "droid-x2"])
 def test_astropy_reads_our_sip_wcs_and_agrees_with_the_camera_model(preset):
-    """The seed 003 lenses (60 and 36 px of distortion at the corners) to 0.02 px everywhere."""
+    """The Fowler 2013 lenses (60 and 36 px of distortion at the corners) to 0.02 px everywhere."""
     camera, rot = get_preset(preset), random_rotations(None, rng=5)
     wcs = solution_wcs(rot, camera)
     assert wcs.sip is not None

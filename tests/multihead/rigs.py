@@ -19,7 +19,7 @@ def two_heads(b_mount: Rotation = TURN_X_90) -> CameraRig:
 
 def split_rig(elongation: float = 2.0, minor_px: float = 1.0) -> CameraRig:
     """StarNav II style: two orthogonal fields on one detector, stretched vertically (left) and
-    horizontally (right), as in seed 004 Fig. 4."""
+    horizontally (right), as in Samaan 2002 Fig. 4."""
     major = elongation * minor_px
     return CameraRig([
         RigHead("left", CAMERA, Rotation.identity(), detector="split", psf=PsfShape(major, minor_px, 90.0)),

@@ -1,5 +1,5 @@
 """Split field of view: elliptical PSF stamps, second moments, the field classification on
-simulated frames (intensity-weighted moments against seed 004 eq. 4's unweighted mask), and a
+simulated frames (intensity-weighted moments against Samaan 2002 eq. 4's unweighted mask), and a
 split frame solved as a two-head rig."""
 
 from __future__ import annotations
@@ -74,7 +74,7 @@ def test_misclassification_falls_with_elongation_and_intensity_weights_beat_eq4(
     assert weighted[2] > 300
     assert weighted[0] / weighted[2] < 0.02 and weighted[1] / weighted[2] < 0.12  # measured 0.4 % and 5.8 %
     slight = classified(1.25, 2, "intensity")
-    mask = classified(1.25, 2, "mask")  # seed 004 eq. 4 as printed (no intensity weights)
+    mask = classified(1.25, 2, "mask")  # Samaan 2002 eq. 4 as printed (no intensity weights)
     assert slight[0] / slight[2] < 0.04  # measured 1.9 % (eq. 4 mask: 6.5 %)
     assert mask[0] + mask[1] > slight[0] + slight[1]  # the erratum costs: more wrong or ambiguous spots
 

@@ -1,4 +1,4 @@
-"""Corner responses go to the right streak ends (seed 001 §3, Table 3.1's detectors).
+"""Corner responses go to the right streak ends (Sease 2013 §3, Table 3.1's detectors).
 
 These would have caught the association outliers of the Table 3.1 benchmark: a clump of noise
 taken for a 6-px streak (an end 85-175 px from any star), long diagonal streaks rejected because

@@ -36,7 +36,7 @@ def test_exact_rate_between_two_attitudes_and_the_seed_first_order_form():
     start = Rotation.random(random_state=np.random.default_rng(60))
     later = propagate(start, OMEGA, 0.5)
     np.testing.assert_allclose(rate_between(start, later, 0.5), OMEGA, rtol=1e-12)
-    first = rate_between(start, later, 0.5, first_order=True)  # seed 004 eq. 3
+    first = rate_between(start, later, 0.5, first_order=True)  # Samaan 2002 eq. 3
     bias = np.linalg.norm(first - OMEGA) / np.linalg.norm(OMEGA)
     assert 0 < bias < (np.linalg.norm(OMEGA) * 0.5) ** 2  # second order in the step angle
     np.testing.assert_allclose(rate_between(later, start, -0.5), OMEGA, rtol=1e-12)

@@ -1,4 +1,4 @@
-"""RSO indicators of seed 001 ch. 4 (notes seed-001-004 §1.22): the RSO flagged, no star flagged."""
+"""RSO indicators of Sease 2013 ch. 4 (Sease 2013 Ch.4 Eq. 4.11–4.15): the RSO flagged, no star flagged."""
 
 from __future__ import annotations
 

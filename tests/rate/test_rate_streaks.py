@@ -1,4 +1,4 @@
-"""Streaked frames (seed 001 ch. 3-4): endpoints, grouping, catalog-free rate, RSO flags, mode."""
+"""Streaked frames (Sease 2013 ch. 3-4): endpoints, grouping, catalog-free rate, RSO flags, mode."""
 
 from __future__ import annotations
 
@@ -160,7 +160,7 @@ def test_groups_are_the_two_exposure_ends(scenes):
 
 
 def test_attitudes_at_both_ends_from_identified_streaks(scenes):
-    # Seed 001 ch. 3: the same identified stars at both ends give the attitude at both times.
+    # Sease 2013 ch. 3: the same identified stars at both ends give the attitude at both times.
     scene = scenes[(90, 0.5)]
     meas = measure_streaks(scene.image, CAMERA, detector="harris", bias_px=HARRIS_BIAS_PX)
     mids = 0.5 * (scene.start_xy + scene.end_xy)

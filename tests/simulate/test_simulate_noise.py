@@ -78,7 +78,7 @@ def test_bias_switch_adds_the_bias():
 
 
 def test_quantisation_rounds_to_nearest_and_returns_uint16():
-    # seed 000 §3.2.4 example at 117 e-/ADU: 0-58 e- read as 0, 59-"176" e- as 1 ADU (the exact
+    # Huffman 2006 §3.2.4 example at 117 e-/ADU: 0-58 e- read as 0, 59-"176" e- as 1 ADU (the exact
     # boundary is 1.5 * 117 = 175.5 e-)
     s = sensor(gain_e_per_adu=117.0, bit_depth=10)
     signal = np.array([[0.0, 58.0, 59.0, 175.0, 176.0]])

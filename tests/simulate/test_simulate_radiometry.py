@@ -112,7 +112,7 @@ def test_misuse_raises_invalid_input(make):
 
 
 def test_seed_scale_preset_reproduces_seed_000_eq_3_4():
-    # notes seed-000.md §5 item 1: with Table 7.1 values eq. 3.4 gives eNum ~ 1.34e4 e- at M_V 6
+    # Huffman 2006: with Table 7.1 values eq. 3.4 gives eNum ~ 1.34e4 e- at M_V 6
     seed = get_sensor_preset("far-mst-seed-eq34")
     literal = 1.77e-4 * 0.12 * 0.1 * 10.0 * 10.0 ** ((28.0 - 6.0) / 2.5)  # a FFSR t g 10^(..)
     assert float(seed.electrons(6.0)) == pytest.approx(literal, rel=1e-4)

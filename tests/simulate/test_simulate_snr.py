@@ -1,5 +1,5 @@
 """The simulator against its analytic companions: SNR, photometry, limiting magnitude, smear-limited
-rate (seed 004 Table 1) and the expected number of stars in the field."""
+rate (Samaan 2002 Table 1) and the expected number of stars in the field."""
 
 from __future__ import annotations
 

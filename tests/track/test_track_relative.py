@@ -1,4 +1,4 @@
-"""Frame-to-frame relative attitude without a catalog (seed 000 triangle and rate matches)."""
+"""Frame-to-frame relative attitude without a catalog (Huffman 2006 triangle and rate matches)."""
 
 import numpy as np
 from scipy.spatial.transform import Rotation

@@ -1,6 +1,6 @@
 """Star detection and centroiding: image -> :class:`startrack.results.Detections`.
 
-Pipeline (DESIGN.md §1; seed 000 §4.1-4.2, notes ``seed-000.md`` §1.5-1.9; seed 003 §II.B-C),
+Pipeline (DESIGN.md §1; Huffman 2006 §4.1-4.2.2.2, eq. 4.2; Fowler 2013 §II.B-C),
 one module per stage::
 
     prepare      one plane (colour: R + G + B, see .channels); NaN / inf ignored
@@ -17,8 +17,8 @@ one module per stage::
 
 Every stage has alternatives selectable by name (:class:`StarDetector`): dark / median-frame
 and row-reference subtraction (:mod:`.dark`), denoising (:mod:`.denoise`), k-sigma, dynamic and
-seed 000 pre-filter thresholds (:mod:`.threshold`, :mod:`.prefilters`), 8-connected labelling
-or seed 002 region growing (:mod:`.region_grow`), shape and smear tests (:mod:`.shape`), and six
+Huffman 2006 pre-filter thresholds (:mod:`.threshold`, :mod:`.prefilters`), 8-connected labelling
+or Jacobs 1995 region growing (:mod:`.region_grow`), shape and smear tests (:mod:`.shape`), and six
 centroiders (:mod:`.centroiders`); predictive windows (:mod:`.predictive`); the Cramér-Rao
 bound (:mod:`.crb`); instrument magnitudes (:mod:`.magnitude`).
 

@@ -1,6 +1,6 @@
 """Weighted-sum centroids, spot shape and centroid uncertainty.
 
-Centroid (seed 000 §4.2.2 eq. 4.1, notes §1.8; seed 003 eq. 3.3)::
+Centroid (Huffman 2006 §4.2.2 eq. 4.1; Fowler 2013 eq. 3.3)::
 
     x_c = sum_i w_i x_i / sum_i w_i,    w_i = max(I_i - B_i, 0)
 
@@ -9,13 +9,13 @@ pixel coordinates are pixel centres (our convention). Clipping the weights at 0 
 negative noise pixels of the spot's rim from pushing the centroid away.
 
 Shape: the intensity-weighted second central moments, plus 1/12 px^2 on the diagonal for the
-pixel's own extent (the ``regionprops`` convention of seed 003 §II.B.6). ``elongation`` is the
+pixel's own extent (the ``regionprops`` convention of Fowler 2013 §II.B.6). ``elongation`` is the
 ratio of the principal axes, sqrt(lambda_max / lambda_min): 1 for a round spot, large for a
-streak (seed 000's "aspect ratio").
+streak (Huffman 2006's "aspect ratio").
 
 Uncertainty, two models (per axis, 1 sigma, pixels):
 
-* ``"eq4.2"`` -- seed 000 §4.2.2 eq. 4.2 (notes §1.9), the empirical Monte-Carlo fit
+* ``"eq4.2"`` -- Huffman 2006 §4.2.2 eq. 4.2 (Huffman 2006 §4.2.2, eq. 4.2), the empirical Monte-Carlo fit
   ``sigma = 0.11 + 0.5 * SNR**-1.3`` with SNR = peak pixel / pixel noise (eq. 3.18). Its 0.11 px
   floor is that thesis's centroider bias on 10-px spots.
 * ``"propagated"`` (the detector's default) -- first-order propagation of a uniform per-pixel
@@ -41,10 +41,10 @@ PIXEL_VARIANCE = 1.0 / 12.0
 """Variance of a uniform distribution over one pixel, px^2."""
 
 EQ42_FLOOR_PX, EQ42_SCALE_PX, EQ42_EXPONENT = 0.11, 0.5, -1.3
-"""Coefficients of seed 000 eq. 4.2."""
+"""Coefficients of Huffman 2006 eq. 4.2."""
 
 UncertaintyModel = Literal["propagated", "eq4.2"]
-"""A centroid's error: the method's own (propagated noise or fit covariance) or seed 000 eq. 4.2."""
+"""A centroid's error: the method's own (propagated noise or fit covariance) or Huffman 2006 eq. 4.2."""
 
 UNCERTAINTY_MODELS: tuple[str, ...] = get_args(UncertaintyModel)
 
@@ -73,7 +73,7 @@ class SpotMeasurements:
     elongation : float
         sqrt(lambda_max / lambda_min) of the second-moment matrix (>= 1).
     flatness : float
-        Seed 003 "flatness factor" as a fraction: std of the spot's values / peak.
+        Fowler 2013 "flatness factor" as a fraction: std of the spot's values / peak.
     spread_px2 : float
         sum_i (x_i - x_c)^2 + (y_i - y_c)^2 over positive pixels, for the propagated sigma.
     size_px : float
@@ -139,7 +139,7 @@ def axis_ratio(cxx: NDArray, cyy: NDArray, cxy: NDArray) -> NDArray[np.float64]:
 
 
 def _flatness(regions: Regions, signal: NDArray, peak: NDArray) -> NDArray[np.float64]:
-    """std of the spot's background-subtracted values divided by its peak (seed 003 FF / 100)."""
+    """std of the spot's background-subtracted values divided by its peak (Fowler 2013 FF / 100)."""
     n = regions.counts
     mean = regions.sum(signal) / n
     var = np.maximum(regions.sum(signal * signal) / n - mean**2, 0.0)
@@ -148,7 +148,7 @@ def _flatness(regions: Regions, signal: NDArray, peak: NDArray) -> NDArray[np.fl
 
 
 def sigma_eq42(snr_peak: NDArray) -> NDArray[np.float64]:
-    """Seed 000 eq. 4.2: 1-sigma centroid error in px from the peak-pixel SNR (eq. 3.18)."""
+    """Huffman 2006 eq. 4.2: 1-sigma centroid error in px from the peak-pixel SNR (eq. 3.18)."""
     snr = np.maximum(np.asarray(snr_peak, dtype=np.float64), 1e-3)
     return EQ42_FLOOR_PX + EQ42_SCALE_PX * snr**EQ42_EXPONENT
 

@@ -1,6 +1,6 @@
 """Maximum-likelihood centroid: a pixel-integrated Gaussian fitted to each star's window.
 
-Seed 000 §4.2.2 eqs. 4.3-4.13 (notes ``seed-000.md`` §1.10, after Winick): the mean value of
+Huffman 2006 §4.2.2 eqs. 4.3-4.13 (after Winick): the mean value of
 pixel (i, j) is ``F g_i(x, s) g_j(y, s) + B`` with ``g_i`` the share of a Gaussian of width s
 in pixel i (:mod:`.crb`), and the counts are Poisson plus read noise. The likelihood's score
 equations are those of weighted least squares with weights ``1 / var_i`` re-evaluated at the

@@ -13,7 +13,7 @@ with ``s_w`` equal to the star's PSF width it is the maximum-likelihood centroid
 background-limited Gaussian star (ignoring pixelation): close to the Cramér-Rao bound
 (:mod:`.crb`) at a fraction of a fit's cost. Unlike the thresholded weighted sum it has no
 pixel-phase bias from a threshold cutting the wings, and far-out noisy pixels get no weight.
-Seed 000 §4.2.2 (notes §1.8) mentions the fixed-window mass-moment variant (DIGISTAR /
+Huffman 2006 §4.2.2 mentions the fixed-window mass-moment variant (DIGISTAR /
 Samaan); this is its iterated, tapered form. For undersampled stars (PSF sigma 0.7 px) the
 Gaussian window has a pixel-phase bias of about 0.01 px (``benchmarks/detect_accuracy.py``).
 

@@ -1,11 +1,11 @@
-"""Every centroider by name, behind one call (seed 003 §II.C; seed 000 §4.2.2).
+"""Every centroider by name, behind one call (Fowler 2013 §II.C; Huffman 2006 §4.2.2).
 
 =================  ===========================================================================
 name               method (module)
 =================  ===========================================================================
 ``peak``           brightest pixel (:mod:`.centroid_moments`)
 ``area``           unweighted mean of the spot's pixels (:mod:`.centroid_moments`)
-``weighted``       seed 000's weighted sum, background subtracted: the default
+``weighted``       Huffman 2006's weighted sum, background subtracted: the default
 ``weighted-raw``   the weighted sum with raw pixel values, no background subtraction
 ``windowed``       iteratively windowed Gaussian-weighted centroid (:mod:`.centroid_windowed`)
 ``mle``            maximum-likelihood pixel-integrated Gaussian fit, the PSF width fitted, or

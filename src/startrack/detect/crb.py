@@ -1,8 +1,8 @@
 """The Cramér-Rao bound on centroid accuracy for a pixel-integrated Gaussian star image.
 
 No unbiased centroider can beat the bound; the benchmark (``benchmarks/detect_centroid_crb.py``)
-divides each method's RMS error by it. Model (seed 000 §4.2.2 eqs. 4.3-4.8, notes ``seed-000.md``
-§1.10, after Winick 1986): the mean electrons in pixel (i, j) are
+divides each method's RMS error by it. Model (Huffman 2006 §4.2.2 eqs. 4.3-4.8,
+after Winick 1986): the mean electrons in pixel (i, j) are
 
     mu_ij = F g_i(x) g_j(y) + B,     g_i(x) = Phi((i + 1/2 - x) / s) - Phi((i - 1/2 - x) / s)
 
@@ -49,7 +49,7 @@ def noise_equivalent_area(psf_sigma_px: ArrayLike) -> NDArray[np.float64]:
 
 def integrated_snr(flux_e: ArrayLike, psf_sigma_px: ArrayLike, background_e: ArrayLike = 0.0,
                    read_noise_e: ArrayLike = 0.0) -> NDArray[np.float64]:
-    """Signal-to-noise ratio of a whole star image (seed 000 eq. 3.17 with the sky and read noise
+    """Signal-to-noise ratio of a whole star image (Huffman 2006 eq. 3.17 with the sky and read noise
     of the noise-equivalent area): ``F / sqrt(F + 4 pi s^2 (B + R^2))``.
 
     Parameters are electrons (flux in the star, background per pixel, read noise rms per pixel)

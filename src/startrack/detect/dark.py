@@ -1,13 +1,13 @@
 """Dark and fixed-pattern subtraction: dark frames, median frames, row-wise dark reference pixels.
 
-* **Dark / median frame** (seed 000 §4.1, notes ``seed-000.md`` §1.5): the per-pixel median of
+* **Dark / median frame** (Huffman 2006 §4.1): the per-pixel median of
   several frames of a sequence is subtracted before thresholding. Stars move between frames
   (or are absent from lens-cap darks), so the median keeps the fixed pattern: hot pixels,
   amp glow, bias structure (``realdata/UBNanosatLab-openstartracker/median_image.png`` is
   such a map). :func:`median_frame` builds one, :func:`subtract_dark` applies it. The frame's
   own level is kept: the median of the dark is added back, so the background stays positive
   for integer images and the detector's background model measures the sky as before.
-* **Row-wise dark reference** (seed 002 §2.2.1.2, notes ``seed-002.md`` §1.2): sensors with
+* **Row-wise dark reference** (Jacobs 1995 §2.2.1.2.2.1.2, App C.1, §8.5–8.6): sensors with
   optically shielded columns at the start and end of each row give that row's dark level; the
   AC-coupled video chain of the seed's camera drifts along the readout, so a per-row value beats
   one for the frame. :func:`subtract_row_reference` subtracts each row's mean over those columns

@@ -1,6 +1,6 @@
 """Split clusters that hold two or more stars (close pairs, open clusters).
 
-8-connected clustering (seed 000 §4.2.1) merges stars whose images touch above the threshold,
+8-connected clustering (Huffman 2006 §4.2.1) merges stars whose images touch above the threshold,
 and the weighted-sum centroid of such a cluster lies between the stars. A cluster is split
 when its significance image has several local maxima separated by a real valley:
 

@@ -1,4 +1,4 @@
-"""Optional noise removal before detection (seed 003 §II.B, notes ``seed-003.md``,
+"""Optional noise removal before detection (Fowler 2013 §II.B,
 "Noise-removal techniques" 1-3).
 
 * **Linear smoothing** -- convolution with a Gaussian low-pass kernel of ``sigma_px`` (the seed

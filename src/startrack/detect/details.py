@@ -27,9 +27,9 @@ class DetectionDetails:
     mag : ndarray, shape (N,)
         Instrument magnitude ``mag_zero_point - 2.5 log10(flux)`` (:mod:`.magnitude`).
     peak_snr : ndarray, shape (N,)
-        Peak pixel over the local pixel noise (seed 000 eq. 3.18).
+        Peak pixel over the local pixel noise (Huffman 2006 eq. 3.18).
     major_px, minor_px, angle_deg : ndarray, shape (N,)
-        Seed 002's long and short axis and the long axis's direction from +x towards +y
+        Jacobs 1995's long and short axis and the long axis's direction from +x towards +y
         (:mod:`.shape`).
     psf_sigma_px : ndarray, shape (N,)
         PSF width fitted (``centroid="mle"``) or used by the centroider, else the spot's

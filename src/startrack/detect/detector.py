@@ -41,7 +41,7 @@ class StarDetector:
     Background and noise
         dark_frame : ndarray (H, W) or None -- dark or median (fixed-pattern) frame to subtract
         (:mod:`.dark`). dark_columns : (leading, trailing) -- dark reference columns per row
-        (seed 002), subtracted row by row and cut off (x stays in the full frame's pixels).
+        (Jacobs 1995), subtracted row by row and cut off (x stays in the full frame's pixels).
         background : {"tiled", "global"} -- local (per ``tile_px`` tile, interpolated) or
         global level and noise; with ``threshold="ksigma"`` these are the local and global
         k-sigma thresholds.
@@ -57,7 +57,7 @@ class StarDetector:
         level spots are grown to; fine_sigma -- k of the full-resolution pass for sharp stars
         (:mod:`.fine_pass`; None: off); target_stars, max_sigma -- the dynamic threshold's target
         count and highest k; pixel_sigma, prefilter_count -- single-pixel k and the count of
-        25 of seed 000's 5 x 5 pre-filters (which work on full-resolution pixels).
+        25 of Huffman 2006's 5 x 5 pre-filters (which work on full-resolution pixels).
     Grouping (:mod:`.label`, :mod:`.region_grow`)
         grouping : {"label8", "region-grow"}; jump_px -- the region growing's scan step;
         deblend; reject_edge; min_area_px, max_area_px (full-resolution pixels);
@@ -65,14 +65,14 @@ class StarDetector:
     Spot filters (:mod:`.filters`, :mod:`.shape`)
         min_peak_snr, max_elongation (the eccentricity test: e = sqrt(1 - 1 / elongation^2)),
         min_flatness, max_peak_fraction (hot pixels), max_clutter; smear_px (dx, dy),
-        smear_tolerance_px, smear_angle_deg, max_axis_difference_px -- seed 002's shape test.
+        smear_tolerance_px, smear_angle_deg, max_axis_difference_px -- Jacobs 1995's shape test.
     Centroid (:mod:`.centroiders`)
         centroid : {"peak", "area", "weighted", "weighted-raw", "windowed", "mle"};
         psf_sigma_px -- known PSF width (None: estimated; fitted by "mle");
         window_half_px -- window of the window methods (None: ceil(3 sigma) + 1);
         gain_e_per_adu -- adds the stars' shot noise to the weights and errors (None: the
         background noise only); uncertainty {"propagated", "eq4.2"} -- the method's own error
-        (propagated noise or fit covariance) or seed 000's eq. 4.2; mag_zero_point -- of the
+        (propagated noise or fit covariance) or Huffman 2006's eq. 4.2; mag_zero_point -- of the
         instrument magnitude (:mod:`.magnitude`).
     Output
         channel : {None, "r", "g", "b", 0, 1, 2} -- colour plane (None: R + G + B);
@@ -198,7 +198,7 @@ class StarDetector:
     def measure_windows(self, image: NDArray, x: ArrayLike, y: ArrayLike,
                         half_width_px: int = 6) -> WindowDetections:
         """Predictive centroiding: find and centroid stars only in square windows of
-        half-width ``half_width_px`` centred on the predicted positions (x, y) (seed 004;
+        half-width ``half_width_px`` centred on the predicted positions (x, y) (Samaan 2002;
         :mod:`.predictive`). The background of each window is its outer ring.
 
         Returns

@@ -1,15 +1,14 @@
 """Spot filters: reject clusters that are not star images.
 
-From seed 003 §II.B (notes ``seed-003.md``, "Noise-removal techniques" 5-7) and seed 000 §4.1
-(notes §1.6):
+From Fowler 2013 §II.B ("Noise-removal techniques" 5-7) and Huffman 2006 §4.1:
 
 * **area** -- fewer than ``min_area_px`` pixels (speckle noise) or more than ``max_area_px``
   (banding, compression blobs, the Moon, lit trees);
 * **peak** -- peak pixel below ``min_peak_snr`` times the pixel noise;
 * **elongation** -- principal-axis ratio above ``max_elongation`` (lines, edges, streaks of
-  roofs); seed 003 gives no number, we use the ratio rather than the eccentricity
+  roofs); Fowler 2013 gives no number, we use the ratio rather than the eccentricity
   e = sqrt(1 - 1 / elongation^2);
-* **flatness** -- std / peak below ``min_flatness`` (plateaus of nearly equal pixels; seed 003
+* **flatness** -- std / peak below ``min_flatness`` (plateaus of nearly equal pixels; Fowler 2013
   finds > 0.10 for focused stars);
 * **hot pixels** -- a single bright pixel: its value is more than ``max_peak_fraction`` of the
   sum of the 3 x 3 pixels around it (a focused star with a 0.5 px sigma puts under half of

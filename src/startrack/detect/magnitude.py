@@ -1,7 +1,7 @@
 """Instrument magnitudes of detected stars, and their calibration against a catalogue.
 
-Seed 000 §5.3 (notes ``seed-000.md`` §1.12) inverts its signal model, eq. 3.4, to get a visual
-magnitude from the measured electrons; seed 002 §2.2.4 (notes ``seed-002.md`` §1.6) does the same
+Huffman 2006 §5.3 inverts its signal model, eq. 3.4, to get a visual
+magnitude from the measured electrons; Jacobs 1995 §2.2.4 (Jacobs 1995 §2.2.4, App C.1) does the same
 with an illuminance constant ``k_illum`` calibrated by matching imaged stars to the catalogue.
 Both are, in magnitudes, one zero point::
 
@@ -9,8 +9,8 @@ Both are, in magnitudes, one zero point::
 
 ``flux`` in the image's units (ADU, background subtracted) and ``zero_point`` the magnitude of a
 star of flux 1. :func:`calibrate_zero_point` finds it from detections matched to catalogue stars
-(the seed 002 procedure, with a median instead of a mean so that a mismatched star or a saturated
-one does not pull it). Seed 002's ``brightness = sum b_i + k_area n delta_th`` adds back the
+(the Jacobs 1995 procedure, with a median instead of a mean so that a mismatched star or a saturated
+one does not pull it). Jacobs 1995's ``brightness = sum b_i + k_area n delta_th`` adds back the
 threshold its region pixels had subtracted; our flux is measured above the background, not above
 the threshold, so :func:`seed002_brightness` is only needed to reproduce that thesis.
 """
@@ -24,7 +24,7 @@ from ..errors import InvalidInputError
 
 MAG_PER_DEX = 2.5
 SEED002_K_AREA = 2.0
-"""Seed 002's empirical area factor k_area (notes §1.6)."""
+"""Jacobs 1995's empirical area factor k_area (Jacobs 1995 §2.2.4, App C.1)."""
 
 
 def instrument_magnitude(flux: ArrayLike, zero_point: float = 0.0) -> NDArray[np.float64]:
@@ -71,7 +71,7 @@ def calibrate_zero_point(flux: ArrayLike, catalog_mag: ArrayLike) -> tuple[float
 
 def seed002_brightness(flux_above_threshold: ArrayLike, area_px: ArrayLike, delta_threshold: float,
                        k_area: float = SEED002_K_AREA) -> NDArray[np.float64]:
-    """Seed 002 eq. (§2.2.4): ``sum b_i + k_area * n * delta_th``, the region's summed values
+    """Jacobs 1995 eq. (§2.2.4): ``sum b_i + k_area * n * delta_th``, the region's summed values
     above the threshold plus the threshold's share, with its empirical ``k_area = 2``."""
     return (np.asarray(flux_above_threshold, dtype=np.float64)
             + k_area * np.asarray(area_px, dtype=np.float64) * delta_threshold)

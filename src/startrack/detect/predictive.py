@@ -1,7 +1,7 @@
 """Predictive (windowed) centroiding: measure only small windows around predicted positions.
 
-Seed 004 (Samaan, Mortari, Pollock & Junkins 2002; notes ``seed-001-004.md`` §2.2 step 4) and
-seed 000 §4.2.3 (notes §1.11): in tracking, the attitude and rate predict where each catalogue
+Samaan 2002 (Samaan, Mortari, Pollock & Junkins 2002; Samaan 2002 Eq. 1–3 step 4) and
+Huffman 2006 §4.2.3: in tracking, the attitude and rate predict where each catalogue
 star will fall; a mask centred on each prediction is centroided, and the rest of the frame is
 never read. A small prediction error only moves where the window starts.
 
@@ -20,7 +20,7 @@ Per window (all windows at once, as one (N, S, S) stack):
    separable sums of :mod:`.centroid_windowed`, a pass over 20 windows of 13 x 13 px takes
    about 0.6 ms (``benchmarks/detect_speed.py``).
 
-The window's half-width follows the rule of the notes (§2.2): ``ceil(3 s) + smear / 2 +
+The window's half-width follows the rule of the Huffman 2006 Table 5.1, §5.1): ``ceil(3 s) + smear / 2 +
 prediction margin``; the caller passes it.
 """
 

@@ -1,5 +1,4 @@
-"""Seed 000's statistical pre-filters and proximity filter (§4.1, §4.2.2; notes ``seed-000.md``
-§1.6).
+"""Huffman 2006's statistical pre-filters and proximity filter (§4.1, §4.2.2).
 
 At a low threshold (1-3 sigma on single pixels) pure noise puts many pixels above it; a star's
 pixels come in dense clumps. The pre-filter keeps a candidate pixel only when at least ``count``

@@ -1,6 +1,6 @@
 """Spot shape: long and short axis, direction, and the test against the expected smear.
 
-Seed 002 §2.2.3 (notes ``seed-002.md`` §1.5): from the **unweighted** "base centre" of the
+Jacobs 1995 §2.2.3: from the **unweighted** "base centre" of the
 spot's pixels (lens aberration skews the intensity-weighted one), the second moments
 ``M20 = sum (x - x0)^2``, ``M02 = sum (y - y0)^2``, ``M11 = sum (x - x0)(y - y0)`` give the
 direction of the long axis
@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 from .label import Regions
 
 DIRECTION_CHECK_PX = 5.0
-"""Above this axis difference the smear direction is checked too (seed 002)."""
+"""Above this axis difference the smear direction is checked too (Jacobs 1995)."""
 
 
 @dataclass(frozen=True)
@@ -38,7 +38,7 @@ class SpotShape:
     Attributes
     ----------
     major_px, minor_px : float
-        Extent along the long and the short axis (a and b of seed 002), px.
+        Extent along the long and the short axis (a and b of Jacobs 1995), px.
     angle_deg : float
         Direction of the long axis from +x towards +y, in (-90, 90].
     """
@@ -49,7 +49,7 @@ class SpotShape:
 
 
 def spot_shape(regions: Regions) -> SpotShape:
-    """Seed 002 axes and direction of every region (module docstring)."""
+    """Jacobs 1995 axes and direction of every region (module docstring)."""
     x, y = regions.x.astype(np.float64), regions.y.astype(np.float64)
     n = regions.counts
     x0, y0 = regions.sum(x) / n, regions.sum(y) / n
@@ -66,7 +66,7 @@ def spot_shape(regions: Regions) -> SpotShape:
 
 def smear_ok(shape: SpotShape, smear_px: tuple[float, float] | None, tolerance_px: float,
              max_axis_difference_px: float | None, max_angle_deg: float) -> NDArray[np.bool_]:
-    """Seed 002's shape test (module docstring); all True when neither a smear vector nor a
+    """Jacobs 1995's shape test (module docstring); all True when neither a smear vector nor a
     maximum axis difference is given."""
     diff = shape.major_px - shape.minor_px
     keep = np.ones(diff.shape, dtype=bool)

@@ -1,5 +1,5 @@
-"""Lost-in-space identification by the angle method with pivoting (seed 000 §5.4.1; notes
-``seed-000.md`` §1.16), for a camera whose focal length is known (to a few percent at most).
+"""Lost-in-space identification by the angle method with pivoting (Huffman 2006 §5.4.1),
+for a camera whose focal length is known (to a few percent at most).
 
 1. Pairs of the brightest image stars in the generalised Pyramid order
    (:func:`.star_order.ordered_star_sets` with sets of two).

@@ -3,7 +3,7 @@
 A matcher verifies a candidate on the few stars of its pattern and their neighbours. This module
 fits the attitude (and the focal length when it is not known) to the matched stars, re-matches
 every image star to the catalog stars the fit predicts, and repeats until the matches settle
-(seed 000 §1.23: the identification is confirmed and refined on all stars in the field).
+(Huffman 2006 §5.5.4: the identification is confirmed and refined on all stars in the field).
 
 A candidate can carry a wrong association or two (a false star that happened to fall within
 the verification radius, or a real star paired with a neighbour). With a free focal length and a

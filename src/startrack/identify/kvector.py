@@ -1,4 +1,4 @@
-"""The k-vector range search (Mortari 1997; seed 000 §5.5.4, notes ``seed-000.md`` §1.15).
+"""The k-vector range search (Mortari 1997; Huffman 2006 §5.5.4).
 
 Given n sorted keys S, a straight line z(j) = m j + q through the first and last key (widened by a
 small margin) and the counts k[j] = #{S <= z(j)} turn the question "which keys lie in [a, b]?"

@@ -1,5 +1,5 @@
-"""Lost-in-space identification by match groups: van Bezooijen's algorithm as seed 002 uses it
-(Jacobs 1995, ``Match.mod``, Ch. 3 and App. D; notes ``seed-002.md`` §1.8, §1.13, §2.2).
+"""Lost-in-space identification by match groups: van Bezooijen's algorithm as Jacobs 1995 uses it
+(Jacobs 1995, ``Match.mod``, Ch. 3 and App. D; Jacobs 1995 §5.2, §3.5, Tables 3-5/3-6/3-7).
 
 A *match* is one assignment (observed star o, guide star g), stored as the key ``o * S + g`` for
 S guide stars.
@@ -30,7 +30,7 @@ The thesis stops there; here the attitude of the group's best-spread three stars
 confirmed on every image star with the false-match probability of :mod:`.verify`
 (:class:`.confirm.Confirmer`), and a group that fails leads on to the next ICLim. The guide stars
 are those of a :class:`.pair_database.PairDatabase`, or of a sub-catalogue of it
-(:func:`sub_catalogue`, seed 002 §5.2's ``MakeCat``).
+(:func:`sub_catalogue`, Jacobs 1995 §5.2's ``MakeCat``).
 """
 
 from __future__ import annotations
@@ -66,7 +66,7 @@ class VanBezooijenOptions:
     Attributes
     ----------
     stars : int
-        Brightest image stars matched (the "observed stars"; 8 in seed 002).
+        Brightest image stars matched (the "observed stars"; 8 in Jacobs 1995).
     verify_stars, centroid_sigma_px, match_radius_px, max_false_match_prob, timeout_s
         As for :class:`.pyramid.PyramidOptions`.
     distance_tolerance_rad : float or None
@@ -330,7 +330,7 @@ def best_triple(obs_vec: NDArray) -> NDArray[np.int64]:
 def match_van_bezooijen(x: ArrayLike, y: ArrayLike, camera: Camera, pdb: PairDatabase, *,
                         focal_tolerance: float = 0.0, options: VanBezooijenOptions | None = None,
                         magnitudes: ArrayLike | None = None) -> MatchOutcome:
-    """Identify image stars with a known camera by van Bezooijen's match groups (seed 002 §3).
+    """Identify image stars with a known camera by van Bezooijen's match groups (Jacobs 1995 §3).
 
     Parameters
     ----------
@@ -395,7 +395,7 @@ def _checked_magnitudes(magnitudes, n: int) -> NDArray | None:
 
 
 def sub_catalogue(pdb: PairDatabase, keep: ArrayLike) -> PairDatabase:
-    """The guide stars of ``keep`` (bool, shape (S,)) and their pairs: seed 002's sub-catalogue
+    """The guide stars of ``keep`` (bool, shape (S,)) and their pairs: Jacobs 1995's sub-catalogue
     (§5.2, ``MakeCat`` + ``DistTab``), e.g. the stars of :func:`region_mask`."""
     keep = np.asarray(keep, dtype=bool)
     if keep.shape != (len(pdb.vectors),):

@@ -1,5 +1,5 @@
-"""Lost-in-space identification by the n-vertex match (seed 000 §5.5.4 pp.111-113, Figs. 5.12-5.13,
-Table 5.4; notes ``seed-000.md`` §1.23), n = 3, 4 or 5, for a camera whose focal length is known
+"""Lost-in-space identification by the n-vertex match (Huffman 2006 §5.5.4 pp.111-113, Figs. 5.12-5.13,
+Table 5.4), n = 3, 4 or 5, for a camera whose focal length is known
 (to a few percent at most).
 
 A modified Pyramid that matches all n stars of a set at once:

@@ -1,5 +1,5 @@
-"""Star overlay: identification from a prior attitude (seed 003, Fowler 2013, Ch. 6; notes
-``seed-003.md`` §1.7 and §4 item 6).
+"""Star overlay: identification from a prior attitude (Fowler 2013, Ch. 6
+and §4 item 6).
 
 In the thesis a user drags and rotates the catalog stars, projected with an initial attitude, over
 the detected spots until they sit on them; every star-spot pair within the "feature deviation"
@@ -8,7 +8,7 @@ initial attitude ("attitude deviation") and limited in magnitude. Here the dragg
 
 1. Direct overlay: the catalog stars projected with the prior attitude are confirmed on the
    detections (:class:`.confirm.Confirmer`, which refits on its loose-radius matches). This
-   confirms a good attitude (seed 003's use) and ends the search when the prior is close.
+   confirms a good attitude (Fowler 2013's use) and ends the search when the prior is close.
 2. Vote: for rolls about the boresight spaced over the prior's uncertainty, every
    (detection, catalog star) pair votes for the shift of the pattern (gnomonic coordinates of the
    prior's camera frame, bins wide enough for the distortion of a shift that large); the best
@@ -90,14 +90,14 @@ class _Search:
 
 def catalog_star_set(max_mag: float, epoch_jyear: float = 2000.0) -> StarSet:
     """Catalog stars with V <= ``max_mag`` at ``epoch_jyear``, brightest first, to overlay
-    (seed 003's "limit star magnitude")."""
+    (Fowler 2013's "limit star magnitude")."""
     stars = field_stars(float(max_mag), float(epoch_jyear))
     return StarSet(stars.tree, stars.vectors, stars.rows)
 
 
 def match_overlay(x: ArrayLike, y: ArrayLike, camera: Camera, stars: StarSet, prior_rot: Rotation, *,
                   prior_sigma_deg: float, options: OverlayOptions | None = None) -> MatchOutcome:
-    """Identify image stars near a prior attitude by overlaying the catalog (seed 003 Ch. 6).
+    """Identify image stars near a prior attitude by overlaying the catalog (Fowler 2013 Ch. 6).
 
     Parameters
     ----------
@@ -166,7 +166,7 @@ def _gnomonic(v: NDArray) -> NDArray[np.float64]:
 
 def _crop(stars: StarSet, prior_rot: Rotation, camera: Camera, span: float) -> NDArray[np.float64]:
     """Catalog vectors in the prior's camera frame within the field plus ``span``, shape (M, 3)
-    (seed 003's "attitude deviation" crop)."""
+    (Fowler 2013's "attitude deviation" crop)."""
     radius = min(math.radians(camera.fov_diagonal_deg) / 2.0 + span, 1.2)
     idx = np.asarray(stars.tree.query_ball_point(prior_rot.inv().apply([0.0, 0.0, 1.0]),
                                                  2.0 * math.sin(radius / 2.0)), dtype=np.int64)

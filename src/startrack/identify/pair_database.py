@@ -1,7 +1,7 @@
-"""The star-pair directory with a k-vector (seed 000 §5.5.4; notes ``seed-000.md`` §1.14-1.15).
+"""The star-pair directory with a k-vector (Huffman 2006 §5.5.4).
 
 For a camera of known field of view: a uniformly thinned catalog (at most ``stars_per_field``
-brightest stars around every pointing, seed 000's reduced onboard catalog), every pair of those
+brightest stars around every pointing, Huffman 2006's reduced onboard catalog), every pair of those
 stars closer than the field's diagonal, sorted by their angle, and a k-vector over the angles.
 A range query on the angle returns the candidate pairs of an image star pair in O(1). Built on
 demand into the user cache (DESIGN.md, Data).

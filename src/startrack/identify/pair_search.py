@@ -1,6 +1,6 @@
 """The search loop shared by the pivoting matchers on the star-pair directory (angle method with
-pivoting, Cole & Crassidis triangles, the n-vertex match; notes ``seed-000.md`` §1.16-1.17,
-1.20-1.21, 1.23).
+pivoting, Cole & Crassidis triangles, the n-vertex match;
+Huffman 2006 §5.4.1, §5.5.2, §5.4.2-1.21, 1.23).
 
 A matcher supplies, for a set of image stars, a *table* of catalog stars: one row per candidate
 correspondence, one column per image star of the set. The loop here
@@ -8,7 +8,7 @@ correspondence, one column per image star of the set. The loop here
 1. takes sets of the brightest image stars in the generalised Pyramid order
    (:func:`.star_order.ordered_star_sets`);
 2. while the table has several rows (or fewer than three columns), *pivots* on a further image
-   star (seed 000 §5.4.1): the matcher's ``extend`` joins the table with the new star's
+   star (Huffman 2006 §5.4.1): the matcher's ``extend`` joins the table with the new star's
    candidates on the stars they share, then the new star's angles to every star of the row and
    the handedness of the first two and the new star must fit the image
    (:func:`consistent_rows`). A pivot star that empties the table is taken as false or missing
@@ -199,7 +199,7 @@ def hypothesis(ctx: SearchContext, camera: Camera, x: NDArray, y: NDArray, row: 
 
 
 def extend_by_angle(ctx: SearchContext, table: NDArray, img: tuple[int, ...], new: int) -> NDArray[np.int64]:
-    """Pivot on the first star of the set (seed 000 §5.4.1): the catalog pairs of image pair
+    """Pivot on the first star of the set (Huffman 2006 §5.4.1): the catalog pairs of image pair
     (img[0], new) that share their first star with a row."""
     return join_rows(table, [0], ctx.pairs_fitting(img[0], new))
 

@@ -320,7 +320,7 @@ def deleted_residuals(system):
 
 @njit(cache=True)
 def q_method(obs, ref):
-    """Davenport's q-method for equal weights (as :mod:`startrack.attitude.qmethod`; seed 000
+    """Davenport's q-method for equal weights (as :mod:`startrack.attitude.qmethod`; Huffman 2006
     §6.1.3): the scalar-last quaternion (4,) of R with R ref_i ~ obs_i (rows of (N, 3) arrays of
     unit vectors) and R itself (3, 3). The four-star fits of the pattern search and the final
     attitude of a solve."""

@@ -1,6 +1,6 @@
 """Lost-in-space identification by triangles on the star-pair directory: the Pyramid of Mortari,
-Junkins & Samaan (2001), as seed 000 §5.4-5.5 and seed 004 use it (notes ``seed-000.md``
-§1.15-1.17, 1.23), for a camera whose focal length is known (to a few percent at most).
+Junkins & Samaan (2001), as Huffman 2006 §5.4-5.5 (§5.5.2, §5.5.4) and Samaan 2002 use it, for a
+camera whose focal length is known (to a few percent at most).
 
 1. Triads of the brightest image stars in Mortari's order (:func:`pyramid_triads`), which
    changes stars as fast as possible so one missing or false star does not stall the search.
@@ -44,7 +44,7 @@ class PyramidOptions:
 
 
 def pyramid_triads(n: int) -> Iterator[tuple[int, int, int]]:
-    """Triads of ``n`` stars (0 = brightest) in Mortari's Pyramid order (notes seed-000 §1.17)."""
+    """Triads of ``n`` stars (0 = brightest) in Mortari's Pyramid order (Huffman 2006 §5.5.2)."""
     for dj in range(1, n - 1):
         for dk in range(1, n - dj):
             for i in range(n - dj - dk):

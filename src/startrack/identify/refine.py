@@ -179,7 +179,7 @@ def leave_one_out_residuals(matrix_cam_from_icrs: NDArray, camera: Camera, ref_i
 
 
 def wahba_equal_weights(observed: NDArray, reference: NDArray) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Attitude of equally weighted vector pairs by Davenport's q-method (seed 000 §6.1.3;
+    """Attitude of equally weighted vector pairs by Davenport's q-method (Huffman 2006 §6.1.3;
     :func:`.pose_kernel.q_method`, the single-problem, compiled form of
     :func:`startrack.attitude.qmethod.q_method_quaternions`).
 

@@ -1,4 +1,4 @@
-"""The order in which lost-in-space matchers pick sets of image stars (notes ``seed-000.md`` §1.17).
+"""The order in which lost-in-space matchers pick sets of image stars (Huffman 2006 §5.5.2).
 
 Mortari's Pyramid order for triads, ``(i, i + dj, i + dj + dk)`` with the gaps in the outer loops
 and the first star in the inner one, generalised to sets of any size: the gaps between

@@ -1,5 +1,5 @@
-"""The catalog triangle directory of Cole & Crassidis (seed 000 §5.4.2; notes ``seed-000.md``
-§1.20-1.21), built from a star-pair directory.
+"""The catalog triangle directory of Cole & Crassidis (Huffman 2006 §5.4.2),
+built from a star-pair directory.
 
 Every triple of directory stars whose three pairs are all in the pair directory (all sides
 shorter than the field's diagonal), with its area and polar moment (planar or spherical, see

@@ -1,5 +1,5 @@
 """Area and polar moment of star triangles, planar and spherical (Cole & Crassidis 2004, 2006;
-seed 000 §5.4.2, notes ``seed-000.md`` §1.20-1.21), and their 1-sigma errors from centroid noise.
+Huffman 2006 §5.4.2), and their 1-sigma errors from centroid noise.
 
 Triangles are three unit vectors, arrays (..., 3, 3) (vertex, component).
 

@@ -1,6 +1,6 @@
 """Lost-in-space identification by triangle area and polar moment, planar (Cole & Crassidis 2006)
-or spherical (Cole & Crassidis 2004), as seed 000 §5.4.2 describes them (notes ``seed-000.md``
-§1.20-1.21), for a camera whose focal length is known (to a few percent at most).
+or spherical (Cole & Crassidis 2004), as Huffman 2006 §5.4.2 describes them,
+for a camera whose focal length is known (to a few percent at most).
 
 Candidate catalog triangles come from a **triangle directory** (:mod:`.triangle_database`: every
 catalog triangle of the pair directory's stars, sorted by area with a k-vector), not from the pair

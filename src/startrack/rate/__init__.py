@@ -2,9 +2,9 @@
 
 Convention: ``omega_rad_s`` is the camera's angular velocity relative to ICRS in camera-frame
 components (``rot_cam_from_icrs(t + dt) = exp(-[omega x] dt) rot_cam_from_icrs(t)``); see
-:mod:`.estimate`. Modules: :mod:`.from_attitudes` (seed 004 eq. 3), :mod:`.from_vectors`
+:mod:`.estimate`. Modules: :mod:`.from_attitudes` (Samaan 2002 eq. 3), :mod:`.from_vectors`
 (frame-to-frame, no catalog), :mod:`.filter` (a constant-rate Kalman filter), and the streak
-chain of seed 001 chapters 3-4.
+chain of Sease 2013 chapters 3-4.
 """
 
 from __future__ import annotations

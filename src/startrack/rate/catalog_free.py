@@ -1,15 +1,15 @@
 """Catalog-free rate from one streaked image: OLAE between the two endpoint sets.
 
-Seed 001 ch. 4 "Catalog-Free Rate Estimation", eqs. 4.1-4.10 (notes seed-001-004 §1.21). The
+Sease 2013 ch. 4 "Catalog-Free Rate Estimation", eqs. 4.1-4.10 (Sease 2013 Ch.4 Eq. 4.1–4.10). The
 group-A end of each streak (camera vector r_i) and its group-B end (b_i) are the same star at
 the two ends of the exposure, so the relative attitude ``Delta = rot_cam_B_from_cam_A`` solves
 Wahba's problem between the two sets with no catalog and no identification. OLAE
 (:mod:`startrack.attitude.olae`) solves it linearly and gives a residual ``e_i`` per streak
 (eq. 4.7); streaks whose residual is an outlier (an RSO, an overlapping pair, a bad end) are
 dropped and the rate solved again. The rate is ``omega = -rotvec(Delta) / T`` (camera frame,
-rad/s, eqs. 4.9-4.10 with the frame change of notes §7 item 12).
+rad/s, eqs. 4.9-4.10 with the frame change of Sease 2013).
 
-Outlier rule: seed 001 flags ``|e_i - mean| > k sigma`` with k = 2.5 and warns that a lower
+Outlier rule: Sease 2013 flags ``|e_i - mean| > k sigma`` with k = 2.5 and warns that a lower
 bound on sigma is needed when all streaks agree closely. Here the centre and spread are the
 median and the MAD-based sigma (one outlier does not inflate them), and sigma is at least
 ``floor_rad``.
@@ -150,7 +150,7 @@ def consensus(
 ) -> Consensus:
     """The rotation most streaks agree with, from pairs of the first ``candidates`` streaks.
 
-    Not in seed 001 (whose k-sigma rejection starts from all streaks and fails when the bad ones
+    Not in Sease 2013 (whose k-sigma rejection starts from all streaks and fails when the bad ones
     are many: the fragments of faint streaks, stars leaving the field). Each pair of the
     ``candidates`` first streaks (put the most precise first), with the second one's ends
     either way round, proposes a rotation (OLAE on two streaks); every streak whose ends fit it,

@@ -1,6 +1,6 @@
 """Streak endpoint detectors and sub-pixel endpoint localisation.
 
-Seed 001 §3 eqs. 3.1-3.16 (notes seed-001-004 §1.11-1.15). A streak's two ends respond like
+Sease 2013 §3 eqs. 3.1-3.16 (Sease 2013 Eq. 3.1–3.4, Eq. 3.14–3.16). A streak's two ends respond like
 corners, so a cornerness map over its region of interest (ROI) has two peaks:
 
 - gradients with the 3 x 3 derivative-of-Gaussian kernel, sigma 0.5 (eq. 3.4; the samples of
@@ -14,8 +14,8 @@ corners, so a cornerness map over its region of interest (ROI) has two peaks:
 - **Trajkovic-4 / -8** (eqs. 3.9-3.13, Trajkovic and Hedley 1998): the simple cornerness
   ``min_lines r`` over the lines through the pixel (horizontal and vertical; plus the two
   diagonals for 8 neighbours), ``r = (I_A - I_C)^2 + (I_A' - I_C)^2``, refined by the
-  inter-pixel approximation between adjacent lines (with the index of eq. 3.12 corrected, notes
-  §7 item 9). The seed's two-resolution candidate search is a speed-up that a single ROI does
+  inter-pixel approximation between adjacent lines (with the index of eq. 3.12 corrected,
+  Sease 2013). The seed's two-resolution candidate search is a speed-up that a single ROI does
   not need, so the cornerness is computed at full resolution on the (lightly smoothed) ROI.
 
 Localisation (eqs. 3.14-3.16): non-maximum suppression (strictly greater than the 8
@@ -27,9 +27,9 @@ streaks): each end is the strongest peak near an end of the path, peaks along th
 (false corners on the body: Trajkovic-4 makes them as strong as the ends on diagonal streaks)
 are ignored, and a peak off the path (a crossing, a non-star) rejects the ROI. Then the centre of
 intensity of the clipped cornerness in a (2N + 1)^2 window, with the coordinate weights eq. 3.15
-omits (notes §7 item 10).
+omits (Sease 2013).
 
-Every Gaussian smoothing pulls the peaks inward along the streak (seed 001 p.40): a bias for a
+Every Gaussian smoothing pulls the peaks inward along the streak (Sease 2013 p.40): a bias for a
 camera and detector, removed by moving both ends outward along the streak. On the pixel grid it
 depends on the streak's direction (Trajkovic-4: 1.2 px along the axes, 2.3 px on the diagonals),
 so :func:`calibrate_bias_model` fits it as harmonics of the direction (:class:`EndpointBias`);
@@ -48,7 +48,7 @@ from ..errors import InvalidInputError
 
 DETECTORS = ("harris", "min_eigenvalue", "trajkovic4", "trajkovic8")
 SEED_HARRIS_K = 0.15
-"""Seed 001's hand-tuned Harris constant (p.24)."""
+"""Sease 2013's hand-tuned Harris constant (p.24)."""
 HARRIS_K = 0.04
 """Our default: with a 1-pixel integration window it gives endpoints about 1.5x more precise
 than the seed's 0.15 on our simulated streaks (benchmarks/streak_benchmark.py, docs)."""
@@ -85,7 +85,7 @@ def structure_tensor(roi: NDArray[np.float64], derivative_sigma_px: float = 0.5,
 
 
 def harris_response(roi: NDArray[np.float64], k: float = HARRIS_K, **tensor) -> NDArray[np.float64]:
-    """Harris cornerness ``det A - k (tr A)^2`` (seed 001 eq. 3.8)."""
+    """Harris cornerness ``det A - k (tr A)^2`` (Sease 2013 eq. 3.8)."""
     a, b, c = structure_tensor(roi, **tensor)
     return a * c - b * b - k * (a + c) ** 2
 
@@ -219,7 +219,7 @@ def streak_path(roi: ArrayLike, mask: ArrayLike | None = None, fraction: float =
 
     The ROI is smoothed, the pixels above ``fraction`` of its maximum (inside ``mask``) are
     labelled and the brightest component (largest sum) is the streak; its principal axis and a
-    weighted parabola across it give the path (curved streaks: seed 001 p.35). None when the
+    weighted parabola across it give the path (curved streaks: Sease 2013 p.35). None when the
     ROI has no positive pixel.
     """
     img = ndimage.gaussian_filter(np.asarray(roi, dtype=float), smooth_sigma_px, mode="nearest")
@@ -418,7 +418,7 @@ def calibrate_bias(measured_xy: ArrayLike, reference_xy: ArrayLike | None = None
     mean of :func:`along_streak_offsets`, negated), or without truth from each streak's
     moment length (:class:`.streak_detect.StreakRegion`): half the median of
     ``length_moments - measured length``, which works on the flight images themselves
-    (seed 001 ch. 6 proposes using the unbiased streak middle the same way).
+    (Sease 2013 ch. 6 proposes using the unbiased streak middle the same way).
     """
     measured = np.asarray(measured_xy, dtype=float)
     offsets, _ = _inward_offsets(measured, reference_xy, length_moments_px)

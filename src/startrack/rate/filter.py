@@ -1,7 +1,7 @@
 """A constant-rate attitude filter over a sequence of frames (error-state Kalman filter).
 
-Seed 004 step 6 suggests filtering the frame-to-frame rate (notes seed-001-004 §2.2: "optionally
-filter, e.g. with an alpha-beta or a Kalman filter"); seed 002's predictor (§4.1.8) extrapolates
+Samaan 2002 step 6 suggests filtering the frame-to-frame rate (Samaan 2002 Eq. 1–3: "optionally
+filter, e.g. with an alpha-beta or a Kalman filter"); Jacobs 1995's predictor (§4.1.8) extrapolates
 each angle with fixed coefficients. This is the small multiplicative filter both point to: the
 state is the attitude ``A = rot_cam_from_icrs`` and the camera-frame rate omega, the error state
 ``x = (dtheta, domega)`` with ``A_true = exp(dtheta) A`` (camera frame), and over a step dt

@@ -1,14 +1,14 @@
 """Angular rate from two or more attitudes.
 
-Seed 004 step 6 eq. 3 (notes seed-001-004 §2.2) and seed 001 eqs. 3.24-3.27 (§1.20): with
+Samaan 2002 step 6 eq. 3 (Samaan 2002 Eq. 1–3) and Sease 2013 eqs. 3.24-3.27 (§1.20): with
 ``Delta = C(t + dt) C(t)^T`` (C = rot_cam_from_icrs as a matrix), the kinematics
 ``dC/dt = -[omega x] C`` give
 
-    [omega x] ~ (I - Delta) / dt                    (seed 004, first order)
+    [omega x] ~ (I - Delta) / dt                    (Samaan 2002, first order)
     omega = -log(Delta) / dt = -rotvec(Delta) / dt  (exact for a constant rate)
 
-The first-order matrix is only nearly skew-symmetric; its skew part is taken (notes §7 item
-19). The exact form is the default; seed 001's principal angle and axis (``Phi = acos((tr Delta
+The first-order matrix is only nearly skew-symmetric; its skew part is taken (Sease 2013 item
+19). The exact form is the default; Sease 2013's principal angle and axis (``Phi = acos((tr Delta
 - 1) / 2)``, ``[a x] = (Delta - Delta^T) / (2 sin Phi)``) are the same log map, computed stably
 by scipy.
 
@@ -43,7 +43,7 @@ def rate_between(
 ) -> NDArray[np.float64]:
     """Camera-frame rate (rad/s), shape (3,) or (M, 3), turning ``rot_before`` into ``rot_after``.
 
-    ``first_order=True`` gives seed 004's eq. 3, ``vex(skew((I - Delta) / dt))``, which is biased
+    ``first_order=True`` gives Samaan 2002's eq. 3, ``vex(skew((I - Delta) / dt))``, which is biased
     by ~|omega dt|^2 / 6 relative; the default is the exact log map.
     """
     dt = np.asarray(dt_s, dtype=float)

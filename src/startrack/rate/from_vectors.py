@@ -1,11 +1,11 @@
 """Angular rate from the same stars seen in two frames, without a catalog.
 
-Seed 000 §5.5.1 / §7.2 (notes §1.18, §1.30-1.31: the relative attitude between frames and the
-rate it implies) and seed 004 step 6. The camera vectors of N stars at t_a (``vectors_a``) and at
+Huffman 2006 §5.5.1 / §7.2 (§1.30-1.31: the relative attitude between frames and the
+rate it implies) and Samaan 2002 step 6. The camera vectors of N stars at t_a (``vectors_a``) and at
 t_b (``vectors_b``) are a Wahba problem whose solution is the relative attitude
 ``Delta = rot_cam_b_from_cam_a`` (``b_i ~ Delta a_i``); the rate is ``-rotvec(Delta) / dt``.
-Both sets are noisy, so the effective per-star sigma is ``sqrt(sigma_a^2 + sigma_b^2)`` (notes
-§1.27) and the rate covariance is the QUEST covariance of Delta over dt^2.
+Both sets are noisy, so the effective per-star sigma is ``sqrt(sigma_a^2 + sigma_b^2)``
+(Sease 2013) and the rate covariance is the QUEST covariance of Delta over dt^2.
 
 :func:`match_frames` associates two unidentified star lists first: mutual nearest neighbours
 after turning frame a by a predicted rotation (from a previous rate, or the identity), then a

@@ -1,10 +1,10 @@
 """Splitting streak endpoints into the exposure-start and exposure-end sets.
 
-Seed 001 §3 "Isolating Endpoint Groups", eqs. 3.17-3.19 (notes seed-001-004 §1.16). Both ends
+Sease 2013 §3 "Isolating Endpoint Groups", eqs. 3.17-3.19 (Sease 2013 Eq. 3.17–3.19). Both ends
 of a streak are equally far from the projected centre of rotation (CoR), so every streak's
 perpendicular bisector passes through it; with unit directions ``d_i`` and midpoints ``c_i`` the
 CoR X solves ``d_i . X = d_i . c_i`` in the least-squares sense (the seed's printed system eq.
-3.18 has an index typo; notes §7 item 11). Then, with ``V_c = c_i - X`` and ``V_1 = p_i1 - c_i``,
+3.18 has an index typo; Sease 2013). Then, with ``V_c = c_i - X`` and ``V_1 = p_i1 - c_i``,
 the sign of the z component of ``V_c x V_1`` is the same for all the ends of one exposure time
 (eq. 3.19): every streak turns the same way about X.
 
@@ -47,7 +47,7 @@ class CentreOfRotation:
     direction : ndarray, shape (2,)
         Dominant streak direction (unit (x, y), sign fixed so its largest component is positive).
     residual_px : ndarray, shape (N,)
-        Distance of the centre from each streak's bisector (the RSO indicator of seed 001 eqs.
+        Distance of the centre from each streak's bisector (the RSO indicator of Sease 2013 eqs.
         4.11-4.13); NaN when parallel.
     """
 

@@ -1,6 +1,6 @@
-"""Objects that move unlike the stars: the three RSO indicators of seed 001 chapter 4.
+"""Objects that move unlike the stars: the three RSO indicators of Sease 2013 chapter 4.
 
-Seed 001 ch. 4 "RSO Indicators", eqs. 4.11-4.15 (notes seed-001-004 §1.22). Every star streak
+Sease 2013 ch. 4 "RSO Indicators", eqs. 4.11-4.15 (Sease 2013 Ch.4 Eq. 4.11–4.15). Every star streak
 of one image is the same rotation seen at a different place; a resident space object (RSO), an
 overlapping pair or a corrupted streak is not. Per streak, from the camera vectors r_i and b_i
 of its two ends:
@@ -28,7 +28,7 @@ squares over the pairs ``n_i x n_j``, then least squares on the streaks within
 Decision (seed: ``|x - mean| > k sigma``, k = 2.5): a streak is flagged when
 ``|x_i - median| / max(1.4826 MAD, sigma_i) > k``, where ``sigma_i`` is the scatter that
 streak's endpoint covariance predicts for the indicator (propagated below); this per-streak
-floor is the seed's "lower bound on the variance" (notes §1.22), which it characterises on
+floor is the seed's "lower bound on the variance" (Sease 2013 Ch.4 Eq. 4.11–4.15), which it characterises on
 RSO-free images. The end precision used is at least :data:`ENDPOINT_FLOOR_PX`.
 
 A streak with an end within ``edge_margin_px`` of the image border may be cut by it: its end
@@ -53,7 +53,7 @@ ENDPOINT_FLOOR_PX = 0.1
 """Smallest end precision (1 sigma, px) the indicators assume. The segment fit's sigma of a
 bright streak (~0.01 px) counts photon noise only; its ends were measured 0.027 px rms (max
 0.12 px) from the simulator's truth on RSO-free frames of the Table 4.4 campaign, and 0.1 px is
-the accuracy limit of centroiding in seed 004 (notes §2.1). Below it, the k-sigma rule would
+the accuracy limit of centroiding in Samaan 2002. Below it, the k-sigma rule would
 flag the tail of the stars' own scatter."""
 EDGE_MARGIN_PX = 4.0
 """An end closer than this to the image border may be cut by it (3 sigma of a 1-px PSF and the

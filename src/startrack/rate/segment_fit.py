@@ -1,6 +1,6 @@
 """Streak ends by fitting a blurred line segment to the pixels (robust at low per-pixel SNR).
 
-Not in seed 001, which uses corner detectors (:mod:`.endpoints`); those need a streak whose
+Not in Sease 2013, which uses corner detectors (:mod:`.endpoints`); those need a streak whose
 pixels stand well above the noise: on a catalog frame with the faint streaks of a 12-degree
 field (a few counts per pixel over a noise of 6) the cornerness map has tens of peaks on the
 noise and the ends are lost. A star moving uniformly during the exposure draws a segment from

@@ -1,5 +1,5 @@
-"""The smear of a streaked frame and the limits of the Tracker's streak mode (issue 19; seed 004
-Table 1; seed 001 notes §5 item 9): the smear measured in an image before there is a rate, the
+"""The smear of a streaked frame and the limits of the Tracker's streak mode (issue 19; Samaan 2002
+Table 1; Sease 2013 ): the smear measured in an image before there is a rate, the
 smear limits an exposure sets, and whether a streak frame's rate is precise enough to predict the
 next frame by. Used by :class:`startrack.track.Tracker`."""
 
@@ -22,7 +22,7 @@ class SmearLimits:
     pixel_arcsec : float
         One pixel at the boresight.
     max_rate_deg_s : float
-        Largest rate across the boresight that smears a star by at most 0.1 px (seed 004
+        Largest rate across the boresight that smears a star by at most 0.1 px (Samaan 2002
         Table 1, :func:`startrack.simulate.snr.max_rate_rad_s`).
     streak_on_px, streak_on_deg_s, streak_off_px, streak_off_deg_s : float
         The smear (px) at which the Tracker enters streak mode and leaves it again, and the rates

@@ -1,6 +1,6 @@
 """Streak identification and separation: threshold, label, one region of interest per streak.
 
-Seed 001 §3 "Streak Identification & Separation" (notes seed-001-004 §1.10): threshold the
+Sease 2013 §3 "Streak Identification & Separation": threshold the
 image, label connected components, keep a bounding box per blob as its region of interest (ROI),
 and do all later work on the ROIs of the original grey image. The thesis thresholds at the
 global image mean, which lets about half of a noisy background through; here the threshold is
@@ -134,7 +134,7 @@ def find_streaks(
     margin_px : int
         Padding of each ROI around its blob.
     rule : {"robust", "mean"}
-        ``"mean"`` thresholds at the image mean as seed 001 does.
+        ``"mean"`` thresholds at the image mean as Sease 2013 does.
     line_filter_px : float
         When > 0, threshold the largest response of blurred-segment filters of this length at
         :data:`LINE_ORIENTATIONS` orientations instead of the Gaussian-smoothed image

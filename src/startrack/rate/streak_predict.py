@@ -3,7 +3,7 @@ first guesses of the streak fit, and which fits agree with the prediction.
 
 Used twice: after a lost-in-space identification, to fit the streaks of every other bright star
 of the field (whether the segmentation found it or not), and in tracking (:mod:`.streak_track`),
-where the previous frame's attitude and rate predict every streak of the new one (seed 004 §2.2:
+where the previous frame's attitude and rate predict every streak of the new one (Samaan 2002 Eq. 1–3:
 windows around the predicted positions only). A predicted streak is skipped when another
 predicted star's path passes within :data:`CROWDED_PX` of it (their light would mix in one
 window).

@@ -1,15 +1,15 @@
-"""The streaked-image chain of seed 001: streaks -> endpoints -> groups -> rate (and attitudes).
+"""The streaked-image chain of Sease 2013: streaks -> endpoints -> groups -> rate (and attitudes).
 
-Seed 001 §3-4 (notes seed-001-004 §1.23). :func:`measure_streaks` finds the streaks
+Sease 2013 §3-4 (Sease 2013 Ch.3–4). :func:`measure_streaks` finds the streaks
 (:mod:`.streak_detect`), locates both ends of each (by default a blurred-segment fit,
 :mod:`.segment_fit`, which works on faint catalog streaks; or the seed's corner detectors,
 :mod:`.endpoints`) and groups them into the two exposure times (:mod:`.grouping`, then the
 rotation most streaks agree with, :func:`.catalog_free.consensus`). Then either
 
-- :func:`streak_rate` (seed 001 ch. 4, no catalog): OLAE between the groups with outlier
+- :func:`streak_rate` (Sease 2013 ch. 4, no catalog): OLAE between the groups with outlier
   rejection (:mod:`.catalog_free`), a trust check (:mod:`.trust`: no rate when too few streaks
   agree or its uncertainty exceeds 5 %) and the three RSO indicators (:mod:`.rso`); or
-- :func:`streak_attitudes` (seed 001 ch. 3): identify the group-A ends lost-in-space against the
+- :func:`streak_attitudes` (Sease 2013 ch. 3): identify the group-A ends lost-in-space against the
   catalog, reuse the same identities for the group-B ends (they are the same stars), solve the
   attitude at both ends (ESOQ2, as the seed) and take the rate between them
   (:mod:`.from_attitudes`).
@@ -20,7 +20,7 @@ chosen (``time_order_known``); without one, group A is taken as the start.
 
 :func:`choose_mode` is the automatic switch between point-star and streak processing: streaks
 shorter than about 10 % of the field of view approach the point-star regime where the corner
-detectors fail (seed 001 p.37-38), so the point-star solver is used there.
+detectors fail (Sease 2013 p.37-38), so the point-star solver is used there.
 """
 
 from __future__ import annotations
@@ -195,7 +195,7 @@ def measure_streaks(
                                  kept, empty, empty, None, rejected)
     ends = np.array(ends)
     # A centre farther than ~2 focal lengths (spin axis > 63 deg from the boresight) is too
-    # poorly fixed by nearly parallel bisectors: use the parallel forms (seed 001's trigger).
+    # poorly fixed by nearly parallel bisectors: use the parallel forms (Sease 2013's trigger).
     far = 1e5 if camera is None else 2.0 * camera.fx
     cor = centre_of_rotation(ends[:, 0], ends[:, 1], max_distance_px=far)
     agree = np.ones(len(kept), dtype=bool)
@@ -243,7 +243,7 @@ def _checked_groups(ends: NDArray, cor: CentreOfRotation, camera: Camera) -> tup
 
 @dataclass(frozen=True)
 class StreakRate:
-    """Catalog-free rate of a streaked image (seed 001 ch. 4), with the RSO indicators.
+    """Catalog-free rate of a streaked image (Sease 2013 ch. 4), with the RSO indicators.
 
     ``rate`` is ``omega`` from the start set to the end set (camera frame, rad/s; ``rate.used``
     marks the streaks kept); ``vectors_start`` / ``vectors_end`` (N, 3) are the camera vectors of
@@ -357,7 +357,7 @@ def _checked(fit: CatalogFreeRate, meas: StreakMeasurement, camera: Camera, vect
 
 @dataclass(frozen=True)
 class StreakAttitudes:
-    """Attitudes at the two ends of the exposure and the rate between (seed 001 ch. 3)."""
+    """Attitudes at the two ends of the exposure and the rate between (Sease 2013 ch. 3)."""
 
     status: Status
     reason: str

@@ -1,5 +1,5 @@
 """Lost-in-space on a streaked frame, then the attitude at mid-exposure and the rate from the
-whole frame (issue 19 items 1-2; seed 001 §5 item 9).
+whole frame (issue 19 items 1-2; Sease 2013 §5 item 9).
 
 1. The streaks are found (:mod:`.streak_find`) and the brightest ``lis_streaks`` fitted
    (:mod:`.streak_fit`).
@@ -23,7 +23,7 @@ whole frame (issue 19 items 1-2; seed 001 §5 item 9).
    most :attr:`StreakOptions.max_rate_uncertainty` of the rate; otherwise the attitude stands
    and the rate says why not.
 
-The catalog-free rate of :func:`.streak_rate.streak_rate` (OLAE, seed 001 ch. 4) stays the
+The catalog-free rate of :func:`.streak_rate.streak_rate` (OLAE, Sease 2013 ch. 4) stays the
 fallback when identification fails: the solution then carries it with status NO_MATCH for the
 attitude. One frame does not tell the time order: give ``prior_omega_rad_s`` (a gyro, the
 previous frame) to order it (``time_order_known``).

@@ -1,5 +1,5 @@
 """Streak mode while tracking: the previous frame's attitude and rate predict every streak of the
-new frame, which is fitted in a window around its prediction only (seed 004 §2.2 step 4 with the
+new frame, which is fitted in a window around its prediction only (Samaan 2002 Eq. 1–3 step 4 with the
 smear of §"The Effect of Image Smear"; no segmentation, no lost-in-space).
 
 1. The brightest ``lis_streaks`` catalog stars of the predicted field (by their expected light

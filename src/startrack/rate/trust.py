@@ -1,6 +1,6 @@
 """Whether a streak rate can be trusted: agreement, misfit and uncertainty of the streaks.
 
-Not in seed 001, whose rate is always reported. On catalog frames a rate from a handful of faint
+Not in Sease 2013, whose rate is always reported. On catalog frames a rate from a handful of faint
 streaks can be confidently wrong (a few percent, mostly the roll about the boresight, which a
 narrow field fixes poorly), so :mod:`.streak_rate` reports one only when enough streaks agree
 (:func:`consistency`) and its covariance (:func:`rate_covariance`) is small enough.

@@ -1,6 +1,6 @@
 """Tracking: identify stars near where the last attitude and rate predict them, and the Tracker
 state machine that chains frames (lost-in-space until it has an attitude, then tracking, back to
-lost-in-space when tracking fails). DESIGN.md §1; seed 004 §2.2, seed 002 §4, seed 000 §8.2."""
+lost-in-space when tracking fails). DESIGN.md §1; Samaan 2002 Eq. 1–3, Jacobs 1995 §4, Huffman 2006 §8.2."""
 
 from __future__ import annotations
 

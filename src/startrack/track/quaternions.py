@@ -8,9 +8,9 @@ floats in a microsecond or two. Quaternions are ``(x, y, z, w)`` tuples, scipy's
 meaning: ``quat_product(p, q)`` is ``Rotation(p) * Rotation(q)`` (q applied first).
 
 * :func:`rotvec_quat` and :func:`quat_rotvec`: the exponential and log maps (the exact form of
-  the constant-rate kinematics, notes seed-001-004 §1.8, and of the rate between two attitudes,
-  seed 004 step 6 eq. 3 / seed 001 eqs. 3.24-3.27, as in :mod:`startrack.rate.from_attitudes`).
-* :func:`fit_quat`: Davenport's q-method (seed 000 §6.1.3, notes §1.25) with equal weights, as
+  the constant-rate kinematics, Sease 2013 Eq. 2.12, and of the rate between two attitudes,
+  Samaan 2002 step 6 eq. 3 / Sease 2013 eqs. 3.24-3.27, as in :mod:`startrack.rate.from_attitudes`).
+* :func:`fit_quat`: Davenport's q-method (Huffman 2006 §6.1.3) with equal weights, as
   :mod:`startrack.attitude.qmethod` with the batch layer and its checks left out.
 """
 

@@ -1,5 +1,5 @@
 """Frame-to-frame identification without a catalog: the relative attitude between two frames
-from their stars alone (seed 000 §5.5.2-5.5.3; notes ``seed-000.md`` §1.19 triangle match and
+from their stars alone (Huffman 2006 §5.5.2-5.5.3 triangle match and
 §1.22 rate match).
 
 * :func:`triangle_match`: triads of the first frame's brightest stars (Mortari's order); the

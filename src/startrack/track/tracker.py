@@ -1,5 +1,5 @@
-"""The Tracker: a state machine over a sequence of frames (DESIGN.md §1; seed 000 §1.33 mode
-logic, seed 004 §2.2 predictive loop, seed 002 §4 tracking).
+"""The Tracker: a state machine over a sequence of frames (DESIGN.md §1; Huffman 2006 §1.3 mode
+logic, Samaan 2002 Eq. 1–3 predictive loop, Jacobs 1995 §4 tracking).
 
 * No attitude yet (or tracking just failed): lost-in-space (:func:`startrack.solve_stars`).
 * An attitude from the previous frame: predict this frame's attitude with the rate (from a gyro
@@ -17,7 +17,7 @@ head's windows predicted from the joint attitude and rate, tracking while at lea
 ``min_stars`` stars, and each step says which heads contributed.
 
 Streaked frames (:meth:`Tracker.update_image` with an exposure time, given or read from the image
-header): the mode switches automatically between point stars and streaks (seed 001 notes §5 item
+header): the mode switches automatically between point stars and streaks (Sease 2013  item
 9) by the length a star smears during the exposure, from the rate (the gyro's or the tracker's,
 ``T (f |omega_xy| + r |omega_z|)`` with r the half-diagonal) or, before there is one, measured in
 the image; with hysteresis, streak mode from :attr:`TrackerOptions.streak_on_px` and point mode
@@ -203,7 +203,7 @@ class Tracker:
         """Detect the stars of an image (array or path) and :meth:`update` with them, or, when
         the stars smear, solve it from its streaks (module docstring).
 
-        ``t_s`` is the frame's time tag: its mid-exposure (seed 004 eq. 6), which the attitude
+        ``t_s`` is the frame's time tag: its mid-exposure (Samaan 2002 eq. 6), which the attitude
         of a streaked frame refers to. The exposure ``streak_exposure_s`` (s; default: the image
         header's ``EXPTIME``, ``EXPOSURE`` or EXIF ``ExposureTime``) enables the mode switching;
         without one every frame is processed as point stars. The step's ``extra`` holds
@@ -219,7 +219,7 @@ class Tracker:
 
         Without a ``detector``, stars are detected with :attr:`TrackerOptions.target_stars`:
         None uses the default k-sigma threshold, a number the dynamic threshold that adapts to
-        reach that many stars (seed 000 §8.2.3).
+        reach that many stars (Huffman 2006 §8.2.3).
         """
         from ..io import read_image
         from ..rate.streak_solve import header_exposure_s
@@ -299,7 +299,7 @@ class Tracker:
         return self._mode
 
     def smear_limits(self, exposure_s: float, width: int, height: int) -> SmearLimits:
-        """The smear diagnostics of an exposure (seed 004 Table 1; module docstring), from the
+        """The smear diagnostics of an exposure (Samaan 2002 Table 1; module docstring), from the
         tracker's camera or, before it has one, a pinhole camera of its FOV for this image size."""
         from ..simulate.snr import max_rate_rad_s
 

@@ -1,5 +1,5 @@
 """Identification by proximity: catalog stars predicted by an attitude, matched to detections in
-windows around them, then the attitude from the matched stars (seed 004 §2.2 steps 2-5; seed 002
+windows around them, then the attitude from the matched stars (Samaan 2002 Eq. 1–3 steps 2-5; Jacobs 1995
 §4.1.4: the search area follows the prediction uncertainty).
 
 The brightest catalog stars predicted inside the image (a few more than there are detections)

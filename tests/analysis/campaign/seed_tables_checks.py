@@ -1,4 +1,4 @@
-"""Checks shared by the tests of the seed 000 / 002 / 004 table levels and their shipped specs.
+"""Checks shared by the tests of the Huffman 2006 / 002 / 004 table levels and their shipped specs.
 
 Each shipped spec must parse, hold the seed's numbers in its ``[[reference]]`` rows with each row
 selecting exactly one cell, and a tiny synchronous run of it (its text edited by

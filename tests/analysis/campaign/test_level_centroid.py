@@ -1,4 +1,4 @@
-"""Level "centroid" on known cases, the truth matching it shares, and its spec (seed 000
+"""Level "centroid" on known cases, the truth matching it shares, and its spec (Huffman 2006
 Table 4.2)."""
 
 from __future__ import annotations

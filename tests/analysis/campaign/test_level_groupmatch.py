@@ -1,4 +1,4 @@
-"""Level "groupmatch" (seed 002's matching trade): the attitude region, the star lists, the
+"""Level "groupmatch" (Jacobs 1995's matching trade): the attitude region, the star lists, the
 judgement of a match, a few trials of each method, and its spec (Tables 3-5 to 3-7)."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Level "photometry": the thresholded weighted sum on known images, and its spec (seed 000
+"""Level "photometry": the thresholded weighted sum on known images, and its spec (Huffman 2006
 Table 5.3)."""
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Level "prefilter": the candidate mask against the normal distribution, a frame's counts, the
-fixed pointing, and its spec (seed 000 Table 7.2)."""
+fixed pointing, and its spec (Huffman 2006 Table 7.2)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Level "rso" on known cases, the Table 4.3 opportunities it renders, and its specs (seed 001
+"""Level "rso" on known cases, the Table 4.3 opportunities it renders, and its specs (Sease 2013
 Tables 4.1-4.4)."""
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from startrack.units import DEG
 
 LEVEL = get_level("rso")
 SMALL = {"width": 512, "height": 512, "fov_deg": 11.4}
-"""The seed 001 camera's 80 arcsec/px on a quarter of its pixels: fast frames for the tests."""
+"""The Sease 2013 camera's 80 arcsec/px on a quarter of its pixels: fast frames for the tests."""
 CAMERA = Camera.from_fov(1024, 1024, fov_deg=22.8)
 SPEC_41_42 = "seed001-tables4.1-4.2-catalog-free-rate"
 SPEC_44 = "seed001-tables4.3-4.4-rso-detection"

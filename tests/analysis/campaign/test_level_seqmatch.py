@@ -1,5 +1,5 @@
 """Level "seqmatch": relative and absolute matching of a short sequence against its truth, and
-its spec (seed 000 Table 8.2)."""
+its spec (Huffman 2006 Table 8.2)."""
 
 from __future__ import annotations
 

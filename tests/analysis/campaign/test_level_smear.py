@@ -1,5 +1,5 @@
 """Level "smear" on known cases, its two error metrics against direct computations, and its spec
-(seed 004 Table 2)."""
+(Samaan 2002 Table 2)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """Level "smearlimit": the rate against the pixel angle, the smear the simulator renders at it,
-and its spec (seed 004 Table 1)."""
+and its spec (Samaan 2002 Table 1)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Level "starcount" against independent counts, and its specs (seed 000 Table 5.1, seed 002
+"""Level "starcount" against independent counts, and its specs (Huffman 2006 Table 5.1, Jacobs 1995
 Fig. 5-1)."""
 
 from __future__ import annotations

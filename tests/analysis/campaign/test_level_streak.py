@@ -1,4 +1,4 @@
-"""Level "streak" on known cases, the streak scenes it draws, and its spec (seed 001 Table 3.1)."""
+"""Level "streak" on known cases, the streak scenes it draws, and its spec (Sease 2013 Table 3.1)."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ from startrack.rate.endpoints import DETECTORS
 
 LEVEL = get_level("streak")
 SMALL = {"width": 512, "height": 512, "fov_deg": 11.4, "calibration_frames": 1}
-"""The seed 001 camera's 80 arcsec/px on a quarter of its pixels: fast frames for the tests."""
+"""The Sease 2013 camera's 80 arcsec/px on a quarter of its pixels: fast frames for the tests."""
 SPEC = "seed001-table3.1-streak-endpoints"
 TABLE_3_1 = {  # the notes' Table 3.1: detector -> (endpoint px 10 %, 50 %; rate % 10 %, 50 %)
     "harris": (0.10, 0.10, 0.69, 0.07), "min_eigenvalue": (0.19, 0.20, 1.20, 0.19),
