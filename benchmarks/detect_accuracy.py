@@ -10,7 +10,7 @@
 2. **Pixel-phase bias**: the mean x error against the sub-pixel phase at SNR 300, for an
    undersampled (0.7 px) and a sampled (1.5 px) PSF; with the weighted sum also over only the
    3 x 3 pixels around the brightest, the classic small-window centroid whose cut wings give
-   seed 000's S-curve bias.
+   Huffman 2006's S-curve bias.
 3. **Detection quality** of each threshold method on frames of stars from SNR 3 to 100:
    completeness per SNR (magnitude) bin and false detections per frame, and detections on
    pure-noise frames.
@@ -155,7 +155,7 @@ def phase_bias(seed: int) -> None:
 
 def box3_centroids(image: np.ndarray):
     """The classic weighted sum over the 3 x 3 pixels around each default detection's
-    brightest pixel (background subtracted): its truncated wings give seed 000's S-curve."""
+    brightest pixel (background subtracted): its truncated wings give Huffman 2006's S-curve."""
     from startrack.detect.windows import extract_windows
     det = StarDetector().detect(image)
     win = extract_windows(image, np.rint(det.x), np.rint(det.y), 3)

@@ -16,7 +16,7 @@ Per image and detector: how many matched stars are detected within :data:`MATCH_
 **unconfirmed** detections (within 2 px of neither a matched nor a Hipparcos star: false
 detections, or real stars fainter than Hipparcos's completeness, about V 8-9), how many of the
 found stars our point-source quality accepts, and the median offset from astrometry.net's
-positions. The openstartracker frames are also run with the seed 000 §4.1 median dark built
+positions. The openstartracker frames are also run with the Huffman 2006 §4.1 median dark built
 from the three frames (their own ``median_image.png`` is truncated). SEP runs in its own
 environment (``peers/detect_env.py``) on the same single-channel images, as in
 ``detect_speed.py``: ``sep.Background`` and ``sep.extract`` at 5 times the global RMS.
@@ -139,7 +139,7 @@ def score(x: np.ndarray, y: np.ndarray, ref: Reference, point: np.ndarray | None
 
 
 def openstartracker_dark() -> np.ndarray:
-    """Seed 000 §4.1's median dark of the three openstartracker frames (the fields differ, so
+    """Huffman 2006 §4.1's median dark of the three openstartracker frames (the fields differ, so
     the median keeps the hot pixels and drops the stars)."""
     return median_frame([load_image(n) for n, folder in IMAGES.items() if folder == OPENSTARTRACKER])
 

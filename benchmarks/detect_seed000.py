@@ -1,4 +1,4 @@
-"""Seed 000 reproductions: WS versus MLE (Table 4.2) and pre-filter time against k (Table 7.2).
+"""Huffman 2006 reproductions: WS versus MLE (Table 4.2) and pre-filter time against k (Table 7.2).
 
 Both run as campaigns of their shipped specs (the experiment lives in the campaign levels;
 ``docs/seed_tables_000_002.md`` describes the conditions and where ours differ):
@@ -34,7 +34,7 @@ from seed_campaign import add_run_arguments, out_for, print_references, run_spec
 TABLE_42 = "seed000-table4.2-ws-vs-mle"
 TABLE_72 = "seed000-table7.2-prefilter-speed"
 SEED_TIMES_42 = {1.0: (5.74, 81.07), 2.0: (5.10, 77.57), 3.0: (2.81, 74.56), 4.0: (1.61, 67.60), 5.0: (0.73, 46.78)}
-"""Seed 000 Table 4.2 (WS s, MLE s per 30-star image, Matlab), for the ratio line."""
+"""Huffman 2006 Table 4.2 (WS s, MLE s per 30-star image, Matlab), for the ratio line."""
 
 
 def time_ratios(trials: pa.Table) -> list[str]:

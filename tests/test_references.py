@@ -23,11 +23,6 @@ REFERENCES = ROOT / "docs" / "references.md"
 NOT_YET_REWRITTEN = (
     # Being edited by other engineers (issue 21 items 1-3) when the rewrite ran; the lead runs
     # /work/prompts/cite_rewrite.py over them afterwards and empties this list.
-    "src/startrack/detect/pipeline.py", "src/startrack/detect/threshold.py", "src/startrack/detect/label.py",
-    "src/startrack/detect/background.py", "src/startrack/detect/blocks.py", "src/startrack/detect/prepare.py",
-    "src/startrack/detect/region_grow.py", "src/startrack/detect/smooth.py", "src/startrack/detect/windows.py",
-    "src/startrack/detect/centroid_moments.py", "src/startrack/detect/frame_kernels.py",
-    "src/startrack/detect/compiled.py", "src/startrack/detect/__init__.py",
     "src/startrack/identify/database.py", "src/startrack/identify/registry.py",
     "src/startrack/identify/image_epoch.py",
     "src/startrack/solve.py", "src/startrack/results.py", "src/startrack/frames.py",

@@ -1,6 +1,6 @@
 """Background level and noise of an image, global or on a coarse grid of tiles.
 
-Seed 000 §4.1 (notes ``seed-000.md`` §1.5) subtracts a dark frame and thresholds at k times the
+Huffman 2006 §4.1 subtracts a dark frame and thresholds at k times the
 noise; a single image has no dark frame, so the level and the noise are estimated from the
 image itself with the robust statistics of :mod:`.robust`.
 

@@ -1,20 +1,20 @@
-"""Centroids from the pixels of a spot: peak, area, intensity-weighted (seed 003 §II.C, notes
-``seed-003.md`` "Centroid methods" 1-3; seed 000 §4.2.2 eq. 4.1, notes §1.8).
+"""Centroids from the pixels of a spot: peak, area, intensity-weighted (Fowler 2013 §II.C,
+its centroid methods 1-3; Huffman 2006 §4.2.2 eq. 4.1).
 
 * ``"peak"`` -- the centre of the brightest pixel; error about 1/sqrt(12) px per axis when the
   star image is smaller than a pixel, more otherwise.
-* ``"area"`` -- the unweighted mean of the spot's pixel centres (seed 003 eq. 3.2), for binary
+* ``"area"`` -- the unweighted mean of the spot's pixel centres (Fowler 2013 eq. 3.2), for binary
   images or unreliable intensities.
-* ``"weighted"`` -- seed 000's weighted sum with the background subtracted,
-  ``sum w_i x_i / sum w_i`` with ``w_i = max(I_i - B_i, 0)`` (seed 003 eq. 3.3): the detector's
+* ``"weighted"`` -- Huffman 2006's weighted sum with the background subtracted,
+  ``sum w_i x_i / sum w_i`` with ``w_i = max(I_i - B_i, 0)`` (Fowler 2013 eq. 3.3): the detector's
   default, measured in :func:`startrack.detect.centroid.measure_spots`.
 * ``"weighted-raw"`` -- the same with the raw pixel values as weights (no background
   subtraction): every pixel's background pulls the centroid towards the centre of the spot's
-  pixel set, which is why seed 000 subtracts a dark frame first.
+  pixel set, which is why Huffman 2006 subtracts a dark frame first.
 
 Each returns :class:`startrack.detect.windows.Centroids`. Uncertainties: ``weighted`` and
 ``weighted-raw`` propagate a uniform pixel noise through the sum (``centroid.sigma_propagated``);
-``peak`` gives sqrt(1/12) px; ``area`` gives seed 000's eq. 4.2 curve (the membership of the
+``peak`` gives sqrt(1/12) px; ``area`` gives Huffman 2006's eq. 4.2 curve (the membership of the
 spot's edge pixels, not the pixel noise, moves it).
 """
 
@@ -43,7 +43,7 @@ def peak_centroid(spots: SpotMeasurements) -> Centroids:
 
 
 def area_centroid(regions: Regions, spots: SpotMeasurements, pixel_noise: NDArray) -> Centroids:
-    """The unweighted mean of the spot's pixel centres (seed 003 eq. 3.2)."""
+    """The unweighted mean of the spot's pixel centres (Fowler 2013 eq. 3.2)."""
     n = regions.counts
     x = regions.sum(regions.x.astype(np.float64)) / n
     y = regions.sum(regions.y.astype(np.float64)) / n

@@ -1,4 +1,4 @@
-"""8-connected clustering of candidate pixels (seed 000 §4.2.1, notes §1.7; seed 003 Fig. 3.2).
+"""8-connected clustering of candidate pixels (Huffman 2006 §4.2.1; Fowler 2013 Fig. 3.2).
 
 A pixel joins the cluster of any of its 8 neighbours that is also above threshold; this is
 ``scipy.ndimage.label`` with a 3 x 3 structuring element, computed by one compiled scan
@@ -118,7 +118,7 @@ def hysteresis_regions(snr: NDArray, detect_sigma: float, grow_sigma: float) -> 
     """Regions of ``snr > grow_sigma`` that reach ``snr > detect_sigma`` somewhere.
 
     Detection at a high threshold with segmentation at a lower one (as in ASTROS / DIGISTAR,
-    seed 000 §4.2.1: seed on the bright core, grow until the neighbours fall below threshold)
+    Huffman 2006 §4.2.1: seed on the bright core, grow until the neighbours fall below threshold)
     keeps more of each star's wings for the centroid without admitting more noise spikes.
     """
     regions = label_regions(threshold_mask(snr, min(grow_sigma, detect_sigma)))

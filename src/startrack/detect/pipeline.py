@@ -179,7 +179,7 @@ def noise_floor(values: NDArray, level: float) -> float:
 # --- threshold and grouping -------------------------------------------------------------------
 
 def group(cfg: StarDetector, mask: NDArray[np.bool_], jump: int) -> Regions:
-    """8-connected labelling, or seed 002's region growing from a jump grid."""
+    """8-connected labelling, or Jacobs 1995's region growing from a jump grid."""
     return grow_regions(mask, jump) if cfg.grouping == "region-grow" else label_regions(mask)
 
 
@@ -261,7 +261,7 @@ def stars_are_sharp(frame: Frame, kept: MeasuredRegions) -> bool:
 
 
 def dynamic_sigma(peak_snr: NDArray, cfg: StarDetector) -> float:
-    """Seed 000 §8.2.3's dynamic threshold for one frame: the lowest k in [sigma, max_sigma]
+    """Huffman 2006 §8.2.3's dynamic threshold for one frame: the lowest k in [sigma, max_sigma]
     that leaves at most ``target_stars`` spots (by their peak significance)."""
     if peak_snr.size <= cfg.target_stars:
         return float(cfg.sigma)
@@ -270,7 +270,7 @@ def dynamic_sigma(peak_snr: NDArray, cfg: StarDetector) -> float:
 
 
 def _prefiltered_regions(cfg: StarDetector, frame: Frame) -> Regions:
-    """Seed 000's single-pixel threshold + 5 x 5 pre-filter (window or grid), at full
+    """Huffman 2006's single-pixel threshold + 5 x 5 pre-filter (window or grid), at full
     resolution, then grouping and the edge filter."""
     data = frame.prepared.data
     h, w = data.shape

@@ -1,4 +1,4 @@
-"""Seed 002's region growing with a jump scan (§2.2.1, notes ``seed-002.md`` §1.3).
+"""Jacobs 1995's region growing with a jump scan (§2.2.1).
 
 The thesis scans only every ``jump``-th row and column for a light pixel (a star of at least 10
 pixels is 3 pixels across, so a jump of 3 cannot miss it), grows a region from each pixel found

@@ -1,7 +1,7 @@
 """The detection image: the frame binned and smoothed, a cheap matched filter.
 
 Thresholding single pixels at k sigma either misses faint spread-out stars (high k) or accepts
-noise spikes (low k); seed 000 §4.1 (notes §1.6) fights the noise spikes with 5 x 5 "at least
+noise spikes (low k); Huffman 2006 §4.1 fights the noise spikes with 5 x 5 "at least
 9 of 25 pixels above threshold" pre-filters. Averaging the image over a window about the size
 of the star image does the same job better: it keeps most of a star's flux while it divides
 the noise by the window's width (a box approximation of the matched filter), and a lone hot

@@ -1,4 +1,4 @@
-"""k-sigma thresholding (seed 000 §4.1, notes ``seed-000.md`` §1.5).
+"""k-sigma thresholding (Huffman 2006 §4.1).
 
 A pixel is a candidate star pixel when its value exceeds the background by more than k times
 the noise. The detector thresholds the detection image (see :mod:`.smooth`) in units of that

@@ -1,7 +1,7 @@
 """Square pixel windows around given positions, and the per-window results of a centroider.
 
 Windowed centroiders (:mod:`.centroid_windowed`, :mod:`.centroid_mle`) and the predictive pass
-(:mod:`.predictive`, seed 004 / notes ``seed-001-004.md`` §2.2 step 4) all work on an (N, S, S)
+(:mod:`.predictive`, Samaan 2002 Eq. 1–3 step 4) all work on an (N, S, S)
 stack of windows cut from the image: ``values[n, j, i]`` is pixel ``(x0[n] + i, y0[n] + j)``.
 Pixels beyond the image border or flagged invalid are NaN, so every reduction over a window
 ignores them the same way.
