@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 
 from ..errors import ImageReadError, InvalidInputError
 from .atomic import write_output
+from .fits_plain import read_plain_fits
 from .limits import check_image_size
 
 _COMMENTARY = ("COMMENT", "HISTORY")
@@ -135,6 +136,9 @@ def read_fits(path: Path, max_pixels: int | None = None) -> tuple[NDArray, dict[
         If the file is truncated, corrupt, too large or holds no image.
     """
     _check_header_length(path)
+    plain = read_plain_fits(path, max_pixels, MAX_HEADER_BLOCKS)
+    if plain is not None:
+        return plain[0], header_to_dict(plain[1]), abs(int(plain[1]["BITPIX"]))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
