@@ -45,7 +45,7 @@ class Detections:
     flux : ndarray, shape (N,)
         Background-subtracted sum of the spot, in the image's units (ADU or electrons).
     sigma_px : ndarray, shape (N,)
-        1-sigma centroid uncertainty per axis, in pixels (seed 000 §4.2.2 eq. 4.2 model).
+        1-sigma centroid uncertainty per axis, in pixels (Huffman 2006 §4.2.2 eq. 4.2 model).
     area_px : ndarray of int, shape (N,)
         Number of pixels above the threshold.
     peak : ndarray, shape (N,)
@@ -139,7 +139,7 @@ class AttitudeSolution:
         Maps ICRS unit vectors to camera-frame vectors.
     covariance_rad2 : ndarray, shape (3, 3) or None
         Covariance of the small-angle attitude error, camera frame, in rad^2 (QUEST model,
-        seed 000 §6.1.3 eq. 6.36).
+        Huffman 2006 §6.1.3 eq. 6.36).
     ra_deg, dec_deg, roll_deg : float
         Boresight and roll in the format of :mod:`startrack.frames` (NaN when unsolved).
     fov_deg : float

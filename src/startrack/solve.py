@@ -37,7 +37,7 @@ __all__ = ["DEFAULT_EPOCH_JYEAR", "DEFAULT_FOV_RANGE_DEG", "FOV_DEG_TOLERANCE", 
 def _solution(problem: SolveRequest, stars: FieldStars, cand: Candidate, t0: float) -> AttitudeSolution:
     """The solution from a verified candidate: refined fit, then the Wahba attitude of all matched
     stars (Davenport's q-method: the same optimum as QUEST) with the QUEST measurement-model
-    covariance (seed 000 §6.1.3), residuals and RA / Dec / roll, in one compiled call
+    covariance (Huffman 2006 §6.1.3), residuals and RA / Dec / roll, in one compiled call
     (:func:`.identify.refine.solution_terms`; the solvers and the covariance are in
     :mod:`startrack.attitude`). The attitude is a rotation matrix inside; the one Rotation is the
     solution's."""

@@ -3,8 +3,8 @@
 Built on demand from the Hipparcos catalog into the user cache (DESIGN.md, Data) and loaded from
 there afterwards.
 
-How it is built (the uniform reduced catalog of seed 000 §5.5.4 and seed 002's sub-catalogue,
-applied per scale; notes ``seed-000.md`` §1.14-1.15):
+How it is built (the uniform reduced catalog of Huffman 2006 §5.5.4 and Jacobs 1995's sub-catalogue,
+applied per scale):
 
 1. Stars to ``max_mag`` (estimated V), at ``epoch_jyear``; stars with a neighbour closer than
    ``blend_fraction`` of a level's FOV are left out of that level's patterns (their centroids

@@ -10,7 +10,7 @@ re-match. The table of what each needs and how fast it is lives in ``docs/identi
 - ``pyramid``, ``angle``, ``triangle-planar``, ``triangle-spherical``, ``nvertex-3``,
   ``nvertex-4``, ``nvertex-5``, ``van-bezooijen``: the seeds' matchers on the star-pair
   directory (:mod:`.pair_database`); they need the field of view to within 5 %.
-- ``overlay``: the catalog overlaid with a prior attitude (seed 003); needs a prior.
+- ``overlay``: the catalog overlaid with a prior attitude (Fowler 2013); needs a prior.
 """
 
 from __future__ import annotations
