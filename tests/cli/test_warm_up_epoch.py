@@ -63,8 +63,8 @@ def test_the_solving_commands_skip_the_collections_of_interpreter_shutdown():
 
     code = ("import atexit, gc, sys\n"
             "atexit.register(lambda: print('frozen at exit:', gc.get_freeze_count() > 0))\n"  # runs after the hook
-            "from startrack.cli.batch_warmup import _no_collection_at_exit\n"
-            "_no_collection_at_exit(); _no_collection_at_exit()\n"
+            "from startrack.cli.process_gc import no_collection_at_exit\n"
+            "no_collection_at_exit(); no_collection_at_exit()\n"
             "print('frozen before:', gc.get_freeze_count() > 0)\n")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
     assert done.stdout.splitlines() == ["frozen before: False", "frozen at exit: True"]

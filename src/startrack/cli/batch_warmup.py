@@ -14,12 +14,12 @@ Exit status 0, 2 on a bad option.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import sys
 import time
 
 from ..camera import Camera
 from ..warm_up import solve_catalog_stars
+from .process_gc import collection_paused, no_collection_at_exit
 
 COMPILE_ESTIMATE_S = 30
 """What compiling every kernel takes on the 2-core reference machine, for the message: 22-44 s
@@ -62,46 +62,11 @@ def warm_up(fov_deg: float | None = None, fov_range_deg: tuple[float, float] | N
     stars are then prepared too."""
     from numba.core import event
 
-    _no_collection_at_exit()
+    no_collection_at_exit()
     notice = _CompileNotice()
-    with event.install_listener("numba:compile", notice.listener), _collection_paused():
+    with event.install_listener("numba:compile", notice.listener), collection_paused():
         solve_catalog_stars(fov_deg, fov_range_deg, camera, epoch=epoch)
     notice.finished()
-
-
-@contextlib.contextmanager
-def _collection_paused():
-    """The garbage collector off while numba loads its registries and the kernels (objects that
-    live as long as the process; collecting them as they come cost about 0.05 s), then as it was."""
-    import gc
-
-    was_enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if was_enabled:
-            gc.enable()
-
-
-_EXIT_HOOK: list[bool] = []
-
-
-def _no_collection_at_exit() -> None:
-    """Spare the process the garbage collections of interpreter shutdown (once per process).
-
-    numba's typing and lowering registries leave some hundred thousand objects that the final
-    collections walk: 0.3-0.4 s of a 1.1-1.5 s ``startrack solve IMAGE`` (measured, 2 cores).
-    ``gc.freeze`` at exit (an atexit hook, so a process that calls the commands in-process, such
-    as a test run, is touched only when it ends) moves them to the permanent generation; atexit
-    hooks and finalizers of objects freed by reference count still run.
-    """
-    if not _EXIT_HOOK:
-        import atexit
-        import gc
-
-        atexit.register(gc.freeze)
-        _EXIT_HOOK.append(True)
 
 
 def _parser() -> argparse.ArgumentParser:

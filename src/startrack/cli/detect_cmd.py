@@ -20,6 +20,7 @@ from ..errors import require
 from ..io import read_image
 from .batch import BATCH_EPILOG, add_batch_options, is_batch
 from .common import add_max_pixels_option, apply_max_pixels_option, positive_int, print_json
+from .process_gc import no_collection_at_exit
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -60,6 +61,7 @@ def table(details: DetectionDetails) -> str:
 def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
     apply_max_pixels_option(args)
+    no_collection_at_exit()
     batch = is_batch(args.image, args.csv)
     image = None if batch else read_image(args.image[0])
     dark = None if args.dark is None else read_image(args.dark).data

@@ -61,9 +61,11 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _run(name: str, argv: list[str]) -> int:
+    from .process_gc import collection_paused
     from .run_context import Terminated, command_context, memory_message
 
-    module = importlib.import_module(SUBCOMMANDS[name][0])
+    with collection_paused():  # the subcommand's modules live as long as the process
+        module = importlib.import_module(SUBCOMMANDS[name][0])
     try:
         with command_context(name):  # inputs protected, SIGTERM raises Terminated, one-line warnings
             return module.main(argv)

@@ -5,12 +5,16 @@ with what the image header says, and the streaks as the solution's detections.""
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..camera import Camera
 from ..results import Detections
-from .streak_solve import StreakOptions, StreakSolution, header_exposure_s, solve_streaked
+
+if TYPE_CHECKING:  # the streak solver is imported by the calls that use it: solve_image imports
+    # this module for every image, and a still frame never needs the solver
+    from .streak_solve import StreakSolution
 
 SMEARED_ELONGATION = 3.0
 """Median elongation (long over short axis of the second moments) of a frame's 10 brightest
@@ -34,6 +38,8 @@ def solve_smeared_image(image, header, *, camera: Camera | None, fov_deg: float 
     """:func:`solve_streaked` for :func:`startrack.solve_image`: the exposure from the image header
     (:func:`header_exposure_s`; without one the rate is per exposure, ``turn_rad``) and the
     pixel aspect as :func:`startrack.solve_stars` takes it (a number fixes it, a range fits it)."""
+    from .streak_solve import StreakOptions, header_exposure_s, solve_streaked
+
     aspect = 1.0 if pixel_aspect is None else (None if isinstance(pixel_aspect, tuple | list) else float(pixel_aspect))
     kwargs = {"camera": camera} if camera is not None else {"fov_deg": fov_deg, "fov_range_deg": fov_range_deg}
     return solve_streaked(image, exposure_s=header_exposure_s(header), epoch=epoch,
