@@ -17,6 +17,8 @@ import argparse
 import sys
 import time
 
+from numpy.typing import NDArray
+
 from ..camera import Camera
 from ..warm_up import solve_catalog_stars
 from .process_gc import collection_paused, no_collection_at_exit
@@ -55,17 +57,25 @@ class _CompileNotice:
 
 
 def warm_up(fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
-            camera: Camera | None = None, epoch: float | None = None) -> None:
+            camera: Camera | None = None, epoch: float | None = None, image: NDArray | None = None,
+            every_detection: bool = False) -> None:
     """Load (or, the first time, compile with a message on stderr) the solver's compiled kernels
     by solving catalog stars with these field-of-view options (checked, as the solvers take them)
     at the catalog ``epoch`` (Julian year; default J2000.0) of the solve to come, whose catalog
-    stars are then prepared too."""
+    stars are then prepared too; and the detector's for frames like ``image`` (its dtype and
+    channels), or for every frame type with ``every_detection``."""
     from numba.core import event
+
+    from ..detect.compiled import warm_up_detect
 
     no_collection_at_exit()
     notice = _CompileNotice()
     with event.install_listener("numba:compile", notice.listener), collection_paused():
         solve_catalog_stars(fov_deg, fov_range_deg, camera, epoch=epoch)
+        if every_detection:
+            warm_up_detect()
+        elif image is not None:
+            warm_up_detect((image.dtype,), channels=image.shape[2] if image.ndim == 3 else 1)
     notice.finished()
 
 
@@ -87,6 +97,6 @@ def main(argv: list[str]) -> int:
     options = fov_kwargs(args)
     t0 = time.perf_counter()
     ensure_database_for(**options)
-    warm_up(**options)
+    warm_up(**options, every_detection=True)
     print(f"startrack is ready: database and compiled kernels loaded in {time.perf_counter() - t0:.1f} s")
     return 0

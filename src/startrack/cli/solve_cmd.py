@@ -94,7 +94,8 @@ def main(argv: list[str]) -> int:
     site = _site(args)
     # the compiled kernels loaded (or compiled, with a message) outside the solve time, and the catalog stars
     # of the image's epoch prepared
-    warm_up(**fov_options, epoch=None if site is not None else _image_epoch(image, solver_options["epoch"]))
+    warm_up(**fov_options, epoch=None if site is not None else _image_epoch(image, solver_options["epoch"]),
+            image=image.data)
     try:
         if site is None:
             solution, ground = solve_image(image, **solver_options), None
@@ -122,7 +123,7 @@ def _batch(args: argparse.Namespace, solver_options: dict, fov_options: dict) ->
         raise InvalidInputError("--site, --latitude-deg and --longitude-deg take one image; leave them out "
                                 "for a batch")
     ensure_database_for(**fov_options)
-    warm_up(**fov_options)
+    warm_up(**fov_options, every_detection=True)  # the images' types are not known yet
     return run_batch(solve_spec(solver_options, args.channel), args.image, as_json=args.json,
                      csv_out=args.csv, jobs=args.jobs)
 

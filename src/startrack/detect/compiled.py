@@ -10,9 +10,11 @@ frame uses, so that no detection time includes it.
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from types import ModuleType
 
 import numpy as np
+from numpy.typing import DTypeLike
 
 
 @functools.cache
@@ -26,17 +28,18 @@ def kernels() -> ModuleType:
     return frame_kernels
 
 
-def warm_up_detect() -> None:
-    """Run the default detector on small uint8, uint16 and float32 frames with a star and a NaN
-    pixel, so that the compiled loops they use are compiled or loaded (free after the first
-    call of a process)."""
+def warm_up_detect(dtypes: Sequence[DTypeLike] = (np.uint8, np.uint16, np.float32), channels: int = 1) -> None:
+    """Run the default detector on a small frame of each of ``dtypes`` (with a star, and a NaN
+    pixel in a float frame; ``channels`` 3 for a colour frame), so that the compiled loops a
+    detection of such frames uses are compiled or loaded (free after the first call of a process)."""
     from .detector import StarDetector
 
     yy, xx = np.mgrid[0:96, 0:96]
     star = 200.0 * np.exp(-((xx - 40.3) ** 2 + (yy - 50.6) ** 2) / 4.5)
     noise = np.random.default_rng(0).normal(20.0, 2.0, (96, 96))
     frame = np.clip(noise + star, 0, 255)
-    float_frame = frame.astype(np.float32)
-    float_frame[3, 5] = np.nan
-    for image in (frame.astype(np.uint8), frame.astype(np.uint16), float_frame):
-        StarDetector().detect(image)
+    for dtype in dtypes:
+        image = frame.astype(dtype)
+        if np.issubdtype(image.dtype, np.floating):
+            image[3, 5] = np.nan
+        StarDetector().detect(np.stack([image] * channels, axis=-1) if channels > 1 else image)
