@@ -14,8 +14,10 @@ Exit status 0, 2 on a bad option.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 import time
+from collections.abc import Iterator
 
 from numpy.typing import NDArray
 
@@ -64,19 +66,36 @@ def warm_up(fov_deg: float | None = None, fov_range_deg: tuple[float, float] | N
     at the catalog ``epoch`` (Julian year; default J2000.0) of the solve to come, whose catalog
     stars are then prepared too; and the detector's for frames like ``image`` (its dtype and
     channels), or for every frame type with ``every_detection``."""
-    from numba.core import event
+    with _announced_compiling():
+        solve_catalog_stars(fov_deg, fov_range_deg, camera, epoch=epoch)
+        _detection(image, every_detection)
 
-    from ..detect.compiled import warm_up_detect
+
+def warm_up_detection(image: NDArray | None = None, every_detection: bool = False) -> None:
+    """The detector's part of :func:`warm_up` alone (for ``startrack detect``)."""
+    with _announced_compiling():
+        _detection(image, every_detection)
+
+
+@contextlib.contextmanager
+def _announced_compiling() -> Iterator[None]:
+    """A block whose numba compilations are announced on stderr (once), with the collector paused."""
+    from numba.core import event
 
     no_collection_at_exit()
     notice = _CompileNotice()
     with event.install_listener("numba:compile", notice.listener), collection_paused():
-        solve_catalog_stars(fov_deg, fov_range_deg, camera, epoch=epoch)
-        if every_detection:
-            warm_up_detect()
-        elif image is not None:
-            warm_up_detect((image.dtype,), channels=image.shape[2] if image.ndim == 3 else 1)
+        yield
     notice.finished()
+
+
+def _detection(image: NDArray | None, every_detection: bool) -> None:
+    from ..detect.compiled import warm_up_detect
+
+    if every_detection:
+        warm_up_detect()
+    elif image is not None:
+        warm_up_detect((image.dtype,), channels=image.shape[2] if image.ndim == 3 else 1)
 
 
 def _parser() -> argparse.ArgumentParser:

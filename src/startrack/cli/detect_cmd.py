@@ -19,8 +19,8 @@ from ..detect.detector import THRESHOLDS
 from ..errors import require
 from ..io import read_image
 from .batch import BATCH_EPILOG, add_batch_options, is_batch
+from .batch_warmup import warm_up_detection
 from .common import add_max_pixels_option, apply_max_pixels_option, positive_int, print_json
-from .process_gc import no_collection_at_exit
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -61,9 +61,9 @@ def table(details: DetectionDetails) -> str:
 def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
     apply_max_pixels_option(args)
-    no_collection_at_exit()
     batch = is_batch(args.image, args.csv)
     image = None if batch else read_image(args.image[0])
+    warm_up_detection(None if image is None else image.data, every_detection=batch)  # compiling announced
     dark = None if args.dark is None else read_image(args.dark).data
     detector = StarDetector(centroid=args.method, threshold=args.threshold, sigma=args.sigma,
                             dark_frame=dark, max_stars=args.max_stars)
