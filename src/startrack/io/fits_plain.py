@@ -24,7 +24,7 @@ from .limits import check_image_size
 BLOCK = 2880
 """A FITS block (bytes)."""
 
-_DTYPES = {8: np.dtype(np.uint8), 16: np.dtype(">u2")}
+_DTYPES: dict[int, np.dtype] = {8: np.dtype(np.uint8), 16: np.dtype(">u2")}
 
 
 def _header_bytes(path: Path, max_blocks: int) -> bytes | None:
