@@ -43,7 +43,8 @@ class _CompileNotice:
             def on_end(inner, ev) -> None:  # noqa: N805
                 pass
 
-        self.listener, self.t0 = Listener(), None
+        self.listener = Listener()
+        self.t0: float | None = None
 
     def started(self) -> None:
         if self.t0 is None:
