@@ -91,7 +91,7 @@ def _announced_compiling() -> Iterator[None]:
 
 
 def _detection(image: NDArray | None, every_detection: bool) -> None:
-    from ..detect.compiled import warm_up_detect
+    from ..detect import warm_up_detect
 
     if every_detection:
         warm_up_detect()

@@ -61,6 +61,7 @@ _EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 5
     "detection_image": ".smooth",
     "significance": ".threshold",
     "extract_windows": ".windows",
+    "warm_up_detect": ".compiled",
 }
 
 __all__ = [
@@ -93,6 +94,7 @@ __all__ = [
     "stands_above_ring",
     "subtract_dark",
     "to_single_channel",
+    "warm_up_detect",
 ]
 
 __getattr__, __dir__ = _lazy_exports(__name__, _EXPORTS)
