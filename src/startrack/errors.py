@@ -40,9 +40,10 @@ def require(value: _T | None, what: str) -> _T:
 
     A result's optional fields (an unsolved solution has no camera) are None only with a failure
     status; code that has checked the status reads them through this, so that a reader and a type
-    checker both see the field cannot be None there. Raises :class:`StartrackError` naming ``what``
-    if it is (a broken invariant, not a user's input).
+    checker both see the field cannot be None there. Raises RuntimeError naming ``what`` if it is:
+    a broken invariant is a bug, not a user's input, so it is not a :class:`StartrackError` (which
+    the CLI reports as a usage error) and it keeps its traceback.
     """
     if value is None:
-        raise StartrackError(f"{what} is not set (the result it belongs to did not succeed)")
+        raise RuntimeError(f"{what} is not set (the result it belongs to did not succeed)")
     return value
