@@ -13,6 +13,7 @@ parse of the same cards, so both paths report the same header.
 from __future__ import annotations
 
 import os
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -44,7 +45,9 @@ def _header_bytes(path: Path, max_blocks: int) -> bytes | None:
 def _plain_layout(header: fits.Header) -> tuple[int, int, int, bool] | None:
     """(width, height, BITPIX, unsigned) of a header this module reads, else None."""
     bitpix, bzero = header.get("BITPIX"), header.get("BZERO", 0)
+    sizes = [header.get("NAXIS1"), header.get("NAXIS2")]
     plain = (header.get("SIMPLE") is True and header.get("NAXIS") == 2 and bitpix in _DTYPES
+             and all(isinstance(n, int) and not isinstance(n, bool) and n > 0 for n in sizes)
              and header.get("BSCALE", 1) == 1 and "BLANK" not in header
              and (bzero == 0 or (bitpix == 16 and bzero == 32768)))
     if not plain:
@@ -77,7 +80,12 @@ def read_plain_fits(path: Path, max_pixels: int | None, max_blocks: int) -> tupl
     head = _header_bytes(path, max_blocks)
     if head is None:
         return None
-    header = fits.Header.fromstring(head.decode("ascii", errors="replace"))
+    with warnings.catch_warnings():  # odd cards: astropy's own read (the other path) says what is wrong
+        warnings.simplefilter("ignore")
+        try:
+            header = fits.Header.fromstring(head.decode("ascii", errors="replace"))
+        except (ValueError, TypeError):
+            return None
     layout = _plain_layout(header)
     if layout is None:
         return None

@@ -142,7 +142,8 @@ def read_fits(path: Path, max_pixels: int | None = None) -> tuple[NDArray, dict[
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            with fits.open(path, memmap=False, lazy_load_hdus=True) as hdus:
+            # our own handle, closed even when astropy fails while opening (it leaks its own then)
+            with open(path, "rb") as fh, fits.open(fh, memmap=False, lazy_load_hdus=True) as hdus:
                 data, header = _image_hdu(hdus, path, max_pixels)
                 data = np.array(data, dtype=data.dtype.newbyteorder("="))
         except ImageReadError:
