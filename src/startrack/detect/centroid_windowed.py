@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.special import erf
 
+from .compiled import window_kernels
 from .windows import Centroids, Windows, fast_median, separable_moments
 
 TOLERANCE_PX = 1e-3
@@ -129,23 +130,13 @@ class _Axes:
 
 def _iterate(axes: _Axes, signal: NDArray, cx: NDArray, cy: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     """The fixed-point (Newton) iteration of the module docstring; returns cx, cy and the last
-    weighted sum. Each step takes the separable weighted moments of the signal."""
-    total = np.zeros(len(cx))
-    for _ in range(MAX_ITERATIONS):
-        at = axes.at(cx, cy)
-        m = separable_moments(signal, at.wx, at.dx, at.wy, at.dy)
-        total = m[:, 0, 0]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            first = np.stack([m[:, 0, 1], m[:, 1, 0]]) / total
-            v = (m[:, 0, 2] + m[:, 2, 0]) / (2.0 * total)
-            gain = np.clip(1.0 / (1.0 + 2.0 * v * axes.inv[:, 0]), 1.0, 4.0)  # 1 / (1 - v / s_w^2)
-        step = first * np.where(np.isfinite(gain), gain, 2.0)
-        step[~np.isfinite(step)] = 0.0
-        np.clip(step, -MAX_STEP_PX, MAX_STEP_PX, out=step)
-        cx += step[0]
-        cy += step[1]
-        if np.all(np.abs(step) < TOLERANCE_PX):
-            break
+    weighted sum. Every window steps until all steps are below :data:`TOLERANCE_PX`; each step
+    takes the separable weighted moments of the signal (one compiled loop,
+    :func:`.window_kernels.windowed_iterate`)."""
+    total = window_kernels().windowed_iterate(
+        np.ascontiguousarray(signal, dtype=np.float64), np.ascontiguousarray(axes.px[:, 0]),
+        np.ascontiguousarray(axes.py[:, 0]),
+        np.ascontiguousarray(axes.inv[:, 0]), cx, cy, MAX_ITERATIONS, TOLERANCE_PX, MAX_STEP_PX)
     return cx, cy, total
 
 

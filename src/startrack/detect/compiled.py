@@ -1,4 +1,5 @@
-"""The detector's compiled loops (:mod:`.frame_kernels`, numba), loaded on first use.
+"""The detector's compiled loops (:mod:`.frame_kernels`, :mod:`.window_kernels`, numba),
+loaded on first use.
 
 Importing :mod:`startrack.cache` points numba's disk cache at startrack's cache folder before
 numba is imported (:mod:`startrack.numba_cache`), and the folder's files are checked once per
@@ -18,14 +19,30 @@ from numpy.typing import DTypeLike
 
 
 @functools.cache
-def kernels() -> ModuleType:
-    """The module of compiled loops, :mod:`.frame_kernels` (numba imported on first call)."""
+def _numba_ready() -> None:
+    """Point numba's disk cache at startrack's folder and check its files (once a process)."""
     from .. import cache, numba_cache  # noqa: F401 - cache configures numba's folder on import
 
     numba_cache.heal(numba_cache.configured_dir())
+
+
+@functools.cache
+def kernels() -> ModuleType:
+    """The module of compiled whole-frame loops, :mod:`.frame_kernels` (numba imported on
+    first call)."""
+    _numba_ready()
     from . import frame_kernels
 
     return frame_kernels
+
+
+@functools.cache
+def window_kernels() -> ModuleType:
+    """The module of the windowed centroider's compiled loops, :mod:`.window_kernels`."""
+    _numba_ready()
+    from . import window_kernels as module
+
+    return module
 
 
 def warm_up_detect(dtypes: Sequence[DTypeLike] = (np.uint8, np.uint16, np.float32), channels: int = 1) -> None:
