@@ -11,7 +11,6 @@ _EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 5
     "flag_doubles": ".doubles",
     "merge_doubles": ".doubles",
     "load_catalog": ".hipparcos",
-    "propagate": ".propagation",
     "StarCatalog": ".star_catalog",
     "fibonacci_sphere": ".thinning",
     "thin_uniform": ".thinning",

@@ -21,20 +21,13 @@ Light-time and relativistic terms (which ERFA's ``starpm`` includes) are below 1
 
 from __future__ import annotations
 
-import warnings
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import InvalidInputError
 from ..frames import radec_to_vector, vector_to_radec
 from ..units import MAS
-
-if TYPE_CHECKING:
-    from astropy.time import Time
-
-    from .star_catalog import StarCatalog
 
 
 class SpaceMotion(NamedTuple):
@@ -47,43 +40,6 @@ class SpaceMotion(NamedTuple):
     pm_radial_mas_yr: NDArray[np.float64]
     distance_scale: NDArray[np.float64]
     """New distance over old distance (the parallax is divided by it)."""
-
-
-def epoch_to_jyear(epoch: float | Time) -> float:
-    """An epoch as a Julian year (TDB): a float is taken as is, a ``Time`` via ``.tdb.jyear``.
-
-    ERFA's "dubious year" warning (no leap-second table for future UTC dates) is silenced here:
-    unknown future leap seconds shift the epoch by seconds, about 1 micro-arcsecond of motion
-    even for Barnard's star.
-    """
-    if not isinstance(epoch, float | int):
-        jyear = _time_jyear(epoch)
-        if jyear is not None:
-            return jyear
-    try:
-        value = float(epoch)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(
-            f"epoch must be a Julian year (float) or an astropy Time, got {epoch!r}"
-        ) from exc
-    if not np.isfinite(value):
-        raise InvalidInputError(f"epoch must be finite, got {value}")
-    return value
-
-
-def _time_jyear(epoch) -> float | None:
-    """The Julian year (TDB) of an astropy Time, None for anything else (astropy.time and erfa,
-    about 0.4 s to import, are loaded only here)."""
-    from astropy.time import Time
-    from erfa import ErfaWarning
-
-    if not isinstance(epoch, Time):
-        return None
-    if not epoch.isscalar:
-        raise InvalidInputError(f"epoch must be a scalar Time, got shape {epoch.shape}")
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", message=".*dubious year", category=ErfaWarning)
-        return float(epoch.tdb.jyear)
 
 
 def _east_north(ra: NDArray, dec: NDArray) -> tuple[NDArray, NDArray]:
@@ -136,11 +92,3 @@ def propagate_state(ra_rad: ArrayLike, dec_rad: ArrayLike, pm_ra_mas_yr: ArrayLi
     return SpaceMotion(ra1, dec1, np.sum(w1 * east, axis=-1), np.sum(w1 * north, axis=-1),
                        np.sum(w1 * u1, axis=-1), scale)
 
-
-def propagate(catalog: StarCatalog, epoch_jyear: float | Time) -> StarCatalog:
-    """The catalog with positions, proper motions and parallaxes moved to ``epoch_jyear``.
-
-    ``epoch_jyear`` is a Julian year (TDB) or an astropy ``Time``. Model: module docstring.
-    Same as ``catalog.propagated(epoch_jyear)``.
-    """
-    return catalog.propagated(epoch_jyear)

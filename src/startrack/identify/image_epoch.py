@@ -20,13 +20,14 @@ when their clock was never set) is passed over, as the EXIF reader passes over a
 from __future__ import annotations
 
 import math
-import sys
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from ..errors import InvalidInputError
+from ..frames import EPOCH_RANGE_JYEAR, jyear_tdb
+from ..frames import epoch_jyear as frames_epoch_jyear
 
 if TYPE_CHECKING:
     from astropy.time import Time
@@ -34,8 +35,6 @@ if TYPE_CHECKING:
 DEFAULT_EPOCH_JYEAR = 2000.0
 """The catalog epoch when nothing says when the image was taken."""
 
-EPOCH_RANGE_JYEAR = (1000.0, 3000.0)
-"""Epochs outside this range (exclusive) are refused as mistakes."""
 
 J2000_MJD = 51544.5
 """Modified Julian date of J2000.0."""
@@ -58,47 +57,17 @@ class Epoch:
     source: str
 
 
-def _jyear_tdb(when: Time) -> float:
-    """Julian year (TDB) of a time; a UTC year outside the leap-second table (before 1960 or far
-    ahead) is converted without ERFA's "dubious year" warning: the epoch needs days, not seconds."""
-    from erfa import ErfaWarning
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ErfaWarning)
-        return float(when.tdb.jyear)
-
-
-def epoch_jyear(epoch) -> float:
+def epoch_jyear(epoch: Time | float | None) -> float:
     """A catalog epoch as a Julian year (TDB): None gives J2000.0; accepts astropy Time or a year.
+
+    :func:`startrack.frames.epoch_jyear` (the one converter) with None as the default epoch.
 
     Raises
     ------
     InvalidInputError
         For a year outside 1000-3000, a non-number, or a Time that is not a single instant.
     """
-    if epoch is None:
-        return DEFAULT_EPOCH_JYEAR
-    time_module = sys.modules.get("astropy.time")  # a Time exists only once astropy.time is imported: a year
-    if time_module is not None and isinstance(epoch, time_module.Time):  # costs no import (0.3-0.4 s)
-        if not epoch.isscalar:
-            raise InvalidInputError(f"epoch must be a single time, got an array of {epoch.size}")
-        return _checked(_jyear_tdb(epoch), epoch)
-    if isinstance(epoch, bool | str):
-        raise InvalidInputError(f"epoch must be an astropy Time or a Julian year such as 2025.5, got {epoch!r}")
-    try:
-        value = float(epoch)
-    except (TypeError, ValueError):
-        raise InvalidInputError(f"epoch must be an astropy Time or a Julian year such as 2025.5, "
-                                f"got {epoch!r}") from None
-    return _checked(value, epoch)
-
-
-def _checked(value: float, given) -> float:
-    lo, hi = EPOCH_RANGE_JYEAR
-    if not (math.isfinite(value) and lo < value < hi):
-        raise InvalidInputError(f"epoch must be an astropy Time or a Julian year such as 2025.5 "
-                                f"(between {lo:g} and {hi:g}), got {given!r}")
-    return value
+    return DEFAULT_EPOCH_JYEAR if epoch is None else frames_epoch_jyear(epoch)
 
 
 def parse_utc(text: str, name: str = "time") -> Time:
@@ -111,7 +80,7 @@ def parse_utc(text: str, name: str = "time") -> Time:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ErfaWarning)
             when = Time(str(text).strip(), scale="utc")
-        jyear = _jyear_tdb(when)
+        jyear = jyear_tdb(when)
     except (ValueError, TypeError):
         raise InvalidInputError(f"{name} must be an ISO 8601 UTC time such as 2024-08-12T03:15:00, "
                                 f"got {text!r}") from None
@@ -144,7 +113,7 @@ def epoch_from_header(header: Mapping[str, Any]) -> Epoch | None:
                                     f"between the years {lo:g} and {hi:g}; give the epoch to override it")
         from astropy.time import Time
 
-        return Epoch(_jyear_tdb(Time(mjd, format="mjd", scale="utc")), "MJD-OBS")
+        return Epoch(jyear_tdb(Time(mjd, format="mjd", scale="utc")), "MJD-OBS")
     if "DateTimeOriginal" in header:
         try:
             return Epoch(_header_time(header, "DateTimeOriginal"), "DateTimeOriginal")
@@ -171,7 +140,7 @@ def _card_number(header: Mapping[str, Any], key: str, what: str) -> float:
     if not math.isfinite(number):
         raise InvalidInputError(f"the image header's {key} = {value!r} is not {what}; "
                                 "give the epoch to override it")
-    return _checked(number, value) if key == "CATEPOCH" else number
+    return frames_epoch_jyear(number, f"the epoch in the image header's {key}") if key == "CATEPOCH" else number
 
 
 def _header_time(header: Mapping[str, Any], key: str) -> float:
@@ -191,4 +160,4 @@ def _header_time(header: Mapping[str, Any], key: str) -> float:
     except (InvalidInputError, ValueError) as exc:
         raise InvalidInputError(f"the image header's {key} = {header[key]!r} is not a time ({exc}); "
                                 "give the epoch to override it") from None
-    return _checked(_jyear_tdb(when), header[key])
+    return frames_epoch_jyear(jyear_tdb(when), f"the epoch from the image header's {key}")

@@ -41,6 +41,7 @@ from ...calibrate.sites import Site, get_site
 from ...camera import Camera, get_preset
 from ...detect import StarDetector
 from ...errors import ImageReadError, InvalidInputError
+from ...frames import jyear_tdb
 from ...io import Image, read_image
 from ...io.image import IMAGE_SUFFIXES
 from ...results import AttitudeSolution, Status
@@ -207,7 +208,7 @@ def record_from_file(path: Path, options: SolveOptions) -> ImageRecord:
     except (ImageReadError, InvalidInputError, OSError) as exc:
         return _failed(path, options, exc)
     when = _header_time(image, options.utc_offset_hours)
-    epoch = float(when.tdb.jyear) if when is not None else options.epoch or epoch_jyear(_header_epoch(image))
+    epoch = jyear_tdb(when) if when is not None else options.epoch or epoch_jyear(_header_epoch(image))
     try:
         solution = solve_image(image, epoch=epoch, detector=options.detector, **options.solve_kwargs())
     except InvalidInputError as exc:  # this file's content (size against the camera, no finite pixel)
