@@ -1,4 +1,5 @@
-"""The detector's compiled loops (:mod:`.frame_kernels`, :mod:`.window_kernels`, numba),
+"""The detector's compiled loops (:mod:`.frame_kernels`, :mod:`.window_kernels`,
+:mod:`.robust_kernels`, numba),
 loaded on first use.
 
 Importing :mod:`startrack.cache` points numba's disk cache at startrack's cache folder before
@@ -34,6 +35,15 @@ def kernels() -> ModuleType:
     from . import frame_kernels
 
     return frame_kernels
+
+
+@functools.cache
+def robust_kernels() -> ModuleType:
+    """The module of :mod:`.robust`'s compiled loops, :mod:`.robust_kernels`."""
+    _numba_ready()
+    from . import robust_kernels as module
+
+    return module
 
 
 @functools.cache

@@ -17,6 +17,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from .compiled import robust_kernels
+
 GAUSS_LO, GAUSS_HI = 0.15865525393145707, 0.8413447460685429
 """Quantiles at -1 and +1 sigma of a normal distribution."""
 
@@ -37,15 +39,10 @@ def strided_sample(image: NDArray, max_samples: int = MAX_SAMPLES) -> tuple[NDAr
 
 def quantization_step(values: NDArray) -> float:
     """Spacing of the values if they all lie on a grid of integers, else 0 (1-D input)."""
-    if values.size < 2 or not np.array_equal(values, np.round(values)):
+    if values.size < 2:
         return 0.0
-    lo, hi = float(values.min()), float(values.max())
-    if hi - lo > MAX_QUANTIZED_RANGE:
-        return 1.0
-    present = np.flatnonzero(np.bincount((values - lo).astype(np.int64)))
-    if present.size < 2:
-        return 1.0
-    return float(max(1, np.gcd.reduce(np.diff(present))))
+    return robust_kernels().quantization_step(np.ascontiguousarray(values, dtype=np.float64).ravel(),
+                                              float(MAX_QUANTIZED_RANGE))
 
 
 def quantiles(values: NDArray, q: NDArray, step: float = 0.0) -> NDArray[np.float64]:
@@ -85,6 +82,12 @@ def clipped_level_noise(values: NDArray, step: float = 0.0, upper_half: bool = F
     level, noise : float
     """
     values = values.ravel()
+    if step > 0:
+        level, noise, done = robust_kernels().clipped_quantized(
+            np.ascontiguousarray(values, dtype=np.float64), float(step), bool(upper_half),
+            np.array([GAUSS_LO, 0.5, GAUSS_HI]), CLIP_SIGMA, CLIP_ITERATIONS, float(MAX_QUANTIZED_RANGE))
+        if done:  # one compiled loop (:mod:`.robust_kernels`), the numbers of the loop below
+            return float(level), float(noise)
     level, noise = 0.0, 0.0
     for _ in range(CLIP_ITERATIONS):
         q_lo, level, q_hi = quantiles(values, np.array([GAUSS_LO, 0.5, GAUSS_HI]), step)
