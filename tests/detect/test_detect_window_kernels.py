@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from startrack.detect import centroid_windowed as cw
-from startrack.detect.windows import Windows, separable_moments
+from startrack.detect.windows import Windows, fast_median, fast_quantile, separable_moments
 
 
 def _numpy_iterate(axes, signal, cx, cy):
@@ -69,3 +69,12 @@ def test_no_windows():
     axes = cw._Axes.of(windows, np.zeros(0))
     x, y, total = cw._iterate(axes, windows.values, np.zeros(0), np.zeros(0))
     assert x.size == y.size == total.size == 0
+
+
+def test_fast_quantile_and_median_are_numpys():
+    rng = np.random.default_rng(5)
+    for _ in range(300):
+        values = np.round(rng.normal(2.0, 1.0, int(rng.integers(1, 60))), int(rng.integers(0, 3)))  # ties
+        for q in (0.0, 0.1, 0.3, 0.5, 0.9, 1.0, float(rng.uniform())):
+            assert fast_quantile(values, q) == float(np.quantile(values, q))
+        assert float(fast_median(values)) == float(np.median(values))

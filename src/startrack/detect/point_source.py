@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 
 from .centroid import axis_ratio
 from .label import Regions
+from .windows import fast_median, fast_quantile
 
 SIZE_RAMP = (1.6, 2.4)
 """Quality falls from 1 to 0 as the spot's size goes from 1.6 to 2.4 times the frame's."""
@@ -113,8 +114,8 @@ def _references(size: NDArray, elongation: NDArray, peak_snr: NDArray) -> tuple[
     use = strong if strong.sum() >= MIN_REFERENCE_SPOTS else ok
     if not use.any():
         return 1.0, 1.0
-    ref_size = float(np.quantile(size[use], REFERENCE_QUANTILE))
-    return max(ref_size, MIN_REFERENCE_SIZE_PX), max(float(np.median(elongation[use])), 1.0)
+    ref_size = fast_quantile(size[use], REFERENCE_QUANTILE)  # np.quantile's and np.median's values
+    return max(ref_size, MIN_REFERENCE_SIZE_PX), max(float(fast_median(elongation[use])), 1.0)
 
 
 def _ramp(ratio: NDArray, start: float, stop: float) -> NDArray[np.float64]:

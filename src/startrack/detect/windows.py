@@ -9,6 +9,7 @@ ignores them the same way.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -93,6 +94,21 @@ def fast_median(values: NDArray) -> NDArray:
         return np.partition(values, mid, axis=-1)[..., mid]
     part = np.partition(values, (mid - 1, mid), axis=-1)
     return (part[..., mid - 1] + part[..., mid]) / 2.0
+
+
+def fast_quantile(values: NDArray, q: float) -> float:
+    """Quantile ``q`` (in [0, 1]) of the 1-D NaN-free non-empty ``values``: ``np.quantile``'s
+    value (its default, linear method, with its interpolation rule) from one ``np.partition``,
+    without its overhead on small arrays."""
+    n = values.size
+    virtual = (n - 1) * q
+    if virtual >= n - 1:
+        return float(values.max())
+    lo = math.floor(virtual)
+    part = np.partition(values, (lo, lo + 1))
+    a, b = part[lo], part[lo + 1]
+    gamma, diff = virtual - lo, b - a
+    return float(b - diff * (1 - gamma) if gamma >= 0.5 else a + diff * gamma)
 
 
 def extract_windows(data: NDArray, cx: NDArray, cy: NDArray, half: int,
