@@ -61,6 +61,14 @@ def test_compiled_step_and_statistics_are_numpys(index):
         assert robust.clipped_level_noise(values, step, upper_half) == _numpy_clipped(values, step, upper_half)
 
 
+@pytest.mark.parametrize("step", [1.0, 0.5, 3.0])
+def test_values_off_the_callers_grid_are_clipped_as_numpy_does(step):
+    values = np.random.default_rng(12).normal(10.0, 3.0, 500)  # binned by rounding, not on the grid
+    values[:5] = 80.0
+    for upper_half in (False, True):
+        assert robust.clipped_level_noise(values, step, upper_half) == _numpy_clipped(values, step, upper_half)
+
+
 def test_grid_steps_found():
     assert robust.quantization_step(np.array([4.0, 12.0, 20.0, 8.0])) == 4.0
     assert robust.quantization_step(np.array([4.0, 4.5])) == 0.0

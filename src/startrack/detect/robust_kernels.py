@@ -55,6 +55,10 @@ def clipped_quantized(values, step, upper_half, probabilities, clip_sigma, itera
     lo, hi = _span(values)
     if (hi - lo) / step > max_range:
         return 0.0, 0.0, False
+    counts = _grid_counts(values, lo, hi, step)
+    if counts.size:
+        level, noise = _clipped_bins(counts, lo, step, upper_half, probabilities, clip_sigma, iterations)
+        return level, noise, True
     level, noise = 0.0, 0.0
     for _ in range(iterations):
         q_lo, level, q_hi = _grouped_quantiles(values, step, probabilities)
@@ -67,6 +71,65 @@ def clipped_quantized(values, step, upper_half, probabilities, clip_sigma, itera
             break
         values = kept
     return level, max(noise, 0.0), True
+
+
+@njit(cache=True, error_model="numpy")
+def _grid_counts(values, lo, hi, step):
+    """How many of ``values`` fall on each grid value ``lo + step k``, k = 0 .. (hi - lo) / step,
+    when every value is an integer below 2^52 that lies exactly on the grid (so that the
+    arithmetic of the clipping loop is exact whether it runs on values or on bins); else empty."""
+    empty = np.zeros(0, dtype=np.int64)
+    if np.floor(step) != step or max(abs(lo), abs(hi)) >= 2.0**52:
+        return empty
+    counts = np.zeros(int(np.rint((hi - lo) / step)) + 1, dtype=np.int64)
+    for v in values:
+        k = int(np.rint((v - lo) / step))
+        if np.floor(v) != v or lo + step * k != v:
+            return empty
+        counts[k] += 1
+    return counts
+
+
+@njit(cache=True, error_model="numpy")
+def _clipped_bins(counts, lo, step, upper_half, probabilities, clip_sigma, iterations):
+    """The clipping loop of :func:`clipped_quantized` on the grid's counts (:func:`_grid_counts`):
+    the values kept are those of a range of bins, narrowed each time."""
+    first, last, n = 0, counts.size - 1, counts.sum()
+    level, noise = 0.0, 0.0
+    for _ in range(iterations):
+        q_lo, level, q_hi = _bin_quantiles(counts, first, last, n, lo + step * first, step, probabilities)
+        noise = (q_hi - level) if upper_half else 0.5 * (q_hi - q_lo)
+        noise = np.sqrt(max(noise**2 - step**2 / 12.0, 0.0))
+        if noise <= 0:
+            break
+        kept_first, kept_last, kept = last + 1, first - 1, 0
+        for k in range(first, last + 1):
+            if counts[k] > 0 and np.abs((lo + step * k) - level) <= clip_sigma * noise:
+                kept_first, kept_last, kept = min(kept_first, k), k, kept + counts[k]
+        if kept == n or kept < 3:
+            break
+        first, last, n = kept_first, kept_last, kept
+    return level, max(noise, 0.0)
+
+
+@njit(cache=True, error_model="numpy")
+def _bin_quantiles(counts, first, last, n, lo, step, probabilities):
+    """:func:`_grouped_quantiles` of the ``n`` values in bins ``first .. last`` of ``counts``
+    (both present), the smallest of them ``lo``."""
+    n_present = 0
+    for k in range(first, last + 1):
+        n_present += counts[k] > 0
+    cdf, edges = np.zeros(n_present + 1), np.empty(n_present + 1)
+    i, total = 0, 0
+    for k in range(first, last + 1):
+        if counts[k] > 0:
+            total += counts[k]
+            edges[i] = (lo + step * (k - first)) - step / 2
+            i += 1
+            cdf[i] = total / n
+    edges[n_present] = (lo + step * (last - first)) + step / 2
+    return (_interp(probabilities[0], cdf, edges), _interp(probabilities[1], cdf, edges),
+            _interp(probabilities[2], cdf, edges))
 
 
 @njit(cache=True, error_model="numpy")
