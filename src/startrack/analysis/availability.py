@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from ..camera import Camera
-from ..catalog import load_catalog
+from ..catalog import load_catalog, query_cone
 from ..errors import InvalidInputError
 from ..frames import random_rotations
 
@@ -78,19 +78,19 @@ def star_counts(camera: Camera, max_mag: float, n_pointings: int, rng: np.random
     vectors = catalog.vectors()
     tree = cKDTree(vectors)
     rng = np.random.default_rng(rng)
-    chord = 2.0 * math.sin(min(math.radians(camera.fov_diagonal_deg) / 2.0 * 1.02, math.pi / 2) / 2.0)
+    reach = min(math.radians(camera.fov_diagonal_deg) / 2.0 * 1.02, math.pi / 2)
     counts = np.zeros(n_pointings, dtype=np.int64)
     for start in range(0, n_pointings, CHUNK):
         stop = min(start + CHUNK, n_pointings)
-        counts[start:stop] = _count_chunk(camera, vectors, tree, random_rotations(stop - start, rng), chord)
+        counts[start:stop] = _count_chunk(camera, vectors, tree, random_rotations(stop - start, rng), reach)
         if progress is not None:
             progress(stop, n_pointings)
     return Availability(counts, float(max_mag), len(catalog))
 
 
-def _count_chunk(camera: Camera, vectors: NDArray, tree: cKDTree, rotations, chord: float) -> NDArray[np.int64]:
+def _count_chunk(camera: Camera, vectors: NDArray, tree: cKDTree, rotations, reach_rad: float) -> NDArray[np.int64]:
     matrices = rotations.as_matrix()  # (P, 3, 3), rows = camera axes in ICRS
-    found = tree.query_ball_point(matrices[:, 2, :], chord, return_sorted=False)
+    found = query_cone(tree, matrices[:, 2, :], reach_rad, return_sorted=False)
     lengths = np.fromiter((len(f) for f in found), dtype=np.int64, count=len(found))
     stars = np.fromiter(itertools.chain.from_iterable(found), dtype=np.int64, count=int(lengths.sum()))
     pointing = np.repeat(np.arange(len(found)), lengths)

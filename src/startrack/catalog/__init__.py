@@ -6,11 +6,14 @@ from __future__ import annotations
 from .. import _lazy_exports
 
 _EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
+    "angle_from_chord": ".chord",
+    "chord_from_angle": ".chord",
     "ConeIndex": ".cone",
     "cone_search": ".cone",
     "flag_doubles": ".doubles",
     "merge_doubles": ".doubles",
     "load_catalog": ".hipparcos",
+    "query_cone": ".cone",
     "StarCatalog": ".star_catalog",
     "fibonacci_sphere": ".thinning",
     "thin_uniform": ".thinning",

@@ -1,7 +1,8 @@
 """Cone search: the stars within an angular radius of a direction.
 
-Angles become chords on the unit sphere (``2 sin(theta / 2)``), so a cone is a ball in 3-D and a
-k-d tree answers it exactly. A star exactly on the cone's edge may fall either side (rounding).
+Angles become chords on the unit sphere (``2 sin(theta / 2)``, :mod:`startrack.catalog.chord`), so a
+cone is a ball in 3-D and a k-d tree answers it exactly. A star exactly on the cone's edge may fall
+either side (rounding). :func:`query_cone` is the one cone query over a k-d tree of unit vectors.
 """
 
 from __future__ import annotations
@@ -14,27 +15,37 @@ from scipy.spatial import cKDTree
 
 from ..errors import InvalidInputError
 from ..frames import normalize
+from .chord import chord_from_angle
 from .star_catalog import StarCatalog
 
 if TYPE_CHECKING:
     from astropy.time import Time
 
 
-def chord_from_angle(theta_rad: float, name: str, allow_zero: bool = False) -> float:
-    """Chord length ``2 sin(theta / 2)`` of an angle in (0, pi] ([0, pi] with ``allow_zero``).
-
-    Raises InvalidInputError naming the parameter ``name`` for any other angle.
-    """
-    theta = float(theta_rad)
-    low_ok = theta >= 0.0 if allow_zero else theta > 0.0
-    if not (low_ok and theta <= np.pi):
-        interval = "[0, pi]" if allow_zero else "(0, pi]"
-        raise InvalidInputError(f"{name} must be in {interval} radians, got {theta_rad!r}")
-    return 2.0 * np.sin(theta / 2.0)
-
-
 def _radius_chord(radius_rad: float) -> float:
     return chord_from_angle(radius_rad, "radius_rad", allow_zero=True)
+
+
+def query_cone(tree: cKDTree, centers: ArrayLike, radius_rad: float, *, return_sorted: bool | None = None,
+               workers: int = 1) -> list[int] | NDArray[np.object_]:
+    """Indices of the points of ``tree`` (unit vectors) within ``radius_rad`` of ``centers``.
+
+    Parameters
+    ----------
+    tree : cKDTree
+        Built on unit vectors (N, 3), e.g. ICRS star directions.
+    centers : (3,) or (M, 3) unit vectors, in the tree's frame.
+    radius_rad : float
+        Cone radius, radians, in [0, pi].
+    return_sorted, workers
+        As for ``cKDTree.query_ball_point`` (None: a single centre unsorted, several sorted).
+
+    Returns
+    -------
+    list of int for one centre; an object array (M,) of lists for several.
+    """
+    return tree.query_ball_point(centers, _radius_chord(radius_rad), return_sorted=return_sorted,
+                                 workers=workers)
 
 
 def _unit_vectors(vectors: ArrayLike, name: str, shape: str) -> NDArray[np.float64]:
@@ -69,16 +80,14 @@ class ConeIndex:
         c = _unit_vectors(center, "center", "(3,)")
         if c.shape != (3,):
             raise InvalidInputError(f"center must have shape (3,), got {c.shape}")
-        found = self._tree.query_ball_point(c, _radius_chord(radius_rad), return_sorted=True)
-        return np.asarray(found, dtype=np.int64)
+        return np.asarray(query_cone(self._tree, c, radius_rad, return_sorted=True), dtype=np.int64)
 
     def query_many(self, centers: ArrayLike, radius_rad: float) -> list[NDArray[np.int64]]:
         """For each of ``centers`` (M, 3), the sorted indices within ``radius_rad`` of it."""
         c = _unit_vectors(centers, "centers", "(M, 3)")
         if c.ndim != 2:
             raise InvalidInputError(f"centers must have shape (M, 3), got {c.shape}")
-        found = self._tree.query_ball_point(c, _radius_chord(radius_rad), return_sorted=True)
-        return [np.asarray(f, dtype=np.int64) for f in found]
+        return [np.asarray(f, dtype=np.int64) for f in query_cone(self._tree, c, radius_rad, return_sorted=True)]
 
 
 def cone_search(catalog: StarCatalog, center_vec: ArrayLike, radius_rad: float,

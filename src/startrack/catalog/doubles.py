@@ -17,7 +17,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from ..frames import vector_to_radec
-from .cone import chord_from_angle
+from .chord import chord_from_angle
 from .star_catalog import StarCatalog
 
 

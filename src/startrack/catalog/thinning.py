@@ -16,7 +16,8 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from ..errors import InvalidInputError
-from .cone import chord_from_angle
+from .chord import chord_from_angle
+from .cone import query_cone
 from .star_catalog import StarCatalog
 
 GOLDEN_ANGLE_RAD = np.pi * (3.0 - np.sqrt(5.0))
@@ -45,9 +46,9 @@ def sky_sample_points(spacing_rad: float) -> NDArray[np.float64]:
     return fibonacci_sphere(int(np.ceil(4.0 * np.pi / spacing**2)))
 
 
-def _regions(vectors: NDArray, centers: NDArray, chord: float) -> tuple[NDArray, NDArray]:
-    """(region index, star index) of every star within ``chord`` of every centre, flattened."""
-    members = cKDTree(vectors).query_ball_point(centers, chord, workers=-1)
+def _regions(vectors: NDArray, centers: NDArray, radius_rad: float) -> tuple[NDArray, NDArray]:
+    """(region index, star index) of every star within ``radius_rad`` of every centre, flattened."""
+    members = query_cone(cKDTree(vectors), centers, radius_rad, workers=-1)
     counts = np.fromiter((len(m) for m in members), dtype=np.int64, count=len(members))
     stars = np.fromiter((j for m in members for j in m), dtype=np.int64, count=int(counts.sum()))
     return np.repeat(np.arange(len(centers)), counts), stars
@@ -78,10 +79,10 @@ def thin_uniform(catalog: StarCatalog, max_per_region: int, region_radius_rad: f
     if k < 1 or k != max_per_region:
         raise InvalidInputError(
             f"max_per_region must be a positive integer, got {max_per_region!r}")
-    chord = chord_from_angle(region_radius_rad, "region_radius_rad")
+    chord_from_angle(region_radius_rad, "region_radius_rad")  # refuses an angle outside (0, pi]
     centers = sky_sample_points(region_radius_rad if spacing_rad is None else spacing_rad)
     order = np.argsort(catalog.magnitudes(band), kind="stable")  # brightness rank -> star
-    region, rank = _regions(catalog.vectors()[order], centers, chord)
+    region, rank = _regions(catalog.vectors()[order], centers, region_radius_rad)
     by_region = np.lexsort((rank, region))
     region, rank = region[by_region], rank[by_region]
     position = np.arange(len(rank)) - np.searchsorted(region, region)

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from ..catalog import load_catalog
+from ..catalog import angle_from_chord, chord_from_angle, load_catalog, query_cone
 
 
 @dataclass(frozen=True)
@@ -42,8 +42,7 @@ class FieldStars:
 
     def near(self, boresight: NDArray, radius_rad: float) -> NDArray[np.int64]:
         """Indices (into :attr:`rows`) of the stars within ``radius_rad`` of a unit vector."""
-        chord = 2.0 * math.sin(min(radius_rad, math.pi) / 2.0)
-        found = self.tree.query_ball_point(boresight, chord)
+        found = query_cone(self.tree, boresight, min(radius_rad, math.pi))
         return np.fromiter(found, dtype=np.int64, count=len(found))
 
     def around(self, directions: NDArray, radius_rad: float) -> NDArray[np.int64]:
@@ -54,13 +53,14 @@ class FieldStars:
         only a direction with that many stars in reach (a dense field) is searched again for all.
         """
         directions = directions[np.isfinite(directions).all(axis=1)]  # NaN: a pixel the lens model cannot invert
-        chord = 2.0 * math.sin(min(radius_rad, math.pi) / 2.0)
+        chord = chord_from_angle(min(radius_rad, math.pi), "radius_rad", allow_zero=True)
         k = min(AROUND_FIRST_K, len(self.rows))
         dist, index = self.tree.query(directions, k=k, distance_upper_bound=chord)
         dist, index = dist.reshape(len(directions), k), index.reshape(len(directions), k)  # k = 1 gives (N,)
         found = [index[np.isfinite(dist)]]
         for crowded in np.flatnonzero(np.isfinite(dist[:, -1])):
-            found.append(np.asarray(self.tree.query_ball_point(directions[crowded], chord), dtype=np.int64))
+            near = query_cone(self.tree, directions[crowded], min(radius_rad, math.pi))
+            found.append(np.asarray(near, dtype=np.int64))
         return np.unique(np.concatenate(found))
 
 
@@ -73,11 +73,11 @@ NEIGHBOUR_SEARCH_RAD = np.radians(0.05)
 
 def _brighter_neighbour_rad(tree: cKDTree, vectors: NDArray) -> NDArray[np.float64]:
     """Angle (S,) to the nearest brighter star (stars stored brightest first), inf past the search."""
-    pairs = tree.query_pairs(2.0 * np.sin(NEIGHBOUR_SEARCH_RAD / 2.0), output_type="ndarray")
+    pairs = tree.query_pairs(chord_from_angle(NEIGHBOUR_SEARCH_RAD), output_type="ndarray")
     angle = np.full(len(vectors), np.inf)
     if pairs.size:
         chord = np.linalg.norm(vectors[pairs[:, 0]] - vectors[pairs[:, 1]], axis=1)
-        np.minimum.at(angle, pairs.max(axis=1), 2.0 * np.arcsin(0.5 * chord))
+        np.minimum.at(angle, pairs.max(axis=1), angle_from_chord(chord))
     return angle
 
 

@@ -49,7 +49,7 @@ from scipy.spatial.transform import Rotation
 
 from ..attitude.qmethod import q_method_quaternions
 from ..camera import Camera
-from ..catalog import load_catalog
+from ..catalog import chord_from_angle, load_catalog
 from ..errors import InvalidInputError
 from ..frames import angle_between, cross
 from ..results import Status
@@ -414,5 +414,5 @@ def region_mask(pdb: PairDatabase, boresights: ArrayLike, radius_rad: float) -> 
     centres = np.atleast_2d(np.asarray(boresights, dtype=float))
     if centres.ndim != 2 or centres.shape[1] != 3 or not 0 < radius_rad < math.pi:
         raise InvalidInputError("boresights must be unit vectors (B, 3) and radius_rad in (0, pi)")
-    dist, _ = cKDTree(centres).query(pdb.vectors, distance_upper_bound=2.0 * math.sin(radius_rad / 2.0))
+    dist, _ = cKDTree(centres).query(pdb.vectors, distance_upper_bound=chord_from_angle(radius_rad, "radius_rad"))
     return np.isfinite(dist)

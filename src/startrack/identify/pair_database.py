@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from .. import cache
-from ..catalog import load_catalog, thin_uniform
+from ..catalog import chord_from_angle, load_catalog, thin_uniform
 from ..errors import InvalidInputError
 from .kvector import KVector
 
@@ -88,7 +88,7 @@ def _build(settings: PairSettings) -> dict[str, NDArray]:
     thinned = thin_uniform(catalog, settings.stars_per_field, fov / 2.0)
     rows = np.searchsorted(load_catalog().hip, thinned.hip)  # catalog rows of the kept stars
     vectors = thinned.vectors(settings.epoch_jyear)
-    pairs = np.array(sorted(cKDTree(vectors).query_pairs(2.0 * math.sin(fov / 2.0))), dtype=np.int32)
+    pairs = np.array(sorted(cKDTree(vectors).query_pairs(chord_from_angle(fov, "fov_rad"))), dtype=np.int32)
     angles = np.arctan2(np.linalg.norm(np.cross(vectors[pairs[:, 0]], vectors[pairs[:, 1]]), axis=1),
                         np.sum(vectors[pairs[:, 0]] * vectors[pairs[:, 1]], axis=1))
     order = np.argsort(angles, kind="stable")

@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ..catalog import angle_from_chord
 from ..errors import InvalidInputError
 from ..frames import cross, normalize
 
@@ -51,7 +52,7 @@ def planar_features(tri: NDArray) -> tuple[NDArray, NDArray]:
 def arc_from_chord(chord: NDArray) -> NDArray:
     """Arcs (radians) between unit vectors from their differences (..., 3): ``2 asin(|d| / 2)``,
     stable at small angles and cheaper than :func:`startrack.frames.angle_between`."""
-    return 2.0 * np.arcsin(np.minimum(0.5 * np.sqrt(np.sum(chord * chord, axis=-1)), 1.0))
+    return angle_from_chord(np.sqrt(np.sum(chord * chord, axis=-1)))
 
 
 def lhuilier_area(tri: NDArray) -> NDArray:

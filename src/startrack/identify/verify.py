@@ -32,6 +32,7 @@ from scipy.spatial.transform import Rotation
 from scipy.special import bdtrc
 
 from ..camera import Camera
+from ..catalog import chord_from_angle
 
 
 @dataclass(frozen=True)
@@ -145,7 +146,7 @@ def field_cone(tree: cKDTree | SkyBands, matrix_cam_from_icrs: NDArray, camera: 
     that can land in the image, and none behind it."""
     half_diag = math.radians(camera.fov_diagonal_deg) / 2.0 * 1.05
     axis = matrix_cam_from_icrs[2]  # the last row is the boresight in ICRS
-    idx = np.asarray(tree.query_ball_point(axis, 2.0 * math.sin(min(half_diag, 1.5) / 2.0)), dtype=np.int64)
+    idx = np.asarray(tree.query_ball_point(axis, chord_from_angle(min(half_diag, 1.5), "half_diag")), dtype=np.int64)
     if keep is not None and idx.size:
         idx = idx[keep(idx)]
     return idx

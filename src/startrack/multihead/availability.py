@@ -118,8 +118,8 @@ def rig_availability(rig: CameraRig, max_mag: float, n_pointings: int, rng: np.r
         body = random_rotations(stop - start, rng)
         for head in rig:
             rot = head.rot_cam_from_body * body
-            chord = 2.0 * math.sin(min(math.radians(head.camera.fov_diagonal_deg) / 2.0 * 1.02, math.pi / 2) / 2.0)
-            found = _count_chunk(head.camera, vectors, tree, rot, chord)
+            reach = min(math.radians(head.camera.fov_diagonal_deg) / 2.0 * 1.02, math.pi / 2)
+            found = _count_chunk(head.camera, vectors, tree, rot, reach)
             blind = np.zeros(stop - start, dtype=bool) if bodies is None else \
                 blinded_mask(head, bodies, rot.as_matrix()[:, 2, :])
             counts[head.name][start:stop] = np.where(blind, 0, found)

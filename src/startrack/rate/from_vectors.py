@@ -14,12 +14,15 @@ second round with the rotation fitted to the first matches.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from ..attitude import WahbaMethod, solve_wahba
+from ..catalog import chord_from_angle
 from ..errors import InvalidInputError, require
 from ..results import Status
 from .estimate import RateEstimate, failed
@@ -69,7 +72,7 @@ def rate_from_vectors(
 
 def _mutual_nearest(a: NDArray, b: NDArray, max_angle_rad: float) -> NDArray[np.intp]:
     """Index pairs (K, 2) of mutual nearest neighbours closer than the angle (chord metric)."""
-    chord = 2.0 * np.sin(0.5 * max_angle_rad)
+    chord = chord_from_angle(min(max_angle_rad, math.pi), "max_angle_rad")
     dist_ab, nearest_b = cKDTree(b).query(a, distance_upper_bound=chord)
     _, nearest_a = cKDTree(a).query(b)
     ia = np.flatnonzero(np.isfinite(dist_ab))

@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from ..camera import Camera
+from ..catalog import query_cone
 from ..errors import InvalidInputError
 from ..frames import radec_to_vector
 from . import _checks
@@ -96,7 +97,7 @@ def limiting_mag_for_min_stars(vectors: NDArray, mags: NDArray, fov_deg: float, 
     worst = -np.inf
     for lo in range(0, len(grid), POINTINGS_PER_CHUNK):
         centres = grid[lo:lo + POINTINGS_PER_CHUNK]
-        found = tree.query_ball_point(centres, 2.0 * math.sin(reach / 2.0))
+        found = query_cone(tree, centres, reach)
         worst = max(worst, float(np.max(_nth_brightest(centres, found, vectors, mags, n_min, shape, half))))
     return worst
 

@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
+from ..catalog import query_cone
 from ..identify.field_stars import FieldStars
 from ..identify.verify import closest_pairs_first, match_nearest
 from .quaternions import fit_quat, quat_matrix
@@ -115,8 +116,7 @@ class WindowMatcher:
             if math.acos(cos_moved) + cone_rad <= self._radius:
                 return self._idx, self._vectors
         radius = min(cone_rad + self.slack_rad, math.pi)
-        chord = 2.0 * math.sin(radius / 2.0)
-        self._idx = np.asarray(self.stars.tree.query_ball_point(b, chord, return_sorted=True), dtype=np.int64)
+        self._idx = np.asarray(query_cone(self.stars.tree, b, radius, return_sorted=True), dtype=np.int64)
         self._vectors = np.ascontiguousarray(self.stars.vectors[self._idx].T)
         self._centre, self._radius = b, radius
         image_sr = (self.camera.width / self.camera.fx) * (self.camera.height / self.camera.fy)

@@ -36,7 +36,7 @@ from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from ....camera import PRESETS, Camera, get_preset
-from ....catalog import load_catalog
+from ....catalog import load_catalog, query_cone
 from ..params import Param, SpecError, params_by_name
 from . import Level, TrialOutput, register
 from ._measure import measurement_columns
@@ -90,10 +90,10 @@ def field_mags(sky: Sky, rot: Rotation, camera: Camera, shape: str, fov_deg: flo
     matrix = rot.as_matrix()  # rows: the camera axes in ICRS
     if shape == "cone":
         half = math.radians(fov_deg) / 2.0
-        idx = sky.tree.query_ball_point(matrix[2], 2.0 * math.sin(half / 2.0))
+        idx = query_cone(sky.tree, matrix[2], half)
         return sky.mags[np.sort(np.asarray(idx, dtype=np.intp))]
     reach = min(math.radians(camera.fov_diagonal_deg) / 2.0 * 1.02, math.pi / 2)
-    idx = np.sort(np.asarray(sky.tree.query_ball_point(matrix[2], 2.0 * math.sin(reach / 2.0)), dtype=np.intp))
+    idx = np.sort(np.asarray(query_cone(sky.tree, matrix[2], reach), dtype=np.intp))
     x, y = camera.vector_to_pixel(sky.vectors[idx] @ matrix.T)
     return sky.mags[idx[camera.in_image(x, y)]]
 
