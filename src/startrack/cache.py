@@ -87,7 +87,7 @@ def manifest(arrays: Mapping[str, np.ndarray], crc: bool = True) -> dict[str, li
     out = {}
     for name in sorted(arrays):
         array = np.asarray(arrays[name])
-        check = zlib.crc32(np.ascontiguousarray(array).view(np.uint8).ravel() if array.size else b"") if crc else 0
+        check = zlib.crc32(np.ascontiguousarray(array).view(np.uint8).ravel().data if array.size else b"") if crc else 0
         out[name] = [array.dtype.str, list(array.shape), check]
     return out
 

@@ -74,7 +74,7 @@ def configure(root: Path) -> Path | None:
     if "numba" in sys.modules:
         from numba.core import config
 
-        config.CACHE_DIR = str(folder)
+        config.CACHE_DIR = str(folder)  # type: ignore[attr-defined]  # numba's config sets its names at run time
     os.environ[NUMBA_ENV_VAR] = str(folder)
     return folder
 

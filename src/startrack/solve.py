@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 import time
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from .camera import Camera
@@ -24,11 +26,16 @@ from .identify.field_stars import FieldStars
 from .identify.final_fit import settle_matches
 from .identify.image_epoch import DEFAULT_EPOCH_JYEAR, epoch_jyear, resolve_epoch
 from .identify.refine import pixel_vectors, solution_terms
-from .identify.registry import DEFAULT_FOV_RANGE_DEG, MATCHERS, prepare_matcher
+from .identify.registry import DEFAULT_FOV_RANGE_DEG, check_method, prepare_matcher
 from .identify.request import FOV_DEG_TOLERANCE, SolveRequest, build_request, check_fov_deg
 from .identify.request import star_arrays as _star_arrays  # noqa: F401 (startrack.multihead checks heads with it)
 from .results import AttitudeSolution, StarMatches, Status
 from .units import ARCSEC
+
+if TYPE_CHECKING:
+    from astropy.time import Time
+
+    from .io import Image
 
 __all__ = ["DEFAULT_EPOCH_JYEAR", "DEFAULT_FOV_RANGE_DEG", "FOV_DEG_TOLERANCE", "check_fov_deg", "epoch_jyear",
            "solve_image", "solve_stars"]
@@ -79,8 +86,7 @@ def _run(problem: SolveRequest, method: str, options: object | None) -> Attitude
 def _check_method(method: str, options: object | None) -> None:
     from .identify.registry import OPTIONS
 
-    if method not in MATCHERS:
-        raise InvalidInputError(f"method must be one of {', '.join(MATCHERS)}, got {method!r}")
+    method = check_method(method)
     if options is not None and not isinstance(options, OPTIONS[method]):
         raise InvalidInputError(f"options for the {method} matcher must be a {OPTIONS[method].__name__} "
                                 f"(startrack.identify.registry.options_for), got {type(options).__name__}")
@@ -101,7 +107,7 @@ def _check_prior(prior_rot_cam_from_icrs, prior_sigma_deg) -> float:
 
 def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height: int | None = None,
                 fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
-                camera: Camera | None = None, flux: ArrayLike | None = None, epoch=None,
+                camera: Camera | None = None, flux: ArrayLike | None = None, epoch: Time | float | None = None,
                 method: str = "quads", options: object | None = None,
                 prior_rot_cam_from_icrs: Rotation | None = None, prior_sigma_deg: float = 1.0,
                 pixel_aspect: float | tuple[float, float] | None = None) -> AttitudeSolution:
@@ -127,7 +133,8 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
         Epoch of the catalog positions (Julian year, TDB); default J2000.0. The solution says
         which it used (``epoch_jyear``, ``epoch_source``).
     method : str
-        The matcher (:data:`startrack.identify.registry.MATCHERS`): "quads", four-star patterns
+        The matcher (:data:`startrack.identify.registry.MethodName`; another name is refused
+        with the valid ones): "quads", four-star patterns
         (the default; any FOV knowledge); the seeds' matchers on the star-pair directory, which
         need a FOV known to 5 % or a camera ("pyramid", "angle", "triangle-planar",
         "triangle-spherical", "nvertex-3", "nvertex-4", "nvertex-5", "van-bezooijen"); or
@@ -178,8 +185,9 @@ def search_order(found) -> np.ndarray:
     return index[np.sort(first)]
 
 
-def solve_image(image, *, fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
-                camera: Camera | None = None, epoch=None, channel: str | int | None = None,
+def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | None = None,
+                fov_range_deg: tuple[float, float] | None = None, camera: Camera | None = None,
+                epoch: Time | float | None = None, channel: str | int | None = None,
                 detector=None, method: str = "quads", options: object | None = None,
                 pixel_aspect: float | tuple[float, float] | None = None) -> AttitudeSolution:
     """Lost-in-space attitude of an image: read, detect, solve.

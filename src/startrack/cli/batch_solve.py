@@ -9,6 +9,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from ..errors import require
 from .batch import BatchSpec, Record
 
 HEADER = "{image}  status           RA deg    Dec deg   roll deg  FOV deg  matched   rms\"  time ms  reason"
@@ -32,8 +33,9 @@ def solve_record(path: Path, *, solver_options: dict[str, Any], channel: str | N
 
     image = read_image(path, channel=channel)
     solution = solve_image(image, **solver_options)
-    solution = explain_blank(solution, solution.detections, image)
-    return {"image": str(path), **solution_to_dict(solution, solution.detections)}
+    detections = require(solution.detections, "the image solve's detections")
+    solution = explain_blank(solution, detections, image)
+    return {"image": str(path), **solution_to_dict(solution, detections)}
 
 
 def _number(value: float | None, spec: str, width: int) -> str:

@@ -15,7 +15,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, require
 from ..identify.image_epoch import resolve_epoch
 from ..io import Image, read_image
 from ..results import AttitudeSolution, Detections, Status
@@ -102,13 +102,13 @@ def main(argv: list[str]) -> int:
         else:
             ground = _solve_ground(image, site, args, solver_options)
             solution = ground.solution
-        detections = solution.detections
+        detections = require(solution.detections, "the image solve's detections")
     except InvalidInputError as exc:  # a problem with this image's content (size, no finite pixel...)
         raise InvalidInputError(f"{args.image}: {exc}") from exc
     if args.wcs and solution.solved:
         from ..io.wcs import write_wcs  # astropy.wcs: loaded only when asked for
 
-        write_wcs(args.wcs, solution.rot_cam_from_icrs, solution.camera)
+        write_wcs(args.wcs, solution.rot_cam_from_icrs, require(solution.camera, "the solution's camera"))
     return report(explain_blank(solution, detections, image), detections, args.json, ground=ground)
 
 

@@ -48,6 +48,36 @@ tiles against a zero noise)."""
 
 
 @dataclass(frozen=True)
+class TileGrid:
+    """The per-tile grids of a tiled background model, all set together.
+
+    Attributes
+    ----------
+    level, noise : ndarray, shape (ny, nx)
+        Per-tile level and noise (standard deviation), in the image's units.
+    clutter : ndarray, shape (ny, nx)
+        Per-tile clutter ratio (module docstring).
+    centres_y, centres_x : ndarray, shape (ny,), (nx,)
+        Tile-centre coordinates, in the pixel convention of the image they are evaluated on.
+    """
+
+    level: NDArray[np.float64]
+    noise: NDArray[np.float64]
+    clutter: NDArray[np.float64]
+    centres_y: NDArray[np.float64]
+    centres_x: NDArray[np.float64]
+
+    def map(self, grid: NDArray, ys: NDArray, xs: NDArray, extrapolate: bool) -> NDArray[np.float32]:
+        """``grid`` (one of these grids) on the grid of rows ``ys`` x columns ``xs``
+        (:func:`_grid_map`)."""
+        return _grid_map(grid, self.centres_y, self.centres_x, ys, xs, extrapolate)
+
+    def weights(self, x: NDArray, y: NDArray) -> tuple[tuple, tuple]:
+        """The axis weights of points (x, y) (:func:`_point_weights`), rows then columns."""
+        return _point_weights(self.centres_y, y), _point_weights(self.centres_x, x)
+
+
+@dataclass(frozen=True)
 class BackgroundModel:
     """Background level and noise of an image, constant or on a grid of tile centres.
 
@@ -55,12 +85,9 @@ class BackgroundModel:
     ----------
     level, noise : float
         Global background level and noise (standard deviation), in the image's units.
-    level_grid, noise_grid : ndarray, shape (ny, nx), or None
-        Per-tile level and noise; None for a constant model.
-    clutter_grid : ndarray, shape (ny, nx), or None
-        Per-tile clutter ratio (module docstring); None for a constant model.
-    centres_y, centres_x : ndarray, shape (ny,), (nx,), or None
-        Tile-centre coordinates, in the pixel convention of the image they are evaluated on.
+    tiles : TileGrid or None
+        The per-tile level, noise and clutter grids and the tile centres; None for a constant
+        model.
     level_map : ndarray of float32, shape of the measured image, or None
         The interpolated level at every pixel of the image the model was measured on, when it
         was computed anyway (tiles covering the whole image); saves the thresholding one
@@ -69,53 +96,77 @@ class BackgroundModel:
 
     level: float
     noise: float
-    level_grid: NDArray[np.float64] | None = None
-    noise_grid: NDArray[np.float64] | None = None
-    clutter_grid: NDArray[np.float64] | None = None
-    centres_y: NDArray[np.float64] | None = None
-    centres_x: NDArray[np.float64] | None = None
+    tiles: TileGrid | None = None
     level_map: NDArray[np.float32] | None = field(default=None, repr=False, compare=False)
 
     @property
     def is_tiled(self) -> bool:
-        return self.level_grid is not None
+        return self.tiles is not None
+
+    @property
+    def level_grid(self) -> NDArray[np.float64] | None:
+        """Per-tile level, shape (ny, nx); None for a constant model."""
+        return None if self.tiles is None else self.tiles.level
+
+    @property
+    def noise_grid(self) -> NDArray[np.float64] | None:
+        """Per-tile noise, shape (ny, nx); None for a constant model."""
+        return None if self.tiles is None else self.tiles.noise
+
+    @property
+    def clutter_grid(self) -> NDArray[np.float64] | None:
+        """Per-tile clutter ratio, shape (ny, nx); None for a constant model."""
+        return None if self.tiles is None else self.tiles.clutter
+
+    @property
+    def centres_y(self) -> NDArray[np.float64] | None:
+        """Tile-centre rows, shape (ny,); None for a constant model."""
+        return None if self.tiles is None else self.tiles.centres_y
+
+    @property
+    def centres_x(self) -> NDArray[np.float64] | None:
+        """Tile-centre columns, shape (nx,); None for a constant model."""
+        return None if self.tiles is None else self.tiles.centres_x
 
     def maps(self, ys: NDArray, xs: NDArray) -> tuple[NDArray | float, NDArray | float]:
         """Level and noise on the grid of rows ``ys`` x columns ``xs``: float32 arrays of shape
         (len(ys), len(xs)), or the two floats for a constant model."""
-        if not self.is_tiled:
+        tiles = self.tiles
+        if tiles is None:
             return self.level, self.noise
-        return (_grid_map(self.level_grid, self.centres_y, self.centres_x, ys, xs, True),
-                _grid_map(self.noise_grid, self.centres_y, self.centres_x, ys, xs, False))
+        return tiles.map(tiles.level, ys, xs, True), tiles.map(tiles.noise, ys, xs, False)
 
     def noise_map(self, ys: NDArray, xs: NDArray) -> NDArray | float:
         """The noise alone on the grid of rows ``ys`` x columns ``xs`` (see :meth:`maps`)."""
-        if not self.is_tiled:
+        tiles = self.tiles
+        if tiles is None:
             return self.noise
-        return _grid_map(self.noise_grid, self.centres_y, self.centres_x, ys, xs, False)
+        return tiles.map(tiles.noise, ys, xs, False)
 
     def at(self, x: NDArray, y: NDArray) -> tuple[NDArray, NDArray]:
         """Level and noise at points (x, y) (arrays of one shape), bilinearly interpolated."""
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-        if not self.is_tiled:
+        tiles = self.tiles
+        if tiles is None:
             return np.full(x.shape, self.level), np.full(x.shape, self.noise)
-        wy, wx = _point_weights(self.centres_y, y), _point_weights(self.centres_x, x)
-        return _bilinear(self.level_grid, wy, wx, True), _bilinear(self.noise_grid, wy, wx, False)
+        wy, wx = tiles.weights(x, y)
+        return _bilinear(tiles.level, wy, wx, True), _bilinear(tiles.noise, wy, wx, False)
 
     def level_at(self, x: NDArray, y: NDArray) -> NDArray:
         """The level alone at points (x, y) (see :meth:`at`)."""
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-        if not self.is_tiled:
+        tiles = self.tiles
+        if tiles is None:
             return np.full(x.shape, self.level)
-        return _bilinear(self.level_grid, _point_weights(self.centres_y, y), _point_weights(self.centres_x, x), True)
+        return _bilinear(tiles.level, *tiles.weights(x, y), True)
 
     def clutter_at(self, x: NDArray, y: NDArray) -> NDArray:
         """Clutter ratio at points (x, y): 1 on clean sky, larger on structure."""
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-        if not self.is_tiled:
+        tiles = self.tiles
+        if tiles is None:
             return np.ones(x.shape)
-        wy, wx = _point_weights(self.centres_y, y), _point_weights(self.centres_x, x)
-        return _bilinear(self.clutter_grid, wy, wx, False)
+        return _bilinear(tiles.clutter, *tiles.weights(x, y), False)
 
 
 def _point_weights(centres: NDArray, coords: NDArray) -> tuple[NDArray, NDArray, NDArray]:
@@ -229,12 +280,10 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
         noise_global = global_background(image).noise
     lower_global = float(np.quantile(lower, CLEAN_SKY_QUANTILE))
     clutter = lower / lower_global if lower_global > 0 else np.ones_like(lower)
-    return BackgroundModel(
-        level=float(np.median(level)), noise=noise_global, level_grid=level,
-        noise_grid=np.maximum(noise, MIN_NOISE_RATIO * noise_global), clutter_grid=clutter,
-        centres_y=offset + scale * centres_y, centres_x=offset + scale * centres_x,
-        level_map=level_map if keep_map else None,
-    )
+    tiles = TileGrid(level=level, noise=np.maximum(noise, MIN_NOISE_RATIO * noise_global), clutter=clutter,
+                     centres_y=offset + scale * centres_y, centres_x=offset + scale * centres_x)
+    return BackgroundModel(level=float(np.median(level)), noise=noise_global, tiles=tiles,
+                           level_map=level_map if keep_map else None)
 
 
 def low_side_clipped(image: NDArray) -> bool:
@@ -376,11 +425,10 @@ def pixel_noise(image: NDArray, model: BackgroundModel) -> float:
     (:func:`clipped_level_noise` with ``upper_half=True``).
     """
     sample, step = strided_sample(image)
-    if model.is_tiled:
-        level = _grid_map(model.level_grid, model.centres_y, model.centres_x, step * np.arange(sample.shape[0]),
-                          step * np.arange(sample.shape[1]), True)
-    else:
-        level = model.level
+    tiles = model.tiles
+    level: NDArray | float = model.level
+    if tiles is not None:
+        level = tiles.map(tiles.level, step * np.arange(sample.shape[0]), step * np.arange(sample.shape[1]), True)
     finite = np.ravel if np.issubdtype(sample.dtype, np.integer) else _finite  # integers are finite (so is the level)
     sample = sample.astype(np.float64)
     q = quantization_step(finite(sample))
@@ -392,5 +440,5 @@ def pixel_noise(image: NDArray, model: BackgroundModel) -> float:
 
 def with_noise_floor(model: BackgroundModel, floor: float) -> BackgroundModel:
     """The model with every noise value raised to at least ``floor``."""
-    grid = None if model.noise_grid is None else np.maximum(model.noise_grid, floor)
-    return replace(model, noise=max(model.noise, floor), noise_grid=grid)
+    tiles = None if model.tiles is None else replace(model.tiles, noise=np.maximum(model.tiles.noise, floor))
+    return replace(model, noise=max(model.noise, floor), tiles=tiles)

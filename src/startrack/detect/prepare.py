@@ -33,7 +33,7 @@ class PreparedImage:
     invalid: NDArray[np.bool_] | None
 
 
-def prepare_image(image: NDArray, channel: int | None = None) -> PreparedImage:
+def prepare_image(image: NDArray, channel: str | int | None = None) -> PreparedImage:
     """Check ``image``, reduce it to one channel, make float planes float32 with NaN for
     every non-finite pixel.
 
@@ -42,8 +42,8 @@ def prepare_image(image: NDArray, channel: int | None = None) -> PreparedImage:
     image : array_like, shape (H, W) or (H, W, C)
         uint8, uint16, any integer, bool, float32 or float64. Colour images are reduced by
         :func:`startrack.detect.channels.to_single_channel` (R + G + B by default).
-    channel : int or None
-        Plane of a colour image to use instead of R + G + B.
+    channel : {None, "r", "g", "b", 0, 1, 2}
+        Plane of a colour image to use instead of R + G + B (by name or index).
 
     Returns
     -------

@@ -38,18 +38,20 @@ def significance(image: NDArray[np.float32], model: BackgroundModel, binning: in
     centre = (binning - 1) / 2
     ys, xs = centre + binning * np.arange(h), centre + binning * np.arange(w)
     image = np.asarray(image, dtype=np.float32)
-    if not model.is_tiled:
+    tiles = model.tiles
+    if tiles is None:
         level, inverse = np.full((1, 1), model.level, np.float32), np.full((1, 1), 1.0 / model.noise, np.float32)
         rows_i, rows_f = np.zeros(h, np.int64), np.zeros(h, np.float32)
         cols_i, cols_f = np.zeros(w, np.int64), np.zeros(w, np.float32)
         return kernels().significance(image, level, inverse, rows_i, rows_i, rows_f, cols_i, cols_i, cols_f, 0,
                                       empty_apart(image.shape, image))
-    y0, y1, wy = _axis_weights(model.centres_y, ys, True)
-    x0, x1, wx = _axis_weights(model.centres_x, xs, True)
-    mapped = model.level_map is not None and model.level_map.shape == image.shape
-    level = model.level_map if mapped else model.level_grid.astype(np.float32)
+    y0, y1, wy = _axis_weights(tiles.centres_y, ys, True)
+    x0, x1, wx = _axis_weights(tiles.centres_x, xs, True)
+    level_map = model.level_map
+    mapped = level_map is not None and level_map.shape == image.shape
+    level = level_map if level_map is not None and mapped else tiles.level.astype(np.float32)
     out = empty_apart(image.shape, image, level)
-    return kernels().significance(image, level, model.noise_grid.astype(np.float32), y0, y1, wy.astype(np.float32),
+    return kernels().significance(image, level, tiles.noise.astype(np.float32), y0, y1, wy.astype(np.float32),
                                   x0, x1, wx.astype(np.float32), 1 if mapped else 2, out)
 
 

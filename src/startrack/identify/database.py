@@ -43,7 +43,7 @@ from scipy.spatial import cKDTree
 from .. import cache
 from ..catalog import flag_doubles, load_catalog
 from ..catalog.thinning import fibonacci_sphere
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, require
 from .patterns import edge_ratios, pair_angles
 
 DB_KIND = "patterns"
@@ -353,10 +353,12 @@ def key_index(pattern_ratios: NDArray[np.uint16],
 
 # --- loading ----------------------------------------------------------------------------------
 def _from_arrays(settings: DatabaseSettings, arrays: dict[str, NDArray]) -> PatternDatabase:
-    fields = {k: arrays[k] for k in ("cat_index", "hip", "vectors", "mag", "level_fov_rad", "pattern_stars",
-                                     "pattern_ratios", "pattern_largest", "level_offsets", "verify_levels",
-                                     "keys", "cell_starts")}
-    return PatternDatabase(settings=settings, **fields)
+    return PatternDatabase(
+        settings=settings, cat_index=arrays["cat_index"], hip=arrays["hip"], vectors=arrays["vectors"],
+        mag=arrays["mag"], level_fov_rad=arrays["level_fov_rad"], pattern_stars=arrays["pattern_stars"],
+        pattern_ratios=arrays["pattern_ratios"], pattern_largest=arrays["pattern_largest"],
+        level_offsets=arrays["level_offsets"], verify_levels=arrays["verify_levels"], keys=arrays["keys"],
+        cell_starts=arrays["cell_starts"])
 
 
 def load_database(settings: DatabaseSettings | None = None,
@@ -410,7 +412,7 @@ def database_report(settings: DatabaseSettings | None = None) -> dict[str, float
         cache.save(DB_KIND, DB_VERSION, params, build_database_arrays(settings))
         build_s = time.perf_counter() - t0
     t0 = time.perf_counter()
-    db = _from_arrays(settings, cache.load(DB_KIND, DB_VERSION, params))
+    db = _from_arrays(settings, require(cache.load(DB_KIND, DB_VERSION, params), "the database's cache file"))
     load_s = time.perf_counter() - t0
     return {"build_s": build_s, "load_s": load_s, "file_bytes": database_path(settings).stat().st_size,
             "memory_bytes": db.nbytes, "n_patterns": db.n_patterns, "n_stars": len(db.hip),

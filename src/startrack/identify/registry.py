@@ -19,12 +19,14 @@ import math
 from collections.abc import Callable, Iterator, Mapping
 from functools import partial
 from importlib import import_module
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Literal, Protocol, get_args
 
 from ..errors import InvalidInputError
 from .database import DB_MAX_FOV_DEG, DatabaseSettings
 
 if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
     from scipy.spatial.transform import Rotation
 
     from ..camera import Camera
@@ -47,19 +49,38 @@ OVERLAY_MAX_MAG = 7.0
 """Faintest catalog star the overlay projects (about what a star tracker's frame shows)."""
 
 
-class MatchRequest(Protocol):
-    """What a matcher needs of a solve request (``startrack.solve``'s validated problem)."""
+MethodName = Literal["quads", "pyramid", "angle", "triangle-planar", "triangle-spherical", "nvertex-3",
+                     "nvertex-4", "nvertex-5", "van-bezooijen", "overlay"]
+"""The matchers' names (the keys of :data:`MATCHERS` and :data:`OPTIONS`; the module docstring)."""
 
-    x: object
-    y: object
-    camera: Camera
-    focal_range: tuple[float, float] | None
-    fov_range_deg: tuple[float, float]
-    epoch_jyear: float
-    prior_rot: Rotation | None
-    prior_sigma_deg: float
-    aspect_range: tuple[float, float] | None
-    fit_aspect: bool
+METHOD_NAMES: tuple[MethodName, ...] = get_args(MethodName)
+"""The names of :data:`MethodName`, in its order (what an unknown ``method`` is told to be)."""
+
+
+class MatchRequest(Protocol):
+    """What a matcher needs of a solve request (``startrack.solve``'s validated problem): read-only
+    attributes, so that a frozen dataclass (:class:`.request.SolveRequest`) is one."""
+
+    @property
+    def x(self) -> NDArray[np.float64]: ...
+    @property
+    def y(self) -> NDArray[np.float64]: ...
+    @property
+    def camera(self) -> Camera: ...
+    @property
+    def focal_range(self) -> tuple[float, float] | None: ...
+    @property
+    def fov_range_deg(self) -> tuple[float, float]: ...
+    @property
+    def epoch_jyear(self) -> float: ...
+    @property
+    def prior_rot(self) -> Rotation | None: ...
+    @property
+    def prior_sigma_deg(self) -> float: ...
+    @property
+    def aspect_range(self) -> tuple[float, float] | None: ...
+    @property
+    def fit_aspect(self) -> bool: ...
 
 
 Matcher = Callable[[object | None], "MatchOutcome"]
@@ -78,8 +99,9 @@ def database_settings_for(fov_range_deg: tuple[float, float] = DEFAULT_FOV_RANGE
     default = DatabaseSettings()
     if default.fov_min_deg <= lo and hi <= default.fov_max_deg:
         return default
-    depth = {"max_mag": NARROW_MAX_MAG} if lo < default.fov_min_deg else {}
-    return DatabaseSettings(fov_min_deg=max(lo * 0.97, 0.4), fov_max_deg=min(hi * 1.03, DB_MAX_FOV_DEG), **depth)
+    max_mag = NARROW_MAX_MAG if lo < default.fov_min_deg else default.max_mag
+    return DatabaseSettings(fov_min_deg=max(lo * 0.97, 0.4), fov_max_deg=min(hi * 1.03, DB_MAX_FOV_DEG),
+                            max_mag=max_mag)
 
 
 def _load(module: str, name: str):
@@ -157,7 +179,7 @@ def _overlay(request: MatchRequest) -> tuple[Matcher, FieldStars]:
     return run, field_stars(PairSettings.max_mag, request.epoch_jyear)
 
 
-MATCHERS: dict[str, Callable[[MatchRequest], tuple[Matcher, FieldStars]]] = {
+MATCHERS: dict[MethodName, Callable[[MatchRequest], tuple[Matcher, FieldStars]]] = {
     "quads": _quads,
     "pyramid": _on_pairs("pyramid", "match_pyramid", "pyramid"),
     "angle": _on_pairs("angle_pivot", "match_angle_pivot", "angle"),
@@ -175,7 +197,7 @@ MATCHERS: dict[str, Callable[[MatchRequest], tuple[Matcher, FieldStars]]] = {
 class _Options(Mapping[str, type]):
     """The options dataclass of each matcher, imported when it is looked up."""
 
-    _WHERE = {
+    _WHERE: dict[str, tuple[str, str]] = {
         "quads": ("quad_matcher", "MatcherOptions"), "pyramid": ("pyramid", "PyramidOptions"),
         "angle": ("angle_pivot", "AnglePivotOptions"),
         "triangle-planar": ("triangles", "TriangleOptions"), "triangle-spherical": ("triangles", "TriangleOptions"),
@@ -198,10 +220,17 @@ OPTIONS: Mapping[str, type] = _Options()
 """The options dataclass of each matcher (a read-only mapping; a look-up imports its module)."""
 
 
+def check_method(method: str) -> MethodName:
+    """``method`` as a :data:`MethodName`; an InvalidInputError naming the valid ones if it is not one."""
+    for name in METHOD_NAMES:
+        if method == name:
+            return name
+    raise InvalidInputError(f"method must be one of {', '.join(METHOD_NAMES)}, got {method!r}")
+
+
 def options_for(method: str, **settings) -> object:
     """The named matcher's options with some settings changed, e.g. ``options_for("pyramid", timeout_s=2)``."""
-    if method not in OPTIONS:
-        raise InvalidInputError(f"method must be one of {', '.join(OPTIONS)}, got {method!r}")
+    method = check_method(method)
     try:
         return OPTIONS[method](**settings)
     except TypeError as exc:
@@ -210,10 +239,8 @@ def options_for(method: str, **settings) -> object:
 
 def prepare_matcher(method: str, request: MatchRequest) -> tuple[Matcher, FieldStars]:
     """The named matcher, ready to run on the request, and the stars of the final re-match."""
-    if method not in MATCHERS:
-        raise InvalidInputError(f"method must be one of {', '.join(MATCHERS)}, got {method!r}")
-    return MATCHERS[method](request)
+    return MATCHERS[check_method(method)](request)
 
 
-__all__ = ["DEFAULT_FOV_RANGE_DEG", "MATCHERS", "OPTIONS", "MatchRequest", "database_settings_for", "options_for",
-           "prepare_matcher"]
+__all__ = ["DEFAULT_FOV_RANGE_DEG", "MATCHERS", "METHOD_NAMES", "OPTIONS", "MatchRequest", "MethodName",
+           "check_method", "database_settings_for", "options_for", "prepare_matcher"]

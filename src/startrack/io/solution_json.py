@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import require
 from ..results import AttitudeSolution, Detections
 
 
@@ -23,7 +24,7 @@ def solution_to_dict(solution: AttitudeSolution, detections: Detections | None =
     """A JSON-ready dictionary of a solve: status, attitude, uncertainty, matches, timing."""
     out: dict[str, Any] = {"status": solution.status.value, "reason": solution.reason}
     if solution.rot_cam_from_icrs is not None:
-        qx, qy, qz, qw = (float(q) for q in solution.quaternion_xyzw)
+        qx, qy, qz, qw = (float(q) for q in require(solution.quaternion_xyzw, "the solution's quaternion"))
         out.update({
             "ra_deg": _num(solution.ra_deg), "dec_deg": _num(solution.dec_deg),
             "roll_deg": _num(solution.roll_deg), "fov_deg": _num(solution.fov_deg),
@@ -49,17 +50,32 @@ def streak_fields(solution: AttitudeSolution) -> dict:
     deg/s: the turn during the exposure, ``turn_deg``, over the exposure; None without one),
     whether it is trusted (``rate_status``, ``rate_reason``) and whether its sign is known
     (``time_order_known``)."""
-    if getattr(solution, "mode", "point") != "streak":
+    if type(solution) is AttitudeSolution:  # a point solve: the streak module need not be imported
+        return {}
+    from ..rate import StreakSolution
+
+    if not isinstance(solution, StreakSolution) or solution.mode != "streak":
         return {}
     rate = solution.rate
     exposure = _num(solution.exposure_s)
     time_mid = solution.time_mid
     return {"mode": "streak", "t_mid_s": _num(solution.t_mid_s), "exposure_s": exposure,
-            "time_mid_utc": None if time_mid is None else time_mid.utc.isot,
+            "time_mid_utc": _utc_isot(time_mid),
             "rate_status": rate.status.value, "rate_reason": rate.reason,
             "time_order_known": bool(solution.time_order_known),
             "rate_deg_s": _nums(np.degrees(solution.turn_rad) / exposure) if exposure else None,
             "turn_deg": _nums(np.degrees(solution.turn_rad))}
+
+
+def _utc_isot(time: object | None) -> str | None:
+    """The ISO UTC time of an astropy Time (what a streak solution's ``time_mid`` holds when the
+    header dates the frame), else None. astropy is imported only when there is one (then it is
+    already)."""
+    if time is None:
+        return None
+    from astropy.time import Time
+
+    return time.utc.isot if isinstance(time, Time) else None
 
 
 def _nums(values) -> list[float | None]:
