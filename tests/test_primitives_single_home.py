@@ -1,4 +1,4 @@
-"""One home for each primitive (issue 21 item 3): the epoch converter (``frames.epoch_jyear``), the
+"""One home for each primitive (issue 21 item 3): the epoch converter (``catalog.epoch_jyear``), the
 angle/chord pair (``catalog.chord``) and the cone query over a k-d tree (``catalog.cone.query_cone``),
 what each checks, and that the rest of ``src/startrack`` uses them instead of its own copy."""
 
@@ -7,6 +7,8 @@ from __future__ import annotations
 import ast
 import math
 import re
+import subprocess
+import sys
 import warnings
 from pathlib import Path
 
@@ -17,9 +19,17 @@ from erfa import ErfaWarning
 from scipy.spatial import cKDTree
 
 import startrack.catalog as catalog_pkg
-from startrack.catalog import ConeIndex, StarCatalog, angle_from_chord, chord_from_angle, query_cone
+from startrack.catalog import (
+    ConeIndex,
+    StarCatalog,
+    angle_from_chord,
+    chord_from_angle,
+    epoch_jyear,
+    jyear_tdb,
+    query_cone,
+)
 from startrack.errors import InvalidInputError
-from startrack.frames import epoch_jyear, jyear_tdb, radec_to_vector
+from startrack.frames import radec_to_vector
 from startrack.identify import image_epoch
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "startrack"
@@ -100,7 +110,7 @@ def test_the_propagate_alias_and_its_import_cycle_are_gone():
 
 # Inline copies of the primitives, and the lines (file: count) that are allowed one with a reason.
 COPIES = {
-    "epoch": (re.compile(r"\.tdb\.jyear"), {"frames.py": 1}),
+    "epoch": (re.compile(r"\.tdb\.jyear"), {"catalog/epoch.py": 1}),
     "chord": (re.compile(r"2(\.0)? \* (math|np)\.sin\((0\.5 \* )?[^)]*(/ 2(\.0)?)?\)(?! \*\*)"), {
         "catalog/chord.py": 1,
         "identify/database.py": 1,  # not ours to edit: uses its own _chord (lead: chord_from_angle)
@@ -151,3 +161,10 @@ def test_no_module_keeps_its_own_copy_of_a_primitive(primitive):
 def test_the_copy_finder_sees_the_copies_it_replaced(primitive, line):
     assert COPIES[primitive][0].search(line)
     assert not COPIES["chord"][0].search("t = 2.0 * math.sin(0.5 * angle) ** 2")  # 1 - cos, not a chord
+
+
+def test_the_epoch_home_loads_neither_numpy_nor_astropy():
+    code = ("import sys\nfrom startrack.identify import epoch_jyear\n"
+            "print(epoch_jyear(2025.5), 'numpy' in sys.modules, 'astropy.time' in sys.modules)")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
+    assert done.stdout.split() == ["2025.5", "False", "False"]

@@ -9,9 +9,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .. import frames
 from ..errors import InvalidInputError
 from ..frames import radec_to_vector
+from .epoch import epoch_jyear as checked_jyear
 from .propagation import propagate_state, propagate_vectors
 
 if TYPE_CHECKING:
@@ -74,7 +74,7 @@ class StarCatalog:
         set_(self, "variable", _frozen(self.variable, bool, "variable"))
         radial = np.zeros(len(self.hip)) if self.pm_radial_mas_yr is None else self.pm_radial_mas_yr
         set_(self, "pm_radial_mas_yr", _frozen(radial, np.float64, "pm_radial_mas_yr"))
-        set_(self, "epoch_jyear", frames.epoch_jyear(self.epoch_jyear, "epoch_jyear"))
+        set_(self, "epoch_jyear", checked_jyear(self.epoch_jyear, "epoch_jyear"))
         n = len(self.hip)
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
@@ -137,7 +137,7 @@ class StarCatalog:
         """
         if epoch_jyear is None:
             return radec_to_vector(self.ra_rad, self.dec_rad)
-        dt = frames.epoch_jyear(epoch_jyear, "epoch_jyear") - self.epoch_jyear
+        dt = checked_jyear(epoch_jyear, "epoch_jyear") - self.epoch_jyear
         if dt == 0.0:
             return radec_to_vector(self.ra_rad, self.dec_rad)
         return propagate_vectors(self.ra_rad, self.dec_rad, self.pm_ra_mas_yr,
@@ -145,7 +145,7 @@ class StarCatalog:
 
     def propagated(self, epoch_jyear: float | Time) -> StarCatalog:
         """A new catalog whose positions, proper motions and parallaxes are at ``epoch_jyear``."""
-        epoch = frames.epoch_jyear(epoch_jyear, "epoch_jyear")
+        epoch = checked_jyear(epoch_jyear, "epoch_jyear")
         state = propagate_state(self.ra_rad, self.dec_rad, self.pm_ra_mas_yr, self.pm_dec_mas_yr,
                                 self.pm_radial_mas_yr, epoch - self.epoch_jyear)
         return dataclasses.replace(

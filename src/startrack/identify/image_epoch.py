@@ -25,9 +25,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from ..catalog import EPOCH_RANGE_JYEAR, jyear_tdb
+from ..catalog import epoch_jyear as catalog_epoch_jyear
 from ..errors import InvalidInputError
-from ..frames import EPOCH_RANGE_JYEAR, jyear_tdb
-from ..frames import epoch_jyear as frames_epoch_jyear
 
 if TYPE_CHECKING:
     from astropy.time import Time
@@ -60,14 +60,14 @@ class Epoch:
 def epoch_jyear(epoch: Time | float | None) -> float:
     """A catalog epoch as a Julian year (TDB): None gives J2000.0; accepts astropy Time or a year.
 
-    :func:`startrack.frames.epoch_jyear` (the one converter) with None as the default epoch.
+    :func:`startrack.catalog.epoch_jyear` (the one converter) with None as the default epoch.
 
     Raises
     ------
     InvalidInputError
         For a year outside 1000-3000, a non-number, or a Time that is not a single instant.
     """
-    return DEFAULT_EPOCH_JYEAR if epoch is None else frames_epoch_jyear(epoch)
+    return DEFAULT_EPOCH_JYEAR if epoch is None else catalog_epoch_jyear(epoch)
 
 
 def parse_utc(text: str, name: str = "time") -> Time:
@@ -140,7 +140,7 @@ def _card_number(header: Mapping[str, Any], key: str, what: str) -> float:
     if not math.isfinite(number):
         raise InvalidInputError(f"the image header's {key} = {value!r} is not {what}; "
                                 "give the epoch to override it")
-    return frames_epoch_jyear(number, f"the epoch in the image header's {key}") if key == "CATEPOCH" else number
+    return catalog_epoch_jyear(number, f"the epoch in the image header's {key}") if key == "CATEPOCH" else number
 
 
 def _header_time(header: Mapping[str, Any], key: str) -> float:
@@ -160,4 +160,4 @@ def _header_time(header: Mapping[str, Any], key: str) -> float:
     except (InvalidInputError, ValueError) as exc:
         raise InvalidInputError(f"the image header's {key} = {header[key]!r} is not a time ({exc}); "
                                 "give the epoch to override it") from None
-    return frames_epoch_jyear(jyear_tdb(when), f"the epoch from the image header's {key}")
+    return catalog_epoch_jyear(jyear_tdb(when), f"the epoch from the image header's {key}")

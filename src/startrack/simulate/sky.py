@@ -19,8 +19,8 @@ from astropy.time import Time
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from .. import frames
 from ..camera import Camera
+from ..catalog import epoch_jyear as checked_jyear
 from ..errors import InvalidInputError
 from ..frames import angle_between, boresight
 from .background import SkyBackground
@@ -108,7 +108,7 @@ class SkyModel:
         subset = cat.brighter_than(_max_mag(max_mag), band=band)
         mags = np.asarray(subset.v_mag if band == "v" else subset.hp_mag, dtype=float)
         keep = np.isfinite(mags)
-        epoch = None if epoch_jyear is None else frames.epoch_jyear(epoch_jyear, "epoch_jyear")
+        epoch = None if epoch_jyear is None else checked_jyear(epoch_jyear, "epoch_jyear")
         return cls(vectors_icrs=np.asarray(subset.vectors(epoch), dtype=float)[keep],
                    mags=mags[keep], ids=np.asarray(subset.hip)[keep],
                    b_v=np.asarray(subset.b_v, dtype=float)[keep],
@@ -199,7 +199,7 @@ def simulate_frame(camera: Camera, rot_cam_from_icrs: Rotation | AttitudeProfile
     """
     sensor = DEFAULT_SENSOR if sensor is None else sensor
     if sky is None:
-        epoch = None if epoch_jyear is None else frames.epoch_jyear(epoch_jyear, "epoch_jyear")
+        epoch = None if epoch_jyear is None else checked_jyear(epoch_jyear, "epoch_jyear")
         sky = _default_sky(_max_mag(max_mag), epoch, "v")
     profile, moving = attitude_profile(rot_cam_from_icrs, rate_rad_s)
     shutter = (FrameTiming() if timing is None else timing).shutter(sensor.exposure_s, camera.height)

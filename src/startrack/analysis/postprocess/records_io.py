@@ -39,9 +39,9 @@ from scipy.spatial.transform import Rotation
 from ...calibrate.ground import time_from_header
 from ...calibrate.sites import Site, get_site
 from ...camera import Camera, get_preset
+from ...catalog import jyear_tdb
 from ...detect import StarDetector
 from ...errors import ImageReadError, InvalidInputError
-from ...frames import jyear_tdb
 from ...io import Image, read_image
 from ...io.image import IMAGE_SUFFIXES
 from ...results import AttitudeSolution, Status
