@@ -7,7 +7,7 @@ either side (rounding). :func:`query_cone` is the one cone query over a k-d tree
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -27,7 +27,7 @@ def _radius_chord(radius_rad: float) -> float:
 
 
 def query_cone(tree: cKDTree, centers: ArrayLike, radius_rad: float, *, return_sorted: bool | None = None,
-               workers: int = 1) -> list[int] | NDArray[np.object_]:
+               workers: int = 1) -> Any:
     """Indices of the points of ``tree`` (unit vectors) within ``radius_rad`` of ``centers``.
 
     Parameters
@@ -42,7 +42,8 @@ def query_cone(tree: cKDTree, centers: ArrayLike, radius_rad: float, *, return_s
 
     Returns
     -------
-    list of int for one centre; an object array (M,) of lists for several.
+    list of int for one centre; an object array (M,) of lists of int for several (typed ``Any``:
+    which one depends on the shape of ``centers``).
     """
     return tree.query_ball_point(centers, _radius_chord(radius_rad), return_sorted=return_sorted,
                                  workers=workers)
