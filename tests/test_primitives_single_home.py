@@ -113,8 +113,6 @@ COPIES = {
     "epoch": (re.compile(r"\.tdb\.jyear"), {"catalog/epoch.py": 1}),
     "chord": (re.compile(r"2(\.0)? \* (math|np)\.sin\((0\.5 \* )?[^)]*(/ 2(\.0)?)?\)(?! \*\*)"), {
         "catalog/chord.py": 1,
-        "identify/database.py": 1,  # not ours to edit: uses its own _chord (lead: chord_from_angle)
-        "identify/overlay.py": 1,  # not ours to edit (lead: query_cone)
     }),
     "arc": (re.compile(r"(np\.arcsin|math\.asin)\((np\.minimum\()?(min\(1\.0, )?0\.5 \*"), {
         "catalog/chord.py": 1,
@@ -124,8 +122,6 @@ COPIES = {
         "catalog/cone.py": 1,
         "identify/verify.py": 1,  # field_cone takes a cKDTree or the compiled SkyBands (chord from chord_from_angle)
         "identify/refine.py": 1,  # SkyBands' warm-up call, not a cKDTree
-        "identify/database.py": 1,  # not ours to edit (lead: query_cone)
-        "identify/overlay.py": 1,  # not ours to edit (lead: query_cone)
         "rate/streak_predict.py": 1,  # a ball in pixels, not a cone on the sphere
     }),
 }

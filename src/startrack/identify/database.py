@@ -41,7 +41,7 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from .. import cache
-from ..catalog import flag_doubles, load_catalog
+from ..catalog import flag_doubles, load_catalog, query_cone
 from ..catalog.thinning import fibonacci_sphere
 from ..errors import InvalidInputError, require
 from .patterns import edge_ratios, pair_angles
@@ -173,10 +173,6 @@ class PatternDatabase:
 
 
 # --- building ---------------------------------------------------------------------------------
-def _chord(angle_rad: float) -> float:
-    return 2.0 * math.sin(angle_rad / 2.0)
-
-
 def _brightest_near(tree: cKDTree, usable: NDArray[np.bool_], spacing_rad: float,
                     radius_rad: float, count: int) -> list[NDArray[np.int64]]:
     """For sample directions at ``spacing_rad``, the ``count`` brightest usable stars within radius.
@@ -184,7 +180,7 @@ def _brightest_near(tree: cKDTree, usable: NDArray[np.bool_], spacing_rad: float
     Stars are indexed brightest first, so the brightest are the smallest indices.
     """
     n_points = max(12, int(4.0 * math.pi / spacing_rad**2))
-    neighbours = tree.query_ball_point(fibonacci_sphere(n_points), _chord(radius_rad))
+    neighbours = query_cone(tree, fibonacci_sphere(n_points), radius_rad)
     regions = []
     for found in neighbours:
         idx = np.sort(np.asarray(found, dtype=np.int64))

@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
+from ..catalog import query_cone
 from ..errors import InvalidInputError
 from ..results import Status
 from .candidate import MatchOutcome
@@ -168,8 +169,7 @@ def _crop(stars: StarSet, prior_rot: Rotation, camera: Camera, span: float) -> N
     """Catalog vectors in the prior's camera frame within the field plus ``span``, shape (M, 3)
     (Fowler 2013's "attitude deviation" crop)."""
     radius = min(math.radians(camera.fov_diagonal_deg) / 2.0 + span, 1.2)
-    idx = np.asarray(stars.tree.query_ball_point(prior_rot.inv().apply([0.0, 0.0, 1.0]),
-                                                 2.0 * math.sin(radius / 2.0)), dtype=np.int64)
+    idx = np.asarray(query_cone(stars.tree, prior_rot.inv().apply([0.0, 0.0, 1.0]), radius), dtype=np.int64)
     if stars.keep is not None and idx.size:
         idx = idx[stars.keep(idx)]
     return prior_rot.apply(stars.vectors[np.sort(idx)]).reshape(-1, 3)
