@@ -72,9 +72,10 @@ def test_tiled_background_follows_a_gradient_and_keeps_the_noise():
 def test_tiled_background_scale_and_offset_map_binned_to_full_pixels():
     rng = np.random.default_rng(4)
     binned = 10.0 + rng.normal(0, 1.0, (64, 64))
-    model = background.tiled_background(binned, 16, scale=2.0, offset=0.5)
-    assert model.centres_x[0] == pytest.approx(0.5 + 2 * 7.5)
-    assert model.centres_y[-1] == pytest.approx(0.5 + 2 * (48 + 7.5))
+    tiles = background.tiled_background(binned, 16, scale=2.0, offset=0.5).tiles
+    assert tiles is not None
+    assert tiles.centres_x[0] == pytest.approx(0.5 + 2 * 7.5)  # px
+    assert tiles.centres_y[-1] == pytest.approx(0.5 + 2 * (48 + 7.5))  # px
 
 
 def test_clutter_ratio_is_one_on_stars_and_high_on_structure():
@@ -87,7 +88,7 @@ def test_clutter_ratio_is_one_on_stars_and_high_on_structure():
     clutter = model.clutter_at(np.array([50.0, 100.0, 240.0]), np.array([50.0, 150.0, 100.0]))
     assert clutter[0] < 1.5 and clutter[1] < 1.5
     assert clutter[2] > 5
-    assert background.global_background(image).clutter_grid is None
+    assert background.global_background(image).tiles is None
 
 
 def test_tile_quantiles_leave_nan_out_and_fill_empty_tiles():

@@ -103,31 +103,6 @@ class BackgroundModel:
     def is_tiled(self) -> bool:
         return self.tiles is not None
 
-    @property
-    def level_grid(self) -> NDArray[np.float64] | None:
-        """Per-tile level, shape (ny, nx); None for a constant model."""
-        return None if self.tiles is None else self.tiles.level
-
-    @property
-    def noise_grid(self) -> NDArray[np.float64] | None:
-        """Per-tile noise, shape (ny, nx); None for a constant model."""
-        return None if self.tiles is None else self.tiles.noise
-
-    @property
-    def clutter_grid(self) -> NDArray[np.float64] | None:
-        """Per-tile clutter ratio, shape (ny, nx); None for a constant model."""
-        return None if self.tiles is None else self.tiles.clutter
-
-    @property
-    def centres_y(self) -> NDArray[np.float64] | None:
-        """Tile-centre rows, shape (ny,); None for a constant model."""
-        return None if self.tiles is None else self.tiles.centres_y
-
-    @property
-    def centres_x(self) -> NDArray[np.float64] | None:
-        """Tile-centre columns, shape (nx,); None for a constant model."""
-        return None if self.tiles is None else self.tiles.centres_x
-
     def maps(self, ys: NDArray, xs: NDArray) -> tuple[NDArray | float, NDArray | float]:
         """Level and noise on the grid of rows ``ys`` x columns ``xs``: float32 arrays of shape
         (len(ys), len(xs)), or the two floats for a constant model."""
