@@ -29,12 +29,13 @@ _DTYPES: dict[int, np.dtype] = {8: np.dtype(np.uint8), 16: np.dtype(">u2")}
 
 
 def _header_bytes(path: Path, max_blocks: int) -> bytes | None:
-    """The primary header's blocks up to the one holding END, or None if there is none in reach."""
+    """The primary header's blocks up to the one holding END, or None if there is none in reach
+    (or the file is gzip-compressed)."""
     with open(path, "rb") as fh:
         head = b""
         for _ in range(max_blocks):
             block = fh.read(BLOCK)
-            if len(block) < BLOCK:
+            if len(block) < BLOCK or (not head and block[:2] == b"\x1f\x8b"):
                 return None
             head += block
             if any(block[i:i + 8] == b"END     " for i in range(0, BLOCK, 80)):
@@ -74,9 +75,6 @@ def read_plain_fits(path: Path, max_pixels: int | None, max_blocks: int) -> tupl
         or int16 (BITPIX 16, BZERO 0), as astropy returns them. None for a gzip file, a header
         this module does not read, or a file shorter than its header says (astropy then says why).
     """
-    with open(path, "rb") as fh:
-        if fh.read(2) == b"\x1f\x8b":
-            return None
     head = _header_bytes(path, max_blocks)
     if head is None:
         return None
