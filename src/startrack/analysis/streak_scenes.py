@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, require
 from ..simulate import (
     RSO,
     Detector,
@@ -165,8 +165,9 @@ def render_streak_scene(
     end[t.ids] = np.stack([t.x_end, t.y_end], axis=1)
     is_rso = np.zeros(count, dtype=bool)
     if rso is not None:
-        start[-1] = [t.rsos.x_start[0], t.rsos.y_start[0]]
-        end[-1] = [t.rsos.x_end[0], t.rsos.y_end[0]]
+        rsos = require(t.rsos, "the simulated truth's RSO tracks")
+        start[-1] = [rsos.x_start[0], rsos.y_start[0]]
+        end[-1] = [rsos.x_end[0], rsos.y_end[0]]
         is_rso[-1] = True
         icrs = np.vstack([icrs, rso.lines_of_sight(np.array([[-exposure_s / 2]]), np.array([0]))[0]])
     return StreakScene(np.asarray(sim.image, dtype=float), camera, t.rot_start, t.rot_end, omega, exposure_s,
