@@ -25,8 +25,9 @@ from .identify.candidate import Candidate
 from .identify.field_stars import FieldStars
 from .identify.final_fit import settle_matches
 from .identify.image_epoch import DEFAULT_EPOCH_JYEAR, epoch_jyear, resolve_epoch
+from .identify.options_base import MatcherOptionsBase
 from .identify.refine import pixel_vectors, solution_terms
-from .identify.registry import DEFAULT_FOV_RANGE_DEG, check_method, prepare_matcher
+from .identify.registry import DEFAULT_FOV_RANGE_DEG, MethodName, check_options, prepare_matcher
 from .identify.request import FOV_DEG_TOLERANCE, SolveRequest, build_request, check_fov_deg
 from .identify.request import star_arrays as _star_arrays  # noqa: F401 (startrack.multihead checks heads with it)
 from .results import AttitudeSolution, StarMatches, Status
@@ -72,7 +73,7 @@ def _hip() -> np.ndarray:
     return load_catalog().hip
 
 
-def _run(problem: SolveRequest, method: str, options: object | None) -> AttitudeSolution:
+def _run(problem: SolveRequest, method: MethodName, options: MatcherOptionsBase | None) -> AttitudeSolution:
     """Run the named matcher on a validated request and build the solution (or the failure)."""
     matcher, stars = prepare_matcher(method, problem)  # loads (or builds) the database first
     t0 = time.perf_counter()
@@ -81,15 +82,6 @@ def _run(problem: SolveRequest, method: str, options: object | None) -> Attitude
         return AttitudeSolution(status=outcome.status, reason=outcome.reason, solve_time_s=time.perf_counter() - t0,
                                 epoch_jyear=problem.epoch.jyear, epoch_source=problem.epoch.source)
     return _solution(problem, stars, outcome.candidate, t0)
-
-
-def _check_method(method: str, options: object | None) -> None:
-    from .identify.registry import OPTIONS
-
-    method = check_method(method)
-    if options is not None and not isinstance(options, OPTIONS[method]):
-        raise InvalidInputError(f"options for the {method} matcher must be a {OPTIONS[method].__name__} "
-                                f"(startrack.identify.registry.options_for), got {type(options).__name__}")
 
 
 def _check_prior(prior_rot_cam_from_icrs, prior_sigma_deg) -> float:
@@ -108,7 +100,7 @@ def _check_prior(prior_rot_cam_from_icrs, prior_sigma_deg) -> float:
 def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height: int | None = None,
                 fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
                 camera: Camera | None = None, flux: ArrayLike | None = None, epoch: Time | float | None = None,
-                method: str = "quads", options: object | None = None,
+                method: MethodName = "quads", options: MatcherOptionsBase | None = None,
                 prior_rot_cam_from_icrs: Rotation | None = None, prior_sigma_deg: float = 1.0,
                 pixel_aspect: float | tuple[float, float] | None = None) -> AttitudeSolution:
     """Lost-in-space attitude from a list of star centroids.
@@ -132,16 +124,19 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
     epoch : astropy.time.Time or float, optional
         Epoch of the catalog positions (Julian year, TDB); default J2000.0. The solution says
         which it used (``epoch_jyear``, ``epoch_source``).
-    method : str
+    method : MethodName
         The matcher (:data:`startrack.identify.registry.MethodName`; another name is refused
         with the valid ones): "quads", four-star patterns
         (the default; any FOV knowledge); the seeds' matchers on the star-pair directory, which
         need a FOV known to 5 % or a camera ("pyramid", "angle", "triangle-planar",
         "triangle-spherical", "nvertex-3", "nvertex-4", "nvertex-5", "van-bezooijen"); or
         "overlay", which needs a prior attitude. See ``docs/identification.md``.
-    options : dataclass, optional
-        Settings of the chosen matcher (``MatcherOptions`` for "quads", ``PyramidOptions`` for
-        "pyramid", and so on).
+    options : MatcherOptionsBase, optional
+        Settings of the chosen matcher, an instance of its subclass of
+        :class:`startrack.identify.options_base.MatcherOptionsBase` (``MatcherOptions`` for
+        "quads", ``PyramidOptions`` for "pyramid", and so on: ``registry.OPTIONS[method]``, or
+        ``registry.options_for(method, ...)``); another matcher's class is refused, naming the
+        method, the class given and the one expected.
     prior_rot_cam_from_icrs : Rotation, optional
         Prior attitude for the "overlay" matcher.
     prior_sigma_deg : float
@@ -165,7 +160,7 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
         For NaN, masked or out-of-frame coordinates, a bad image size, field of view, pixel
         aspect, epoch, camera, options or prior.
     """
-    _check_method(method, options)
+    method = check_options(method, options)
     sigma = _check_prior(prior_rot_cam_from_icrs, prior_sigma_deg)
     request = build_request(x, y, width=width, height=height, fov_deg=fov_deg, fov_range_deg=fov_range_deg,
                             camera=camera, flux=flux, epoch=resolve_epoch(epoch), pixel_aspect=pixel_aspect)
@@ -188,7 +183,7 @@ def search_order(found) -> np.ndarray:
 def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | None = None,
                 fov_range_deg: tuple[float, float] | None = None, camera: Camera | None = None,
                 epoch: Time | float | None = None, channel: str | int | None = None,
-                detector=None, method: str = "quads", options: object | None = None,
+                detector=None, method: MethodName = "quads", options: MatcherOptionsBase | None = None,
                 pixel_aspect: float | tuple[float, float] | None = None) -> AttitudeSolution:
     """Lost-in-space attitude of an image: read, detect, solve.
 
@@ -228,7 +223,7 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
 
     if detector is not None and not isinstance(detector, StarDetector):
         raise InvalidInputError(f"detector must be a startrack.detect.StarDetector, got {type(detector).__name__}")
-    _check_method(method, options)
+    method = check_options(method, options)
     img = image if isinstance(image, Image) else read_image(image, channel=channel)
     when = resolve_epoch(epoch, img.header)
     height, width = img.data.shape[:2]

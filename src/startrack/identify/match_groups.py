@@ -56,11 +56,12 @@ from ..results import Status
 from .candidate import MatchOutcome
 from .confirm import Confirmer, StarSet, match_radius_px
 from .kvector import KVector
+from .options_base import MatcherOptionsBase
 from .pair_database import PairDatabase
 
 
 @dataclass(frozen=True)
-class VanBezooijenOptions:
+class VanBezooijenOptions(MatcherOptionsBase):
     """Settings of the van Bezooijen matcher.
 
     Attributes
@@ -77,10 +78,7 @@ class VanBezooijenOptions:
     """
 
     stars: int = 8
-    verify_stars: int = 40
     centroid_sigma_px: float = 0.5
-    match_radius_px: float | None = None
-    max_false_match_prob: float = 1e-6
     timeout_s: float = 5.0
     distance_tolerance_rad: float | None = None
     mag_tolerance: float = 0.45

@@ -34,6 +34,7 @@ from ..results import Status
 from .candidate import MatchOutcome
 from .confirm import LOOSE_RADIUS_FACTOR, Confirmer, StarSet, match_radius_px
 from .field_stars import field_stars
+from .options_base import MatcherOptionsBase
 from .refine import refine_pointing
 from .verify import match_nearest, project_stars
 
@@ -42,7 +43,7 @@ MAX_PRIOR_SIGMA_DEG = 10.0
 
 
 @dataclass(frozen=True)
-class OverlayOptions:
+class OverlayOptions(MatcherOptionsBase):
     """Settings of the overlay matcher.
 
     Attributes
@@ -60,9 +61,6 @@ class OverlayOptions:
         Match-and-refit rounds of each hypothesis.
     """
 
-    verify_stars: int = 40
-    match_radius_px: float | None = None
-    max_false_match_prob: float = 1e-6
     search_sigmas: float = 3.0
     vote_bin_px: float | None = None
     hypotheses: int = 5

@@ -38,12 +38,13 @@ from ..frames import angle_between, cross
 from ..results import Status
 from .candidate import MatchOutcome
 from .confirm import Confirmer, StarSet, match_radius_px
+from .options_base import MatcherOptionsBase
 from .pair_database import PairDatabase
 from .star_order import further_stars, ordered_star_sets
 
 
 @dataclass(frozen=True)
-class PairSearchOptions:
+class PairSearchOptions(MatcherOptionsBase):
     """Settings shared by the pivoting matchers (the first six as :class:`.pyramid.PyramidOptions`).
 
     Attributes
@@ -67,10 +68,7 @@ class PairSearchOptions:
     """
 
     stars: int = 12
-    verify_stars: int = 40
     centroid_sigma_px: float = 0.5
-    match_radius_px: float | None = None
-    max_false_match_prob: float = 1e-6
     timeout_s: float = 5.0
     max_pivots: int = 4
     max_confirm: int = 6

@@ -28,18 +28,16 @@ from ..frames import angle_between
 from ..results import Status
 from .candidate import MatchOutcome
 from .confirm import Confirmer, StarSet, match_radius_px
+from .options_base import MatcherOptionsBase
 from .pair_database import PairDatabase
 
 
 @dataclass(frozen=True)
-class PyramidOptions:
-    """Settings of the Pyramid matcher (see :class:`.quad_matcher.MatcherOptions` for the shared ones)."""
+class PyramidOptions(MatcherOptionsBase):
+    """Settings of the Pyramid matcher (:class:`.options_base.MatcherOptionsBase` has the shared ones)."""
 
     stars: int = 12
-    verify_stars: int = 40
     centroid_sigma_px: float = 0.5
-    match_radius_px: float | None = None
-    max_false_match_prob: float = 1e-6
     timeout_s: float = 5.0
 
 

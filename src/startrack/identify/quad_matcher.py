@@ -37,6 +37,7 @@ from ..results import Status
 from .candidate import Candidate, MatchOutcome
 from .confirm import Confirmer, StarSet, match_radius_px
 from .database import PatternDatabase
+from .options_base import MatcherOptionsBase
 from .quad_search import Fits, SearchSetup, focal_grid, search_batch, warm_up
 from .refine import pixel_vectors
 from .verify import SkyBands
@@ -46,7 +47,7 @@ MAX_RATIO_TOLERANCE = 0.1
 
 
 @dataclass(frozen=True)
-class MatcherOptions:
+class MatcherOptions(MatcherOptionsBase):
     """Settings of the lost-in-space matcher.
 
     Attributes
@@ -80,10 +81,7 @@ class MatcherOptions:
     """
 
     pattern_stars: int = 20
-    verify_stars: int = 40
     centroid_sigma_px: float = 0.5
-    match_radius_px: float | None = None
-    max_false_match_prob: float = 1e-6
     focal_step: float = 0.0015
     timeout_s: float = 5.0
     max_distortion: float = 0.05

@@ -19,10 +19,11 @@ import math
 from collections.abc import Callable, Iterator, Mapping
 from functools import partial
 from importlib import import_module
-from typing import TYPE_CHECKING, Literal, Protocol, get_args
+from typing import TYPE_CHECKING, Literal, Protocol, TypeVar, get_args
 
 from ..errors import InvalidInputError
 from .database import DB_MAX_FOV_DEG, DatabaseSettings
+from .options_base import MatcherOptionsBase
 
 if TYPE_CHECKING:
     import numpy as np
@@ -83,8 +84,18 @@ class MatchRequest(Protocol):
     def fit_aspect(self) -> bool: ...
 
 
-Matcher = Callable[[object | None], "MatchOutcome"]
+Matcher = Callable[[MatcherOptionsBase | None], "MatchOutcome"]
 """A prepared matcher: called with its options (or None), returns the outcome."""
+
+_O = TypeVar("_O", bound=MatcherOptionsBase)
+
+
+def _own(options: MatcherOptionsBase | None, name: str, cls: type[_O]) -> _O | None:
+    """``options`` as the ``name`` matcher's class ``cls`` (None stays None); another class is refused."""
+    if options is None or isinstance(options, cls):
+        return options
+    raise InvalidInputError(f"options for the {name} matcher must be a {cls.__name__}, "
+                            f"got a {type(options).__name__}")
 
 
 def database_settings_for(fov_range_deg: tuple[float, float] = DEFAULT_FOV_RANGE_DEG) -> DatabaseSettings:
@@ -113,14 +124,15 @@ def _load(module: str, name: str):
 def _quads(request: MatchRequest) -> tuple[Matcher, FieldStars]:
     from .database import load_database
     from .field_stars import field_stars
-    from .quad_matcher import match_lost_in_space
+    from .quad_matcher import MatcherOptions, match_lost_in_space
     from .quad_search import warm_up
 
     db = load_database(database_settings_for(request.fov_range_deg))
     warm_up(db)
 
-    def run(options):
-        return match_lost_in_space(request.x, request.y, request.camera, db, request.focal_range, options,
+    def run(options: MatcherOptionsBase | None) -> MatchOutcome:
+        return match_lost_in_space(request.x, request.y, request.camera, db, request.focal_range,
+                                   _own(options, "quads", MatcherOptions),
                                    aspect_range=request.aspect_range, fit_aspect=request.fit_aspect)
 
     return run, field_stars(db.settings.max_mag, request.epoch_jyear)
@@ -154,7 +166,7 @@ def _on_pairs(module: str, function: str, name: str,
         settings = PairSettings(fov_deg=float(math.ceil(camera.fov_diagonal_deg * (1 + tolerance))))
         pdb = load_pair_database(settings)
 
-        def run(options):
+        def run(options: MatcherOptionsBase | None) -> MatchOutcome:
             return match(request.x, request.y, camera, pdb, focal_tolerance=tolerance, options=options)
 
         return run, field_stars(settings.max_mag, request.epoch_jyear)
@@ -164,7 +176,7 @@ def _on_pairs(module: str, function: str, name: str,
 
 def _overlay(request: MatchRequest) -> tuple[Matcher, FieldStars]:
     from .field_stars import field_stars
-    from .overlay import catalog_star_set, match_overlay
+    from .overlay import OverlayOptions, catalog_star_set, match_overlay
     from .pair_database import PairSettings
 
     if request.prior_rot is None:
@@ -172,9 +184,10 @@ def _overlay(request: MatchRequest) -> tuple[Matcher, FieldStars]:
     camera, _ = _known_focal(request, "overlay")
     stars = catalog_star_set(OVERLAY_MAX_MAG, request.epoch_jyear)
 
-    def run(options):
+    def run(options: MatcherOptionsBase | None) -> MatchOutcome:
         return match_overlay(request.x, request.y, camera, stars, request.prior_rot,
-                             prior_sigma_deg=request.prior_sigma_deg, options=options)
+                             prior_sigma_deg=request.prior_sigma_deg,
+                             options=_own(options, "overlay", OverlayOptions))
 
     return run, field_stars(PairSettings.max_mag, request.epoch_jyear)
 
@@ -194,7 +207,7 @@ MATCHERS: dict[MethodName, Callable[[MatchRequest], tuple[Matcher, FieldStars]]]
 """Matchers by name (see the module docstring); each imports its modules when it is called."""
 
 
-class _Options(Mapping[str, type]):
+class _Options(Mapping[str, type[MatcherOptionsBase]]):
     """The options dataclass of each matcher, imported when it is looked up."""
 
     _WHERE: dict[str, tuple[str, str]] = {
@@ -206,7 +219,7 @@ class _Options(Mapping[str, type]):
         "overlay": ("overlay", "OverlayOptions"),
     }
 
-    def __getitem__(self, method: str) -> type:
+    def __getitem__(self, method: str) -> type[MatcherOptionsBase]:
         return _load(*self._WHERE[method])
 
     def __iter__(self) -> Iterator[str]:
@@ -216,8 +229,9 @@ class _Options(Mapping[str, type]):
         return len(self._WHERE)
 
 
-OPTIONS: Mapping[str, type] = _Options()
-"""The options dataclass of each matcher (a read-only mapping; a look-up imports its module)."""
+OPTIONS: Mapping[str, type[MatcherOptionsBase]] = _Options()
+"""The options dataclass of each matcher, a subclass of :class:`.options_base.MatcherOptionsBase`
+(a read-only mapping; a look-up imports its module)."""
 
 
 def check_method(method: str) -> MethodName:
@@ -228,7 +242,26 @@ def check_method(method: str) -> MethodName:
     raise InvalidInputError(f"method must be one of {', '.join(METHOD_NAMES)}, got {method!r}")
 
 
-def options_for(method: str, **settings) -> object:
+def check_options(method: str, options: object) -> MethodName:
+    """``method`` as a :data:`MethodName`, after checking that ``options`` (None or a dataclass)
+    are that matcher's options class (:data:`OPTIONS`).
+
+    Raises
+    ------
+    InvalidInputError
+        For an unknown method (naming the valid ones), or options of another class (naming the
+        method, the class given and the class it takes).
+    """
+    name = check_method(method)
+    expected = OPTIONS[name]
+    if options is not None and not isinstance(options, expected):
+        raise InvalidInputError(f"options for the {name} matcher must be a {expected.__name__} "
+                                f"(startrack.identify.registry.options_for({name!r}, ...)), "
+                                f"got a {type(options).__name__}")
+    return name
+
+
+def options_for(method: str, **settings) -> MatcherOptionsBase:
     """The named matcher's options with some settings changed, e.g. ``options_for("pyramid", timeout_s=2)``."""
     method = check_method(method)
     try:
@@ -237,10 +270,10 @@ def options_for(method: str, **settings) -> object:
         raise InvalidInputError(f"bad option for the {method} matcher: {exc}") from None
 
 
-def prepare_matcher(method: str, request: MatchRequest) -> tuple[Matcher, FieldStars]:
+def prepare_matcher(method: MethodName | str, request: MatchRequest) -> tuple[Matcher, FieldStars]:
     """The named matcher, ready to run on the request, and the stars of the final re-match."""
     return MATCHERS[check_method(method)](request)
 
 
 __all__ = ["DEFAULT_FOV_RANGE_DEG", "MATCHERS", "METHOD_NAMES", "OPTIONS", "MatchRequest", "MethodName",
-           "check_method", "database_settings_for", "options_for", "prepare_matcher"]
+           "check_method", "check_options", "database_settings_for", "options_for", "prepare_matcher"]

@@ -37,6 +37,7 @@ from ..errors import InvalidInputError, require
 from ..frames import angle_between
 from ..identify.field_stars import field_stars
 from ..identify.registry import MATCHERS
+from ..identify.registry import check_method as matcher_name
 from ..results import AttitudeSolution, StarMatches, Status
 from ..rig import CameraRig
 from ..solve import epoch_jyear, solve_stars
@@ -155,7 +156,8 @@ def _lost_in_space(work: _Work, stars: HeadStars) -> AttitudeSolution:
             sol = AttitudeSolution(status=Status.TOO_FEW_STARS, reason=f"head {head.name!r}: {len(stars)} star(s); "
                                    f"lost-in-space on one head needs {LIS_MIN_STARS}")
         else:
-            sol = solve_stars(stars.x, stars.y, camera=head.camera, epoch=work.epoch, method=work.method)
+            sol = solve_stars(stars.x, stars.y, camera=head.camera, epoch=work.epoch,
+                              method=matcher_name(work.method))
             if sol.solved:
                 sol = replace(sol, matches=replace(sol.matches, det_index=stars.index[sol.matches.det_index]))
             else:

@@ -46,6 +46,7 @@ from ..calibrate.sites import Site
 from ..camera import Camera
 from ..detect import StarDetector
 from ..errors import InvalidInputError, require
+from ..identify.registry import check_method
 from ..io import Image, read_image
 from ..results import AttitudeSolution
 from ..solve import DEFAULT_EPOCH_JYEAR, solve_image
@@ -162,7 +163,7 @@ def _fov_kwargs(opts: dict[str, Any], image: Image) -> dict[str, Any]:
 
 def _identify(image: Image, detector: StarDetector, fov: dict[str, Any], epoch, method: str) -> AttitudeSolution:
     """:func:`startrack.solve_image` of the job (epoch None: from the header, else J2000.0)."""
-    return solve_image(image, detector=detector, epoch=epoch, method=method, **fov)
+    return solve_image(image, detector=detector, epoch=epoch, method=check_method(method), **fov)
 
 
 def _attitude(solution: AttitudeSolution, image: Image, detector: StarDetector, fov: dict[str, Any],

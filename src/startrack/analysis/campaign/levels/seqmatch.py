@@ -37,7 +37,7 @@ from scipy.spatial.transform import Rotation
 from ....camera import Camera
 from ....errors import require
 from ....frames import attitude_error
-from ....identify.registry import MATCHERS
+from ....identify.registry import MATCHERS, check_method
 from ....rate.from_attitudes import rate_between
 from ....results import AttitudeSolution, Detections, Status
 from ....simulate import ConstantRate, simulate_sequence
@@ -92,7 +92,7 @@ def render_sequence(params: Mapping[str, Any], rot: Rotation, rng: np.random.Gen
 
 
 def _solve(found: Detections, camera: Camera, method: str, epoch: float) -> AttitudeSolution:
-    return solve_stars(found.x, found.y, flux=found.flux, camera=camera, method=method, epoch=epoch)
+    return solve_stars(found.x, found.y, flux=found.flux, camera=camera, method=check_method(method), epoch=epoch)
 
 
 def absolute_chain(found: list[Detections], camera: Camera, method: str, epoch: float) -> list[AttitudeSolution]:
