@@ -39,6 +39,7 @@ so :func:`calibrate_bias_model` fits it as harmonics of the direction (:class:`E
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -46,7 +47,10 @@ from scipy import ndimage
 
 from ..errors import InvalidInputError
 
-DETECTORS = ("harris", "min_eigenvalue", "trajkovic4", "trajkovic8")
+CornerDetector = Literal["harris", "min_eigenvalue", "trajkovic4", "trajkovic8"]
+"""The corner detectors of :func:`cornerness` (Sease 2013 ch. 3)."""
+DETECTORS: tuple[CornerDetector, ...] = get_args(CornerDetector)
+"""The names of :data:`CornerDetector`, in its order."""
 SEED_HARRIS_K = 0.15
 """Sease 2013's hand-tuned Harris constant (p.24)."""
 HARRIS_K = 0.04
@@ -129,16 +133,23 @@ def trajkovic_response(roi: NDArray[np.float64], neighbours: int = 4, smooth_sig
     return np.min([_interpixel(img, a, a2, b, b2) for (a, a2), (b, b2) in pairs], axis=0)
 
 
-def cornerness(roi: ArrayLike, detector: str = "harris", **params) -> NDArray[np.float64]:
+def check_detector(detector: str) -> CornerDetector:
+    """``detector`` as a :data:`CornerDetector`; an InvalidInputError naming the valid ones if it is not one."""
+    for name in DETECTORS:
+        if detector == name:
+            return name
+    raise InvalidInputError(f"detector must be one of {', '.join(DETECTORS)}, got {detector!r}")
+
+
+def cornerness(roi: ArrayLike, detector: CornerDetector = "harris", **params) -> NDArray[np.float64]:
     """Cornerness map of a background-subtracted ROI for one of :data:`DETECTORS`."""
+    detector = check_detector(detector)
     img = np.asarray(roi, dtype=float)
     if detector == "harris":
         return harris_response(img, **params)
     if detector == "min_eigenvalue":
         return min_eigenvalue_response(img, **params)
-    if detector in ("trajkovic4", "trajkovic8"):
-        return trajkovic_response(img, neighbours=int(detector[-1]), **params)
-    raise InvalidInputError(f"detector must be one of {', '.join(DETECTORS)}, got {detector!r}")
+    return trajkovic_response(img, neighbours=int(detector[-1]), **params)  # trajkovic4 or trajkovic8
 
 
 def local_maxima(response: NDArray[np.float64], min_fraction: float) -> tuple[NDArray, NDArray]:
@@ -259,7 +270,7 @@ def _end_peaks(points: NDArray, strength: NDArray, path: StreakPath, end_radius_
 def locate_endpoints(
     roi: ArrayLike,
     origin_xy: ArrayLike = (0.0, 0.0),
-    detector: str = "harris",
+    detector: CornerDetector = "harris",
     *,
     mask: ArrayLike | None = None,
     half_window_px: int = HALF_WINDOW_PX,
@@ -278,8 +289,9 @@ def locate_endpoints(
         Background-subtracted pixels of one streak.
     origin_xy : array_like, shape (2,)
         Full-image (x, y) of ``roi[0, 0]``.
-    detector : str
-        One of :data:`DETECTORS`; ``params`` go to it (k, integration_sigma_px, ...).
+    detector : CornerDetector
+        One of :data:`DETECTORS` (another name is refused with the valid ones); ``params`` go
+        to it (k, integration_sigma_px, ...).
     mask : array_like of bool, shape (h, w), optional
         Pixels that belong to this streak or the background; False on other streaks that the
         ROI's bounding box takes in (long diagonal streaks), whose corners and light are then
@@ -307,6 +319,7 @@ def locate_endpoints(
         ``ok`` False with a reason for fewer than two peaks, peaks off the path, an end of the
         path without a peak, or peaks too close together.
     """
+    detector = check_detector(detector)
     img = np.asarray(roi, dtype=float)
     use = np.ones(img.shape, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
     response = np.where(use, cornerness(img, detector, **params), 0.0)

@@ -40,6 +40,7 @@ a piece of a star's path still contains the spin axis, so indicator (a) still ap
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -48,7 +49,10 @@ from ..camera import Camera
 from ..errors import InvalidInputError
 from .catalog_free import K_SIGMA
 
-INDICATORS = ("centre_of_rotation", "angular_displacement", "combined")
+IndicatorName = Literal["centre_of_rotation", "angular_displacement", "combined"]
+"""The three indicators (module docstring: (a), (b) and their combination)."""
+INDICATORS: tuple[IndicatorName, ...] = get_args(IndicatorName)
+"""The names of :data:`IndicatorName`, in its order: the keys of :class:`RsoIndicators`' maps."""
 ENDPOINT_FLOOR_PX = 0.1
 """Smallest end precision (1 sigma, px) the indicators assume. The segment fit's sigma of a
 bright streak (~0.01 px) counts photon noise only; its ends were measured 0.027 px rms (max
@@ -77,9 +81,9 @@ class RsoIndicators:
     value). ``candidates`` are the streak indices flagged by the combined indicator.
     """
 
-    values: dict[str, NDArray[np.float64]]
-    z: dict[str, NDArray[np.float64]]
-    flags: dict[str, NDArray[np.bool_]]
+    values: dict[IndicatorName, NDArray[np.float64]]
+    z: dict[IndicatorName, NDArray[np.float64]]
+    flags: dict[IndicatorName, NDArray[np.bool_]]
     axis: NDArray[np.float64]
     truncated: NDArray[np.bool_]
 
@@ -197,7 +201,7 @@ def rso_indicators(
     truncated = truncated_streaks(p1, p2, camera, edge_margin_px)
     axis, offsets = spin_axis(va, vb)
     sigma_cor, sigma_turn, sigma_combined = expected_scatter(va, vb, axis, sigma)
-    values = {
+    values: dict[IndicatorName, NDArray[np.float64]] = {
         "centre_of_rotation": offsets,
         "angular_displacement": np.where(truncated, np.nan, turn_angles(va, vb, axis)),
         "combined": np.where(truncated, np.nan, np.asarray(olae_residuals, dtype=float)),

@@ -14,6 +14,7 @@ from ..results import Detections
 
 if TYPE_CHECKING:  # the streak solver is imported by the calls that use it: solve_image imports
     # this module for every image, and a still frame never needs the solver
+    from ..identify.registry import MethodName
     from .streak_solve import StreakSolution
 
 SMEARED_ELONGATION = 3.0
@@ -33,7 +34,7 @@ def smear_elongation(detections) -> float:
 
 
 def solve_smeared_image(image, header, *, camera: Camera | None, fov_deg: float | None,
-                        fov_range_deg: tuple[float, float] | None, epoch, method: str,
+                        fov_range_deg: tuple[float, float] | None, epoch, method: MethodName,
                         pixel_aspect: float | tuple[float, float] | None) -> StreakSolution:
     """:func:`solve_streaked` for :func:`startrack.solve_image`: the exposure from the image header
     (:func:`header_exposure_s`; without one the rate is per exposure, ``turn_rad``) and the

@@ -26,6 +26,7 @@ detectors fail (Sease 2013 p.37-38), so the point-star solver is used there.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Final, Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -37,7 +38,7 @@ from ..camera import Camera
 from ..errors import InvalidInputError, require
 from ..results import AttitudeSolution, Status
 from .catalog_free import CatalogFreeRate, catalog_free_rate, consensus, regroup
-from .endpoints import DETECTORS, EndpointBias, locate_endpoints
+from .endpoints import CornerDetector, EndpointBias, check_detector, locate_endpoints
 from .estimate import RateEstimate, failed
 from .from_attitudes import rate_between
 from .grouping import CentreOfRotation, centre_of_rotation, group_endpoints
@@ -68,9 +69,22 @@ def length_mismatch(ends_xy: ArrayLike, length_moments_px: float,
     return abs(separation - length_moments_px) > tolerance[0] + tolerance[1] * length_moments_px
 
 
-SEGMENT = "segment"
+SEGMENT: Final = "segment"
 """The blurred-segment fit (:mod:`.segment_fit`): the default endpoint method."""
-METHODS = (SEGMENT, *DETECTORS)
+EndpointMethod = Literal["segment", CornerDetector]
+"""How :func:`measure_streaks` finds a streak's ends: the segment fit or a corner detector."""
+METHODS: tuple[EndpointMethod, ...] = get_args(EndpointMethod)
+"""The names of :data:`EndpointMethod`, in its order."""
+
+
+def check_endpoint_method(detector: str) -> EndpointMethod:
+    """``detector`` as an :data:`EndpointMethod`; an InvalidInputError naming the valid ones if it is not one."""
+    if detector == SEGMENT:
+        return SEGMENT
+    try:
+        return check_detector(detector)
+    except InvalidInputError:
+        raise InvalidInputError(f"detector must be one of {', '.join(METHODS)}, got {detector!r}") from None
 SEGMENT_FIND_OPTIONS = {"line_filter_px": 25.0, "threshold_sigma": 5.0, "margin_px": 6}
 """Segmentation for the segment fit: a 25-px line filter at 5 sigma keeps faint streaks whole."""
 MAX_END_SIGMA_PX = 2.0
@@ -165,8 +179,9 @@ def measure_streaks(
 ) -> StreakMeasurement:
     """Find the streaks of an image, locate and group their ends (module docstring).
 
-    ``detector`` is ``"segment"`` (the blurred-segment fit, :mod:`.segment_fit`, on a
-    line-filtered segmentation) or a corner detector of :mod:`.endpoints`. ``find_options`` go
+    ``detector`` is an :data:`EndpointMethod` (another name is refused with the valid ones):
+    ``"segment"`` (the blurred-segment fit, :mod:`.segment_fit`, on a line-filtered
+    segmentation) or a corner detector of :mod:`.endpoints`. ``find_options`` go
     to :func:`.streak_detect.find_streaks`, ``endpoint_options`` to
     :func:`.endpoints.locate_endpoints` (with ``detector`` and ``bias_px``). With a corner
     detector, a streak whose (bias-corrected) end separation differs from its moment length by
@@ -178,8 +193,7 @@ def measure_streaks(
     (:func:`.catalog_free.consensus`, marked in ``agree``). Fewer than two streaks give status
     TOO_FEW_STARS.
     """
-    if detector not in METHODS:
-        raise InvalidInputError(f"detector must be one of {', '.join(METHODS)}, got {detector!r}")
+    detector = check_endpoint_method(detector)
     img = np.asarray(image, dtype=float)
     defaults = SEGMENT_FIND_OPTIONS if detector == SEGMENT else {}
     found = find_streaks(img, **(defaults | (find_options or {})))
@@ -276,7 +290,7 @@ def streak_rate(
     camera: Camera,
     exposure_s: float,
     *,
-    detector: str = SEGMENT,
+    detector: EndpointMethod = SEGMENT,
     bias_px: float | EndpointBias = 0.0,
     prior_omega_rad_s: ArrayLike | None = None,
     k_sigma: float = 2.5,
@@ -293,7 +307,7 @@ def streak_rate(
         The calibrated camera (pixel -> vector).
     exposure_s : float
         Exposure time, seconds (the time between the two ends of every streak).
-    detector, bias_px : str, float
+    detector, bias_px : EndpointMethod, float
         Endpoint detector and its calibrated bias (:mod:`.endpoints`).
     prior_omega_rad_s : array_like, shape (3,), optional
         A rough rate of the right sign, to order the two ends in time.
@@ -305,6 +319,7 @@ def streak_rate(
     measurement : StreakMeasurement, optional
         Reuse an earlier :func:`measure_streaks` of this image.
     """
+    detector = check_endpoint_method(detector)
     meas = measurement or measure_streaks(image, camera, detector=detector, bias_px=bias_px)
     if meas.status is not Status.OK:
         return StreakRate(failed(meas.status, meas.reason, "catalog-free OLAE"), meas)

@@ -34,6 +34,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -43,6 +44,7 @@ from ..camera import Camera
 from ..errors import InvalidInputError, require
 from ..frames import radec_roll_from_rotation
 from ..identify.field_stars import field_stars
+from ..identify.registry import MethodName, check_method
 from ..results import AttitudeSolution, StarMatches, Status
 from ..units import DEG
 from .catalog_free import consensus
@@ -53,6 +55,9 @@ from .streak_model import JointFit, Timing, fit_joint, predict
 from .streak_predict import Field, Identified, concatenated, fit_predicted, v_mags, zero_point
 from .streak_screen import typical
 from .trust import consensus_tolerance_px
+
+if TYPE_CHECKING:
+    from astropy.time import Time
 
 METHOD = "streak joint fit"
 
@@ -201,6 +206,16 @@ def agreement_tolerance_px(length_px: ArrayLike) -> NDArray[np.float64]:
     return 2.0 + 0.03 * np.asarray(length_px, dtype=float)
 
 
+def checked_options(options: object) -> StreakOptions:
+    """``options`` (None: the defaults) as :class:`StreakOptions`; another class is refused."""
+    if options is None:
+        return StreakOptions()
+    if not isinstance(options, StreakOptions):
+        raise InvalidInputError(f"options of the streak path must be a startrack.rate.streak_solve.StreakOptions, "
+                                f"got a {type(options).__name__}")
+    return options
+
+
 def solve_streaked(
     image: ArrayLike,
     *,
@@ -208,10 +223,10 @@ def solve_streaked(
     fov_deg: float | None = None,
     fov_range_deg: tuple[float, float] | None = None,
     exposure_s: float | None = None,
-    epoch=None,
+    epoch: Time | float | None = None,
     prior_omega_rad_s: ArrayLike | None = None,
     options: StreakOptions | None = None,
-    method: str = "quads",
+    method: MethodName = "quads",
 ) -> StreakSolution:
     """Lost-in-space attitude at mid-exposure and the rate of a streaked frame (module docstring).
 
@@ -227,6 +242,7 @@ def solve_streaked(
     prior_omega_rad_s : array_like, shape (3,), optional
         A rough rate of the right sign (camera frame) that orders the exposure in time.
     options : StreakOptions, optional
+        Settings of the streak path (another class is refused, naming the class given).
 
     Returns
     -------
@@ -235,7 +251,8 @@ def solve_streaked(
         identification disagrees with the streaks' motion; ``rate`` then holds the catalog-free
         rate) or OK, with ``rate`` OK or saying why the rate is not trusted.
     """
-    opts = options or StreakOptions()
+    method = check_method(method)
+    opts = checked_options(options)
     img = np.asarray(image)
     clock = Stages()
     timing = _timing(exposure_s, opts.line_time_s, img.shape[0])

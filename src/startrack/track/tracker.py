@@ -38,6 +38,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any, Final, Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -54,11 +55,23 @@ from .inputs import checked_flux, checked_rate, checked_stars, checked_time
 from .quaternions import Quat, quat_conjugate, quat_matrix, quat_product, quat_rotvec, rotvec_quat
 from .windows import WindowMatcher
 
-LOST_IN_SPACE = "lost-in-space"
-TRACKING = "tracking"
-STREAK_LOST_IN_SPACE = "streak lost-in-space"
-STREAK_TRACKING = "streak tracking"
-POINT_MODE, STREAK_MODE = "point", "streak"
+if TYPE_CHECKING:
+    from astropy.time import Time
+
+    from ..rate.streak_solve import StreakOptions
+
+StepMode = Literal["lost-in-space", "tracking", "streak lost-in-space", "streak tracking"]
+"""How the Tracker solved a frame (:attr:`TrackStep.mode`)."""
+STEP_MODES: tuple[StepMode, ...] = get_args(StepMode)
+"""The names of :data:`StepMode`, in its order."""
+LOST_IN_SPACE: Final = "lost-in-space"
+TRACKING: Final = "tracking"
+STREAK_LOST_IN_SPACE: Final = "streak lost-in-space"
+STREAK_TRACKING: Final = "streak tracking"
+FrameMode = Literal["point", "streak"]
+"""The kind of image :meth:`Tracker.update_image` is in (:attr:`Tracker.mode`; module docstring)."""
+POINT_MODE: Final = "point"
+STREAK_MODE: Final = "streak"
 
 
 @dataclass(frozen=True)
@@ -105,9 +118,13 @@ class TrackerOptions:
     target_stars: int | None = None
     streak_on_px: float = 12.0
     streak_off_px: float = 8.0
-    streak: object | None = None
+    streak: StreakOptions | None = None
 
     def __post_init__(self) -> None:
+        if self.streak is not None:
+            from ..rate.streak_solve import checked_options
+
+            checked_options(self.streak)
         if not 0 < self.streak_off_px <= self.streak_on_px:
             raise InvalidInputError(f"streak_off_px must be positive and at most streak_on_px (hysteresis), got "
                                     f"{self.streak_off_px!r} and {self.streak_on_px!r}")
@@ -118,7 +135,7 @@ class TrackStep:
     """What the Tracker made of one frame."""
 
     t_s: float
-    mode: str
+    mode: StepMode
     status: Status
     reason: str = ""
     rot_cam_from_icrs: Rotation | None = None
@@ -135,6 +152,16 @@ class TrackStep:
             return (math.nan, math.nan, math.nan)
         ra, dec, roll = (float(np.degrees(a)) for a in radec_roll_from_rotation(self.rot_cam_from_icrs))
         return ra, dec, roll
+
+
+def _checked_options(options: object) -> TrackerOptions:
+    """``options`` (None: the defaults) as :class:`TrackerOptions`; another class is refused."""
+    if options is None:
+        return TrackerOptions()
+    if not isinstance(options, TrackerOptions):
+        raise InvalidInputError(f"options of the Tracker must be a startrack.track.tracker.TrackerOptions, "
+                                f"got a {type(options).__name__}")
+    return options
 
 
 class Tracker:
@@ -154,8 +181,8 @@ class Tracker:
     """
 
     def __init__(self, *, camera: Camera | None = None, width: int | None = None, height: int | None = None,
-                 fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None, epoch=None,
-                 options: TrackerOptions | None = None, rig=None):
+                 fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
+                 epoch: Time | float | None = None, options: TrackerOptions | None = None, rig=None):
         self._rig = None
         if rig is not None:
             if any(v is not None for v in (camera, width, height, fov_deg, fov_range_deg)):
@@ -165,9 +192,9 @@ class Tracker:
             self._rig = RigTracker(rig, epoch=epoch, options=options)
         elif camera is None and (width is None or height is None):
             raise InvalidInputError("give a camera, or the image width and height (and a FOV or FOV range)")
-        self.options = options or TrackerOptions()
-        self._lis_kwargs = {"width": width, "height": height, "fov_deg": fov_deg, "fov_range_deg": fov_range_deg,
-                            "epoch": epoch}
+        self.options = _checked_options(options)
+        self._lis_kwargs: dict[str, Any] = {"width": width, "height": height, "fov_deg": fov_deg,
+                                            "fov_range_deg": fov_range_deg, "epoch": epoch}
         self._camera = camera
         self._rot: Rotation | None = None
         self._quat: Quat | None = None
@@ -175,7 +202,7 @@ class Tracker:
         self._rate: NDArray | None = None
         self._epoch = epoch
         self._matcher: WindowMatcher | None = None
-        self._mode = POINT_MODE
+        self._mode: FrameMode = POINT_MODE
         self._streak_memory: dict = {}
         self._last_measured: NDArray | None = None
 
@@ -294,7 +321,7 @@ class Tracker:
         return Camera.from_fov(data.shape[1], data.shape[0], fov)
 
     @property
-    def mode(self) -> str:
+    def mode(self) -> FrameMode:
         """The mode of the last image (:data:`POINT_MODE` or :data:`STREAK_MODE`)."""
         return self._mode
 
@@ -316,7 +343,7 @@ class Tracker:
         t0 = time.perf_counter()
         solution = self._streak_tracked(data, t_s, exposure_s) if self._rot is not None and \
             self._camera is not None and self._rate is not None else None
-        mode = STREAK_TRACKING
+        mode: StepMode = STREAK_TRACKING
         if solution is None or not solution.solved:
             solution, mode = self._streak_lost(data, exposure_s), STREAK_LOST_IN_SPACE
         if not solution.solved:
