@@ -19,7 +19,8 @@ applied per scale):
 3. Each pattern is keyed by its five sorted edge ratios (:mod:`.patterns`); each level's patterns
    are sorted by a key of its three smallest ratios (:func:`pattern_key`). The keys of all levels,
    prefixed by their level, form one sorted array (:attr:`PatternDatabase.keys`, stored with the
-   patterns: computing it at each load took 0.11-0.35 s of a 0.35-0.76 s load),
+   patterns rather than computed at each load, where it was a large part of the load time;
+   ``benchmarks/startup_benchmark.py`` times the load),
    so that every range query of a batch of image patterns, over every level, is one binary
    search (:meth:`PatternDatabase.key_ranges`). In numpy that is faster than a k-vector per
    level (measured: the k-vector's exact trimming gathers a window per query); the k-vector
@@ -136,8 +137,8 @@ class PatternDatabase:
 
     @property
     def tree(self) -> cKDTree:
-        """A KD-tree over :attr:`vectors`, built on first use, then kept (30 ms for the default
-        database's 98,000 stars, which a load no longer spends when nothing asks for it)."""
+        """A KD-tree over :attr:`vectors`, built on first use, then kept (lazily, so that a load
+        that never needs it does not pay for building it)."""
         if not self._star_tree:
             self._star_tree.append(cKDTree(self.vectors))
         return self._star_tree[0]

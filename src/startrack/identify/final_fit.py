@@ -247,9 +247,9 @@ SCAN_PER_TREE_STAR = 40.0
 """The field's brightest stars (to its depth) are scanned for a cone unless that reads more than
 this many times the stars the cone holds (a narrow field, whose depth reaches faint stars); then
 the sectors of longitude and bands of z the cone reaches are read instead. The brightest stars
-are the same at every solve and stay in the cache; the bands are elsewhere each time (measured
-in a loop of solves: 29-31 us against 47-53 us at FOV 20, where the scan reads 17,000 stars;
-62 us against 64-110 us for the KD-tree this rule chose before at FOV 10)."""
+are the same at every solve and stay in the cache; the bands are elsewhere each time (timed in a
+loop of solves, the scan was the faster at FOV 20, and at FOV 10 no slower than the KD-tree this
+rule chose before; ``benchmarks/lis_benchmark.py`` times whole solves)."""
 
 CONE_PAIRS_LIMIT = 200_000
 """A re-match compares every image star with every catalog star it considers (compiled,

@@ -259,10 +259,10 @@ def level_stars(db: PatternDatabase, level: int) -> StarSet:
     """Level ``level``'s verification stars of ``db`` (those whose bit k of
     :attr:`PatternDatabase.verify_levels` is set) as a :class:`.confirm.StarSet` over a
     :class:`.verify.SkyBands` index, in ascending order of z: made on first use, then kept while
-    the database lives. The first call for a database sorts its stars by z (a few ms for the
-    default database's 98,000, once); a level is then a selection in that order (under 1 ms for
-    most levels), where a KD-tree (:meth:`PatternDatabase.verification_stars`) cost 1-60 ms to
-    build for each level first used inside a solve, and a cone query reads one band of z."""
+    the database lives. The first call for a database sorts its stars by z (once); a level is
+    then a selection in that order, much cheaper than building a KD-tree
+    (:meth:`PatternDatabase.verification_stars`) for each level first used inside a solve, and a
+    cone query reads one band of z."""
     stars = _LEVEL_STARS.get(id(db))
     if stars is None:
         stars = _LEVEL_STARS[id(db)] = _DatabaseStars(db)
@@ -270,7 +270,7 @@ def level_stars(db: PatternDatabase, level: int) -> StarSet:
     if level not in stars.levels:
         bits = db.verify_levels.dtype.type
         members = stars.z_order[((db.verify_levels[stars.z_order] >> bits(level)) & bits(1)).astype(bool)]
-        vectors = np.take(db.vectors, members, axis=0)  # a tenth of the time of db.vectors[members] here
+        vectors = np.take(db.vectors, members, axis=0)  # faster than db.vectors[members] here
         stars.levels[level] = StarSet(SkyBands(vectors), vectors, db.cat_index[members])
     return stars.levels[level]
 
@@ -282,8 +282,8 @@ whose levels :func:`_index_levels` has indexed (the grids are cached by :func:`.
 
 def _index_levels(db: PatternDatabase, searches: list[_Search]) -> None:
     """Index (:func:`level_stars`) the verification stars of every level the searches can reach,
-    once per database and search geometry: a level first used inside a solve cost up to 10 ms
-    there, a check here costs a set look-up."""
+    once per database and search geometry, so that no level is first indexed inside a solve's
+    timed search; a check here costs a set look-up."""
     for search in searches:
         key = (id(db), id(search.setup.grid), search.setup.short_px, search.setup.focal_nominal)
         if key not in _INDEXED:

@@ -26,9 +26,8 @@ overhead, not the arithmetic, set its time. For each pattern, in order:
 Candidates come out in the order the patterns were formed (brightest stars first), then by
 trial, level and key. A call stops after the first pattern that yields candidates, so that they
 are confirmed before the rest of the batch is searched (searching all 15 patterns of the first
-batch before confirming cost about a quarter of a FOV-range solve at FOV 20: 2.22 -> 1.70 ms
-median on 1,000 lists, measured together with dropping the kernel's per-pattern and per-trial
-allocations, whose own share was within the run-to-run noise).
+batch before confirming made FOV-range solves measurably slower; ``benchmarks/lis_benchmark.py``
+times the solves).
 """
 
 from __future__ import annotations

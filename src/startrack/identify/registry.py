@@ -117,7 +117,8 @@ def database_settings_for(fov_range_deg: tuple[float, float] = DEFAULT_FOV_RANGE
 
 def _load(module: str, name: str):
     """``name`` from the module ``startrack.identify.<module>``, imported on first use (a matcher's
-    modules cost 20-50 ms each to import; a call imports only those of the matcher it runs)."""
+    modules are slow to import, so a call imports only those of the matcher it runs;
+    ``benchmarks/startup_benchmark.py`` times the package's import)."""
     return getattr(import_module(f".{module}", __package__), name)
 
 

@@ -55,13 +55,13 @@ INDICATORS: tuple[IndicatorName, ...] = get_args(IndicatorName)
 """The names of :data:`IndicatorName`, in its order: the keys of :class:`RsoIndicators`' maps."""
 ENDPOINT_FLOOR_PX = 0.1
 """Smallest end precision (1 sigma, px) the indicators assume. The segment fit's sigma of a
-bright streak (~0.01 px) counts photon noise only; its ends were measured 0.027 px rms (max
-0.12 px) from the simulator's truth on RSO-free frames of the Table 4.4 campaign, and 0.1 px is
-the accuracy limit of centroiding in Samaan 2002. Below it, the k-sigma rule would
+bright streak counts photon noise only and falls under the true end error against the
+simulator's truth on RSO-free frames of the Table 4.4 campaign (docs/attitude_and_rate.md gives
+both), and 0.1 px is the accuracy limit of centroiding in Samaan 2002. Below it, the k-sigma rule would
 flag the tail of the stars' own scatter."""
 EDGE_MARGIN_PX = 4.0
 """An end closer than this to the image border may be cut by it (3 sigma of a 1-px PSF and the
-~0.7 px inward pull of the corner detectors)."""
+inward pull of the corner detectors, docs/attitude_and_rate.md's bias calibration)."""
 INLIER_Z = 3.0
 """Streaks whose bisectors miss the first spin axis by more than this many robust sigmas are
 left out of its least-squares refit."""

@@ -19,10 +19,11 @@ if TYPE_CHECKING:  # the streak solver is imported by the calls that use it: sol
 
 SMEARED_ELONGATION = 3.0
 """Median elongation (long over short axis of the second moments) of a frame's 10 brightest
-detections from which :func:`startrack.solve_image` solves the frame from its streaks first: 3
-is about a 15 px smear at a 1 px PSF (measured on generic-cmos frames, 12 deg field: 1.1 still,
-2.2 at 8 px, 4.0 at 17 px, where the point solve was already 73 arcsec off; from 33 px it found
-no match). From :data:`SOME_ELONGATION` the streaks are tried when the point solve fails."""
+detections from which :func:`startrack.solve_image` solves the frame from its streaks first:
+chosen on simulated generic-cmos frames of a 12 deg field between the smears where the point
+solve still holds and those where it is already far off or finds no match (the point and streak
+solves of such frames: docs/attitude_and_rate.md). From :data:`SOME_ELONGATION` the streaks are
+tried when the point solve fails."""
 SOME_ELONGATION = 1.5
 
 

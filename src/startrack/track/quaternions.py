@@ -1,10 +1,10 @@
 """Attitude arithmetic on one scalar-last quaternion at a time, for the tracking loop.
 
 A tracking step turns the last attitude by the rate, fits two small attitudes and measures the
-rate between frames. scipy's :class:`~scipy.spatial.transform.Rotation` does each of these in
-tens of microseconds (array-API dispatch and input checks on every call; ``from_matrix`` takes
-~0.1 ms), which is most of a step's budget. These helpers do the same arithmetic on plain
-floats in a microsecond or two. Quaternions are ``(x, y, z, w)`` tuples, scipy's order and
+rate between frames. scipy's :class:`~scipy.spatial.transform.Rotation` pays array-API
+dispatch and input checks on every call, which on one attitude at a time is most of a tracking
+step's cost (``benchmarks/tracking_benchmark.py`` times the steps). These helpers do the same
+arithmetic on plain floats, without that overhead. Quaternions are ``(x, y, z, w)`` tuples, scipy's order and
 meaning: ``quat_product(p, q)`` is ``Rotation(p) * Rotation(q)`` (q applied first).
 
 * :func:`rotvec_quat` and :func:`quat_rotvec`: the exponential and log maps (the exact form of
