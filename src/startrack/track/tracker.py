@@ -65,9 +65,13 @@ StepMode = Literal["lost-in-space", "tracking", "streak lost-in-space", "streak 
 STEP_MODES: tuple[StepMode, ...] = get_args(StepMode)
 """The names of :data:`StepMode`, in its order."""
 LOST_IN_SPACE: Final = "lost-in-space"
+"""A step solved lost-in-space (no usable prediction: the first frame, or tracking failed)."""
 TRACKING: Final = "tracking"
+"""A step solved from the prediction of the last attitude and rate (the window matcher)."""
 STREAK_LOST_IN_SPACE: Final = "streak lost-in-space"
+"""A streaked frame solved lost-in-space from its streaks (:mod:`startrack.rate.streak_solve`)."""
 STREAK_TRACKING: Final = "streak tracking"
+"""A streaked frame solved from the predicted streaks of the last attitude and rate."""
 FrameMode = Literal["point", "streak"]
 """The kind of image :meth:`Tracker.update_image` is in (:attr:`Tracker.mode`; module docstring)."""
 POINT_MODE: Final = "point"
