@@ -44,11 +44,6 @@ UNDOCUMENTED = frozenset("""
     startrack.detect.CENTROIDERS
     startrack.detect.THRESHOLDS
     startrack.identify.DB_KIND
-    startrack.rate.DETECTORS
-    startrack.rate.INDICATORS
-    startrack.rate.METHODS
-    startrack.track.LOST_IN_SPACE
-    startrack.track.TRACKING
     startrack.calibrate.DEFAULT_FIT
     startrack.calibrate.get_site
     startrack.adcs.FEEDBACKS
@@ -290,6 +285,10 @@ IMPORTS_PAST_INIT = {line.strip(): ROUTABLE for line in """
     startrack.track.tracker startrack.identify.field_stars
     startrack.track.tracker startrack.rate.streak_rate
     startrack.web.outputs startrack.analysis.postprocess.core
+    startrack.rate.streak_image startrack.identify.registry
+    startrack.rate.streak_solve startrack.identify.registry
+    startrack.solve startrack.identify.options_base
+    startrack.web.pipeline startrack.identify.registry
     startrack.web.pipeline startrack.analysis.postprocess.corrections
     startrack.web.pipeline startrack.analysis.postprocess.ground
     startrack.web.pipeline startrack.analysis.postprocess.records_io
