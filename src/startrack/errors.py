@@ -9,6 +9,7 @@ from __future__ import annotations
 from typing import TypeVar
 
 _T = TypeVar("_T")
+_S = TypeVar("_S", bound=str)
 
 
 class StartrackError(Exception):
@@ -46,4 +47,21 @@ def require(value: _T | None, what: str) -> _T:
     """
     if value is None:
         raise RuntimeError(f"{what} is not set (the result it belongs to did not succeed)")
+    return value
+
+
+def check_choice(value: object, choices: tuple[_S, ...], what: str) -> _S:
+    """``value`` as the one of ``choices`` it equals (a ``Literal`` selector's names, from
+    ``typing.get_args``); an InvalidInputError naming ``what``, the valid names and the value if none."""
+    for choice in choices:
+        if value == choice:
+            return choice
+    raise InvalidInputError(f"{what} must be one of {', '.join(choices)}, got {value!r}")
+
+
+def check_instance(value: object, cls: type[_T], what: str) -> _T:
+    """``value`` itself when it is a ``cls``; an InvalidInputError naming ``what``, the class it must
+    be and the class given if it is not (an options object of another stage or method)."""
+    if not isinstance(value, cls):
+        raise InvalidInputError(f"{what} must be a {cls.__module__}.{cls.__qualname__}, got a {type(value).__name__}")
     return value

@@ -21,7 +21,7 @@ from functools import partial
 from importlib import import_module
 from typing import TYPE_CHECKING, Literal, Protocol, TypeVar, get_args
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, check_choice, check_instance
 from .database import DB_MAX_FOV_DEG, DatabaseSettings
 from .options_base import MatcherOptionsBase
 
@@ -92,10 +92,7 @@ _O = TypeVar("_O", bound=MatcherOptionsBase)
 
 def _own(options: MatcherOptionsBase | None, name: str, cls: type[_O]) -> _O | None:
     """``options`` as the ``name`` matcher's class ``cls`` (None stays None); another class is refused."""
-    if options is None or isinstance(options, cls):
-        return options
-    raise InvalidInputError(f"options for the {name} matcher must be a {cls.__name__}, "
-                            f"got a {type(options).__name__}")
+    return None if options is None else check_instance(options, cls, f"options for the {name} matcher")
 
 
 def database_settings_for(fov_range_deg: tuple[float, float] = DEFAULT_FOV_RANGE_DEG) -> DatabaseSettings:
@@ -237,10 +234,7 @@ OPTIONS: Mapping[str, type[MatcherOptionsBase]] = _Options()
 
 def check_method(method: str) -> MethodName:
     """``method`` as a :data:`MethodName`; an InvalidInputError naming the valid ones if it is not one."""
-    for name in METHOD_NAMES:
-        if method == name:
-            return name
-    raise InvalidInputError(f"method must be one of {', '.join(METHOD_NAMES)}, got {method!r}")
+    return check_choice(method, METHOD_NAMES, "method")
 
 
 def check_options(method: str, options: object) -> MethodName:

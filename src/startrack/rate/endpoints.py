@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, check_choice
 
 CornerDetector = Literal["harris", "min_eigenvalue", "trajkovic4", "trajkovic8"]
 """The corner detectors of :func:`cornerness` (Sease 2013 ch. 3)."""
@@ -135,10 +135,7 @@ def trajkovic_response(roi: NDArray[np.float64], neighbours: int = 4, smooth_sig
 
 def check_detector(detector: str) -> CornerDetector:
     """``detector`` as a :data:`CornerDetector`; an InvalidInputError naming the valid ones if it is not one."""
-    for name in DETECTORS:
-        if detector == name:
-            return name
-    raise InvalidInputError(f"detector must be one of {', '.join(DETECTORS)}, got {detector!r}")
+    return check_choice(detector, DETECTORS, "detector")
 
 
 def cornerness(roi: ArrayLike, detector: CornerDetector = "harris", **params) -> NDArray[np.float64]:

@@ -35,10 +35,10 @@ from scipy.spatial.transform import Rotation
 
 from ..attitude import WahbaMethod, solve_wahba
 from ..camera import Camera
-from ..errors import InvalidInputError, require
+from ..errors import InvalidInputError, check_choice, require
 from ..results import AttitudeSolution, Status
 from .catalog_free import CatalogFreeRate, catalog_free_rate, consensus, regroup
-from .endpoints import CornerDetector, EndpointBias, check_detector, locate_endpoints
+from .endpoints import CornerDetector, EndpointBias, locate_endpoints
 from .estimate import RateEstimate, failed
 from .from_attitudes import rate_between
 from .grouping import CentreOfRotation, centre_of_rotation, group_endpoints
@@ -79,12 +79,7 @@ METHODS: tuple[EndpointMethod, ...] = get_args(EndpointMethod)
 
 def check_endpoint_method(detector: str) -> EndpointMethod:
     """``detector`` as an :data:`EndpointMethod`; an InvalidInputError naming the valid ones if it is not one."""
-    if detector == SEGMENT:
-        return SEGMENT
-    try:
-        return check_detector(detector)
-    except InvalidInputError:
-        raise InvalidInputError(f"detector must be one of {', '.join(METHODS)}, got {detector!r}") from None
+    return check_choice(detector, METHODS, "detector")
 SEGMENT_FIND_OPTIONS = {"line_filter_px": 25.0, "threshold_sigma": 5.0, "margin_px": 6}
 """Segmentation for the segment fit: a 25-px line filter at 5 sigma keeps faint streaks whole."""
 MAX_END_SIGMA_PX = 2.0

@@ -41,7 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..attitude.covariance import roll_cross_boresight
 from ..camera import Camera
-from ..errors import InvalidInputError, require
+from ..errors import InvalidInputError, check_instance, require
 from ..frames import radec_roll_from_rotation
 from ..identify.field_stars import field_stars
 from ..identify.registry import MethodName, check_method
@@ -208,12 +208,7 @@ def agreement_tolerance_px(length_px: ArrayLike) -> NDArray[np.float64]:
 
 def checked_options(options: object) -> StreakOptions:
     """``options`` (None: the defaults) as :class:`StreakOptions`; another class is refused."""
-    if options is None:
-        return StreakOptions()
-    if not isinstance(options, StreakOptions):
-        raise InvalidInputError(f"options of the streak path must be a startrack.rate.streak_solve.StreakOptions, "
-                                f"got a {type(options).__name__}")
-    return options
+    return StreakOptions() if options is None else check_instance(options, StreakOptions, "options of the streak path")
 
 
 def solve_streaked(

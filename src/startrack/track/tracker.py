@@ -45,7 +45,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
-from ..errors import InvalidInputError, require
+from ..errors import InvalidInputError, check_instance, require
 from ..frames import radec_roll_from_rotation
 from ..identify.field_stars import field_stars
 from ..rate.smear_mode import SmearLimits, image_smear_px, usable_for_prediction
@@ -160,12 +160,7 @@ class TrackStep:
 
 def _checked_options(options: object) -> TrackerOptions:
     """``options`` (None: the defaults) as :class:`TrackerOptions`; another class is refused."""
-    if options is None:
-        return TrackerOptions()
-    if not isinstance(options, TrackerOptions):
-        raise InvalidInputError(f"options of the Tracker must be a startrack.track.tracker.TrackerOptions, "
-                                f"got a {type(options).__name__}")
-    return options
+    return TrackerOptions() if options is None else check_instance(options, TrackerOptions, "options of the Tracker")
 
 
 class Tracker:
