@@ -22,10 +22,10 @@ import time
 
 import numpy as np
 
-from startrack.adcs.loop import LoopConfig, run_loop
-from startrack.adcs.metrics import METRIC_KEYS, SEED_POWER_W, SEED_TABLE_5_3, run_metrics
-from startrack.adcs.scenario import Scenario
-from startrack.adcs.star_tracker_feedback import StarTrackerSetup, fit_noise_model
+from startrack.adcs._loop import LoopConfig, run_loop
+from startrack.adcs._metrics import METRIC_KEYS, SEED_POWER_W, SEED_TABLE_5_3, run_metrics
+from startrack.adcs._scenario import Scenario
+from startrack.adcs._star_tracker_feedback import StarTrackerSetup, fit_noise_model
 
 HEADS = ("ss err deg", "overshoot %", "rise s", "settle s", "avg W", "peak W")
 DIGITS = (4, 2, 2, 2, 4, 3)

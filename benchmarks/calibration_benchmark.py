@@ -25,13 +25,13 @@ import numpy as np
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
-from startrack.calibrate.lens_models import distortion_field_px
-from startrack.calibrate.selfcal import self_calibrate
-from startrack.calibrate.stars import CalibrationFrame, calibrate_from_stars
+from startrack.calibrate._lens_models import distortion_field_px
+from startrack.calibrate._selfcal import self_calibrate
+from startrack.calibrate._stars import CalibrationFrame, calibrate_from_stars
 from startrack.camera import Camera, get_preset
 from startrack.detect import StarDetector
 from startrack.frames import random_rotations
-from startrack.io.wcs import read_wcs, solution_wcs
+from startrack.io._wcs import read_wcs, solution_wcs
 from startrack.simulate import get_sensor_preset, simulate_frame
 from startrack.units import DEG
 

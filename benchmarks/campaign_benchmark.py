@@ -27,12 +27,12 @@ from pathlib import Path
 
 import pyarrow.compute as pc
 
-from startrack.analysis.campaign.engine import dask_client, run_dask
-from startrack.analysis.campaign.rerun import rows_agree
-from startrack.analysis.campaign.run import default_chunk_size, run_campaign
-from startrack.analysis.campaign.spec import parse_spec
-from startrack.analysis.campaign.store import CampaignStore
-from startrack.analysis.campaign.trials import plan_chunks
+from startrack.analysis.campaign._engine import dask_client, run_dask
+from startrack.analysis.campaign._rerun import rows_agree
+from startrack.analysis.campaign._run import default_chunk_size, run_campaign
+from startrack.analysis.campaign._spec import parse_spec
+from startrack.analysis.campaign._store import CampaignStore
+from startrack.analysis.campaign._trials import plan_chunks
 
 SPECS = {
     "stars": """

@@ -38,7 +38,8 @@ from detect_frames import (  # noqa: E402
     snr_frame,
 )
 
-from startrack.detect import StarDetector, crb  # noqa: E402
+from startrack.detect import StarDetector  # noqa: E402
+from startrack.detect import _crb as crb
 
 SHAPE = (512, 512)
 SNRS = (5, 10, 20, 50, 100, 200, 500)
@@ -156,7 +157,7 @@ def phase_bias(seed: int) -> None:
 def box3_centroids(image: np.ndarray):
     """The classic weighted sum over the 3 x 3 pixels around each default detection's
     brightest pixel (background subtracted): its truncated wings give Huffman 2006's S-curve."""
-    from startrack.detect.windows import extract_windows
+    from startrack.detect._windows import extract_windows
     det = StarDetector().detect(image)
     win = extract_windows(image, np.rint(det.x), np.rint(det.y), 3)
     peak = win.values[:, 1:-1, 1:-1].reshape(len(det), -1).argmax(axis=1)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from startrack.detect import crb
+from startrack.detect import _crb as crb
 from startrack.simulate import render_gaussian_psf
 
 BACKGROUND_E = 100.0
@@ -55,7 +55,7 @@ def render_frame(shape: tuple[int, int], x: np.ndarray, y: np.ndarray, flux: np.
 
 def snr_frame(shape: tuple[int, int], snr: float, psf_sigma_px: float, rng: np.random.Generator,
               spacing: int = 48) -> Frame:
-    """A frame of equal stars of integrated SNR ``snr`` (:func:`startrack.detect.crb.integrated_snr`)."""
+    """A frame of equal stars of integrated SNR ``snr`` (:func:`startrack.detect._crb.integrated_snr`)."""
     x, y = grid_positions(shape, spacing, rng)
     flux = np.full(x.size, float(crb.flux_for_snr(snr, psf_sigma_px, BACKGROUND_E, READ_NOISE_E)))
     return render_frame(shape, x, y, flux, psf_sigma_px, rng)

@@ -174,9 +174,9 @@ def run_sep(images: dict[str, np.ndarray]) -> dict[str, tuple[np.ndarray, np.nda
 @dataclass(frozen=True)
 class Miss:
     """One matched star the detector missed: where, how significant in the fine image (peak of
-    the full-resolution pass's significance within 1 px, :mod:`startrack.detect.fine_pass`) and
+    the full-resolution pass's significance within 1 px, :mod:`startrack.detect._fine_pass`) and
     in the binned one, its distances to the border and to the nearest detection, the spread of its
-    ring (:func:`startrack.detect.fine_pass.ring_noise_ratio`, 1 on open sky), the tile clutter,
+    ring (:func:`startrack.detect._fine_pass.ring_noise_ratio`, 1 on open sky), the tile clutter,
     how many unconfirmed peaks of the fine image are at least as significant (what a threshold
     low enough for it would let in before the spot filters), and the cause it is put down to."""
 
@@ -195,11 +195,11 @@ class Miss:
 def significance_maps(image: np.ndarray, detector: StarDetector) -> tuple[np.ndarray, np.ndarray, float, object]:
     """The fine and the binned (full-resolution shape) significance images, the pixel noise and the
     background model, built as the detector builds them (``dark_frame`` applied)."""
-    from startrack.detect import pipeline
-    from startrack.detect.background import low_side_clipped
-    from startrack.detect.fine_pass import fine_significance
-    from startrack.detect.smooth import detection_image
-    from startrack.detect.threshold import significance
+    from startrack.detect import _pipeline as pipeline
+    from startrack.detect._background import low_side_clipped
+    from startrack.detect._fine_pass import fine_significance
+    from startrack.detect._smooth import detection_image
+    from startrack.detect._threshold import significance
 
     prepared, _ = pipeline.preprocess(detector, image, detector.dark_frame)
     data, skewed = prepared.data, low_side_clipped(np.asarray(image))
@@ -223,13 +223,13 @@ def misses(image: np.ndarray, detector: StarDetector, det, ref: Reference) -> li
     """The matched stars of ``ref`` that ``det`` (the detector's output) does not hold, each
     with its measurements and cause: *edge* (within 4 px of the border), *blend* (a detection or
     another reference star 2-6 px away took it), *clutter* (a ring over 1.4 that the spot does not
-    stand 1.5 times the fine threshold above, :func:`startrack.detect.fine_pass.quiet_surroundings`,
+    stand 1.5 times the fine threshold above, :func:`startrack.detect._fine_pass.quiet_surroundings`,
     or a tile clutter over the detector's limit), *faint* (fine significance under the detector's ``fine_sigma``),
     otherwise *filtered* (significant, alone, on open sky, yet a spot filter or a rule of the
     fine pass dropped it)."""
     from scipy.ndimage import maximum_filter
 
-    from startrack.detect.fine_pass import MAX_RING_NOISE, ring_noise_ratio, stands_above_ring
+    from startrack.detect._fine_pass import MAX_RING_NOISE, ring_noise_ratio, stands_above_ring
 
     fine, coarse, noise, (data, model) = significance_maps(image, detector)
     peaks = (fine == maximum_filter(fine, 5)) & (fine > 3.0)

@@ -33,7 +33,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from detect_frames import grid_positions, match, render_frame  # noqa: E402
 from peers.detect_env import run_peers  # noqa: E402
 
-from startrack.detect import StarDetector, crb  # noqa: E402
+from startrack.detect import StarDetector  # noqa: E402
+from startrack.detect import _crb as crb
 from startrack.simulate import render_gaussian_psf  # noqa: E402
 
 SHAPE = (1024, 1024)

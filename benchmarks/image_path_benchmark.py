@@ -41,7 +41,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from startrack import solve_image, solve_stars  # noqa: E402
-from startrack.analysis.scoring import TOLERANCE_PIXELS, attitude_errors_rad, roll_weight, summarize, tolerance_rad  # noqa: E402
+from startrack.analysis._scoring import TOLERANCE_PIXELS, attitude_errors_rad, roll_weight, summarize, tolerance_rad  # noqa: E402
 from startrack.camera import Camera  # noqa: E402
 from startrack.frames import random_rotations  # noqa: E402
 

@@ -48,7 +48,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import methods  # noqa: E402
 from methods import FovKnowledge, MethodRun, concatenate_runs, solve_cedar, solve_ours  # noqa: E402
 
-from startrack.analysis.scoring import (  # noqa: E402
+from startrack.analysis._scoring import (  # noqa: E402
     TOLERANCE_PIXELS,
     attitude_errors_rad,
     boresight_and_roll_errors,
@@ -56,8 +56,8 @@ from startrack.analysis.scoring import (  # noqa: E402
     summarize,
     tolerance_rad,
 )
-from startrack.analysis.starlists import Conditions, generate_star_lists, load_sky  # noqa: E402
-from startrack.identify.registry import MATCHERS  # noqa: E402
+from startrack.analysis._starlists import Conditions, generate_star_lists, load_sky  # noqa: E402
+from startrack.identify._registry import MATCHERS  # noqa: E402
 from startrack.units import ARCSEC  # noqa: E402
 
 LIS_MATCHERS = [name for name in MATCHERS if name != "overlay"]
@@ -154,7 +154,9 @@ def _on_cpu(cpu: int | None):
 
 def _loaded_tables() -> set:
     """(kind, settings) of every cached table loaded in this process so far."""
-    from startrack.identify import database, pair_database, triangle_database
+    from startrack.identify import _database as database
+    from startrack.identify import _pair_database as pair_database
+    from startrack.identify import _triangle_database as triangle_database
 
     return ({("patterns", k) for k in database._LOADED} | {("pairs", k) for k in pair_database._LOADED}
             | {("triangles", k) for k in triangle_database._LOADED})
@@ -164,7 +166,9 @@ def _table_bytes(kind: str, key) -> int:
     from dataclasses import asdict
 
     from startrack import cache
-    from startrack.identify import database, pair_database, triangle_database
+    from startrack.identify import _database as database
+    from startrack.identify import _pair_database as pair_database
+    from startrack.identify import _triangle_database as triangle_database
 
     if kind == "patterns":
         return database.database_path(key).stat().st_size
@@ -300,16 +304,16 @@ EASY = {"sigma_px_range": (0.1, 0.1), "missing_fraction_range": (0.0, 0.0), "fal
 """The easy lists of ``--easy``: the 25 brightest stars with 0.1 px of noise, nothing missing or false."""
 
 STAGES = (("request", "startrack.solve", "build_request"),
-          ("look-up", "startrack.identify.quad_matcher", "search_batch"),
-          ("confirmation", "startrack.identify.confirm", "Confirmer.confirm"),
-          ("  field cone", "startrack.identify.confirm", "field_cone"),
-          ("  matches", "startrack.identify.confirm", "predicted_pairs"),
-          ("  bound", "startrack.identify.confirm", "false_match_bound_counts"),
+          ("look-up", "startrack.identify._quad_matcher", "search_batch"),
+          ("confirmation", "startrack.identify._confirm", "Confirmer.confirm"),
+          ("  field cone", "startrack.identify._confirm", "field_cone"),
+          ("  matches", "startrack.identify._confirm", "predicted_pairs"),
+          ("  bound", "startrack.identify._confirm", "false_match_bound_counts"),
           ("final fit", "startrack.solve", "settle_matches"),
-          ("  refits", "startrack.identify.final_fit", "fit_pose"),
-          ("  deleted residuals", "startrack.identify.final_fit", "leave_one_out_residuals"),
-          ("  catalog choice", "startrack.identify.final_fit", "_Catalog.chosen"),
-          ("  re-match", "startrack.identify.final_fit", "rematch"),
+          ("  refits", "startrack.identify._final_fit", "fit_pose"),
+          ("  deleted residuals", "startrack.identify._final_fit", "leave_one_out_residuals"),
+          ("  catalog choice", "startrack.identify._final_fit", "_Catalog.chosen"),
+          ("  re-match", "startrack.identify._final_fit", "rematch"),
           ("solution", "startrack.solve", "_solution"),
           ("  covariance", "startrack.solve", "covariance_batch"))
 """Stages of a startrack solve timed by ``--stages``: (label, module, function or Class.method);

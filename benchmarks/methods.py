@@ -27,8 +27,8 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from startrack import solve_stars
-from startrack.analysis.scoring import rotations_from_radec_roll_deg
-from startrack.analysis.starlists import Conditions, StarList
+from startrack.analysis._scoring import rotations_from_radec_roll_deg
+from startrack.analysis._starlists import Conditions, StarList
 
 try:
     from startrack.solve import FOV_DEG_TOLERANCE as KNOWN_FOV_TOLERANCE
@@ -99,7 +99,7 @@ def solve_ours(lists: list[StarList], conditions: Conditions, knowledge: FovKnow
                timeout_s: float | None = None, clock: str = "wall") -> MethodRun:
     """Solve every list with ``startrack.solve_stars(method=matcher)`` (in this process), with the
     matcher's default time limit or ``timeout_s``, each timed by ``clock`` (:data:`CLOCKS`)."""
-    from startrack.identify.registry import options_for
+    from startrack.identify._registry import options_for
 
     options = None if timeout_s is None else options_for(matcher, timeout_s=timeout_s)
     kwargs = dict(width=conditions.width, height=conditions.height, epoch=conditions.epoch_jyear,

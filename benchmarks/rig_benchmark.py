@@ -5,13 +5,13 @@ fusing the heads' own quaternions, split-FOV classification against PSF elongati
                                        [--clock wall|cpu]
 
 Heads: 1024 x 1024 px, 15 deg (53 arcsec per pixel); head a along body +z, b turned 90 deg about
-body x, c 90 deg about body y. Star lists (:func:`startrack.simulate.rig.rig_star_lists`): catalog
+body x, c 90 deg about body y. Star lists (:func:`startrack.simulate._rig.rig_star_lists`): catalog
 stars to V 6, 0.2 px centroid noise, the 40 brightest per head. Errors are the rotation vector of
 ``truth * estimate^-1`` in the body frame, which is head a's camera frame: "cross" is across head
 a's boresight, "roll" about it. Printed:
 
 1. Over ``--attitudes`` seeded random attitudes per rig: success (within 5 pixel angles at the
-   image corner, :mod:`startrack.analysis.scoring`'s judgement), rms cross and roll error of the
+   image corner, :mod:`startrack.analysis._scoring`'s judgement), rms cross and roll error of the
    joint solution, of head a alone (``solve_stars`` on its list), and of every head solved alone
    with its quaternion fused with the others' (covariance-weighted; what rigs that fuse per-head
    quaternions do), and the roll ratio against head a alone. Rms over the correct solutions.
@@ -39,15 +39,15 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from startrack import Camera, CameraRig, RigHead, solve_rig, solve_stars
-from startrack.analysis.scoring import roll_weight, tolerance_rad
+from startrack.analysis._scoring import roll_weight, tolerance_rad
 from startrack.attitude import covariance_to_body
 from startrack.detect import StarDetector
 from startrack.frames import random_rotations
-from startrack.multihead.split_fov import classify_fields, moments_radius_px, spot_moments
+from startrack.multihead._split_fov import classify_fields, moments_radius_px, spot_moments
 from startrack.rig import PsfShape
 from startrack.simulate import get_sensor_preset
-from startrack.simulate.rig import rig_star_lists
-from startrack.simulate.split_fov import simulate_split_frame
+from startrack.simulate._rig import rig_star_lists
+from startrack.simulate._split_fov import simulate_split_frame
 from startrack.units import ARCSEC
 
 CAMERA = Camera.from_fov(1024, 1024, 15.0)

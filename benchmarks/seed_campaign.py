@@ -4,7 +4,7 @@ The seed-table benchmarks (``detect_seed000.py``, ``simulate_benchmark.py``,
 ``seed000_table82.py``, ``seed002_matching.py``) are thin: each runs the specs of
 ``startrack/analysis/campaign/specs/`` (the one implementation of the experiment, in the
 campaign levels) with ``run_campaign`` and prints the spec's reference tables
-(``startrack.analysis.campaign.reference``). What they may change is what a spec leaves open:
+(``startrack.analysis.campaign._reference``). What they may change is what a spec leaves open:
 the trials per cell, the campaign seed and ``[base]`` values, by editing the spec's text, so that
 the run's manifest holds the spec as run.
 """
@@ -22,10 +22,10 @@ from typing import Any
 
 import pyarrow as pa
 
-from startrack.analysis.campaign.reference import reference_text
-from startrack.analysis.campaign.run import run_campaign
-from startrack.analysis.campaign.shipped import find_spec
-from startrack.analysis.campaign.spec import CampaignSpec, parse_spec
+from startrack.analysis.campaign._reference import reference_text
+from startrack.analysis.campaign._run import run_campaign
+from startrack.analysis.campaign._shipped import find_spec
+from startrack.analysis.campaign._spec import CampaignSpec, parse_spec
 
 
 def _toml_value(value: Any) -> str:

@@ -7,7 +7,7 @@ frames of a 15 deg pinhole camera with the ``generic-cmos`` sensor):
   shot noise, dark current, read noise, bias, gain, 12-bit quantisation, full well, a 21.5 mag
   arcsec^-2 sky, stray light, hot and dead pixels; target under 30 ms;
 - the same **with PRNU and DSNU** (every pixel then has its own expectation and is drawn one by
-  one: the slow path of :mod:`startrack.simulate.noise`);
+  one: the slow path of :mod:`startrack.simulate._noise`);
 - **streaked frame**: 0.5 s at 1 deg/s, the Hipparcos sky to V 7.5 (about 190 stars), every noise
   source; target under 150 ms median; and the same with only 30 stars.
 
@@ -60,7 +60,7 @@ from startrack.simulate import (  # noqa: E402
     render_stars,
     simulate_frame,
 )
-from startrack.simulate.noise import NoiseModel  # noqa: E402
+from startrack.simulate._noise import NoiseModel  # noqa: E402
 from startrack.units import DEG  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -99,7 +99,7 @@ def random_stars(n: int, rng: np.random.Generator, rot):
 def loop_signal(truth, sensor) -> np.ndarray:
     """Star electrons per pixel: star by star, sub-step by sub-step (the attitude at each from the
     constant rate), stamp pixel by stamp pixel."""
-    from startrack.simulate.scene import psf_radius_px
+    from startrack.simulate._scene import psf_radius_px
 
     sigma2 = math.sqrt(2.0) * sensor.psf_sigma_px
     radius = psf_radius_px(CAMERA, sensor)

@@ -3,9 +3,9 @@ one image and for a batch of 20, beside cedar-solve and astrometry.net, in one r
 
 Measured, each in fresh processes (the median of ``--repeat`` runs where it says so):
 
-* ``import startrack`` and ``import startrack.cli.solve_cmd`` (the solve command's modules);
+* ``import startrack`` and ``import startrack.cli._solve_cmd`` (the solve command's modules);
 * the first solve in a new process once the caches exist: the database load, the warm-up
-  (:func:`startrack.cli.batch_warmup.warm_up`: the compiled kernels loaded from numba's cache,
+  (:func:`startrack.cli._batch_warmup.warm_up`: the compiled kernels loaded from numba's cache,
   the smallest first so that numba's own start, 0.25-0.4 s whatever function comes first, is
   printed apart from quad_kernel.search's load),
   the first and second ``solve_image`` of a real photo, and the same first solve with no warm-up
@@ -63,10 +63,10 @@ import json, sys, time
 t0 = time.perf_counter()
 import startrack
 from startrack.io import read_image
-from startrack.cli.progress import ensure_database_for
-from startrack.cli.batch_warmup import warm_up
+from startrack.cli._progress import ensure_database_for
+from startrack.cli._batch_warmup import warm_up
 t1 = time.perf_counter()
-import startrack.solve, startrack.detect.detector, startrack.identify.quad_search, startrack.identify.refine
+import startrack.solve, startrack.detect._detector, startrack.identify._quad_search, startrack.identify._refine
 from numba.core.registry import CPUDispatcher
 from startrack.identify import match_kernel, pose_kernel, quad_kernel
 loads = {}
@@ -151,7 +151,7 @@ def _import_s(module: str, repeat: int) -> list[float]:
 
 def measure_imports(repeat: int) -> None:
     print("\nimport time in a new process (s)")
-    for module in ("startrack", "startrack.cli.solve_cmd", "startrack.cli.detect_cmd"):
+    for module in ("startrack", "startrack.cli._solve_cmd", "startrack.cli._detect_cmd"):
         runs = _import_s(module, repeat)
         print(f"  {module:<26} median {statistics.median(runs):6.3f}  min {min(runs):6.3f}")
 

@@ -3,7 +3,7 @@
 Each part runs a shipped spec (``startrack/analysis/campaign/specs/``) through the campaign
 engine (``seed_campaign.py``) and prints its reference tables; the per-trial logic lives in the
 campaign levels ``streak``, ``rso`` and ``smear`` (``startrack.analysis.campaign.levels``) and the
-scenes in ``startrack.analysis.streak_scenes`` / ``startrack.analysis.rso_passes``. Conditions
+scenes in ``startrack.analysis._streak_scenes`` / ``startrack.analysis._rso_passes``. Conditions
 and results: ``docs/seed_tables_001_004.md``.
 
 1. Seed 001 Table 3.1 (``seed001-table3.1-streak-endpoints``): endpoint error (px) and rate
@@ -59,8 +59,8 @@ sys.path.insert(0, str(ROOT))
 
 from seed_campaign import add_run_arguments, out_for, print_references, run_spec, spec_text  # noqa: E402
 
-from startrack.analysis.campaign.aggregate import read_campaign  # noqa: E402
-from startrack.analysis.campaign.reference import reference_tables  # noqa: E402
+from startrack.analysis.campaign._aggregate import read_campaign  # noqa: E402
+from startrack.analysis.campaign._reference import reference_tables  # noqa: E402
 
 RESULTS_DIR = ROOT / "results"
 PARTS = {
@@ -85,7 +85,7 @@ def print_streak_misses(trials) -> list[dict]:
     claims (% of the rate); returns them as rows."""
     import numpy as np
 
-    from startrack.analysis.campaign.aggregate import as_columns
+    from startrack.analysis.campaign._aggregate import as_columns
 
     cols = as_columns(trials)
     if not {"five_streaks", "meets_target"} <= set(cols) or not set(MISS_COLUMNS) <= set(cols):
@@ -205,11 +205,11 @@ def run_end_speed() -> dict:
     from scipy.spatial.transform import Rotation
 
     from startrack import Camera
-    from startrack.analysis.streak_scenes import render_streak_scene, spin_rate, star_field
-    from startrack.rate import streak_rate
-    from startrack.rate.streak_detect import find_streaks
-    from startrack.rate.streak_find import find_streak_candidates
-    from startrack.rate.streak_fit import first_guesses, fit_streaks
+    from startrack.analysis._streak_scenes import render_streak_scene, spin_rate, star_field
+    from startrack.rate import _streak_rate as streak_rate
+    from startrack.rate._streak_detect import find_streaks
+    from startrack.rate._streak_find import find_streak_candidates
+    from startrack.rate._streak_fit import first_guesses, fit_streaks
     from startrack.units import DEG
 
     print(f"\npart {SPEED_PART}: streak ends, process time (ms, best of 3) on 1024 x 1024 px, 12 deg, 20 streaks",

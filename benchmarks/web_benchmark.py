@@ -39,7 +39,7 @@ REALDATA = ROOT.parent / "shared" / "realdata"
 sys.path.insert(0, str(ROOT / "tests" / "web"))
 from web_server import WebServer  # noqa: E402  (the launcher the browser tests use)
 
-from startrack.identify.registry import DEFAULT_FOV_RANGE_DEG  # noqa: E402
+from startrack.identify._registry import DEFAULT_FOV_RANGE_DEG  # noqa: E402
 from startrack.io import write_png  # noqa: E402
 
 SLOW = {"method": "pyramid", "fov_deg": 10.0}

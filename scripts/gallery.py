@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 from astropy.time import Time
 
-from startrack.analysis.plots import display_stretch
+from startrack.analysis._plots import display_stretch
 from startrack.camera import Camera
 from startrack.frames import rotation_from_radec_roll, vector_to_radec
 from startrack.plotting import new_figure
@@ -36,7 +36,7 @@ from startrack.simulate import (
     get_sensor_preset,
     simulate_frame,
 )
-from startrack.simulate.orbits import MU_EARTH_KM3_S2
+from startrack.simulate._orbits import MU_EARTH_KM3_S2
 from startrack.units import DEG
 
 DEFAULT_OUT = Path("docs") / "gallery"

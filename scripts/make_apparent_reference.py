@@ -9,7 +9,7 @@ it to GCRS (geocentric apparent direction on ICRS axes: parallax, light deflecti
 annual aberration), to GCRS with an observer velocity (orbital aberration) and to TETE (true
 equator and equinox of date). The output, tests/calibrate/data/apparent_reference.json, holds the
 catalog inputs and astropy's answers in degrees; the test rebuilds the catalog from it and compares
-startrack.calibrate.apparent to it.
+startrack.calibrate._apparent to it.
 """
 
 from __future__ import annotations

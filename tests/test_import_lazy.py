@@ -51,7 +51,7 @@ def test_star_import_gives_all():
 def test_submodule_as_attribute_and_unknown_name():
     import startrack.catalog as catalog
 
-    assert catalog.cone is importlib.import_module("startrack.catalog.cone")
+    assert catalog._cone is importlib.import_module("startrack.catalog._cone")
     with pytest.raises(AttributeError, match="'startrack.catalog' has no attribute 'no_such_name'"):
         _ = catalog.no_such_name
     with pytest.raises(ImportError, match="no_such_name"):
@@ -70,16 +70,16 @@ def test_import_startrack_loads_no_numerical_library():
     assert not loaded & {"numpy", "scipy", "astropy", "numba", "PIL", "matplotlib"}
 
 
-@pytest.mark.parametrize("module", ["startrack.cli.solve_cmd", "startrack.cli.detect_cmd",
-                                    "startrack.cli.solve_stars_cmd"])
+@pytest.mark.parametrize("module", ["startrack.cli._solve_cmd", "startrack.cli._detect_cmd",
+                                    "startrack.cli._solve_stars_cmd"])
 def test_image_commands_do_not_load_astropy_or_matplotlib(module):
     loaded = _loaded_in_fresh_process(f"import {module}")
     assert not loaded & {"astropy", "matplotlib", "erfa"}
 
 
 def test_command_line_loads_only_the_chosen_command():
-    code = ("import sys, startrack.cli.main as m; m.main(['--version']); "
+    code = ("import sys, startrack.cli._main as m; m.main(['--version']); "
             "print(sorted(n for n in sys.modules if n.startswith('startrack.cli.')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
-    assert "startrack.cli.main" in out.stdout
+    assert "startrack.cli._main" in out.stdout
     assert "_cmd" not in out.stdout

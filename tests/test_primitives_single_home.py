@@ -30,7 +30,7 @@ from startrack.catalog import (
 )
 from startrack.errors import InvalidInputError
 from startrack.frames import radec_to_vector
-from startrack.identify import image_epoch
+from startrack.identify import _image_epoch as image_epoch
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "startrack"
 

@@ -65,238 +65,15 @@ UNDOCUMENTED = frozenset("""
 engineers while issue 21 is worked on): constants want an attribute docstring, the string right
 after the assignment. ``__version__`` is exempt."""
 
-ROUTABLE = "to be routed through the package: the names it imports are in the package's __all__"
-NOT_YET_PUBLIC = ("to be routed through the package once the name is public: a private helper, a module "
-                  "imported as a whole, a function named as its module (field_stars, streak_rate, "
-                  "repeatability: the submodule would shadow it in a lazy package) or a name "
-                  "analysis.postprocess does not export yet")
-
-IMPORTS_PAST_INIT = {line.strip(): ROUTABLE for line in """
-    startrack.adcs.star_tracker_feedback startrack.simulate.sequence
-    startrack.analysis.calibration_plots startrack.calibrate.lens_models
-    startrack.analysis.calibration_plots startrack.calibrate.repeatability
-    startrack.analysis.campaign.aggregate startrack.io.atomic
-    startrack.analysis.campaign.levels._sunsat startrack.identify.match_groups
-    startrack.analysis.campaign.levels._sunsat startrack.identify.pair_database
-    startrack.analysis.campaign.levels.common startrack.identify.registry
-    startrack.analysis.campaign.levels.groupmatch startrack.identify.match_groups
-    startrack.analysis.campaign.levels.groupmatch startrack.identify.refine
-    startrack.analysis.campaign.levels.image startrack.simulate.motion
-    startrack.analysis.campaign.levels.photometry startrack.simulate.radiometry
-    startrack.analysis.campaign.levels.prefilter startrack.detect.background
-    startrack.analysis.campaign.levels.prefilter startrack.detect.pipeline
-    startrack.analysis.campaign.levels.prefilter startrack.detect.smooth
-    startrack.analysis.campaign.levels.rig startrack.multihead.exclusion
-    startrack.analysis.campaign.levels.rig startrack.simulate.rig
-    startrack.analysis.campaign.levels.rso startrack.rate.endpoints
-    startrack.analysis.campaign.levels.rso startrack.rate.estimate
-    startrack.analysis.campaign.levels.rso startrack.rate.rso
-    startrack.analysis.campaign.levels.scene startrack.calibrate.apparent
-    startrack.analysis.campaign.levels.scene startrack.simulate.radiometry
-    startrack.analysis.campaign.levels.seqmatch startrack.identify.registry
-    startrack.analysis.campaign.levels.seqmatch startrack.rate.from_attitudes
-    startrack.analysis.campaign.levels.seqmatch startrack.track.relative
-    startrack.analysis.campaign.levels.sequence startrack.track.tracker
-    startrack.analysis.campaign.levels.smear startrack.detect.centroiders
-    startrack.analysis.campaign.levels.smear startrack.rate.streak_detect
-    startrack.analysis.campaign.levels.smearlimit startrack.simulate.radiometry
-    startrack.analysis.campaign.levels.streak startrack.rate.endpoints
-    startrack.analysis.campaign.levels.streak startrack.rate.streak_rate
-    startrack.analysis.campaign.levels.streak_frames startrack.rate.streak_solve
-    startrack.analysis.campaign.levels.streak_frames startrack.simulate.radiometry
-    startrack.analysis.campaign.provenance startrack.identify.database
-    startrack.analysis.campaign.provenance startrack.identify.registry
-    startrack.analysis.campaign.report startrack.io.atomic
-    startrack.analysis.campaign.rerun startrack.io.atomic
-    startrack.analysis.campaign.rerun startrack.io.truth_files
-    startrack.analysis.campaign.store startrack.io.atomic
-    startrack.analysis.postprocess.core startrack.io.atomic
-    startrack.analysis.postprocess.corrections startrack.calibrate.apparent
-    startrack.analysis.postprocess.corrections startrack.calibrate.ground
-    startrack.analysis.postprocess.figures startrack.calibrate.repeatability
-    startrack.analysis.postprocess.ground startrack.calibrate.sites
-    startrack.analysis.postprocess.magnitude startrack.detect.magnitude
-    startrack.analysis.postprocess.records_io startrack.calibrate.ground
-    startrack.analysis.postprocess.records_io startrack.calibrate.sites
-    startrack.analysis.postprocess.records_io startrack.io.image
-    startrack.analysis.postprocess.repeatability startrack.calibrate.ground
-    startrack.analysis.records startrack.calibrate.sites
-    startrack.analysis.records startrack.simulate.truth
-    startrack.analysis.rso_passes startrack.simulate.orbits
-    startrack.cache startrack.io.atomic
-    startrack.calibrate.apparent startrack.catalog.star_catalog
-    startrack.calibrate.ground_solve startrack.attitude.qmethod
-    startrack.calibrate.sites startrack.io.atomic
-    startrack.cli.adcs_cmd startrack.adcs.cubesat
-    startrack.cli.adcs_cmd startrack.adcs.guidance
-    startrack.cli.adcs_cmd startrack.adcs.loop
-    startrack.cli.adcs_cmd startrack.adcs.metrics
-    startrack.cli.adcs_cmd startrack.adcs.plots
-    startrack.cli.adcs_cmd startrack.adcs.report
-    startrack.cli.adcs_cmd startrack.adcs.scenario
-    startrack.cli.adcs_cmd startrack.adcs.star_tracker_feedback
-    startrack.cli.analyse_cmd startrack.analysis.postprocess.core
-    startrack.cli.availability_cmd startrack.analysis.availability
-    startrack.cli.availability_cmd startrack.analysis.plots
-    startrack.cli.availability_cmd startrack.io.atomic
-    startrack.cli.availability_cmd startrack.io.targets
-    startrack.cli.availability_cmd startrack.multihead.availability
-    startrack.cli.availability_cmd startrack.multihead.exclusion
-    startrack.cli.batch startrack.io.atomic
-    startrack.cli.batch startrack.io.image
-    startrack.cli.batch startrack.io.targets
-    startrack.cli.batch_solve startrack.io.solution_json
-    startrack.cli.calibrate_cmd startrack.calibrate.bench
-    startrack.cli.calibrate_cmd startrack.calibrate.stars
-    startrack.cli.calibrate_cmd startrack.io.atomic
-    startrack.cli.campaign_cmd startrack.analysis.campaign.params
-    startrack.cli.campaign_cmd startrack.analysis.campaign.report
-    startrack.cli.campaign_cmd startrack.analysis.campaign.rerun
-    startrack.cli.campaign_cmd startrack.analysis.campaign.run
-    startrack.cli.campaign_cmd startrack.analysis.campaign.shipped
-    startrack.cli.campaign_cmd startrack.analysis.campaign.spec
-    startrack.cli.campaign_cmd startrack.analysis.campaign.summary
-    startrack.cli.common startrack.identify.registry
-    startrack.cli.common startrack.io.limits
-    startrack.cli.common startrack.io.solution_json
-    startrack.cli.demo_cmd startrack.analysis.plots
-    startrack.cli.demo_cmd startrack.io.solution_json
-    startrack.cli.demo_cmd startrack.io.truth_files
-    startrack.cli.detect_cmd startrack.detect.centroiders
-    startrack.cli.detect_cmd startrack.detect.details
-    startrack.cli.detect_cmd startrack.detect.detector
-    startrack.cli.progress startrack.identify.database
-    startrack.cli.progress startrack.identify.registry
-    startrack.cli.rate_cmd startrack.rate.streak_detect
-    startrack.cli.render_limits startrack.io.limits
-    startrack.cli.run_context startrack.io.limits
-    startrack.cli.run_context startrack.io.targets
-    startrack.cli.simulate_cmd startrack.io.atomic
-    startrack.cli.simulate_cmd startrack.io.fitsfile
-    startrack.cli.simulate_cmd startrack.io.tiff
-    startrack.cli.simulate_cmd startrack.io.truth_files
-    startrack.cli.simulate_cmd startrack.io.writers
-    startrack.cli.simulate_cmd startrack.multihead.exclusion
-    startrack.cli.simulate_cmd startrack.simulate.rig
-    startrack.cli.simulate_cmd startrack.simulate.split_fov
-    startrack.cli.solve_cmd startrack.calibrate.ground_solve
-    startrack.cli.solve_cmd startrack.calibrate.sites
-    startrack.cli.solve_cmd startrack.identify.image_epoch
-    startrack.cli.solve_cmd startrack.io.wcs
-    startrack.cli.solve_rig_cmd startrack.multihead.images
-    startrack.cli.solve_rig_cmd startrack.multihead.report
-    startrack.cli.solve_rig_cmd startrack.multihead.solution
-    startrack.cli.solve_rig_cmd startrack.multihead.solve
-    startrack.cli.solve_rig_cmd startrack.multihead.stars
-    startrack.cli.solve_stars_cmd startrack.identify.image_epoch
-    startrack.cli.solve_stars_cmd startrack.identify.request
-    startrack.cli.solve_stars_cmd startrack.io.limits
-    startrack.cli.track_cmd startrack.io.image
-    startrack.cli.track_cmd startrack.io.limits
-    startrack.cli.track_cmd startrack.io.targets
-    startrack.cli.track_cmd startrack.io.track_csv
-    startrack.cli.track_cmd startrack.rate.streak_solve
-    startrack.cli.web_cmd startrack.web.app
-    startrack.cli.web_cmd startrack.web.config
-    startrack.detect.channels startrack.io.channels
-    startrack.detect.dark startrack.io.channels
-    startrack.detect.detector startrack.io.channels
-    startrack.detect.predictive startrack.io.channels
-    startrack.identify.database startrack.catalog.thinning
-    startrack.identify.image_epoch startrack.calibrate.ground
-    startrack.identify.match_groups startrack.attitude.qmethod
-    startrack.identify.pair_search startrack.attitude.qmethod
-    startrack.identify.pyramid startrack.attitude.qmethod
-    startrack.multihead.exclusion startrack.simulate.orbits
-    startrack.multihead.joint startrack.attitude.covariance
-    startrack.multihead.joint startrack.attitude.qmethod
-    startrack.multihead.pattern startrack.attitude.covariance
-    startrack.multihead.pattern startrack.attitude.qmethod
-    startrack.multihead.pattern startrack.identify.field_stars
-    startrack.multihead.pattern startrack.identify.pair_database
-    startrack.multihead.pattern startrack.identify.pyramid
-    startrack.multihead.pattern startrack.identify.star_order
-    startrack.multihead.pattern startrack.track.windows
-    startrack.multihead.predict startrack.identify.field_stars
-    startrack.multihead.predict startrack.track.windows
-    startrack.multihead.solve startrack.identify.registry
-    startrack.multihead.solve startrack.track.windows
-    startrack.multihead.tracking startrack.track.inputs
-    startrack.multihead.tracking startrack.track.tracker
-    startrack.multihead.tracking startrack.track.windows
-    startrack.rate.catalog_free startrack.attitude.olae
-    startrack.rate.streak_predict startrack.identify.field_stars
-    startrack.rate.streak_solve startrack.attitude.covariance
-    startrack.rate.streak_solve startrack.identify.quad_matcher
-    startrack.rig startrack.io.atomic
-    startrack.simulate.rig startrack.multihead.exclusion
-    startrack.solve startrack.identify.candidate
-    startrack.solve startrack.identify.field_stars
-    startrack.solve startrack.identify.final_fit
-    startrack.solve startrack.identify.image_epoch
-    startrack.solve startrack.identify.refine
-    startrack.solve startrack.identify.registry
-    startrack.solve startrack.identify.request
-    startrack.track.relative startrack.attitude.qmethod
-    startrack.track.relative startrack.identify.pyramid
-    startrack.track.tracker startrack.multihead.tracking
-    startrack.track.tracker startrack.rate.smear_mode
-    startrack.track.tracker startrack.rate.streak_predict
-    startrack.track.tracker startrack.rate.streak_solve
-    startrack.track.tracker startrack.rate.streak_track
-    startrack.track.tracker startrack.simulate.snr
-    startrack.track.windows startrack.identify.field_stars
-    startrack.track.windows startrack.identify.verify
-    startrack.warm_up startrack.identify.registry
-    startrack.web.annotate startrack.analysis.plots
-    startrack.web.annotate startrack.io.atomic
-    startrack.web.batches startrack.io.image
-    startrack.web.jobs startrack.io.atomic
-    startrack.web.options startrack.calibrate.sites
-    startrack.web.options startrack.identify.registry
-    startrack.web.outputs startrack.detect.details
-    startrack.web.outputs startrack.io.atomic
-    startrack.web.outputs startrack.io.solution_json
-    startrack.web.outputs startrack.io.wcs
-    startrack.web.pipeline startrack.calibrate.ground
-    startrack.web.pipeline startrack.calibrate.ground_solve
-    startrack.web.pipeline startrack.calibrate.selfcal
-    startrack.web.pipeline startrack.calibrate.sites
-    startrack.web.pipeline startrack.calibrate.stars
-    startrack.web.records startrack.analysis.records
-    startrack.web.records startrack.calibrate.sites
-    startrack.web.rejects startrack.detect.filters
-    startrack.web.simulation startrack.io.truth_files
-    startrack.web.uploads startrack.io.image
-    startrack.web.views startrack.calibrate.sites
-    startrack.web.worker startrack.identify.registry
-""".strip().splitlines()} | {line.strip(): NOT_YET_PUBLIC for line in """
-    startrack.analysis.campaign.levels.prefilter startrack.detect.prefilters
-    startrack.analysis.campaign.levels.rso startrack.rate.streak_rate
-    startrack.analysis.postprocess.repeatability startrack.calibrate.repeatability
-    startrack.cli.rate_cmd startrack.rate.streak_rate
-    startrack.multihead.availability startrack.analysis.availability
-    startrack.multihead.joint startrack.attitude._inputs
-    startrack.multihead.solve startrack.identify.field_stars
-    startrack.multihead.tracking startrack.identify.field_stars
-    startrack.rate.streak_solve startrack.identify.field_stars
-    startrack.rate.streak_track startrack.identify.field_stars
-    startrack.solve startrack.rate.streak_image
-    startrack.track.tracker startrack.identify.field_stars
-    startrack.track.tracker startrack.rate.streak_rate
-    startrack.web.outputs startrack.analysis.postprocess.core
-    startrack.rate.streak_image startrack.identify.registry
-    startrack.rate.streak_solve startrack.identify.registry
-    startrack.solve startrack.identify.options_base
-    startrack.web.pipeline startrack.identify.registry
-    startrack.web.pipeline startrack.analysis.postprocess.corrections
-    startrack.web.pipeline startrack.analysis.postprocess.ground
-    startrack.web.pipeline startrack.analysis.postprocess.records_io
-""".strip().splitlines()}
-"""``"importer target"`` -> why ``importer`` still imports ``target`` (a module of another
-subpackage) rather than the subpackage. Measured on 2026-12-02: 215 pairs (204 from modules of
-subpackages, 11 from top-level modules such as ``startrack.solve``), 198 of them importing only
-names that are public now."""
+IMPORTS_PAST_INIT = {
+    "startrack.multihead._availability startrack.analysis._availability":
+        "the rig's star availability counts each head's stars with the single-camera chunk counter "
+        "(_count_chunk, CHUNK): one implementation of the count, which is not an analysis API",
+}
+"""``"importer target"`` -> why ``importer`` imports ``target`` (a private module of another
+subpackage) rather than a name of that subpackage. Before the modules of the subpackages became
+private (2026-12-02) there were 215 such pairs; routing every other import through the package's
+public names left this one."""
 
 
 def test_every_package_is_on_the_api_page():
@@ -399,3 +176,9 @@ def test_no_module_imports_past_another_subpackages_init():
     assert not new, f"import these from the subpackage (add the name to its __all__): {new}"
     assert not gone, f"no longer imported past the package's __init__: delete from IMPORTS_PAST_INIT: {gone}"
     assert all(IMPORTS_PAST_INIT.values())
+
+
+def test_every_module_of_a_subpackage_is_private():
+    public = sorted(str(p.relative_to(SRC)) for p in (SRC / "startrack").rglob("*.py")
+                    if p.parent != SRC / "startrack" and not p.name.startswith("_"))
+    assert not public, "a subpackage's __init__ is its contract: give these modules a leading underscore"

@@ -8,19 +8,19 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from startrack.attitude.wahba import METHODS as WAHBA_METHODS
-from startrack.attitude.wahba import WahbaMethod, solve_wahba
-from startrack.detect.detector import StarDetector
+from startrack.attitude._wahba import METHODS as WAHBA_METHODS
+from startrack.attitude._wahba import WahbaMethod, solve_wahba
+from startrack.detect._detector import StarDetector
 from startrack.errors import InvalidInputError
-from startrack.identify.options_base import MatcherOptionsBase
-from startrack.identify.registry import METHOD_NAMES, OPTIONS, MethodName, check_method, check_options
-from startrack.rate.endpoints import DETECTORS, CornerDetector, check_detector, cornerness
-from startrack.rate.rso import INDICATORS, IndicatorName
-from startrack.rate.streak_rate import METHODS as ENDPOINT_METHODS
-from startrack.rate.streak_rate import EndpointMethod, check_endpoint_method, measure_streaks
-from startrack.rate.streak_solve import StreakOptions, checked_options, solve_streaked
+from startrack.identify._options_base import MatcherOptionsBase
+from startrack.identify._registry import METHOD_NAMES, OPTIONS, MethodName, check_method, check_options
+from startrack.rate._endpoints import DETECTORS, CornerDetector, check_detector, cornerness
+from startrack.rate._rso import INDICATORS, IndicatorName
+from startrack.rate._streak_rate import METHODS as ENDPOINT_METHODS
+from startrack.rate._streak_rate import EndpointMethod, check_endpoint_method, measure_streaks
+from startrack.rate._streak_solve import StreakOptions, checked_options, solve_streaked
 from startrack.solve import solve_image, solve_stars
-from startrack.track.tracker import (
+from startrack.track._tracker import (
     LOST_IN_SPACE,
     POINT_MODE,
     STEP_MODES,
@@ -169,8 +169,8 @@ def test_the_streak_path_refuses_options_of_another_class_and_a_wrong_matcher_na
     assert checked_options(None) == StreakOptions()
     mine = StreakOptions(lis_streaks=10)
     assert checked_options(mine) is mine
-    with pytest.raises(InvalidInputError, match="must be a startrack.rate.streak_solve.StreakOptions, got a "
-                                                "TrackerOptions"):
+    with pytest.raises(InvalidInputError, match="options of the streak path must be a startrack.rate.StreakOptions, "
+                                                "got a TrackerOptions"):
         solve_streaked(np.zeros((32, 32)), fov_deg=10.0, options=TrackerOptions())
     with pytest.raises(InvalidInputError) as err:
         solve_streaked(np.zeros((32, 32)), fov_deg=10.0, method="quad")
@@ -179,10 +179,10 @@ def test_the_streak_path_refuses_options_of_another_class_and_a_wrong_matcher_na
 
 # --- track: the Tracker's options and its modes ---------------------------------------------------
 def test_the_tracker_refuses_options_of_another_class_naming_both():
-    with pytest.raises(InvalidInputError, match="must be a startrack.track.tracker.TrackerOptions, got a "
+    with pytest.raises(InvalidInputError, match="must be a startrack.track.TrackerOptions, got a "
                                                 "StreakOptions"):
         Tracker(width=64, height=64, fov_deg=10.0, options=StreakOptions())
-    with pytest.raises(InvalidInputError, match="must be a startrack.rate.streak_solve.StreakOptions, got a "
+    with pytest.raises(InvalidInputError, match="TrackerOptions.streak must be a startrack.rate.StreakOptions, got a "
                                                 "MatcherOptions"):
         TrackerOptions(streak=OPTIONS["quads"]())
 

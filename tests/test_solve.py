@@ -315,7 +315,7 @@ def _cli(*argv) -> tuple[int, str, str]:
     import contextlib
     import io
 
-    from startrack.cli.main import main
+    from startrack.cli import main
 
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):

@@ -4,10 +4,10 @@ background's grids as one TileGrid, a streak solution's fields read only from a 
 import numpy as np
 import pytest
 
-from startrack.detect import background
+from startrack.detect import _background as background
 from startrack.errors import InvalidInputError
-from startrack.identify.registry import MATCHERS, METHOD_NAMES, OPTIONS, check_method, options_for, prepare_matcher
-from startrack.io.solution_json import solution_to_dict, streak_fields
+from startrack.identify._registry import MATCHERS, METHOD_NAMES, OPTIONS, check_method, options_for, prepare_matcher
+from startrack.io._solution_json import solution_to_dict, streak_fields
 from startrack.results import AttitudeSolution, Status
 
 

@@ -11,10 +11,11 @@ import solve_image`` works as before. Subpackages do the same through :func:`_la
 
 from __future__ import annotations
 
+import ast
 import importlib
 import sys
 from collections.abc import Callable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
 
@@ -34,7 +35,7 @@ def _lazy_exports(package: str, exports: Mapping[str, str]) -> tuple[Callable[[s
     (__getattr__, __dir__)
         ``__getattr__(name)`` imports the module of an exported name, binds the name in the
         package (later look-ups cost nothing) and returns it; any other name is tried as a
-        submodule (``startrack.catalog.cone`` after ``import startrack.catalog``, as when the
+        submodule (``startrack.catalog._cone`` after ``import startrack.catalog``, as when the
         package imported it eagerly), else AttributeError.
     """
 
@@ -55,6 +56,35 @@ def _lazy_exports(package: str, exports: Mapping[str, str]) -> tuple[Callable[[s
     return __getattr__, __dir__
 
 
+def _exports_of(init_file: str) -> dict[str, str]:
+    """Public name -> defining module of a lazy package, read from its ``__init__.py``.
+
+    A lazy package lists its names once, as the imports of its ``if TYPE_CHECKING:`` block (what
+    mypy and a reader see); at run time nothing there is imported, and this map tells
+    :func:`_lazy_exports` which module to load for a name.
+
+    Parameters
+    ----------
+    init_file : str
+        The package's ``__file__``.
+
+    Returns
+    -------
+    dict of str to str
+        Name -> the module relative to the package (``"._solve"``), in the block's order.
+    """
+    with open(init_file, encoding="utf-8") as file:
+        tree = ast.parse(file.read(), init_file)
+    exports = {}
+    for node in tree.body:
+        if isinstance(node, ast.If) and isinstance(node.test, ast.Name) and node.test.id == "TYPE_CHECKING":
+            for statement in node.body:
+                if isinstance(statement, ast.ImportFrom) and statement.level == 1:
+                    module = "." + (statement.module or "")
+                    exports.update({alias.asname or alias.name: module for alias in statement.names})
+    return exports
+
+
 def _submodule(package: str, name: str) -> Any:
     """The submodule ``package.name``, or AttributeError when there is none."""
     try:
@@ -65,20 +95,14 @@ def _submodule(package: str, name: str) -> Any:
         raise AttributeError(f"module {package!r} has no attribute {name!r}") from None
 
 
-_EXPORTS = {
-    "AttitudeSolution": ".results",
-    "Camera": ".camera",
-    "CameraRig": ".rig",
-    "Detections": ".results",
-    "RigHead": ".rig",
-    "RigSolution": ".multihead",
-    "StarMatches": ".results",
-    "Status": ".results",
-    "get_preset": ".camera",
-    "solve_image": ".solve",
-    "solve_rig": ".multihead",
-    "solve_stars": ".solve",
-}
+if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
+    from .camera import Camera, get_preset
+    from .multihead import RigSolution, solve_rig
+    from .results import AttitudeSolution, Detections, StarMatches, Status
+    from .rig import CameraRig, RigHead
+    from .solve import solve_image, solve_stars
+
+_EXPORTS = _exports_of(__file__)
 
 __all__ = sorted([*_EXPORTS, "__version__"])
 

@@ -43,7 +43,7 @@ from numpy.lib import format as npy_format
 
 from . import numba_cache
 from .errors import CacheError, CacheWarning
-from .io.atomic import discard, remove_stale_temps, temp_name
+from .io import discard, remove_stale_temps, temp_name
 
 ENV_VAR = "STARTRACK_CACHE_DIR"
 FORMAT = 2

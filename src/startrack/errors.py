@@ -63,5 +63,13 @@ def check_instance(value: object, cls: type[_T], what: str) -> _T:
     """``value`` itself when it is a ``cls``; an InvalidInputError naming ``what``, the class it must
     be and the class given if it is not (an options object of another stage or method)."""
     if not isinstance(value, cls):
-        raise InvalidInputError(f"{what} must be a {cls.__module__}.{cls.__qualname__}, got a {type(value).__name__}")
+        raise InvalidInputError(f"{what} must be a {public_name(cls)}, got a {type(value).__name__}")
     return value
+
+
+def public_name(cls: type) -> str:
+    """``cls`` by the name users import it under: its module's path up to the first private part
+    (``startrack.rate._streak_solve.StreakOptions`` is ``startrack.rate.StreakOptions``)."""
+    parts = cls.__module__.split(".")
+    public = next((i for i, part in enumerate(parts) if part.startswith("_")), len(parts))
+    return ".".join([*parts[:public], cls.__qualname__])

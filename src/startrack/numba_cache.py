@@ -1,6 +1,6 @@
 """Where numba keeps startrack's compiled loops, and clearing a damaged copy (docs/io.md, "Caches").
 
-startrack's kernels (:mod:`startrack.identify.quad_kernel`, :mod:`startrack.identify.pose_kernel`)
+startrack's kernels (:mod:`startrack.identify._quad_kernel`, :mod:`startrack.identify._pose_kernel`)
 are compiled by numba on first use and cached on disk (``cache=True``). Left to itself numba writes
 that cache into ``__pycache__`` beside the installed package (read-only in a system install, shared
 by every user) and trusts what it finds there: a damaged index or data file stops every later run

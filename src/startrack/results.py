@@ -160,7 +160,7 @@ class AttitudeSolution:
     epoch_source : str
         Where that epoch came from: "given", an image header card ("CATEPOCH", "DATE-OBS",
         "MJD-OBS", "DateTimeOriginal") or "default" (J2000.0, nothing said when); empty when not
-        recorded. See :mod:`startrack.identify.image_epoch`.
+        recorded. See :mod:`startrack.identify._image_epoch`.
     """
 
     status: Status

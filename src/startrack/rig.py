@@ -298,7 +298,7 @@ class CameraRig:
 
     def save(self, path: str | os.PathLike) -> Path:
         """Write the rig as JSON (atomically) and return the path."""
-        from .io.atomic import atomic_path
+        from .io import atomic_path
 
         path = Path(path)
         with atomic_path(path) as tmp:

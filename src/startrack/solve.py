@@ -21,15 +21,26 @@ from scipy.spatial.transform import Rotation
 from .camera import Camera
 from .catalog import load_catalog
 from .errors import InvalidInputError
-from .identify.candidate import Candidate
-from .identify.field_stars import FieldStars
-from .identify.final_fit import settle_matches
-from .identify.image_epoch import DEFAULT_EPOCH_JYEAR, epoch_jyear, resolve_epoch
-from .identify.options_base import MatcherOptionsBase
-from .identify.refine import pixel_vectors, solution_terms
-from .identify.registry import DEFAULT_FOV_RANGE_DEG, MethodName, check_options, prepare_matcher
-from .identify.request import FOV_DEG_TOLERANCE, SolveRequest, build_request, check_fov_deg
-from .identify.request import star_arrays as _star_arrays  # noqa: F401 (startrack.multihead checks heads with it)
+from .identify import (
+    DEFAULT_EPOCH_JYEAR,
+    DEFAULT_FOV_RANGE_DEG,
+    FOV_DEG_TOLERANCE,
+    Candidate,
+    FieldStars,
+    MatcherOptionsBase,
+    MethodName,
+    SolveRequest,
+    build_request,
+    check_fov_deg,
+    check_options,
+    epoch_jyear,
+    pixel_vectors,
+    prepare_matcher,
+    resolve_epoch,
+    settle_matches,
+    solution_terms,
+)
+from .identify import star_arrays as _star_arrays  # noqa: F401 (startrack.multihead checks heads with it)
 from .results import AttitudeSolution, StarMatches, Status
 from .units import ARCSEC
 
@@ -125,7 +136,7 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
         Epoch of the catalog positions (Julian year, TDB); default J2000.0. The solution says
         which it used (``epoch_jyear``, ``epoch_source``).
     method : MethodName
-        The matcher (:data:`startrack.identify.registry.MethodName`; another name is refused
+        The matcher (:data:`startrack.identify._registry.MethodName`; another name is refused
         with the valid ones): "quads", four-star patterns
         (the default; any FOV knowledge); the seeds' matchers on the star-pair directory, which
         need a FOV known to 5 % or a camera ("pyramid", "angle", "triangle-planar",
@@ -133,7 +144,7 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
         "overlay", which needs a prior attitude. See ``docs/identification.md``.
     options : MatcherOptionsBase, optional
         Settings of the chosen matcher, an instance of its subclass of
-        :class:`startrack.identify.options_base.MatcherOptionsBase` (``MatcherOptions`` for
+        :class:`startrack.identify._options_base.MatcherOptionsBase` (``MatcherOptions`` for
         "quads", ``PyramidOptions`` for "pyramid", and so on: ``registry.OPTIONS[method]``, or
         ``registry.options_for(method, ...)``); another matcher's class is refused, naming the
         method, the class given and the one expected.
@@ -145,7 +156,7 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
         Height of a pixel on the sky over its width (fx / fy; 1 for square pixels), or a range
         (low, high) to search for it (slower: each aspect is a search). Not given: square pixels
         are assumed in the search and the aspect is fitted in the final solution. Not with a
-        camera, which has its own. See :mod:`startrack.identify.request`.
+        camera, which has its own. See :mod:`startrack.identify._request`.
 
     Returns
     -------
@@ -195,10 +206,10 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
         As in :func:`solve_stars`.
     epoch : astropy.time.Time or float, optional
         Catalog epoch; default: the time the image's header states (FITS ``CATEPOCH``,
-        ``DATE-OBS``, ``MJD-OBS``, EXIF ``DateTimeOriginal``; :mod:`startrack.identify.image_epoch`),
+        ``DATE-OBS``, ``MJD-OBS``, EXIF ``DateTimeOriginal``; :mod:`startrack.identify._image_epoch`),
         else J2000.0.
     channel : str or int, optional
-        Colour channel to use: 'r', 'g' or 'b' (default: R + G + B; see :mod:`startrack.io.channels`).
+        Colour channel to use: 'r', 'g' or 'b' (default: R + G + B; see :mod:`startrack.io._channels`).
     detector : startrack.detect.StarDetector, optional
         Detection settings (default: :func:`startrack.detect.detect`'s).
 
@@ -206,10 +217,10 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
     -------
     AttitudeSolution
         With ``detections`` (the stars found, brightest first; ``matches.det_index`` indexes
-        them). A smeared frame (its brightest spots elongated, :mod:`startrack.rate.streak_image`'s
+        them). A smeared frame (its brightest spots elongated, :mod:`startrack._smeared_image`'s
         ``SMEARED_ELONGATION``; or a failed point solve of somewhat elongated spots) is solved from
         its streaks without being asked: the result is then a
-        :class:`startrack.rate.streak_solve.StreakSolution` (``mode`` "streak", the attitude at
+        :class:`startrack.rate._streak_solve.StreakSolution` (``mode`` "streak", the attitude at
         mid-exposure ``t_mid_s`` after the exposure start, the rate when the header gives the
         exposure; ``detections`` are then the fitted streaks' light centroids, one per row of
         ``streaks``, which ``matches.det_index`` indexes). The patterns are formed from
@@ -233,19 +244,19 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
     t0 = time.perf_counter()
     found = (detector or StarDetector()).detect(img.data)
     detect_s = time.perf_counter() - t0
-    from .rate import streak_image
+    from . import _smeared_image as smeared_image
 
-    smeared = functools.partial(streak_image.solve_smeared_image, img.data, img.header, camera=camera, fov_deg=fov_deg,
+    smeared = functools.partial(smeared_image.solve_smeared_image, img.data, img.header, camera=camera, fov_deg=fov_deg,
                                 fov_range_deg=fov_range_deg, epoch=when.jyear, method=method, pixel_aspect=pixel_aspect)
-    elongation = streak_image.smear_elongation(found)
-    if elongation >= streak_image.SMEARED_ELONGATION and (streaked := smeared()).solved:
-        return streak_image.image_solution(streaked, found, detect_s, when.source)
+    elongation = smeared_image.smear_elongation(found)
+    if elongation >= smeared_image.SMEARED_ELONGATION and (streaked := smeared()).solved:
+        return smeared_image.image_solution(streaked, found, detect_s, when.source)
     order = search_order(found)
     request = build_request(found.x[order], found.y[order], width=width, height=height, fov_deg=fov_deg,
                             fov_range_deg=fov_range_deg, camera=camera, flux=None, epoch=when,
                             pixel_aspect=pixel_aspect)
     solution = _run(replace(request, rows=order[request.rows]), method, options)
-    if not solution.solved and streak_image.SOME_ELONGATION <= elongation < streak_image.SMEARED_ELONGATION \
+    if not solution.solved and smeared_image.SOME_ELONGATION <= elongation < smeared_image.SMEARED_ELONGATION \
             and (streaked := smeared()).solved:
-        return streak_image.image_solution(streaked, found, detect_s, when.source)
+        return smeared_image.image_solution(streaked, found, detect_s, when.source)
     return replace(solution, solve_time_s=detect_s + solution.solve_time_s, detections=found)

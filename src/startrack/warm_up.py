@@ -1,8 +1,8 @@
 """A solve that loads what a first real solve would: the 30 brightest catalog stars a camera
 pointed at RA 90, Dec 30 deg sees, solved with the field-of-view options of the work to come, so
 that the pattern database and the compiled kernels are loaded (or, once after an install,
-compiled) before any timed solve. Used by the CLI's warm-up (:mod:`startrack.cli.batch_warmup`)
-and by the web server's fork server (:mod:`startrack.web.worker`)."""
+compiled) before any timed solve. Used by the CLI's warm-up (:mod:`startrack.cli._batch_warmup`)
+and by the web server's fork server (:mod:`startrack.web._worker`)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from .camera import Camera
 def warm_up_fov_deg(fov_deg: float | None, fov_range_deg: tuple[float, float] | None,
                      camera: Camera | None) -> float:
     """The field of view of the warm-up star list: the one the command will search (deg)."""
-    from .identify.registry import DEFAULT_FOV_RANGE_DEG
+    from .identify import DEFAULT_FOV_RANGE_DEG
 
     if camera is not None:
         return camera.fov_deg

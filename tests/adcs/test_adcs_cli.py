@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from startrack.cli.main import main
+from startrack.cli import main
 
 
 def run(capsys, *argv: str) -> tuple[int, str, str]:

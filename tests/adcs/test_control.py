@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from startrack.adcs.control import (
+from startrack.adcs._control import (
     A_DOUBLE_INTEGRATOR,
     B_DOUBLE_INTEGRATOR,
     LQRTracking,

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from startrack.adcs.estimate import CommandLog, Measurement, estimate_from, y_angle
-from startrack.adcs.metrics import overall_metrics, step_metrics
-from startrack.adcs.plant import y_rotation
+from startrack.adcs._estimate import CommandLog, Measurement, estimate_from, y_angle
+from startrack.adcs._metrics import overall_metrics, step_metrics
+from startrack.adcs._plant import y_rotation
 
 
 def _log(accels: list[tuple[float, float]]) -> CommandLog:

@@ -7,7 +7,7 @@ import pytest
 from numpy.polynomial import legendre
 from numpy.polynomial import polynomial as P
 
-from startrack.adcs.lgl import lgl_grid, time_nodes
+from startrack.adcs._lgl import lgl_grid, time_nodes
 from startrack.errors import InvalidInputError
 
 

@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from startrack.adcs.cubesat import CubeSat
-from startrack.adcs.loop import LoopConfig, run_loop
-from startrack.adcs.metrics import SEED_TABLE_5_3, run_metrics
-from startrack.adcs.scenario import Scenario
-from startrack.adcs.star_tracker_feedback import StarTrackerSetup, fit_noise_model
+from startrack.adcs._cubesat import CubeSat
+from startrack.adcs._loop import LoopConfig, run_loop
+from startrack.adcs._metrics import SEED_TABLE_5_3, run_metrics
+from startrack.adcs._scenario import Scenario
+from startrack.adcs._star_tracker_feedback import StarTrackerSetup, fit_noise_model
 from startrack.errors import InvalidInputError
 
 ARCSEC = math.pi / 180 / 3600

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from startrack.adcs.cubesat import CubeSat
-from startrack.adcs.planner import Boundary, PlannerOptions, PlanStatus, plan_path, prey_cubic
-from startrack.adcs.plant import SingleAxisPlant
+from startrack.adcs._cubesat import CubeSat
+from startrack.adcs._planner import Boundary, PlannerOptions, PlanStatus, plan_path, prey_cubic
+from startrack.adcs._plant import SingleAxisPlant
 from startrack.errors import InvalidInputError
 
 SAT = CubeSat()

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from startrack.adcs.actuation import allocate
-from startrack.adcs.cubesat import CubeSat, helmholtz_field_t
-from startrack.adcs.field import EARTH_RADIUS_M, DipoleField, UniformField, dipole_field_t
-from startrack.adcs.plant import SingleAxisPlant, ThreeAxisPlant, y_rotation
+from startrack.adcs._actuation import allocate
+from startrack.adcs._cubesat import CubeSat, helmholtz_field_t
+from startrack.adcs._field import EARTH_RADIUS_M, DipoleField, UniformField, dipole_field_t
+from startrack.adcs._plant import SingleAxisPlant, ThreeAxisPlant, y_rotation
 from startrack.errors import InvalidInputError
 
 SAT = CubeSat()

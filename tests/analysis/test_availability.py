@@ -3,9 +3,9 @@
 import numpy as np
 
 from startrack import get_preset
-from startrack.analysis.availability import star_counts
+from startrack.analysis._availability import star_counts
 from startrack.catalog import load_catalog
-from startrack.cli.main import main
+from startrack.cli import main
 from startrack.frames import random_rotations
 
 

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from startrack import Camera
+from startrack.analysis._records import ImageRecord
 from startrack.analysis.postprocess import ResultSet, run_analysis
-from startrack.analysis.postprocess.radial import quadratic_fit
-from startrack.analysis.records import ImageRecord
+from startrack.analysis.postprocess._radial import quadratic_fit
 from startrack.catalog import load_catalog
 from startrack.detect import StarDetector
 from startrack.frames import angle_between, boresight, random_rotations

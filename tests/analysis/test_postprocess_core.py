@@ -13,6 +13,7 @@ import pytest
 from matplotlib.figure import Figure
 
 from startrack import Camera
+from startrack.analysis._records import ImageRecord
 from startrack.analysis.postprocess import (
     ANALYSES,
     AnalysisResult,
@@ -22,14 +23,13 @@ from startrack.analysis.postprocess import (
     parse_param,
     record_pixels,
     records_from_images,
-    records_io,
     run_analysis,
 )
-from startrack.analysis.postprocess.core import PARAM_TYPES
-from startrack.analysis.records import ImageRecord
+from startrack.analysis.postprocess import _records_io as records_io
+from startrack.analysis.postprocess._core import PARAM_TYPES
 from startrack.errors import InvalidInputError
 from startrack.frames import attitude_error, random_rotations
-from startrack.io.truth_files import write_frame
+from startrack.io._truth_files import write_frame
 from startrack.results import AttitudeSolution, Status
 from startrack.simulate import get_sensor_preset, simulate_frame
 from startrack.units import ARCSEC

@@ -12,13 +12,13 @@ from astropy.time import Time, TimeDelta
 from scipy.spatial.transform import Rotation
 
 from startrack import Camera
+from startrack.analysis._records import ImageRecord
 from startrack.analysis.postprocess import ResultSet, run_analysis
-from startrack.analysis.postprocess.ground import error_arcsec
-from startrack.analysis.records import ImageRecord
-from startrack.calibrate.ground import rotation_enu_from_icrs
-from startrack.calibrate.ground_solve import solve_ground_photo
-from startrack.calibrate.repeatability import repeatability
-from startrack.calibrate.sites import get_site
+from startrack.analysis.postprocess._ground import error_arcsec
+from startrack.calibrate._ground import rotation_enu_from_icrs
+from startrack.calibrate._ground_solve import solve_ground_photo
+from startrack.calibrate._repeatability import repeatability
+from startrack.calibrate._sites import get_site
 from startrack.errors import InvalidInputError
 from startrack.frames import attitude_error
 from startrack.simulate import get_sensor_preset, simulate_frame

@@ -6,7 +6,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from startrack import Camera
-from startrack.analysis import scoring
+from startrack.analysis import _scoring as scoring
 from startrack.units import ARCSEC
 
 

@@ -7,7 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from startrack.analysis import starlists
+from startrack.analysis import _starlists as starlists
 from startrack.catalog import load_catalog
 from startrack.units import PIXEL
 

@@ -24,7 +24,8 @@ import cedar_runner  # noqa: E402
 import methods  # noqa: E402
 from methods import KNOWN_FOV_TOLERANCE, FovKnowledge  # noqa: E402
 
-from startrack.analysis import scoring, starlists  # noqa: E402
+from startrack.analysis import _scoring as scoring  # noqa: E402
+from startrack.analysis import _starlists as starlists  # noqa: E402
 
 
 class RecordingSolver:

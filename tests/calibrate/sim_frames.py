@@ -7,10 +7,10 @@ import functools
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from startrack.calibrate.stars import CalibrationFrame
+from startrack.calibrate._stars import CalibrationFrame
 from startrack.catalog import load_catalog
 from startrack.frames import random_rotations
-from startrack.simulate.scene import project_stars
+from startrack.simulate._scene import project_stars
 from startrack.units import DEG
 
 

@@ -11,7 +11,7 @@ import pytest
 from astropy.time import Time, TimeDelta
 from erfa import ErfaWarning
 
-from startrack.calibrate.apparent import (
+from startrack.calibrate._apparent import (
     CircularOrbit,
     aberrate,
     aberration_angle_rad,
@@ -22,7 +22,7 @@ from startrack.calibrate.apparent import (
     observer_state,
     rotation_tod_from_icrs,
 )
-from startrack.calibrate.deflection import (
+from startrack.calibrate._deflection import (
     deflect_by_planets,
     deflection_near_planet_rad,
     limb_deflection_rad,

@@ -7,13 +7,13 @@ from scipy.spatial.transform import Rotation
 
 pytest.importorskip("cv2", reason="bench calibration needs opencv-python-headless")
 
-from startrack.calibrate.bench import (  # noqa: E402
+from startrack.calibrate._bench import (  # noqa: E402
     Checkerboard,
     calibrate_checkerboard,
     find_corners,
     render_checkerboard,
 )
-from startrack.calibrate.lens_models import distortion_field_px  # noqa: E402
+from startrack.calibrate._lens_models import distortion_field_px  # noqa: E402
 from startrack.camera import Camera, get_preset  # noqa: E402
 from startrack.errors import InvalidInputError  # noqa: E402
 from startrack.units import PIXEL  # noqa: E402

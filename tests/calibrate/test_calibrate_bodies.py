@@ -3,8 +3,8 @@
 import numpy as np
 from astropy.time import Time
 
-from startrack.calibrate.apparent import rotation_tod_from_icrs
-from startrack.calibrate.bodies import body_directions, bright_bodies_near, variable_flags
+from startrack.calibrate._apparent import rotation_tod_from_icrs
+from startrack.calibrate._bodies import body_directions, bright_bodies_near, variable_flags
 from startrack.frames import angle_between, rotation_from_radec_roll, vector_to_radec
 from startrack.units import DEG
 

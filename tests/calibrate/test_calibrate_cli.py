@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from startrack.camera import Camera
-from startrack.cli.main import main
+from startrack.cli import main
 from startrack.io import write_png
 
 CEDAR_SAME_SIZE = ("crappy.jpg", "orion_trees.jpg", "roof.jpg")  # 507 x 507
@@ -37,7 +37,7 @@ def test_calibrate_from_checkerboard_pngs(tmp_path):
     pytest.importorskip("cv2")
     from scipy.spatial.transform import Rotation
 
-    from startrack.calibrate.bench import Checkerboard, render_checkerboard
+    from startrack.calibrate._bench import Checkerboard, render_checkerboard
 
     board = Checkerboard(7, 5, 30.0)
     truth = Camera(width=400, height=300, fx=430.0, k1=-0.1)

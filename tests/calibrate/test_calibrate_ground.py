@@ -11,7 +11,7 @@ from astropy.coordinates import AltAz, EarthLocation, SkyCoord
 from astropy.time import Time
 from astropy.utils import iers
 
-from startrack.calibrate.ground import (
+from startrack.calibrate._ground import (
     altaz_from_vectors,
     pointing_altaz,
     refract_icrs,
@@ -19,10 +19,10 @@ from startrack.calibrate.ground import (
     time_from_header,
     unrefract_icrs,
 )
-from startrack.calibrate.sites import BUILTIN_SITES, Site, delete_site, get_site, load_sites, save_site
+from startrack.calibrate._sites import BUILTIN_SITES, Site, delete_site, get_site, load_sites, save_site
 from startrack.errors import InvalidInputError
 from startrack.frames import angle_between, radec_to_vector, rotation_from_radec_roll
-from startrack.io.raw import bayer_cells, full_resolution_xy
+from startrack.io._raw import bayer_cells, full_resolution_xy
 from startrack.units import ARCSEC, DEG
 
 SITE = BUILTIN_SITES["logan-ut-2012"]
@@ -68,7 +68,7 @@ def _astropy_altaz(ra_deg, dec_deg):
 def test_horizon_frame_agrees_with_astropy():
     """astropy's AltAz (no refraction) of an ICRS direction vs our GCRS-apparent -> ENU; astropy
     applies aberration inside the transform, so we feed it the aberrated direction's ICRS twin."""
-    from startrack.calibrate.apparent import aberrate, earth_state
+    from startrack.calibrate._apparent import aberrate, earth_state
 
     ra, dec = np.array([10.0, 120.0, 250.0, 300.0]), np.array([20.0, 60.0, -5.0, 45.0])
     alt, az = _astropy_altaz(ra, dec)

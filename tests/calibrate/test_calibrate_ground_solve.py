@@ -5,10 +5,10 @@ import numpy as np
 from astropy.time import Time
 
 from startrack import Camera, solve_image
-from startrack.calibrate.apparent import apparent_vectors
-from startrack.calibrate.ground import pointing_altaz, refract_icrs, rotation_enu_from_icrs
-from startrack.calibrate.ground_solve import solve_ground_photo
-from startrack.calibrate.sites import Site
+from startrack.calibrate._apparent import apparent_vectors
+from startrack.calibrate._ground import pointing_altaz, refract_icrs, rotation_enu_from_icrs
+from startrack.calibrate._ground_solve import solve_ground_photo
+from startrack.calibrate._sites import Site
 from startrack.catalog import load_catalog
 from startrack.frames import attitude_error, boresight, rotation_from_radec_roll, vector_to_radec
 from startrack.simulate import get_sensor_preset, render_stars
@@ -49,7 +49,7 @@ def test_ground_photo_is_solved_against_the_apparent_refracted_sky():
 def test_cli_solve_with_a_site_prints_altitude_and_azimuth(tmp_path, capsys):
     import json
 
-    from startrack.cli.main import main
+    from startrack.cli import main
     from startrack.io import write_png
 
     image, truth = _photo(35.0, 250.0)

@@ -6,14 +6,14 @@ import math
 import numpy as np
 import pytest
 
-from startrack.calibrate.quick import (
+from startrack.calibrate._quick import (
     centre_from_rotation,
     focal_from_pair,
     focal_from_stars,
     seed002_focal_sensitivity,
 )
-from startrack.calibrate.stars import calibrate_from_stars
-from startrack.calibrate.tilted_ccd import TiltedCcdCamera, TiltedCcdModel
+from startrack.calibrate._stars import calibrate_from_stars
+from startrack.calibrate._tilted_ccd import TiltedCcdCamera, TiltedCcdModel
 from startrack.camera import Camera
 from startrack.errors import InvalidInputError
 from startrack.units import DEG, PIXEL

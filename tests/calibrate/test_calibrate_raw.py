@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from startrack.calibrate.ground import time_from_header
+from startrack.calibrate._ground import time_from_header
 from startrack.errors import ImageReadError
 from startrack.io import read_image
-from startrack.io.raw import cell_origin, full_resolution_xy, read_raw
+from startrack.io._raw import cell_origin, full_resolution_xy, read_raw
 from startrack.simulate import render_gaussian_psf
 from startrack.units import PIXEL
 

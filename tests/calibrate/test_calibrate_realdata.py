@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from startrack.calibrate.selfcal import self_calibrate
-from startrack.io.wcs import read_wcs, solution_wcs
+from startrack.calibrate._selfcal import self_calibrate
+from startrack.io._wcs import read_wcs, solution_wcs
 
 TRUTH_CSV = Path(__file__).resolve().parents[2].parent / "shared" / "realdata" / "truth.csv"
 

@@ -5,7 +5,7 @@ import erfa
 import numpy as np
 import pytest
 
-from startrack.calibrate.refraction import (
+from startrack.calibrate._refraction import (
     BENNETT_ACCURACY_RAD,
     altitude_of,
     apparent_from_true_altitude,

@@ -5,10 +5,10 @@ import pytest
 from astropy.time import Time, TimeDelta
 from scipy.spatial.transform import Rotation
 
-from startrack.analysis.calibration_plots import plot_distortion, plot_repeatability, plot_residuals
-from startrack.calibrate.ground import rotation_enu_from_icrs
-from startrack.calibrate.repeatability import error_budget, repeatability
-from startrack.calibrate.sites import BUILTIN_SITES
+from startrack.analysis._calibration_plots import plot_distortion, plot_repeatability, plot_residuals
+from startrack.calibrate._ground import rotation_enu_from_icrs
+from startrack.calibrate._repeatability import error_budget, repeatability
+from startrack.calibrate._sites import BUILTIN_SITES
 from startrack.camera import get_preset
 from startrack.errors import InvalidInputError
 from startrack.frames import attitude_error

@@ -1,7 +1,7 @@
 """The self-calibration's joint test of the calibrated terms against the pinhole (F-test)."""
 
-from startrack.calibrate.selfcal import justified
-from startrack.calibrate.stars import CalibrationFrame, calibrate_from_stars
+from startrack.calibrate._selfcal import justified
+from startrack.calibrate._stars import CalibrationFrame, calibrate_from_stars
 from startrack.camera import Camera, get_preset
 
 from .sim_frames import make_frames

@@ -4,8 +4,8 @@ focal lengths, principal points and Brown-Conrady distortion), from 1 frame and 
 import numpy as np
 import pytest
 
-from startrack.calibrate.lens_models import distortion_field_px
-from startrack.calibrate.stars import CalibrationFrame, calibrate_from_stars
+from startrack.calibrate._lens_models import distortion_field_px
+from startrack.calibrate._stars import CalibrationFrame, calibrate_from_stars
 from startrack.camera import Camera, get_preset
 from startrack.errors import InvalidInputError
 from startrack.frames import attitude_error

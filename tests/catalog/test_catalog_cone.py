@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from startrack.catalog import ConeIndex, StarCatalog, cone_search, load_catalog
-from startrack.catalog.thinning import fibonacci_sphere
+from startrack.catalog._thinning import fibonacci_sphere
 from startrack.errors import InvalidInputError
 from startrack.frames import angle_between
 from startrack.units import DEG

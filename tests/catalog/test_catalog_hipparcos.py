@@ -7,13 +7,7 @@ import pytest
 
 from startrack import cache
 from startrack.catalog import StarCatalog, load_catalog
-from startrack.catalog.hipparcos import (
-    CACHE_KIND,
-    catalog_file,
-    catalog_from_arrays,
-    load_hip2_arrays,
-    parse_hip2,
-)
+from startrack.catalog._hipparcos import CACHE_KIND, catalog_file, catalog_from_arrays, load_hip2_arrays, parse_hip2
 from startrack.errors import InvalidInputError
 from startrack.units import ARCSEC, DEG
 

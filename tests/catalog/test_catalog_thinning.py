@@ -5,7 +5,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 from startrack.catalog import ConeIndex, StarCatalog, load_catalog, thin_uniform
-from startrack.catalog.thinning import fibonacci_sphere, sky_sample_points
+from startrack.catalog._thinning import fibonacci_sphere, sky_sample_points
 from startrack.errors import InvalidInputError
 from startrack.frames import vector_to_radec
 from startrack.units import DEG

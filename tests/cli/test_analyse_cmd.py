@@ -12,9 +12,9 @@ import pytest
 
 from startrack import Camera
 from startrack.analysis.postprocess import ANALYSES, records_from_images, run_analysis
-from startrack.cli.main import main
+from startrack.cli import main
 from startrack.frames import random_rotations
-from startrack.io.truth_files import write_frame
+from startrack.io._truth_files import write_frame
 from startrack.simulate import get_sensor_preset, simulate_frame
 
 CAMERA = Camera.from_fov(384, 320, 12.0)

@@ -12,9 +12,9 @@ from pathlib import Path
 import pytest
 from test_cli import assert_misuse, assert_no_traceback, run, strict_json
 
-from startrack.cli.batch import IMAGE_SUFFIXES
-from startrack.cli.batch_detect import CSV_COLUMNS as DETECT_COLUMNS
-from startrack.cli.batch_solve import CSV_COLUMNS as SOLVE_COLUMNS
+from startrack.cli._batch import IMAGE_SUFFIXES
+from startrack.cli._batch_detect import CSV_COLUMNS as DETECT_COLUMNS
+from startrack.cli._batch_solve import CSV_COLUMNS as SOLVE_COLUMNS
 
 GOOD = ("crappy.jpg", "roof.jpg")
 FOV = ("--fov-range-deg", 5, 35)  # the range test_cli's real-photo test loads too

@@ -7,8 +7,8 @@ import numpy as np
 from numba import njit
 from numba.core import event
 
-from startrack.cli.batch_warmup import _CompileNotice
-from startrack.cli.progress import ensure_database_for
+from startrack.cli._batch_warmup import _CompileNotice
+from startrack.cli._progress import ensure_database_for
 from startrack.solve import solve_stars
 from startrack.warm_up import warm_up_fov_deg
 
@@ -44,7 +44,7 @@ def test_warm_up_field_is_the_searched_one():
 
 
 def test_warm_up_star_list_solves(monkeypatch):
-    import startrack.cli.batch_warmup as warmup
+    import startrack.cli._batch_warmup as warmup
 
     solved = []
     monkeypatch.setattr("startrack.solve.solve_stars", lambda *a, **k: solved.append(solve_stars(*a, **k)))

@@ -12,7 +12,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from startrack.analysis.campaign import list_specs
-from startrack.cli.main import main
+from startrack.cli import main
 
 SPEC = """
 [campaign]
@@ -119,7 +119,7 @@ def test_without_the_extra_the_command_names_it(monkeypatch, tmp_path):
 
 
 def test_progress_draws_a_bar_on_a_terminal_and_plain_lines_elsewhere(monkeypatch):
-    from startrack.cli.progress import ProgressBar
+    from startrack.cli._progress import ProgressBar
 
     class Stream(io.StringIO):
         def __init__(self, tty):

@@ -1,4 +1,4 @@
-"""The ``startrack`` command line: every subcommand through ``startrack.cli.main.main`` in-process,
+"""The ``startrack`` command line: every subcommand through ``startrack.cli.main`` in-process,
 plus one run of the installed console script.
 
 Exit codes: 0 success, 1 an expected failure (printed as a result with its status and reason),
@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from startrack.cli.main import SUBCOMMANDS, main
-from startrack.cli.progress import ensure_database
+from startrack.cli import SUBCOMMANDS, main
+from startrack.cli._progress import ensure_database
 from startrack.frames import angle_between, attitude_error, boresight, rotation_from_radec_roll
 from startrack.io import read_image, write_fits, write_png
 from startrack.units import DEG, PIXEL
@@ -466,7 +466,7 @@ def test_demo_out_is_a_file(tmp_path):
 
 def test_console_script_missing_file_prints_one_line_and_no_traceback(tmp_path):
     script = Path(sys.executable).with_name("startrack")
-    command = [str(script)] if script.is_file() else [sys.executable, "-m", "startrack.cli.main"]
+    command = [str(script)] if script.is_file() else [sys.executable, "-m", "startrack"]
     missing = tmp_path / "missing.fits"
     done = subprocess.run([*command, "solve", str(missing)], capture_output=True, text=True, timeout=120, check=False)
     assert done.returncode == 2

@@ -1,6 +1,6 @@
 """The command line and hostile input (issue 17, part A): outputs over inputs, devices and pipes,
 ``track`` past bad frames, accepted nonsense, memory, signals, warnings. Each test names what
-happened before. Commands run in-process (``startrack.cli.main.main``) except where a real
+happened before. Commands run in-process (``startrack.cli.main``) except where a real
 process is the point (a pipe, a signal, a memory limit, a warning printed to a terminal log)."""
 
 from __future__ import annotations
@@ -19,16 +19,16 @@ import numpy as np
 import pytest
 
 from startrack.camera import Camera
-from startrack.cli.main import main
-from startrack.cli.progress import ensure_database
+from startrack.cli import main
+from startrack.cli._progress import ensure_database
 from startrack.frames import rotation_from_radec_roll
 from startrack.io import write_fits, write_png
-from startrack.io.truth_files import write_frame
-from startrack.io.wcs import read_wcs
+from startrack.io._truth_files import write_frame
+from startrack.io._wcs import read_wcs
 from startrack.simulate import get_sensor_preset, simulate_frame
 from startrack.units import DEG
 
-STARTRACK = [sys.executable, "-m", "startrack.cli.main"]
+STARTRACK = [sys.executable, "-m", "startrack"]
 SENSOR = get_sensor_preset("generic-cmos")
 
 
@@ -167,7 +167,7 @@ def test_a_memory_error_is_a_one_line_exit_2(tmp_path):
     """Before: a MemoryError ended in a traceback with exit 1 (the code for 'not solved'). The
     process gets 2.5 GiB of address space and asks for a 20,000 x 20,000 frame (3.2 GB of floats)."""
     code = ("import resource, sys; resource.setrlimit(resource.RLIMIT_AS, (5 << 29, 5 << 29))\n"
-            "from startrack.cli.main import main; sys.exit(main(sys.argv[1:]))")
+            "from startrack.cli import main; sys.exit(main(sys.argv[1:]))")
     proc = subprocess.run([sys.executable, "-c", code, "simulate", "--width", "20000", "--height", "20000",
                            "--max-pixels", "400000000", "--no-noise", "--out", str(tmp_path / "big.fits")],
                           capture_output=True, text=True, timeout=300)

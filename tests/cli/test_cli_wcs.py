@@ -8,9 +8,9 @@ import io
 import numpy as np
 import pytest
 
-from startrack.cli.main import main
+from startrack.cli import main
 from startrack.io import write_png
-from startrack.io.wcs import read_wcs
+from startrack.io._wcs import read_wcs
 
 
 def run(*argv) -> tuple[int, str, str]:

@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-from startrack.cli.main import main
+from startrack.cli import main
 from startrack.io import write_png
 from startrack.simulate import render_gaussian_psf
 from startrack.units import PIXEL

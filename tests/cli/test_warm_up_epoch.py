@@ -8,9 +8,9 @@ import pytest
 from astropy.io import fits
 from astropy.time import Time
 
-import startrack.cli.solve_cmd as solve_cmd
-from startrack.cli.batch_warmup import warm_up
-from startrack.cli.progress import ensure_database_for
+import startrack.cli._solve_cmd as solve_cmd
+from startrack.cli._batch_warmup import warm_up
+from startrack.cli._progress import ensure_database_for
 from startrack.errors import InvalidInputError
 from startrack.solve import solve_stars
 
@@ -63,7 +63,7 @@ def test_the_solving_commands_skip_the_collections_of_interpreter_shutdown():
 
     code = ("import atexit, gc, sys\n"
             "atexit.register(lambda: print('frozen at exit:', gc.get_freeze_count() > 0))\n"  # runs after the hook
-            "from startrack.cli.process_gc import no_collection_at_exit\n"
+            "from startrack.cli._process_gc import no_collection_at_exit\n"
             "no_collection_at_exit(); no_collection_at_exit()\n"
             "print('frozen before:', gc.get_freeze_count() > 0)\n")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)

@@ -7,11 +7,12 @@ import numpy as np
 import pytest
 from star_render import pixel_fractions, random_positions, render_stars
 
-from startrack.detect import StarDetector, crb, detect
-from startrack.detect.centroid_mle import mle_centroid
-from startrack.detect.centroid_windowed import windowed_centroid
-from startrack.detect.centroiders import CENTROIDERS
-from startrack.detect.windows import Windows, extract_windows
+from startrack.detect import StarDetector, detect
+from startrack.detect import _crb as crb
+from startrack.detect._centroid_mle import mle_centroid
+from startrack.detect._centroid_windowed import windowed_centroid
+from startrack.detect._centroiders import CENTROIDERS
+from startrack.detect._windows import Windows, extract_windows
 from startrack.units import PIXEL
 
 # --- the bound ---------------------------------------------------------------------------------

@@ -1,4 +1,4 @@
-"""The compiled whole-frame passes (:mod:`startrack.detect.frame_kernels`) against the plain
+"""The compiled whole-frame passes (:mod:`startrack.detect._frame_kernels`) against the plain
 numpy or scipy computations they replace."""
 
 from __future__ import annotations
@@ -7,8 +7,12 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from startrack.detect import background, label, smooth, threshold, windows
-from startrack.detect.label import Regions
+from startrack.detect import _background as background
+from startrack.detect import _label as label
+from startrack.detect import _smooth as smooth
+from startrack.detect import _threshold as threshold
+from startrack.detect import _windows as windows
+from startrack.detect._label import Regions
 
 
 def _scipy_regions(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

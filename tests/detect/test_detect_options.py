@@ -13,20 +13,20 @@ from star_render import random_positions, render_stars
 from startrack.detect import (
     StarDetector,
     calibrate_zero_point,
-    dark,
-    denoise,
     detect,
     instrument_magnitude,
-    label,
-    magnitude,
     median_frame,
-    prefilters,
-    region_grow,
-    shape,
     stack_frames,
     subtract_dark,
 )
-from startrack.detect.blocks import strip_rows
+from startrack.detect import _dark as dark
+from startrack.detect import _denoise as denoise
+from startrack.detect import _label as label
+from startrack.detect import _magnitude as magnitude
+from startrack.detect import _prefilters as prefilters
+from startrack.detect import _region_grow as region_grow
+from startrack.detect import _shape as shape
+from startrack.detect._blocks import strip_rows
 from startrack.units import PIXEL
 
 SHAPE = (192, 256)

@@ -13,16 +13,10 @@ from scipy.special import erf
 from star_render import random_positions, render_stars
 
 from startrack.detect import StarDetector
-from startrack.detect.centroid import measure_spots
-from startrack.detect.centroid_windowed import pixel_variance, windowed_centroid
-from startrack.detect.predictive import (
-    _pixels,
-    _window_regions,
-    cut_windows,
-    ring_statistics,
-    window_spots,
-)
-from startrack.detect.windows import fast_median, separable_moments
+from startrack.detect._centroid import measure_spots
+from startrack.detect._centroid_windowed import pixel_variance, windowed_centroid
+from startrack.detect._predictive import _pixels, _window_regions, cut_windows, ring_statistics, window_spots
+from startrack.detect._windows import fast_median, separable_moments
 from startrack.units import PIXEL
 
 SHAPE = (160, 160)

@@ -62,8 +62,9 @@ from detect_realdata import (  # noqa: E402
     significance_maps,
 )
 
-from startrack.detect import StarDetector, pipeline  # noqa: E402
-from startrack.detect.fine_pass import MAX_RING_NOISE, fine_regions, quiet_surroundings, ring_noise_ratio  # noqa: E402
+from startrack.detect import StarDetector  # noqa: E402
+from startrack.detect import _pipeline as pipeline
+from startrack.detect._fine_pass import MAX_RING_NOISE, fine_regions, quiet_surroundings, ring_noise_ratio  # noqa: E402
 from startrack.units import PIXEL  # noqa: E402
 
 GOAL = 0.90

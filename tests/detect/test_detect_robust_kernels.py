@@ -1,4 +1,4 @@
-"""The compiled quantization step and clipped level and noise (:mod:`startrack.detect.robust_kernels`)
+"""The compiled quantization step and clipped level and noise (:mod:`startrack.detect._robust_kernels`)
 against the numpy computations they replace."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from startrack.detect import robust
+from startrack.detect import _robust as robust
 
 
 def _numpy_step(values):

@@ -20,7 +20,7 @@ import pytest
 
 from startrack import Status
 from startrack.detect import StarDetector, detect
-from startrack.detect.merge import MERGE_RADIUS_PX
+from startrack.detect._merge import MERGE_RADIUS_PX
 from startrack.identify import MatcherOptions
 from startrack.solve import solve_stars
 from startrack.units import PIXEL

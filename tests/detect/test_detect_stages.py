@@ -8,7 +8,13 @@ import pytest
 from scipy import ndimage
 from star_render import render_stars
 
-from startrack.detect import background, centroid, deblend, filters, label, robust, smooth
+from startrack.detect import _background as background
+from startrack.detect import _centroid as centroid
+from startrack.detect import _deblend as deblend
+from startrack.detect import _filters as filters
+from startrack.detect import _label as label
+from startrack.detect import _robust as robust
+from startrack.detect import _smooth as smooth
 from startrack.units import PIXEL
 
 # --- robust statistics -----------------------------------------------------------------------

@@ -1,4 +1,4 @@
-"""The windowed centroider's compiled iteration (:mod:`startrack.detect.window_kernels`) against
+"""The windowed centroider's compiled iteration (:mod:`startrack.detect._window_kernels`) against
 the numpy computation it replaces."""
 
 from __future__ import annotations
@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from startrack.detect import centroid_windowed as cw
-from startrack.detect.windows import Windows, fast_median, fast_quantile, separable_moments
+from startrack.detect import _centroid_windowed as cw
+from startrack.detect._windows import Windows, fast_median, fast_quantile, separable_moments
 
 
 def _numpy_iterate(axes, signal, cx, cy):

@@ -12,8 +12,8 @@ from scipy.spatial.transform import Rotation
 from startrack import Camera, Status
 from startrack.catalog import load_catalog
 from startrack.frames import angle_between, attitude_error, boresight, random_rotations
-from startrack.identify.field_stars import field_stars
-from startrack.identify.pair_database import PairSettings, load_pair_database
+from startrack.identify._field_stars import field_stars
+from startrack.identify._pair_database import PairSettings, load_pair_database
 from startrack.units import ARCSEC
 
 CAMERA = Camera.from_fov(1024, 1024, 15.0)

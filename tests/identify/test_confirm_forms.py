@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from startrack.identify.confirm import _attitude
-from startrack.identify.verify import TEST_RADIUS_FRACTIONS, false_match_bound, false_match_bound_counts
+from startrack.identify._confirm import _attitude
+from startrack.identify._verify import TEST_RADIUS_FRACTIONS, false_match_bound, false_match_bound_counts
 
 
 @pytest.mark.parametrize("seed", range(5))

@@ -10,11 +10,11 @@ import pytest
 from astropy.time import Time
 
 from startrack.errors import InvalidInputError
-from startrack.identify.image_epoch import epoch_jyear
+from startrack.identify._image_epoch import epoch_jyear
 
 
 def test_a_year_is_taken_without_astropy():
-    code = ("import sys\nfrom startrack.identify.image_epoch import epoch_jyear\n"
+    code = ("import sys\nfrom startrack.identify._image_epoch import epoch_jyear\n"
             "print(epoch_jyear(2025.5), epoch_jyear(None), 'astropy.time' in sys.modules)")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
     assert done.stdout.split() == ["2025.5", "2000.0", "False"]

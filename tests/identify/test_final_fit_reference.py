@@ -1,12 +1,12 @@
 """The compiled final fit and solution assembly against straightforward reference computations.
 
 The attitude, residuals, covariance and RA / Dec / roll of a solve come from one compiled call
-(:func:`startrack.identify.refine.solution_terms`), the re-match of the final fit from compiled
-kernels (:func:`~startrack.identify.refine.match_predicted`, catalog stars chosen in a cone by
-:func:`~startrack.identify.refine.stars_in_cone`). Each is compared here with the plain numpy /
+(:func:`startrack.identify._refine.solution_terms`), the re-match of the final fit from compiled
+kernels (:func:`~startrack.identify._refine.match_predicted`, catalog stars chosen in a cone by
+:func:`~startrack.identify._refine.stars_in_cone`). Each is compared here with the plain numpy /
 scipy computation it replaces: ``Rotation.align_vectors``, :func:`startrack.frames.angle_between`,
-:func:`startrack.attitude.covariance.covariance_batch`, :func:`startrack.frames.radec_roll_from_rotation`,
-``Camera.vector_to_pixel`` with :func:`startrack.identify.verify.match_nearest`, and the per-star
+:func:`startrack.attitude._covariance.covariance_batch`, :func:`startrack.frames.radec_roll_from_rotation`,
+``Camera.vector_to_pixel`` with :func:`startrack.identify._verify.match_nearest`, and the per-star
 KD-tree choice of catalog stars.
 """
 
@@ -15,14 +15,14 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from startrack import Camera, Status, solve_stars
-from startrack.analysis.starlists import Conditions, generate_star_lists, load_sky
-from startrack.attitude.covariance import attitude_covariance, covariance_batch
+from startrack.analysis._starlists import Conditions, generate_star_lists, load_sky
+from startrack.attitude._covariance import attitude_covariance, covariance_batch
 from startrack.frames import angle_between, attitude_error, radec_roll_from_rotation, random_rotations
-from startrack.identify import final_fit
-from startrack.identify.candidate import Candidate
-from startrack.identify.field_stars import field_stars
-from startrack.identify.refine import match_predicted, pixel_vectors, solution_terms
-from startrack.identify.verify import match_nearest
+from startrack.identify import _final_fit as final_fit
+from startrack.identify._candidate import Candidate
+from startrack.identify._field_stars import field_stars
+from startrack.identify._refine import match_predicted, pixel_vectors, solution_terms
+from startrack.identify._verify import match_nearest
 from startrack.units import ARCSEC
 
 NOISE_RAD = 1e-12

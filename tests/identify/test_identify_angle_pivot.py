@@ -9,10 +9,10 @@ from pair_matcher_lists import CAMERA, PDB, check_identified, check_refused, mir
 
 from startrack import Status
 from startrack.frames import random_rotations
-from startrack.identify.angle_pivot import AnglePivotOptions, match_angle_pivot
-from startrack.identify.pair_search import SearchContext, consistent_rows, extend_by_angle, join_rows, pivot
-from startrack.identify.pyramid import pyramid_triads
-from startrack.identify.star_order import further_stars, ordered_star_sets
+from startrack.identify._angle_pivot import AnglePivotOptions, match_angle_pivot
+from startrack.identify._pair_search import SearchContext, consistent_rows, extend_by_angle, join_rows, pivot
+from startrack.identify._pyramid import pyramid_triads
+from startrack.identify._star_order import further_stars, ordered_star_sets
 from startrack.units import ARCSEC, DEG
 
 

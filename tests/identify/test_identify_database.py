@@ -5,7 +5,7 @@ import pytest
 
 from startrack import cache
 from startrack.errors import InvalidInputError
-from startrack.identify.database import (
+from startrack.identify._database import (
     KEY_BINS,
     LARGEST_LN_STEP,
     LEVEL_SHIFT,
@@ -17,8 +17,8 @@ from startrack.identify.database import (
     largest_to_stored,
     pattern_key,
 )
-from startrack.identify.patterns import edge_ratios, pair_angles
-from startrack.identify.registry import database_settings_for
+from startrack.identify._patterns import edge_ratios, pair_angles
+from startrack.identify._registry import database_settings_for
 
 SMALL = DatabaseSettings(fov_min_deg=20.0, fov_max_deg=30.0, max_mag=7.0)
 
@@ -83,7 +83,7 @@ def test_report_builds_into_the_cache_and_loads(tmp_path, monkeypatch):
 def test_corrupt_database_file_is_rebuilt(tmp_path, monkeypatch):
     from dataclasses import asdict
 
-    from startrack.identify.database import DB_KIND, DB_VERSION, database_path
+    from startrack.identify._database import DB_KIND, DB_VERSION, database_path
 
     monkeypatch.setenv(cache.ENV_VAR, str(tmp_path))
     path = database_path(SMALL)
@@ -93,7 +93,7 @@ def test_corrupt_database_file_is_rebuilt(tmp_path, monkeypatch):
 
 
 def test_is_cached_is_false_for_a_file_that_would_be_rebuilt(tmp_path, monkeypatch):
-    from startrack.identify.database import database_path, is_cached
+    from startrack.identify._database import database_path, is_cached
 
     monkeypatch.setenv(cache.ENV_VAR, str(tmp_path))
     assert not is_cached(SMALL)
@@ -129,7 +129,7 @@ def test_every_valid_range_gets_a_database(request_deg, expected):
 
 
 def test_the_star_tree_is_built_on_first_use_over_the_database_stars(arrays):
-    from startrack.identify.database import _from_arrays
+    from startrack.identify._database import _from_arrays
 
     db = _from_arrays(SMALL, arrays)
     assert not db._star_tree  # a load builds no tree

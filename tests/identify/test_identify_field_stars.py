@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from startrack.identify.field_stars import AROUND_FIRST_K, field_stars
+from startrack.identify._field_stars import AROUND_FIRST_K, field_stars
 from startrack.units import DEG
 
 

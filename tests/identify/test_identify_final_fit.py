@@ -12,13 +12,13 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from startrack import Camera, Status, solve_stars
-from startrack.analysis.starlists import Conditions, load_sky, make_star_list
+from startrack.analysis._starlists import Conditions, load_sky, make_star_list
 from startrack.catalog import load_catalog
 from startrack.frames import attitude_error
-from startrack.identify import final_fit
-from startrack.identify.candidate import Candidate
-from startrack.identify.field_stars import field_stars
-from startrack.identify.refine import leave_one_out_residuals, refine_pointing
+from startrack.identify import _final_fit as final_fit
+from startrack.identify._candidate import Candidate
+from startrack.identify._field_stars import field_stars
+from startrack.identify._refine import leave_one_out_residuals, refine_pointing
 from startrack.units import ARCSEC, PIXEL
 
 

@@ -7,7 +7,7 @@ from astropy.time import Time
 from startrack import Camera, solve_image
 from startrack.errors import InvalidInputError
 from startrack.frames import rotation_from_radec_roll
-from startrack.identify.image_epoch import epoch_from_header, epoch_jyear, parse_utc, resolve_epoch
+from startrack.identify._image_epoch import epoch_from_header, epoch_jyear, parse_utc, resolve_epoch
 from startrack.io import Image
 from startrack.simulate import get_sensor_preset, simulate_frame
 from startrack.units import DEG

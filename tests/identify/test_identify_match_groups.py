@@ -10,7 +10,7 @@ from startrack.camera import get_preset
 from startrack.catalog import load_catalog
 from startrack.errors import InvalidInputError
 from startrack.frames import angle_between, attitude_error, boresight, random_rotations
-from startrack.identify.match_groups import (
+from startrack.identify._match_groups import (
     VanBezooijenOptions,
     iclim_start,
     largest_group,
@@ -23,7 +23,7 @@ from startrack.identify.match_groups import (
     sub_catalogue,
     unique_groups,
 )
-from startrack.identify.pair_database import PairSettings, load_pair_database
+from startrack.identify._pair_database import PairSettings, load_pair_database
 from startrack.units import ARCSEC, PIXEL
 
 CAMERA = get_preset("sunsat")  # Jacobs 1995's camera: 752 x 582 px, 11.2 x 8.3 deg

@@ -7,7 +7,7 @@ from pair_matcher_lists import CAMERA, PDB, check_identified, check_refused, mir
 
 from startrack.errors import InvalidInputError
 from startrack.frames import random_rotations
-from startrack.identify.nvertex import (
+from startrack.identify._nvertex import (
     NVertexOptions,
     SMatrix,
     baselines,
@@ -15,7 +15,7 @@ from startrack.identify.nvertex import (
     match_nvertex,
     ngon_candidates,
 )
-from startrack.identify.pair_search import SearchContext
+from startrack.identify._pair_search import SearchContext
 from startrack.units import ARCSEC, DEG
 
 TABLE_5_4_C = [np.array([[45, 46]]), np.array([[45, 47]]), np.array([[45, 48]]),

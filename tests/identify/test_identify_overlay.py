@@ -11,7 +11,7 @@ from startrack.camera import get_preset
 from startrack.catalog import load_catalog
 from startrack.errors import InvalidInputError
 from startrack.frames import angle_between, attitude_error, boresight, random_rotations
-from startrack.identify.overlay import OverlayOptions, catalog_star_set, match_overlay
+from startrack.identify._overlay import OverlayOptions, catalog_star_set, match_overlay
 from startrack.units import ARCSEC, DEG
 
 CAMERA = Camera.from_fov(1024, 1024, 12.0)

@@ -4,7 +4,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from startrack.frames import normalize
-from startrack.identify.patterns import PERMUTATIONS, best_correspondence, edge_ratios, pair_angles
+from startrack.identify._patterns import PERMUTATIONS, best_correspondence, edge_ratios, pair_angles
 from startrack.units import DEG
 
 

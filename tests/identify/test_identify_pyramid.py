@@ -9,8 +9,8 @@ import pytest
 from startrack import Camera, Status, solve_stars
 from startrack.errors import InvalidInputError
 from startrack.frames import attitude_error, random_rotations
-from startrack.identify.pair_database import PairSettings, load_pair_database
-from startrack.identify.pyramid import PyramidOptions, candidate_triangles, pyramid_triads
+from startrack.identify._pair_database import PairSettings, load_pair_database
+from startrack.identify._pyramid import PyramidOptions, candidate_triangles, pyramid_triads
 from startrack.simulate import get_sensor_preset, simulate_frame
 from startrack.units import ARCSEC
 

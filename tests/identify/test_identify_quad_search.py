@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from startrack.identify.database import (
+from startrack.identify._database import (
     KEY_BINS,
     LEVEL_SHIFT,
     RATIO_SCALE,
@@ -14,7 +14,7 @@ from startrack.identify.database import (
     _from_arrays,
     build_database_arrays,
 )
-from startrack.identify.quad_search import SearchSetup, focal_grid, search_batch, warm_up
+from startrack.identify._quad_search import SearchSetup, focal_grid, search_batch, warm_up
 from startrack.units import ARCSEC
 
 SMALL = DatabaseSettings(fov_min_deg=20.0, fov_max_deg=30.0, max_mag=7.0)
@@ -119,7 +119,7 @@ def test_cell_starts_bound_every_cell_of_the_key_index(db):
 
 
 def test_warm_up_compiles_the_signature_a_search_uses(db):
-    from startrack.identify.quad_kernel import search
+    from startrack.identify._quad_kernel import search
 
     warm_up(db)
     before = len(search.signatures)
@@ -143,7 +143,7 @@ def test_trials_of_a_focal_range_each_span_about_one_focal_step(corner):
     """A pattern near the centre and one reaching the corner of a 20 deg field (5-35 deg range): the trials chosen
     from every eighth grid point cover the grid, and the ratios move by at most 1.25 focal steps
     within each trial's span (measured at every grid point)."""
-    from startrack.identify.quad_kernel import _trial_starts
+    from startrack.identify._quad_kernel import _trial_starts
 
     step = 0.0015
     nominal = (SIZE_PX / 2) / math.tan(math.radians(10.0))
@@ -176,7 +176,7 @@ def test_ratio_tolerances_cover_three_sigma_centroid_noise_without_waste():
     nearly every draw, and not be loose: the 99.9th-percentile error of the smallest ratio must
     reach half its tolerance in a typical pattern (the earlier bound, which used the small edge
     in place of the large one, reached 0.22)."""
-    from startrack.identify.quad_kernel import ratio_tolerances
+    from startrack.identify._quad_kernel import ratio_tolerances
 
     rng = np.random.default_rng(5)
     sigma_px = 0.5
@@ -206,7 +206,7 @@ def test_the_distortion_term_bounds_what_a_radial_lens_does_to_the_ratios(fov_de
     """Patterns anywhere in a square field, bent by r -> r (1 + k1 r^2) with |k1| <= 0.1: every
     ratio moves by less than ratio * shape_bound (the lens term of the look-up tolerance), and
     the bound is not idle (the worst pattern uses 40 % of it or more; 55-67 % measured)."""
-    from startrack.identify.quad_kernel import radius2_range, shape_bound
+    from startrack.identify._quad_kernel import radius2_range, shape_bound
 
     rng = np.random.default_rng(7)
     half = math.tan(math.radians(fov_deg / 2))

@@ -15,7 +15,7 @@ import pytest
 
 from startrack.detect import StarDetector
 from startrack.frames import angle_between, radec_to_vector
-from startrack.identify.registry import MATCHERS, options_for
+from startrack.identify._registry import MATCHERS, options_for
 from startrack.io import read_image
 from startrack.solve import solve_stars
 from startrack.units import ARCSEC, DEG

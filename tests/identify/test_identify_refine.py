@@ -1,6 +1,6 @@
 """The pose fit of the final stage: Gauss-Newton on rotation matrices, its Jacobian, and the re-match.
 
-The fit and the re-match of :mod:`startrack.identify.final_fit` are written for speed (a few
+The fit and the re-match of :mod:`startrack.identify._final_fit` are written for speed (a few
 fused numpy operations per step, a cell filter in front of the nearest-star match); these tests
 pin them to what they replace: finite differences, scipy's rotations and a match over every
 predicted star.
@@ -16,7 +16,8 @@ from scipy.spatial.transform import Rotation
 
 from startrack import Camera
 from startrack.frames import attitude_error
-from startrack.identify import final_fit, refine
+from startrack.identify import _final_fit as final_fit
+from startrack.identify import _refine as refine
 from startrack.units import ARCSEC, PIXEL
 
 DISTORTED = Camera(width=1600, height=1200, fx=1400.0, fy=1390.0, cx=810.0, cy=590.0,
@@ -211,5 +212,5 @@ def test_every_input_layout_runs_the_one_compiled_signature():
 
 
 def test_importing_startrack_does_not_import_numba():
-    code = "import sys, startrack, startrack.identify.refine; print('numba' in sys.modules)"
+    code = "import sys, startrack, startrack.identify._refine; print('numba' in sys.modules)"
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout == "False\n"

@@ -3,7 +3,7 @@
 import subprocess
 import sys
 
-from startrack.identify.registry import MATCHERS, OPTIONS, options_for
+from startrack.identify._registry import MATCHERS, OPTIONS, options_for
 
 PAIR_MODULES = ("angle_pivot", "match_groups", "nvertex", "overlay", "pyramid", "triangles")
 
@@ -16,8 +16,8 @@ def _imported_after(code: str) -> set[str]:
 
 
 def test_the_registry_imports_no_matcher_and_a_look_up_only_its_own():
-    assert not _imported_after("import startrack.identify.registry") & {*PAIR_MODULES, "quad_matcher"}
-    after = _imported_after("from startrack.identify.registry import OPTIONS\nOPTIONS['pyramid']")
+    assert not _imported_after("import startrack.identify._registry") & {*PAIR_MODULES, "quad_matcher"}
+    after = _imported_after("from startrack.identify._registry import OPTIONS\nOPTIONS['pyramid']")
     assert "pyramid" in after and not after & {"angle_pivot", "nvertex", "triangles", "match_groups", "overlay"}
 
 

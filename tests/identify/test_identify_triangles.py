@@ -10,16 +10,16 @@ from pair_matcher_lists import CAMERA, PDB, check_identified, check_refused, mir
 
 from startrack.errors import InvalidInputError
 from startrack.frames import angle_between, normalize, random_rotations
-from startrack.identify.pair_search import SearchContext
-from startrack.identify.triangle_database import directory_triangles, load_triangle_database
-from startrack.identify.triangle_features import (
+from startrack.identify._pair_search import SearchContext
+from startrack.identify._triangle_database import directory_triangles, load_triangle_database
+from startrack.identify._triangle_features import (
     feature_sigmas,
     lhuilier_area,
     planar_features,
     spherical_features,
     subdivide,
 )
-from startrack.identify.triangles import TriangleOptions, match_triangles, triangle_candidates
+from startrack.identify._triangles import TriangleOptions, match_triangles, triangle_candidates
 from startrack.units import ARCSEC, DEG
 
 RNG_TRIANGLE = normalize(np.array([[0.0, 0.0, 1.0], [0.05, 0.01, 1.0], [0.02, 0.07, 1.0]]))

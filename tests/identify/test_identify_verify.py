@@ -3,7 +3,7 @@
 import numpy as np
 from scipy.stats import binom
 
-from startrack.identify.verify import false_match_bound, false_match_probability, match_nearest
+from startrack.identify._verify import false_match_bound, false_match_probability, match_nearest
 
 
 def test_probability_is_the_binomial_tail_times_trials():

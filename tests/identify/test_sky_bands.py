@@ -1,10 +1,10 @@
 """The confirmation's cone and pair queries against the plain forms they replace.
 
-:class:`~startrack.identify.verify.SkyBands` (a sort of unit vectors by z) must find the stars a
-KD-tree finds in a cone, and the stars :func:`~startrack.identify.refine.stars_in_cone` finds among
-the brightest; :func:`~startrack.identify.refine.predicted_pairs` within a radius R, cut to a
+:class:`~startrack.identify._verify.SkyBands` (a sort of unit vectors by z) must find the stars a
+KD-tree finds in a cone, and the stars :func:`~startrack.identify._refine.stars_in_cone` finds among
+the brightest; :func:`~startrack.identify._refine.predicted_pairs` within a radius R, cut to a
 smaller radius r, must equal the match made at r; and the level sets of
-:func:`~startrack.identify.quad_matcher.level_stars` must hold the database's verification stars.
+:func:`~startrack.identify._quad_matcher.level_stars` must hold the database's verification stars.
 """
 
 from __future__ import annotations
@@ -16,10 +16,10 @@ import pytest
 from scipy.spatial import cKDTree
 
 from startrack.camera import Camera
-from startrack.identify.database import DatabaseSettings, PatternDatabase
-from startrack.identify.quad_matcher import level_stars
-from startrack.identify.refine import match_predicted, predicted_pairs, stars_in_cone
-from startrack.identify.verify import SkyBands
+from startrack.identify._database import DatabaseSettings, PatternDatabase
+from startrack.identify._quad_matcher import level_stars
+from startrack.identify._refine import match_predicted, predicted_pairs, stars_in_cone
+from startrack.identify._verify import SkyBands
 
 
 def _unit(rng: np.random.Generator, n: int) -> np.ndarray:

@@ -10,7 +10,7 @@ from astropy.io import fits
 
 from startrack.errors import ImageReadError
 from startrack.io import read_image
-from startrack.io.fits_plain import read_plain_fits
+from startrack.io._fits_plain import read_plain_fits
 
 RNG = np.random.default_rng(7)
 PLAIN = {

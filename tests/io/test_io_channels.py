@@ -1,4 +1,4 @@
-"""The colour-to-single-channel rule (startrack.io.channels): R + G + B in a wider type."""
+"""The colour-to-single-channel rule (startrack.io._channels): R + G + B in a wider type."""
 
 from __future__ import annotations
 

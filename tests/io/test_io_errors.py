@@ -12,7 +12,7 @@ from PIL import ImageFile
 
 from startrack.errors import ImageReadError, InvalidInputError
 from startrack.io import read_image, write_tiff
-from startrack.io.tiff import read_tiff16_colour
+from startrack.io._tiff import read_tiff16_colour
 
 RNG = np.random.default_rng(7)
 NOISE = RNG.integers(0, 256, size=(120, 160, 3)).astype(np.uint8)

@@ -20,7 +20,7 @@ from astropy.io import fits
 from startrack.camera import Camera
 from startrack.frames import rotation_from_radec_roll
 from startrack.io import read_image
-from startrack.io.truth_files import TRUTH_NOTE_EXTNAME, write_frame
+from startrack.io._truth_files import TRUTH_NOTE_EXTNAME, write_frame
 from startrack.simulate import get_sensor_preset, simulate_frame
 from startrack.units import DEG
 

@@ -18,9 +18,9 @@ from PIL import Image as PILImage
 
 from startrack.errors import ImageReadError, InvalidInputError
 from startrack.io import read_image, read_star_list
-from startrack.io.fitsfile import MAX_HEADER_BLOCKS
-from startrack.io.limits import DEFAULT_MAX_PIXELS, ENV_VAR, max_pixels_limit
-from startrack.io.starlist import MAX_LINE_CHARS
+from startrack.io._fitsfile import MAX_HEADER_BLOCKS
+from startrack.io._limits import DEFAULT_MAX_PIXELS, ENV_VAR, max_pixels_limit
+from startrack.io._starlist import MAX_LINE_CHARS
 
 
 def _fits_header_only(width: int, height: int, bitpix: int) -> bytes:

@@ -21,11 +21,11 @@ import pytest
 
 from startrack.errors import InvalidInputError, OutputError
 from startrack.io import read_image, write_fits, write_png, write_tiff
-from startrack.io.atomic import atomic_group, open_output, remove_stale_temps, write_output
-from startrack.io.targets import note_input, output_target, protect_inputs
-from startrack.io.track_csv import track_csv_writer
-from startrack.io.truth_files import write_with_sidecar
-from startrack.io.wcs import write_wcs
+from startrack.io._atomic import atomic_group, open_output, remove_stale_temps, write_output
+from startrack.io._targets import note_input, output_target, protect_inputs
+from startrack.io._track_csv import track_csv_writer
+from startrack.io._truth_files import write_with_sidecar
+from startrack.io._wcs import write_wcs
 
 RNG = np.random.default_rng(5)
 NOISE16 = RNG.integers(0, 65536, size=(64, 64)).astype(np.uint16)

@@ -40,7 +40,7 @@ def test_pillow_32bit_grey_png_from_mode_i_becomes_uint16(tmp_path):
     PILImage.fromarray(GREY16).save(path)
     with PILImage.open(path) as pil:
         as_mode_i = pil.convert("I")
-    from startrack.io.raster import _to_array  # the mode table itself
+    from startrack.io._raster import _to_array  # the mode table itself
 
     data, bits = _to_array(as_mode_i, 16)
     assert data.dtype == np.uint16 and bits == 16
@@ -158,7 +158,7 @@ def test_fits_gzip(tmp_path):
 
 # --- 16-bit colour TIFF, which Pillow would cut to 8 bits -------------------------------------
 def _tiff_rgb16(array: np.ndarray, big_endian: bool, deflate: bool, predictor: bool) -> bytes:
-    """A strip-based 16-bit RGB TIFF assembled here by hand, independently of startrack.io.tiff."""
+    """A strip-based 16-bit RGB TIFF assembled here by hand, independently of startrack.io._tiff."""
     order = ">" if big_endian else "<"
     height, width, _ = array.shape
     samples = array.astype(np.int64)

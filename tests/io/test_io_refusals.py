@@ -11,8 +11,8 @@ from scipy.spatial.transform import Rotation
 from startrack.camera import Camera
 from startrack.errors import InvalidInputError
 from startrack.io import read_image, read_star_list, write_fits, write_png
-from startrack.io.truth_files import write_frame
-from startrack.io.wcs import fit_sip, wcs_header, write_wcs
+from startrack.io._truth_files import write_frame
+from startrack.io._wcs import fit_sip, wcs_header, write_wcs
 
 CAMERA = Camera.from_fov(64, 48, 10.0)
 DISTORTED = CAMERA.with_distortion(k1=0.1)

@@ -7,7 +7,7 @@ from astropy.coordinates import SkyCoord
 from startrack.camera import Camera, get_preset
 from startrack.errors import InvalidInputError
 from startrack.frames import angle_between, radec_to_vector, random_rotations, rotation_from_radec_roll
-from startrack.io.wcs import fit_sip, read_wcs, solution_wcs, wcs_header, write_wcs
+from startrack.io._wcs import fit_sip, read_wcs, solution_wcs, wcs_header, write_wcs
 from startrack.solve import solve_image
 from startrack.units import ARCSEC, DEG, PIXEL
 

@@ -8,10 +8,10 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from startrack import CameraRig, RigHead
-from startrack.analysis.availability import star_counts
+from startrack.analysis._availability import star_counts
 from startrack.errors import InvalidInputError
-from startrack.multihead.availability import rig_availability
-from startrack.multihead.exclusion import dawn_dusk_bodies
+from startrack.multihead._availability import rig_availability
+from startrack.multihead._exclusion import dawn_dusk_bodies
 
 from .rigs import CAMERA, three_heads, two_heads
 

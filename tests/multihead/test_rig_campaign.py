@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from startrack.analysis.campaign._params import SpecError
+from startrack.analysis.campaign._run import run_campaign
 from startrack.analysis.campaign.levels import get_level
-from startrack.analysis.campaign.params import SpecError
-from startrack.analysis.campaign.run import run_campaign
 
 SPEC = """
 [campaign]

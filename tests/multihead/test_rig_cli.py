@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from startrack.cli.main import main
+from startrack.cli import main
 
 from .rigs import split_rig, two_heads
 

@@ -10,8 +10,8 @@ from scipy.spatial.transform import Rotation
 from startrack import solve_rig
 from startrack.errors import InvalidInputError
 from startrack.frames import random_rotations
-from startrack.multihead.mounting import calibrate_mountings, recalibrated
-from startrack.simulate.rig import rig_star_lists
+from startrack.multihead._mounting import calibrate_mountings, recalibrated
+from startrack.simulate._rig import rig_star_lists
 from startrack.units import ARCSEC
 
 from .rigs import TURN_X_90, two_heads

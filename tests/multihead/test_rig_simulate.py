@@ -12,10 +12,10 @@ from astropy.time import Time
 from startrack.detect import StarDetector
 from startrack.errors import InvalidInputError
 from startrack.frames import angle_between, random_rotations
-from startrack.multihead.exclusion import BrightBodies, blinded_by, dawn_dusk_bodies, edge_angles_rad
+from startrack.multihead._exclusion import BrightBodies, blinded_by, dawn_dusk_bodies, edge_angles_rad
 from startrack.simulate import get_sensor_preset
-from startrack.simulate.orbits import R_EARTH_KM
-from startrack.simulate.rig import rig_star_lists, simulate_rig
+from startrack.simulate._orbits import R_EARTH_KM
+from startrack.simulate._rig import rig_star_lists, simulate_rig
 from startrack.units import DEG
 
 from .rigs import CAMERA, two_heads

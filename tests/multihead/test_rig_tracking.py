@@ -10,9 +10,9 @@ from scipy.spatial.transform import Rotation
 from startrack import Status
 from startrack.errors import InvalidInputError
 from startrack.frames import random_rotations
-from startrack.simulate.rig import rig_star_lists
+from startrack.simulate._rig import rig_star_lists
 from startrack.track import Tracker
-from startrack.track.tracker import LOST_IN_SPACE, TRACKING
+from startrack.track._tracker import LOST_IN_SPACE, TRACKING
 from startrack.units import ARCSEC, DEG
 
 from .rigs import CAMERA, two_heads

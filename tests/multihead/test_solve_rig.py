@@ -11,9 +11,9 @@ from startrack import Status, solve_rig
 from startrack.errors import InvalidInputError
 from startrack.frames import random_rotations
 from startrack.multihead import IDENTIFIED_JOINTLY, consistency_chi2
-from startrack.multihead.joint import HeadMatch, fit_joint
-from startrack.multihead.stars import HeadStars
-from startrack.simulate.rig import rig_star_lists
+from startrack.multihead._joint import HeadMatch, fit_joint
+from startrack.multihead._stars import HeadStars
+from startrack.simulate._rig import rig_star_lists
 from startrack.units import ARCSEC
 
 from .rigs import TURN_X_90, split_rig, three_heads, two_heads

@@ -10,12 +10,12 @@ import pytest
 from startrack.detect import StarDetector
 from startrack.errors import InvalidInputError
 from startrack.frames import random_rotations
-from startrack.multihead.images import solve_rig_images
-from startrack.multihead.split_fov import classify_fields, expected_ellipticity, moments_radius_px, spot_moments
+from startrack.multihead._images import solve_rig_images
+from startrack.multihead._split_fov import classify_fields, expected_ellipticity, moments_radius_px, spot_moments
 from startrack.rig import PsfShape
 from startrack.simulate import get_sensor_preset
-from startrack.simulate.psf import add_stamps
-from startrack.simulate.split_fov import elliptical_stamps, simulate_split_frame
+from startrack.simulate._psf import add_stamps
+from startrack.simulate._split_fov import elliptical_stamps, simulate_split_frame
 from startrack.units import ARCSEC, PIXEL
 
 from .rigs import split_rig

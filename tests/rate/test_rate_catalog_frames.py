@@ -13,10 +13,10 @@ from scipy.spatial.transform import Rotation
 
 from startrack.camera import Camera
 from startrack.rate import axis_error_rad
-from startrack.rate.streak_rate import streak_rate
+from startrack.rate._streak_rate import streak_rate
 from startrack.results import Status
 from startrack.simulate import simulate_frame
-from startrack.simulate.radiometry import get_sensor_preset
+from startrack.simulate._radiometry import get_sensor_preset
 from startrack.units import DEG
 
 CAMERA = Camera.from_fov(800, 600, fov_deg=12.0)

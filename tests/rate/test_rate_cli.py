@@ -10,7 +10,7 @@ from streak_scenes import render_streak_scene, spin_rate, star_field
 
 from startrack.attitude import propagate
 from startrack.camera import Camera
-from startrack.cli.main import main
+from startrack.cli import main
 from startrack.io import write_fits
 from startrack.units import DEG
 

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from test_rate_streaks import CAMERA, _match_truth, _scene
 
-from startrack.rate.endpoints import DETECTORS, EndpointBias, calibrate_bias_model, locate_endpoints, streak_path
-from startrack.rate.segment_fit import model_and_jacobian, segment_image
-from startrack.rate.streak_detect import find_streaks
-from startrack.rate.streak_rate import measure_streaks
+from startrack.rate._endpoints import DETECTORS, EndpointBias, calibrate_bias_model, locate_endpoints, streak_path
+from startrack.rate._segment_fit import model_and_jacobian, segment_image
+from startrack.rate._streak_detect import find_streaks
+from startrack.rate._streak_rate import measure_streaks
 from startrack.units import PIXEL
 
 

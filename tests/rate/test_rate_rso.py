@@ -9,9 +9,9 @@ from streak_scenes import render_streak_scene, spin_rate
 
 from startrack.camera import Camera
 from startrack.errors import InvalidInputError
-from startrack.rate.catalog_free import catalog_free_rate
-from startrack.rate.rso import INDICATORS, rso_indicators, spin_axis, turn_angles
-from startrack.rate.streak_rate import streak_rate
+from startrack.rate._catalog_free import catalog_free_rate
+from startrack.rate._rso import INDICATORS, rso_indicators, spin_axis, turn_angles
+from startrack.rate._streak_rate import streak_rate
 from startrack.units import DEG
 
 CAMERA = Camera.from_fov(1024, 1024, fov_deg=20.0)

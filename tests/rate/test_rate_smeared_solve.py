@@ -11,7 +11,7 @@ from startrack import Camera
 from startrack.frames import attitude_error
 from startrack.io import Image
 from startrack.rate import axis_error_rad
-from startrack.rate.streak_solve import StreakSolution
+from startrack.rate._streak_solve import StreakSolution
 from startrack.simulate import get_sensor_preset, simulate_frame
 from startrack.solve import solve_image
 from startrack.units import DEG
@@ -66,7 +66,7 @@ def test_startrack_solve_says_it_solved_from_streaks(smeared, tmp_path, capsys):
     # The CLI on a FITS frame with EXPTIME: JSON and the table say "streak", the mid-exposure time and the rate.
     import json
 
-    from startrack.cli.main import main
+    from startrack.cli import main
     from startrack.io import write_fits
 
     path = tmp_path / "smeared.fits"

@@ -1,10 +1,10 @@
 """The streak fit's convergence test: a step is small when it is a small part of each end's,
-the sag's and the blur's own 1-sigma (startrack.rate.streak_kernel._small_step)."""
+the sag's and the blur's own 1-sigma (startrack.rate._streak_kernel._small_step)."""
 
 import numpy as np
 import pytest
 
-from startrack.rate.streak_kernel import NPAR, SAG, SIG, _small_step
+from startrack.rate._streak_kernel import NPAR, SAG, SIG, _small_step
 
 
 def _information(sigma_px):

@@ -9,8 +9,8 @@ from scipy.spatial.transform import Rotation
 from streak_scenes import paths_apart, render_streak_scene, spin_rate, star_field, star_paths
 
 from startrack.camera import Camera
-from startrack.rate.streak_find import find_streak_candidates
-from startrack.rate.streak_fit import first_guesses, fit_streaks
+from startrack.rate._streak_find import find_streak_candidates
+from startrack.rate._streak_fit import first_guesses, fit_streaks
 from startrack.units import DEG
 
 CAMERA = Camera.from_fov(1024, 1024, fov_deg=12.0)

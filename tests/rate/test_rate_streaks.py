@@ -10,17 +10,17 @@ from streak_scenes import render_streak_scene, spin_rate, star_field
 from startrack.camera import Camera
 from startrack.errors import InvalidInputError
 from startrack.rate import axis_error_rad
-from startrack.rate.catalog_free import catalog_free_rate
-from startrack.rate.endpoints import (
+from startrack.rate._catalog_free import catalog_free_rate
+from startrack.rate._endpoints import (
     DETECTORS,
     along_streak_offsets,
     calibrate_bias,
     gaussian_derivative_kernel,
     locate_endpoints,
 )
-from startrack.rate.grouping import centre_of_rotation, group_endpoints
-from startrack.rate.streak_detect import find_streaks
-from startrack.rate.streak_rate import attitudes_from_matches, choose_mode, measure_streaks, streak_rate
+from startrack.rate._grouping import centre_of_rotation, group_endpoints
+from startrack.rate._streak_detect import find_streaks
+from startrack.rate._streak_rate import attitudes_from_matches, choose_mode, measure_streaks, streak_rate
 from startrack.results import Status
 from startrack.units import DEG, PIXEL
 

@@ -10,8 +10,8 @@ import pytest
 from scipy.stats import chi2, poisson
 
 from startrack.simulate import Detector, NoiseModel, Optics, Sensor, pixel_maps, read_out
-from startrack.simulate.detector import bloom
-from startrack.simulate.noise import readout_table, sample_table
+from startrack.simulate._detector import bloom
+from startrack.simulate._noise import readout_table, sample_table
 
 SHAPE = (200, 200)
 

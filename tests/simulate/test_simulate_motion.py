@@ -25,7 +25,7 @@ from startrack.simulate import (
     simulate_sequence,
     tumble,
 )
-from startrack.simulate.motion import quaternion_rate
+from startrack.simulate._motion import quaternion_rate
 from startrack.units import ARCSEC, DEG, PIXEL
 
 EXPECTED_ONLY = NoiseModel(shot=False, dark=False, read=False, bias=False, quantize=False, saturate=False,

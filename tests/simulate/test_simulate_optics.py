@@ -21,8 +21,8 @@ from startrack.simulate import (
     render_stars,
     zodiacal_mag_arcsec2,
 )
-from startrack.simulate.background import S10_MAG_ARCSEC2, ecliptic_latitude
-from startrack.simulate.optics import airy_intensity, airy_stamps, psf_sigma_px, star_illumination
+from startrack.simulate._background import S10_MAG_ARCSEC2, ecliptic_latitude
+from startrack.simulate._optics import airy_intensity, airy_stamps, psf_sigma_px, star_illumination
 from startrack.units import DEG, PIXEL
 
 EXPECTED_ONLY = NoiseModel(shot=False, dark=False, read=False, bias=False, quantize=False, saturate=False,

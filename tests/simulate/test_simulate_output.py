@@ -15,9 +15,9 @@ from astropy.time import Time
 from astropy.wcs import WCS
 
 from startrack.camera import Camera
-from startrack.cli.main import main
+from startrack.cli import main
 from startrack.frames import angle_between, radec_to_vector
-from startrack.io.truth_files import index_row, write_frame, write_index
+from startrack.io._truth_files import index_row, write_frame, write_index
 from startrack.simulate import FrameTiming, get_sensor_preset, random_attitude, save_profile, simulate_frame, tumble
 from startrack.units import DEG, PIXEL
 

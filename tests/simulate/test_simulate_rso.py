@@ -23,8 +23,8 @@ from startrack.simulate import (
     render_stars,
     sun_moon_km,
 )
-from startrack.simulate.orbits import J2_EARTH, MU_EARTH_KM3_S2, R_EARTH_KM
-from startrack.simulate.rso import SUN_V_MAG, Snapshot
+from startrack.simulate._orbits import J2_EARTH, MU_EARTH_KM3_S2, R_EARTH_KM
+from startrack.simulate._rso import SUN_V_MAG, Snapshot
 from startrack.units import DEG, PIXEL
 
 EPOCH = Time("2026-03-01T00:00:00", scale="utc")

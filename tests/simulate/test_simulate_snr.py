@@ -24,7 +24,7 @@ from startrack.simulate import (
     simulate_frame,
     star_snr,
 )
-from startrack.simulate.snr import box_fraction, noise_per_pixel_e2
+from startrack.simulate._snr import box_fraction, noise_per_pixel_e2
 from startrack.units import DEG, PIXEL
 
 N_FRAMES = 1000

@@ -5,7 +5,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from startrack import Camera, Status
-from startrack.attitude.propagation import propagate as propagate_attitude
+from startrack.attitude._propagation import propagate as propagate_attitude
 from startrack.catalog import load_catalog
 from startrack.frames import attitude_error, random_rotations
 from startrack.rate import rate_between

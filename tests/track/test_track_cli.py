@@ -6,8 +6,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from startrack import Camera
-from startrack.attitude.propagation import propagate as propagate_attitude
-from startrack.cli.main import main
+from startrack.attitude._propagation import propagate as propagate_attitude
+from startrack.cli import main
 from startrack.frames import attitude_error, random_rotations
 from startrack.io import write_png
 from startrack.simulate import get_sensor_preset, simulate_frame

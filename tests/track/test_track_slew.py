@@ -7,7 +7,7 @@ from slew_frames import CAMERA, EXPOSURE_S, slew_rate
 
 from startrack.frames import attitude_error
 from startrack.track import Tracker
-from startrack.track.tracker import POINT_MODE, STREAK_MODE
+from startrack.track._tracker import POINT_MODE, STREAK_MODE
 from startrack.units import DEG
 
 

@@ -8,23 +8,17 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from startrack import Camera
-from startrack.attitude.propagation import propagate
-from startrack.attitude.qmethod import q_method_quaternions
+from startrack.attitude._propagation import propagate
+from startrack.attitude._qmethod import q_method_quaternions
 from startrack.errors import InvalidInputError
 from startrack.frames import angle_between, attitude_error, boresight, random_rotations
-from startrack.identify.field_stars import field_stars
-from startrack.identify.verify import match_nearest
+from startrack.identify._field_stars import field_stars
+from startrack.identify._verify import match_nearest
 from startrack.rate import rate_between
-from startrack.track import Tracker, match_in_windows, windows
-from startrack.track.quaternions import (
-    fit_quat,
-    quat_conjugate,
-    quat_matrix,
-    quat_product,
-    quat_rotvec,
-    rotvec_quat,
-)
-from startrack.track.windows import WindowMatcher, one_to_one, project
+from startrack.track import Tracker, match_in_windows
+from startrack.track import _windows as windows
+from startrack.track._quaternions import fit_quat, quat_conjugate, quat_matrix, quat_product, quat_rotvec, rotvec_quat
+from startrack.track._windows import WindowMatcher, one_to_one, project
 from startrack.units import ARCSEC, DEG
 
 CAMERA = Camera.from_fov(1024, 1024, 15.0)

@@ -16,17 +16,17 @@ from astropy.coordinates import AltAz, EarthLocation, SkyCoord
 from astropy.time import Time
 from astropy.utils import iers
 
-from startrack.calibrate.sites import get_site
+from startrack.calibrate._sites import get_site
 from startrack.detect import StarDetector
 from startrack.frames import angle_between, radec_to_vector
 from startrack.io import write_png
 from startrack.results import AttitudeSolution, Status
 from startrack.units import ARCSEC, DEG
-from startrack.web.annotate import grid_step_deg, residual_gain
-from startrack.web.jobs import read_json
-from startrack.web.outputs import failure_words
-from startrack.web.records import job_record, load_solution
-from startrack.web.rejects import rejected_spots
+from startrack.web._annotate import grid_step_deg, residual_gain
+from startrack.web._jobs import read_json
+from startrack.web._outputs import failure_words
+from startrack.web._records import job_record, load_solution
+from startrack.web._rejects import rejected_spots
 
 
 def run_job(server, source, options: dict | None = None):

@@ -10,8 +10,8 @@ import signal
 from web_server import WebServer
 
 from conftest import SLOW
-from startrack.web.jobs import RESTART_REASON, JobStore
-from startrack.web.options import validate_options
+from startrack.web._jobs import RESTART_REASON, JobStore
+from startrack.web._options import validate_options
 
 
 def test_cancel_a_running_job(idle_server, random_field, real_images):

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from astropy.io import fits
 
-from startrack.web.refusals import Refusal
-from startrack.web.uploads import check_size, display_label, image_size, raw_suffix, sniff
+from startrack.web._refusals import Refusal
+from startrack.web._uploads import check_size, display_label, image_size, raw_suffix, sniff
 
 
 @pytest.mark.parametrize(("head", "label", "kind"), [
@@ -73,7 +73,7 @@ def test_fits_sizes_from_the_header_only(tmp_path):
 
 
 def test_a_simulated_frame_reads_its_size(tmp_path):
-    from startrack.web.simulation import render, validate_simulation
+    from startrack.web._simulation import render, validate_simulation
 
     path = tmp_path / "sim.fits"
     render(validate_simulation({"width": 160, "height": 120, "fov_deg": 8.0, "seed": 3}), path)

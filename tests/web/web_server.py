@@ -1,6 +1,6 @@
 """A real ``startrack web`` server in a child process, for the HTTP and browser tests.
 
-The server is started the way a user starts it (``python -m startrack.cli.main web --port 0``;
+The server is started the way a user starts it (``python -m startrack web --port 0``;
 no shell), on 127.0.0.1 with a port the system picks; the address is read from the line it
 prints. Its standard error goes to a file (a pipe could fill and block it).
 """
@@ -32,7 +32,7 @@ class WebServer:
         self.log = self.data_dir.parent / f"{self.data_dir.name}-server-{time.monotonic_ns()}.log"
         with open(self.log, "wb") as err:
             self.process = subprocess.Popen(
-                [sys.executable, "-m", "startrack.cli.main", "web", "--port", "0", "--data-dir", str(self.data_dir),
+                [sys.executable, "-m", "startrack", "web", "--port", "0", "--data-dir", str(self.data_dir),
                  *args], stdout=subprocess.DEVNULL, stderr=err, env={**os.environ, "PYTHONUNBUFFERED": "1"})
         self.url = self._address()
         host, port = re.match(r"http://([\d.]+):(\d+)/", self.url).groups()

@@ -24,36 +24,25 @@ plots           the figures of a run
 
 from __future__ import annotations
 
-from .. import _lazy_exports
+from typing import TYPE_CHECKING
 
-_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
-    "CubeSat": ".cubesat",
-    "CommandLog": ".estimate",
-    "DipoleField": ".field",
-    "GuidanceOptions": ".guidance",
-    "HORIZONS": ".guidance",
-    "FEEDBACKS": ".loop",
-    "FIELDS": ".loop",
-    "LoopConfig": ".loop",
-    "PLANTS": ".loop",
-    "RunRecord": ".loop",
-    "run_loop": ".loop",
-    "METRIC_KEYS": ".metrics",
-    "SEED_POWER_W": ".metrics",
-    "SEED_TABLE_5_3": ".metrics",
-    "StepMetrics": ".metrics",
-    "run_metrics": ".metrics",
-    "Boundary": ".planner",
-    "ThreeAxisPlant": ".plant",
-    "save_run_plots": ".plots",
-    "summary": ".report",
-    "table": ".report",
-    "write_files": ".report",
-    "Scenario": ".scenario",
-    "StarTrackerSetup": ".star_tracker_feedback",
-    "TrackerNoiseModel": ".star_tracker_feedback",
-    "fit_noise_model": ".star_tracker_feedback",
-}
+from .. import _exports_of, _lazy_exports
+
+if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
+    from ._cubesat import CubeSat
+    from ._estimate import CommandLog
+    from ._field import DipoleField
+    from ._guidance import HORIZONS, GuidanceOptions
+    from ._loop import FEEDBACKS, FIELDS, PLANTS, LoopConfig, RunRecord, run_loop
+    from ._metrics import METRIC_KEYS, SEED_POWER_W, SEED_TABLE_5_3, StepMetrics, run_metrics
+    from ._planner import Boundary
+    from ._plant import ThreeAxisPlant
+    from ._plots import save_run_plots
+    from ._report import summary, table, write_files
+    from ._scenario import Scenario
+    from ._star_tracker_feedback import StarTrackerSetup, TrackerNoiseModel, fit_noise_model
+
+_EXPORTS = _exports_of(__file__)
 
 __all__ = sorted(_EXPORTS)
 

@@ -19,39 +19,38 @@ matplotlib nor the campaign's Dask.
 
 from __future__ import annotations
 
-from .. import _lazy_exports
+from typing import TYPE_CHECKING
 
-_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
-    "star_counts": ".availability",
-    "plot_distortion": ".calibration_plots",
-    "plot_repeatability": ".calibration_plots",
-    "plot_residuals": ".calibration_plots",
-    "display_stretch": ".plots",
-    "plot_solution": ".plots",
-    "plot_star_counts": ".plots",
-    "ImageRecord": ".records",
-    "elements": ".rso_passes",
-    "TOLERANCE_PIXELS": ".scoring",
-    "attitude_errors_rad": ".scoring",
-    "boresight_and_roll_errors": ".scoring",
-    "roll_weight": ".scoring",
-    "rotations_from_radec_roll_deg": ".scoring",
-    "summarize": ".scoring",
-    "tolerance_rad": ".scoring",
-    "Conditions": ".starlists",
-    "StarList": ".starlists",
-    "generate_star_lists": ".starlists",
-    "load_sky": ".starlists",
-    "make_star_list": ".starlists",
-    "StreakScene": ".streak_scenes",
-    "paths_apart": ".streak_scenes",
-    "render_streak_scene": ".streak_scenes",
-    "spin_rate": ".streak_scenes",
-    "star_field": ".streak_scenes",
-    "star_paths": ".streak_scenes",
-    "streak_sensor": ".streak_scenes",
-    "turning_rso_snapshot": ".streak_scenes",
-}
+from .. import _exports_of, _lazy_exports
+
+if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
+    from ._availability import star_counts
+    from ._calibration_plots import plot_distortion, plot_repeatability, plot_residuals
+    from ._plots import display_stretch, plot_solution, plot_star_counts
+    from ._records import ImageRecord
+    from ._rso_passes import elements
+    from ._scoring import (
+        TOLERANCE_PIXELS,
+        attitude_errors_rad,
+        boresight_and_roll_errors,
+        roll_weight,
+        rotations_from_radec_roll_deg,
+        summarize,
+        tolerance_rad,
+    )
+    from ._starlists import Conditions, StarList, generate_star_lists, load_sky, make_star_list
+    from ._streak_scenes import (
+        StreakScene,
+        paths_apart,
+        render_streak_scene,
+        spin_rate,
+        star_field,
+        star_paths,
+        streak_sensor,
+        turning_rso_snapshot,
+    )
+
+_EXPORTS = _exports_of(__file__)
 
 __all__ = sorted(_EXPORTS)
 

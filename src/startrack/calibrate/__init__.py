@@ -19,51 +19,41 @@ repeatability  fixed-mount repeatability analysis (Fowler 2013 Ch. 7 and 9)
 
 from __future__ import annotations
 
-from .. import _lazy_exports
+from typing import TYPE_CHECKING
 
-_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
-    "CircularOrbit": ".apparent",
-    "aberrate": ".apparent",
-    "aberration_angle_rad": ".apparent",
-    "apparent_vectors": ".apparent",
-    "attitude_in_true_of_date": ".apparent",
-    "earth_state": ".apparent",
-    "observer_state": ".apparent",
-    "Checkerboard": ".bench",
-    "calibrate_checkerboard": ".bench",
-    "find_corners": ".bench",
-    "render_checkerboard": ".bench",
-    "bright_bodies_near": ".bodies",
-    "variable_flags": ".bodies",
-    "altaz_from_vectors": ".ground",
-    "pointing_altaz": ".ground",
-    "refract_icrs": ".ground",
-    "rotation_enu_from_icrs": ".ground",
-    "time_from_header": ".ground",
-    "unrefract_icrs": ".ground",
-    "solve_ground_photo": ".ground_solve",
-    "distortion_field_px": ".lens_models",
-    "centre_from_rotation": ".quick",
-    "focal_from_pair": ".quick",
-    "focal_from_stars": ".quick",
-    "refract": ".refraction",
-    "unrefract": ".refraction",
-    "Repeatability": ".repeatability",
-    "error_budget": ".repeatability",
-    "affordable_fit": ".selfcal",
-    "justified": ".selfcal",
-    "pinhole_of": ".selfcal",
-    "self_calibrate": ".selfcal",
-    "Site": ".sites",
-    "get_site": ".sites",
-    "load_sites": ".sites",
-    "save_site": ".sites",
-    "CalibrationFrame": ".stars",
-    "DEFAULT_FIT": ".stars",
-    "calibrate_from_stars": ".stars",
-    "TiltedCcdCamera": ".tilted_ccd",
-    "TiltedCcdModel": ".tilted_ccd",
-}
+from .. import _exports_of, _lazy_exports
+
+if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
+    from ._apparent import (
+        CircularOrbit,
+        aberrate,
+        aberration_angle_rad,
+        apparent_vectors,
+        attitude_in_true_of_date,
+        earth_state,
+        observer_state,
+    )
+    from ._bench import Checkerboard, calibrate_checkerboard, find_corners, render_checkerboard
+    from ._bodies import bright_bodies_near, variable_flags
+    from ._ground import (
+        altaz_from_vectors,
+        pointing_altaz,
+        refract_icrs,
+        rotation_enu_from_icrs,
+        time_from_header,
+        unrefract_icrs,
+    )
+    from ._ground_solve import solve_ground_photo
+    from ._lens_models import distortion_field_px
+    from ._quick import centre_from_rotation, focal_from_pair, focal_from_stars
+    from ._refraction import refract, unrefract
+    from ._repeatability import Repeatability, error_budget, repeatability
+    from ._selfcal import affordable_fit, justified, pinhole_of, self_calibrate
+    from ._sites import Site, get_site, load_sites, save_site
+    from ._stars import DEFAULT_FIT, CalibrationFrame, calibrate_from_stars
+    from ._tilted_ccd import TiltedCcdCamera, TiltedCcdModel
+
+_EXPORTS = _exports_of(__file__)
 
 __all__ = sorted(_EXPORTS)
 

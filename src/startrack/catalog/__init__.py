@@ -3,24 +3,20 @@ thinning and cone search (DESIGN.md §2; Huffman 2006 §5.5.4, Jacobs 1995 §5.2
 
 from __future__ import annotations
 
-from .. import _lazy_exports
+from typing import TYPE_CHECKING
 
-_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
-    "angle_from_chord": ".chord",
-    "chord_from_angle": ".chord",
-    "ConeIndex": ".cone",
-    "EPOCH_RANGE_JYEAR": ".epoch",
-    "epoch_jyear": ".epoch",
-    "cone_search": ".cone",
-    "flag_doubles": ".doubles",
-    "merge_doubles": ".doubles",
-    "jyear_tdb": ".epoch",
-    "load_catalog": ".hipparcos",
-    "query_cone": ".cone",
-    "StarCatalog": ".star_catalog",
-    "fibonacci_sphere": ".thinning",
-    "thin_uniform": ".thinning",
-}
+from .. import _exports_of, _lazy_exports
+
+if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
+    from ._chord import angle_from_chord, chord_from_angle
+    from ._cone import ConeIndex, cone_search, query_cone
+    from ._doubles import flag_doubles, merge_doubles
+    from ._epoch import EPOCH_RANGE_JYEAR, epoch_jyear, jyear_tdb
+    from ._hipparcos import load_catalog
+    from ._star_catalog import StarCatalog
+    from ._thinning import fibonacci_sphere, thin_uniform
+
+_EXPORTS = _exports_of(__file__)
 
 __all__ = sorted(_EXPORTS)
 

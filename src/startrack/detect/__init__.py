@@ -16,11 +16,11 @@ one module per stage::
                  of the Cramér-Rao bound, see docs/detection.md) with its 1-sigma error
 
 Every stage has alternatives selectable by name (:class:`StarDetector`): dark / median-frame
-and row-reference subtraction (:mod:`.dark`), denoising (:mod:`.denoise`), k-sigma, dynamic and
-Huffman 2006 pre-filter thresholds (:mod:`.threshold`, :mod:`.prefilters`), 8-connected labelling
-or Jacobs 1995 region growing (:mod:`.region_grow`), shape and smear tests (:mod:`.shape`), and six
-centroiders (:mod:`.centroiders`); predictive windows (:mod:`.predictive`); the Cramér-Rao
-bound (:mod:`.crb`); instrument magnitudes (:mod:`.magnitude`).
+and row-reference subtraction (:mod:`._dark`), denoising (:mod:`._denoise`), k-sigma, dynamic and
+Huffman 2006 pre-filter thresholds (:mod:`._threshold`, :mod:`._prefilters`), 8-connected labelling
+or Jacobs 1995 region growing (:mod:`._region_grow`), shape and smear tests (:mod:`._shape`), and six
+centroiders (:mod:`._centroiders`); predictive windows (:mod:`._predictive`); the Cramér-Rao
+bound (:mod:`._crb`); instrument magnitudes (:mod:`._magnitude`).
 
 ``detect(image)`` runs it with the default settings; :class:`StarDetector` holds other
 settings. x, y are in our pixel convention (0-based pixel centres, x = column); detections
@@ -29,40 +29,31 @@ are sorted brightest (largest flux) first.
 
 from __future__ import annotations
 
-from .. import _lazy_exports
+from typing import TYPE_CHECKING
 
-_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
-    "to_single_channel": ".channels",
-    "crb_sigma_px": ".crb",
-    "flux_for_snr": ".crb",
-    "integrated_snr": ".crb",
-    "median_frame": ".dark",
-    "subtract_dark": ".dark",
-    "stack_frames": ".denoise",
-    "DetectionDetails": ".details",
-    "StarDetector": ".detector",
-    "detect": ".detector",
-    "calibrate_zero_point": ".magnitude",
-    "instrument_magnitude": ".magnitude",
-    "WindowDetections": ".predictive",
-    "low_side_clipped": ".background",
-    "pixel_noise": ".background",
-    "CENTROIDERS": ".centroiders",
-    "THRESHOLDS": ".detector",
-    "peak_fraction": ".filters",
-    "MAX_RING_NOISE": ".fine_pass",
-    "fine_significance": ".fine_pass",
-    "quiet_surroundings": ".fine_pass",
-    "ring_noise_ratio": ".fine_pass",
-    "stands_above_ring": ".fine_pass",
-    "background_model": ".pipeline",
-    "noise_floor": ".pipeline",
-    "preprocess": ".pipeline",
-    "detection_image": ".smooth",
-    "significance": ".threshold",
-    "extract_windows": ".windows",
-    "warm_up_detect": ".compiled",
-}
+from .. import _exports_of, _lazy_exports
+
+if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
+    from ._background import low_side_clipped, pixel_noise
+    from ._centroiders import CENTROIDERS
+    from ._channels import to_single_channel
+    from ._compiled import warm_up_detect
+    from ._crb import crb_sigma_px, flux_for_snr, integrated_snr
+    from ._dark import median_frame, subtract_dark
+    from ._denoise import stack_frames
+    from ._details import DetectionDetails
+    from ._detector import THRESHOLDS, StarDetector, detect
+    from ._filters import peak_fraction
+    from ._fine_pass import MAX_RING_NOISE, fine_significance, quiet_surroundings, ring_noise_ratio, stands_above_ring
+    from ._magnitude import calibrate_zero_point, instrument_magnitude
+    from ._pipeline import background_model, noise_floor, preprocess
+    from ._predictive import WindowDetections
+    from ._prefilters import PREFILTER_FORMS, prefilter
+    from ._smooth import detection_image
+    from ._threshold import significance
+    from ._windows import extract_windows
+
+_EXPORTS = _exports_of(__file__)
 
 __all__ = [
     "CENTROIDERS",

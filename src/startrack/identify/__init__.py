@@ -1,79 +1,69 @@
 """Star identification: lost-in-space matching against the catalog (and, later, tracking).
 
 The default lost-in-space matcher is :func:`match_lost_in_space` (four-star patterns with a
-k-vector index per field-of-view scale, see :mod:`.quad_matcher`), backed by the pattern
-database of :mod:`.database`. The other matchers, each with its options class and selectable by
+k-vector index per field-of-view scale, see :mod:`._quad_matcher`), backed by the pattern
+database of :mod:`._database`. The other matchers, each with its options class and selectable by
 name through :data:`MATCHERS` / :data:`OPTIONS` (``solve_stars(method=...)``):
 :func:`match_pyramid`, :func:`match_angle_pivot`, :func:`match_triangles`, :func:`match_nvertex`,
-:func:`match_van_bezooijen` (on the pair database of :mod:`.pair_database`) and
+:func:`match_van_bezooijen` (on the pair database of :mod:`._pair_database`) and
 :func:`match_overlay` (with a prior attitude).
 """
 
 from __future__ import annotations
 
-from .. import _lazy_exports
+from typing import TYPE_CHECKING
 
-_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
-    "AnglePivotOptions": ".angle_pivot",
-    "match_angle_pivot": ".angle_pivot",
-    "Candidate": ".candidate",
-    "MatchOutcome": ".candidate",
-    "DB_KIND": ".database",
-    "DB_VERSION": ".database",
-    "DatabaseSettings": ".database",
-    "PatternDatabase": ".database",
-    "database_report": ".database",
-    "is_cached": ".database",
-    "load_database": ".database",
-    "FieldStars": ".field_stars",
-    "settle_matches": ".final_fit",
-    "DEFAULT_EPOCH_JYEAR": ".image_epoch",
-    "epoch_from_header": ".image_epoch",
-    "epoch_jyear": ".image_epoch",
-    "parse_utc": ".image_epoch",
-    "resolve_epoch": ".image_epoch",
-    "KVector": ".kvector",
-    "GroupProblem": ".match_groups",
-    "VanBezooijenOptions": ".match_groups",
-    "candidate_groups": ".match_groups",
-    "match_pairs": ".match_groups",
-    "match_van_bezooijen": ".match_groups",
-    "region_mask": ".match_groups",
-    "sub_catalogue": ".match_groups",
-    "NVertexOptions": ".nvertex",
-    "match_nvertex": ".nvertex",
-    "OverlayOptions": ".overlay",
-    "match_overlay": ".overlay",
-    "PairDatabase": ".pair_database",
-    "PairSettings": ".pair_database",
-    "load_pair_database": ".pair_database",
-    "PyramidOptions": ".pyramid",
-    "candidate_triangles": ".pyramid",
-    "match_pyramid": ".pyramid",
-    "pyramid_triads": ".pyramid",
-    "MatcherOptions": ".quad_matcher",
-    "match_lost_in_space": ".quad_matcher",
-    "pixel_vectors": ".refine",
-    "refine_pointing": ".refine",
-    "solution_terms": ".refine",
-    "DEFAULT_FOV_RANGE_DEG": ".registry",
-    "MATCHERS": ".registry",
-    "OPTIONS": ".registry",
-    "database_settings_for": ".registry",
-    "options_for": ".registry",
-    "prepare_matcher": ".registry",
-    "FOV_DEG_TOLERANCE": ".request",
-    "SolveRequest": ".request",
-    "build_request": ".request",
-    "check_fov_deg": ".request",
-    "check_pixel_aspect": ".request",
-    "star_arrays": ".request",
-    "ordered_star_sets": ".star_order",
-    "TriangleOptions": ".triangles",
-    "match_triangles": ".triangles",
-    "closest_pairs_first": ".verify",
-    "match_nearest": ".verify",
-}
+from .. import _exports_of, _lazy_exports
+
+if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
+    from ._angle_pivot import AnglePivotOptions, match_angle_pivot
+    from ._candidate import Candidate, MatchOutcome
+    from ._database import (
+        DB_KIND,
+        DB_VERSION,
+        DatabaseSettings,
+        PatternDatabase,
+        database_report,
+        is_cached,
+        load_database,
+    )
+    from ._field_stars import FieldStars, field_stars
+    from ._final_fit import settle_matches
+    from ._image_epoch import DEFAULT_EPOCH_JYEAR, epoch_from_header, epoch_jyear, parse_utc, resolve_epoch
+    from ._kvector import KVector
+    from ._match_groups import (
+        GroupProblem,
+        VanBezooijenOptions,
+        candidate_groups,
+        match_pairs,
+        match_van_bezooijen,
+        region_mask,
+        sub_catalogue,
+    )
+    from ._nvertex import NVertexOptions, match_nvertex
+    from ._options_base import MatcherOptionsBase
+    from ._overlay import OverlayOptions, match_overlay
+    from ._pair_database import PairDatabase, PairSettings, load_pair_database
+    from ._pyramid import PyramidOptions, candidate_triangles, match_pyramid, pyramid_triads
+    from ._quad_matcher import MatcherOptions, match_lost_in_space
+    from ._refine import pixel_vectors, refine_pointing, solution_terms
+    from ._registry import (
+        DEFAULT_FOV_RANGE_DEG,
+        MATCHERS,
+        OPTIONS,
+        MethodName,
+        check_method,
+        check_options,
+        database_settings_for,
+        options_for,
+        prepare_matcher,
+    )
+    from ._request import FOV_DEG_TOLERANCE, SolveRequest, build_request, check_fov_deg, check_pixel_aspect, star_arrays
+    from ._star_order import ordered_star_sets
+    from ._triangles import TriangleOptions, match_triangles
+    from ._verify import closest_pairs_first, match_nearest
+
+_EXPORTS = _exports_of(__file__)
 
 __all__ = sorted(_EXPORTS)
 

@@ -23,37 +23,23 @@ report       a RigSolution as JSON values and a table (``startrack solve-rig``)
 
 from __future__ import annotations
 
-from .. import _lazy_exports
+from typing import TYPE_CHECKING
 
-_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
-    "RigAvailability": ".availability",
-    "rig_availability": ".availability",
-    "BrightBodies": ".exclusion",
-    "blinded_by": ".exclusion",
-    "dawn_dusk_bodies": ".exclusion",
-    "detector_stars": ".images",
-    "solve_rig_images": ".images",
-    "MountingEstimate": ".mounting",
-    "calibrate_mountings": ".mounting",
-    "recalibrated": ".mounting",
-    "rig_solution_table": ".report",
-    "rig_solution_to_dict": ".report",
-    "IDENTIFIED_BY_HEAD": ".solution",
-    "IDENTIFIED_JOINTLY": ".solution",
-    "RigOptions": ".solution",
-    "RigSolution": ".solution",
-    "check_method": ".solve",
-    "consistency_chi2": ".solve",
-    "solve_head_stars": ".solve",
-    "solve_rig": ".solve",
-    "FieldClassification": ".split_fov",
-    "classify_fields": ".split_fov",
-    "moments_radius_px": ".split_fov",
-    "spot_moments": ".split_fov",
-    "HeadStars": ".stars",
-    "RigTrackStep": ".tracking",
-    "RigTracker": ".tracking",
-}
+from .. import _exports_of, _lazy_exports
+
+if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
+    from ._availability import RigAvailability, rig_availability
+    from ._exclusion import BrightBodies, blinded_by, dawn_dusk_bodies
+    from ._images import detector_stars, solve_rig_images
+    from ._mounting import MountingEstimate, calibrate_mountings, recalibrated
+    from ._report import rig_solution_table, rig_solution_to_dict
+    from ._solution import IDENTIFIED_BY_HEAD, IDENTIFIED_JOINTLY, RigOptions, RigSolution
+    from ._solve import check_method, consistency_chi2, solve_head_stars, solve_rig
+    from ._split_fov import FieldClassification, classify_fields, moments_radius_px, spot_moments
+    from ._stars import HeadStars
+    from ._tracking import RigTracker, RigTrackStep
+
+_EXPORTS = _exports_of(__file__)
 
 __all__ = sorted(_EXPORTS)
 

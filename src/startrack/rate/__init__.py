@@ -2,54 +2,54 @@
 
 Convention: ``omega_rad_s`` is the camera's angular velocity relative to ICRS in camera-frame
 components (``rot_cam_from_icrs(t + dt) = exp(-[omega x] dt) rot_cam_from_icrs(t)``); see
-:mod:`.estimate`. Modules: :mod:`.from_attitudes` (Samaan 2002 eq. 3), :mod:`.from_vectors`
-(frame-to-frame, no catalog), :mod:`.filter` (a constant-rate Kalman filter), and the streak
+:mod:`._estimate`. Modules: :mod:`._from_attitudes` (Samaan 2002 eq. 3), :mod:`._from_vectors`
+(frame-to-frame, no catalog), :mod:`._filter` (a constant-rate Kalman filter), and the streak
 chain of Sease 2013 chapters 3-4.
 """
 
 from __future__ import annotations
 
-from .. import _lazy_exports
+from typing import TYPE_CHECKING
 
-_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
-    "catalog_free_rate": ".catalog_free",
-    "DETECTORS": ".endpoints",
-    "EndpointBias": ".endpoints",
-    "calibrate_bias": ".endpoints",
-    "calibrate_bias_model": ".endpoints",
-    "streak_path": ".endpoints",
-    "RateEstimate": ".estimate",
-    "axis_error_rad": ".estimate",
-    "FilterState": ".filter",
-    "RateFilter": ".filter",
-    "rate_between": ".from_attitudes",
-    "rate_from_attitudes": ".from_attitudes",
-    "match_frames": ".from_vectors",
-    "rate_from_vectors": ".from_vectors",
-    "INDICATORS": ".rso",
-    "SmearLimits": ".smear_mode",
-    "image_smear_px": ".smear_mode",
-    "usable_for_prediction": ".smear_mode",
-    "find_streaks": ".streak_detect",
-    "find_streak_candidates": ".streak_find",
-    "first_guesses": ".streak_fit",
-    "fit_streaks": ".streak_fit",
-    "v_mags": ".streak_predict",
-    "zero_point": ".streak_predict",
-    "METHODS": ".streak_rate",
-    "SEGMENT": ".streak_rate",
-    "StreakRate": ".streak_rate",
-    "attitudes_from_matches": ".streak_rate",
-    "choose_mode": ".streak_rate",
-    "measure_streaks": ".streak_rate",
-    "streak_attitudes": ".streak_rate",
-    "StreakOptions": ".streak_solve",
-    "StreakSolution": ".streak_solve",
-    "header_exposure_s": ".streak_solve",
-    "solve_streaked": ".streak_solve",
-    "prediction_slack_px": ".streak_track",
-    "track_streaks": ".streak_track",
-}
+from .. import _exports_of, _lazy_exports
+
+if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
+    from ._catalog_free import catalog_free_rate
+    from ._endpoints import (
+        DETECTORS,
+        CornerDetector,
+        EndpointBias,
+        calibrate_bias,
+        calibrate_bias_model,
+        check_detector,
+        streak_path,
+    )
+    from ._estimate import RateEstimate, axis_error_rad
+    from ._filter import FilterState, RateFilter
+    from ._from_attitudes import rate_between, rate_from_attitudes
+    from ._from_vectors import match_frames, rate_from_vectors
+    from ._rso import INDICATORS, IndicatorName
+    from ._smear_mode import SmearLimits, image_smear_px, usable_for_prediction
+    from ._streak_detect import find_streaks
+    from ._streak_find import find_streak_candidates
+    from ._streak_fit import first_guesses, fit_streaks
+    from ._streak_predict import v_mags, zero_point
+    from ._streak_rate import (
+        METHODS,
+        SEGMENT,
+        EndpointMethod,
+        StreakRate,
+        attitudes_from_matches,
+        check_endpoint_method,
+        choose_mode,
+        measure_streaks,
+        streak_attitudes,
+        streak_rate,
+    )
+    from ._streak_solve import StreakOptions, StreakSolution, header_exposure_s, solve_streaked
+    from ._streak_track import prediction_slack_px, track_streaks
+
+_EXPORTS = _exports_of(__file__)
 
 __all__ = sorted(_EXPORTS)
 

@@ -31,76 +31,52 @@ Example
 
 from __future__ import annotations
 
-from .. import _lazy_exports
+from typing import TYPE_CHECKING
 
-_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
-    "SkyBackground": ".background",
-    "zodiacal_mag_arcsec2": ".background",
-    "PixelMaps": ".detector",
-    "pixel_maps": ".detector",
-    "ConstantRate": ".motion",
-    "RecordedProfile": ".motion",
-    "Slew": ".motion",
-    "VaryingRate": ".motion",
-    "inertial_hold": ".motion",
-    "tumble": ".motion",
-    "NoiseModel": ".noise",
-    "read_out": ".noise",
-    "readout_table": ".noise",
-    "psf_sigma_px": ".optics",
-    "KeplerElements": ".orbits",
-    "MU_EARTH_KM3_S2": ".orbits",
-    "Orbit": ".orbits",
-    "R_EARTH_KM": ".orbits",
-    "R_MOON_KM": ".orbits",
-    "R_SUN_KM": ".orbits",
-    "in_earth_shadow": ".orbits",
-    "sun_moon_km": ".orbits",
-    "PASSBANDS": ".passband",
-    "Passband": ".passband",
-    "load_profile": ".profile_file",
-    "save_profile": ".profile_file",
-    "add_stamps": ".psf",
-    "render_gaussian_psf": ".psf",
-    "Detector": ".radiometry",
-    "Optics": ".radiometry",
-    "SEED000_EQ34_ZERO_POINT_PHOTONS_S_M2": ".radiometry",
-    "SENSOR_PRESETS": ".radiometry",
-    "Sensor": ".radiometry",
-    "V_MAG0_PHOTONS_S_M2": ".radiometry",
-    "electrons_from_magnitude": ".radiometry",
-    "get_sensor_preset": ".radiometry",
-    "magnitude_from_electrons": ".radiometry",
-    "photon_flux_from_magnitude": ".radiometry",
-    "rig_star_lists": ".rig",
-    "simulate_rig": ".rig",
-    "BrightBodyFlags": ".rso",
-    "OrbitalScene": ".rso",
-    "RSO": ".rso",
-    "Snapshot": ".rso",
-    "FrameTiming": ".scene",
-    "field_radius_rad": ".scene",
-    "project_stars": ".scene",
-    "psf_radius_px": ".scene",
-    "random_attitude": ".scene",
-    "render_stars": ".scene",
-    "frame_rng": ".sequence",
-    "simulate_sequence": ".sequence",
-    "DEFAULT_MAX_MAG": ".sky",
-    "SkyModel": ".sky",
-    "simulate_frame": ".sky",
-    "limiting_magnitude": ".snr",
-    "max_rate_rad_s": ".snr",
-    "peak_snr": ".snr",
-    "star_snr": ".snr",
-    "SplitFieldFrame": ".split_fov",
-    "elliptical_stamps": ".split_fov",
-    "simulate_split_frame": ".split_fov",
-    "expected_star_count": ".starcount",
-    "RSOTruth": ".truth",
-    "SimulatedImage": ".truth",
-    "Truth": ".truth",
-}
+from .. import _exports_of, _lazy_exports
+
+if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
+    from ._background import SkyBackground, zodiacal_mag_arcsec2
+    from ._detector import PixelMaps, pixel_maps
+    from ._motion import ConstantRate, RecordedProfile, Slew, VaryingRate, inertial_hold, tumble
+    from ._noise import NoiseModel, read_out, readout_table
+    from ._optics import psf_sigma_px
+    from ._orbits import (
+        MU_EARTH_KM3_S2,
+        R_EARTH_KM,
+        R_MOON_KM,
+        R_SUN_KM,
+        KeplerElements,
+        Orbit,
+        in_earth_shadow,
+        sun_moon_km,
+    )
+    from ._passband import PASSBANDS, Passband
+    from ._profile_file import load_profile, save_profile
+    from ._psf import add_stamps, render_gaussian_psf
+    from ._radiometry import (
+        SEED000_EQ34_ZERO_POINT_PHOTONS_S_M2,
+        SENSOR_PRESETS,
+        V_MAG0_PHOTONS_S_M2,
+        Detector,
+        Optics,
+        Sensor,
+        electrons_from_magnitude,
+        get_sensor_preset,
+        magnitude_from_electrons,
+        photon_flux_from_magnitude,
+    )
+    from ._rig import rig_star_lists, simulate_rig
+    from ._rso import RSO, BrightBodyFlags, OrbitalScene, Snapshot
+    from ._scene import FrameTiming, field_radius_rad, project_stars, psf_radius_px, random_attitude, render_stars
+    from ._sequence import frame_rng, simulate_sequence
+    from ._sky import DEFAULT_MAX_MAG, SkyModel, simulate_frame
+    from ._snr import limiting_magnitude, max_rate_rad_s, peak_snr, star_snr
+    from ._split_fov import SplitFieldFrame, elliptical_stamps, simulate_split_frame
+    from ._starcount import expected_star_count
+    from ._truth import RSOTruth, SimulatedImage, Truth
+
+_EXPORTS = _exports_of(__file__)
 
 __all__ = sorted(_EXPORTS)
 

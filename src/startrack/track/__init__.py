@@ -4,25 +4,17 @@ lost-in-space when tracking fails). DESIGN.md §1; Samaan 2002 Eq. 1–3, Jacobs
 
 from __future__ import annotations
 
-from .. import _lazy_exports
+from typing import TYPE_CHECKING
 
-_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
-    "checked_rate": ".inputs",
-    "RelativeMatch": ".relative",
-    "rate_match": ".relative",
-    "triangle_match": ".relative",
-    "LOST_IN_SPACE": ".tracker",
-    "TRACKING": ".tracker",
-    "TrackStep": ".tracker",
-    "Tracker": ".tracker",
-    "TrackerOptions": ".tracker",
-    "EXTRA_PREDICTED": ".windows",
-    "WindowMatch": ".windows",
-    "WindowMatcher": ".windows",
-    "match_in_windows": ".windows",
-    "one_to_one": ".windows",
-    "project": ".windows",
-}
+from .. import _exports_of, _lazy_exports
+
+if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
+    from ._inputs import checked_rate
+    from ._relative import RelativeMatch, rate_match, triangle_match
+    from ._tracker import LOST_IN_SPACE, STEP_MODES, TRACKING, FrameMode, StepMode, Tracker, TrackerOptions, TrackStep
+    from ._windows import EXTRA_PREDICTED, WindowMatch, WindowMatcher, match_in_windows, one_to_one, project
+
+_EXPORTS = _exports_of(__file__)
 
 __all__ = sorted(_EXPORTS)
 

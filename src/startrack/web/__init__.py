@@ -5,36 +5,41 @@ and fits with :mod:`startrack.detect`, :mod:`startrack.solve` and :mod:`startrac
 the annotated frame and writes the result files; an analysis job calls
 :func:`startrack.analysis.postprocess.run_analysis`. Modules:
 
-- :mod:`.config` the server's settings (:class:`WebConfig`);
-- :mod:`.jobs` the job store on disk (one folder per job) and its state machine;
-- :mod:`.runner` the bounded pool of worker processes (time limit, cancellation, crashes);
-- :mod:`.pipeline` what a worker does for one solve job, stage by stage; :mod:`.presets` the
-  detection presets (``auto`` included); :mod:`.rejects` the spots the detector refused and why;
-  :mod:`.annotate` the annotated frame; :mod:`.outputs` the result files; :mod:`.records` the
-  solution kept on disk and the :class:`~startrack.analysis.records.ImageRecord` rebuilt from it;
-  :mod:`.analysis_jobs` analysis jobs over result sets;
-- :mod:`.options` validation of a job's ``options`` JSON; :mod:`.uploads` streaming uploads with
-  their size limit, content sniffing and dimension check; :mod:`.batches` result sets (several
+- :mod:`._config` the server's settings (:class:`WebConfig`);
+- :mod:`._jobs` the job store on disk (one folder per job) and its state machine;
+- :mod:`._runner` the bounded pool of worker processes (time limit, cancellation, crashes);
+- :mod:`._pipeline` what a worker does for one solve job, stage by stage; :mod:`._presets` the
+  detection presets (``auto`` included); :mod:`._rejects` the spots the detector refused and why;
+  :mod:`._annotate` the annotated frame; :mod:`._outputs` the result files; :mod:`._records` the
+  solution kept on disk and the :class:`~startrack.analysis._records.ImageRecord` rebuilt from it;
+  :mod:`._analysis_jobs` analysis jobs over result sets;
+- :mod:`._options` validation of a job's ``options`` JSON; :mod:`._uploads` streaming uploads with
+  their size limit, content sniffing and dimension check; :mod:`._batches` result sets (several
   files, or a folder under ``--root``);
-- :mod:`.api` the JSON API, :mod:`.pages` the HTML pages, :mod:`.schema` the OpenAPI document,
-  :mod:`.app` the Starlette application.
+- :mod:`._api` the JSON API, :mod:`._pages` the HTML pages, :mod:`._schema` the OpenAPI document,
+  :mod:`._app` the Starlette application.
 
 See ``docs/web.md``.
 """
 
 from __future__ import annotations
 
-from .. import _lazy_exports
+from typing import TYPE_CHECKING
 
-_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
-    "create_app": ".app",
-    "DEFAULT_MAX_QUEUED": ".config",
-    "DEFAULT_MAX_UPLOAD_MB": ".config",
-    "DEFAULT_PORT": ".config",
-    "DEFAULT_TIME_LIMIT_S": ".config",
-    "WebConfig": ".config",
-    "default_data_dir": ".config",
-}
+from .. import _exports_of, _lazy_exports
+
+if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
+    from ._app import create_app
+    from ._config import (
+        DEFAULT_MAX_QUEUED,
+        DEFAULT_MAX_UPLOAD_MB,
+        DEFAULT_PORT,
+        DEFAULT_TIME_LIMIT_S,
+        WebConfig,
+        default_data_dir,
+    )
+
+_EXPORTS = _exports_of(__file__)
 
 __all__ = sorted(_EXPORTS)
 

@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import os
 
-from startrack.analysis.campaign.levels import Level, register, stars
-from startrack.analysis.campaign.params import Param, params_by_name
+from startrack.analysis.campaign._params import Param, params_by_name
+from startrack.analysis.campaign.levels import Level, register
+from startrack.analysis.campaign.levels import _stars as stars
 
 FAULT_PARAMS = (
     Param("fail_fraction", "float", 0.0, "share of trials that fail", lo=0.0, hi=1.0),

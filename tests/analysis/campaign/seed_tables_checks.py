@@ -15,12 +15,12 @@ from typing import Any
 
 import pyarrow as pa
 
-from startrack.analysis.campaign.reference import match_cells, reference_tables
-from startrack.analysis.campaign.run import run_campaign
-from startrack.analysis.campaign.shipped import find_spec
-from startrack.analysis.campaign.spec import CampaignSpec, load_spec, parse_spec
-from startrack.analysis.campaign.stats import parse_metric
-from startrack.analysis.campaign.store import CampaignStore
+from startrack.analysis.campaign._reference import match_cells, reference_tables
+from startrack.analysis.campaign._run import run_campaign
+from startrack.analysis.campaign._shipped import find_spec
+from startrack.analysis.campaign._spec import CampaignSpec, load_spec, parse_spec
+from startrack.analysis.campaign._stats import parse_metric
+from startrack.analysis.campaign._store import CampaignStore
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "benchmarks"))
 from seed_campaign import spec_text  # noqa: E402

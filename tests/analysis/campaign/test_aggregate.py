@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from synthetic_campaign import synthetic_campaign
 
-from startrack.analysis.campaign.aggregate import (
+from startrack.analysis.campaign._aggregate import (
     axis_table,
     cell_table,
     quantile_table,
@@ -21,7 +21,7 @@ from startrack.analysis.campaign.aggregate import (
     time_tables,
     write_cells_csv,
 )
-from startrack.analysis.campaign.stats import rate_upper_bound, wilson_interval
+from startrack.analysis.campaign._stats import rate_upper_bound, wilson_interval
 from startrack.errors import InvalidInputError
 
 SWEEP = {"fov_deg": [10.0, 20.0], "centroid_sigma_px": [0.1, 0.5]}

@@ -8,12 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from startrack.analysis.campaign.budget import BUDGET_KEYS, SOURCES, budget_manifest
-from startrack.analysis.campaign.budget_terms import contribution, ecss_terms, variance_components
-from startrack.analysis.campaign.levels.image import PARAMS, field_and_dither, trial_attitude, trial_key
-from startrack.analysis.campaign.params import SpecError
-from startrack.analysis.campaign.spec import parse_spec
-from startrack.analysis.campaign.trials import trial_rng
+from startrack.analysis.campaign._budget import BUDGET_KEYS, SOURCES, budget_manifest
+from startrack.analysis.campaign._budget_terms import contribution, ecss_terms, variance_components
+from startrack.analysis.campaign._params import SpecError
+from startrack.analysis.campaign._spec import parse_spec
+from startrack.analysis.campaign._trials import trial_rng
+from startrack.analysis.campaign.levels._image import PARAMS, field_and_dither, trial_attitude, trial_key
 from startrack.camera import Camera
 from startrack.frames import angle_between, boresight
 
@@ -211,10 +211,10 @@ def test_shared_attitudes_follow_fields_and_dithers_and_ignore_the_cell():
 
 @pytest.mark.parametrize(("name", "cases"), [("error-budget", ["base"]), ("seed003-error-budget", ["aptina", "droid"])])
 def test_the_shipped_budgets_parse_and_their_references_select_cells(name, cases):
-    from startrack.analysis.campaign.reference import match_cells
-    from startrack.analysis.campaign.run import _manifest
-    from startrack.analysis.campaign.shipped import find_spec
-    from startrack.analysis.campaign.spec import load_spec
+    from startrack.analysis.campaign._reference import match_cells
+    from startrack.analysis.campaign._run import _manifest
+    from startrack.analysis.campaign._shipped import find_spec
+    from startrack.analysis.campaign._spec import load_spec
 
     spec = load_spec(find_spec(name))
     cells = spec.cells()

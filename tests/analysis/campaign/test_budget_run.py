@@ -9,10 +9,10 @@ import numpy as np
 import pyarrow.compute as pc
 import pytest
 
-from startrack.analysis.campaign.budget_report import budget_text
-from startrack.analysis.campaign.rerun import rerun_trial
-from startrack.analysis.campaign.run import run_campaign
-from startrack.calibrate.apparent import aberrate
+from startrack.analysis.campaign._budget_report import budget_text
+from startrack.analysis.campaign._rerun import rerun_trial
+from startrack.analysis.campaign._run import run_campaign
+from startrack.calibrate._apparent import aberrate
 from startrack.frames import angle_between, radec_to_vector
 from startrack.units import ARCSEC
 

@@ -15,12 +15,12 @@ import numpy as np
 import pyarrow as pa
 import pytest
 
-from startrack.analysis.campaign.attitudes import trial_attitude
-from startrack.analysis.campaign.rerun import rerun_trial
-from startrack.analysis.campaign.run import run_campaign
-from startrack.analysis.campaign.spec import parse_spec
-from startrack.analysis.campaign.store import CampaignStore
-from startrack.analysis.campaign.trials import trial_rng
+from startrack.analysis.campaign._attitudes import trial_attitude
+from startrack.analysis.campaign._rerun import rerun_trial
+from startrack.analysis.campaign._run import run_campaign
+from startrack.analysis.campaign._spec import parse_spec
+from startrack.analysis.campaign._store import CampaignStore
+from startrack.analysis.campaign._trials import trial_rng
 from startrack.errors import InvalidInputError
 from startrack.io import read_image
 
@@ -73,7 +73,7 @@ def test_resume_after_a_killed_run_gives_the_uninterrupted_table(serial, tmp_pat
     spec_path = tmp_path / "spec.toml"
     spec_path.write_text(SPEC)
     out = tmp_path / "killed"
-    cmd = [sys.executable, "-m", "startrack.cli.main", "campaign", "run", str(spec_path), "--out", str(out),
+    cmd = [sys.executable, "-m", "startrack", "campaign", "run", str(spec_path), "--out", str(out),
            "--sync", "--chunk-size", "1", "--no-report"]
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     store = CampaignStore(out)
@@ -145,7 +145,7 @@ def test_trials_waiting_with_no_worker_left_become_lost_rows(tmp_path, monkeypat
     # A scheduler with no worker at all: the run ends with LOST rows (after NO_WORKERS_S), not a hang.
     from distributed import LocalCluster
 
-    from startrack.analysis.campaign import engine
+    from startrack.analysis.campaign import _engine as engine
 
     monkeypatch.setattr(engine, "NO_WORKERS_S", 1.0)
     monkeypatch.setattr(engine, "POLL_S", 0.5)

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from startrack.analysis.campaign.attitudes import fibonacci_radec, trial_attitude
-from startrack.analysis.campaign.params import SpecError
-from startrack.analysis.campaign.spec import parse_spec
+from startrack.analysis.campaign._attitudes import fibonacci_radec, trial_attitude
+from startrack.analysis.campaign._params import SpecError
+from startrack.analysis.campaign._spec import parse_spec
 from startrack.frames import boresight
 
 GOOD = """

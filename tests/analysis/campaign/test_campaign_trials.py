@@ -10,9 +10,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from startrack import Camera
-from startrack.analysis.campaign.outcome import error_columns
-from startrack.analysis.campaign.spec import parse_spec
-from startrack.analysis.campaign.trials import Chunk, plan_chunks, run_chunk, run_trial, trial_rng, trial_schema
+from startrack.analysis.campaign._outcome import error_columns
+from startrack.analysis.campaign._spec import parse_spec
+from startrack.analysis.campaign._trials import Chunk, plan_chunks, run_chunk, run_trial, trial_rng, trial_schema
 from startrack.units import ARCSEC
 
 STARS = """

@@ -10,12 +10,12 @@ import pytest
 from scipy.spatial.transform import Rotation
 from seed_tables_checks import finite, seed_numbers, shipped, tiny_run
 
+from startrack.analysis.campaign._params import SpecError
+from startrack.analysis.campaign._spec import parse_spec
 from startrack.analysis.campaign.levels import get_level
 from startrack.analysis.campaign.levels._measure import match_truth
-from startrack.analysis.campaign.params import SpecError
-from startrack.analysis.campaign.spec import parse_spec
 from startrack.simulate import get_sensor_preset
-from startrack.simulate.radiometry import electrons_from_magnitude
+from startrack.simulate._radiometry import electrons_from_magnitude
 
 LEVEL = get_level("centroid")
 NOISE_OFF = {f"noise_{k}": False for k in ("shot", "dark", "read", "bias", "quantize")}

@@ -10,6 +10,7 @@ import pytest
 from seed_tables_checks import finite, seed_numbers, shipped, tiny_run
 
 from startrack.analysis.campaign.levels import get_level
+from startrack.analysis.campaign.levels._groupmatch import row_values
 from startrack.analysis.campaign.levels._sunsat import (
     CAMERA,
     MIN_SEPARATION_PX,
@@ -18,7 +19,6 @@ from startrack.analysis.campaign.levels._sunsat import (
     region_attitudes,
     star_list,
 )
-from startrack.analysis.campaign.levels.groupmatch import row_values
 from startrack.frames import boresight, vector_to_radec
 
 LEVEL = get_level("groupmatch")

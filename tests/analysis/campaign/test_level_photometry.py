@@ -10,7 +10,7 @@ import pytest
 from seed_tables_checks import finite, seed_numbers, shipped, tiny_run
 
 from startrack.analysis.campaign.levels import get_level
-from startrack.analysis.campaign.levels.photometry import threshold_adu, weighted_sum_mags
+from startrack.analysis.campaign.levels._photometry import threshold_adu, weighted_sum_mags
 from startrack.frames import random_rotations
 from startrack.simulate import get_sensor_preset, magnitude_from_electrons, render_gaussian_psf
 

@@ -8,10 +8,10 @@ import pytest
 from scipy.stats import norm
 from seed_tables_checks import finite, seed_numbers, shipped, tiny_run
 
+from startrack.analysis.campaign._params import SpecError
+from startrack.analysis.campaign._spec import parse_spec
 from startrack.analysis.campaign.levels import get_level
-from startrack.analysis.campaign.levels.prefilter import candidate_mask, trial_pointing
-from startrack.analysis.campaign.params import SpecError
-from startrack.analysis.campaign.spec import parse_spec
+from startrack.analysis.campaign.levels._prefilter import candidate_mask, trial_pointing
 from startrack.detect import StarDetector
 from startrack.frames import angle_between, boresight, random_rotations, rotation_from_radec_roll
 

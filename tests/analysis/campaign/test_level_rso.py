@@ -11,14 +11,14 @@ from astropy.time import Time, TimeDelta
 from scipy.spatial.transform import Rotation
 from seed_tables_checks import finite, shipped, tiny_run
 
+from startrack.analysis._rso_passes import SEED001_CAMERA_ELEMENTS, SEED001_RSO_ELEMENTS, camera_rotation, elements
+from startrack.analysis.campaign._params import SpecError
+from startrack.analysis.campaign._spec import parse_spec
 from startrack.analysis.campaign.levels import get_level
-from startrack.analysis.campaign.levels.rso import draw_frame, passes, rate_columns, rso_streak
-from startrack.analysis.campaign.params import SpecError
-from startrack.analysis.campaign.spec import parse_spec
-from startrack.analysis.rso_passes import SEED001_CAMERA_ELEMENTS, SEED001_RSO_ELEMENTS, camera_rotation, elements
+from startrack.analysis.campaign.levels._rso import draw_frame, passes, rate_columns, rso_streak
 from startrack.camera import Camera
 from startrack.errors import InvalidInputError
-from startrack.rate.estimate import RateEstimate
+from startrack.rate._estimate import RateEstimate
 from startrack.results import Status
 from startrack.simulate import Orbit, in_earth_shadow, sun_moon_km
 from startrack.units import DEG

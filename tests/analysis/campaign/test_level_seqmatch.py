@@ -23,7 +23,7 @@ def params(**changes):
 @pytest.mark.parametrize("method", ["triangle", "rate", "nvertex-3"])
 def test_every_frame_of_a_slow_sequence_is_solved_within_a_pixel(method):
     """Stars to V 6.5 (about 40 in the field): in a field of 120 stars to V 7.5 the triangle match
-    (startrack.track.relative, 4 pairs to confirm) took a false relative attitude on 5 pairs."""
+    (startrack.track._relative, 4 pairs to confirm) took a false relative attitude on 5 pairs."""
     row = LEVEL.run(params(match_method=method), ROT, np.random.default_rng(3), 5.0).row
     assert row["frames_solved"] == row["frames_correct"] == 4
     assert row["status"] == "OK" and row["correct"]

@@ -10,9 +10,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 from seed_tables_checks import finite, seed_numbers, shipped, tiny_run
 
+from startrack.analysis.campaign._rerun import rerun_trial
 from startrack.analysis.campaign.levels import get_level
-from startrack.analysis.campaign.levels.smear import image_rms_rad, interstar_rms_rad
-from startrack.analysis.campaign.rerun import rerun_trial
+from startrack.analysis.campaign.levels._smear import image_rms_rad, interstar_rms_rad
 from startrack.camera import Camera
 from startrack.units import DEG
 

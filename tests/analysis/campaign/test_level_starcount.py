@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from seed_tables_checks import finite, seed_numbers, shipped, tiny_run
 
-from startrack.analysis.availability import star_counts
+from startrack.analysis._availability import star_counts
+from startrack.analysis.campaign._params import SpecError
+from startrack.analysis.campaign._spec import parse_spec
 from startrack.analysis.campaign.levels import get_level
-from startrack.analysis.campaign.params import SpecError
-from startrack.analysis.campaign.spec import parse_spec
 from startrack.camera import get_preset
 from startrack.catalog import load_catalog
 from startrack.frames import angle_between, boresight, random_rotations
@@ -25,7 +25,7 @@ def params(**changes):
 
 
 def test_counts_in_the_image_are_those_of_the_availability_study():
-    """The same pointings counted by startrack.analysis.availability (batched, its own k-d tree
+    """The same pointings counted by startrack.analysis._availability (batched, its own k-d tree
     and projection chunking) give the same numbers."""
     epoch = float(load_catalog().epoch_jyear)  # availability counts at the catalog's epoch
     expected = star_counts(get_preset("sunsat"), 6.0, 40, rng=7).counts

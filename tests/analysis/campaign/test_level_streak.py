@@ -9,14 +9,14 @@ import pytest
 from scipy.spatial.transform import Rotation
 from seed_tables_checks import finite, seed_numbers, shipped, tiny_run
 
+from startrack.analysis._streak_scenes import paths_apart, spin_rate, star_paths
+from startrack.analysis.campaign._params import SpecError
+from startrack.analysis.campaign._spec import parse_spec
 from startrack.analysis.campaign.levels import get_level
+from startrack.analysis.campaign.levels._streak import draw_frame
 from startrack.analysis.campaign.levels._streaks import in_time_order
-from startrack.analysis.campaign.levels.streak import draw_frame
-from startrack.analysis.campaign.params import SpecError
-from startrack.analysis.campaign.spec import parse_spec
-from startrack.analysis.streak_scenes import paths_apart, spin_rate, star_paths
 from startrack.camera import Camera
-from startrack.rate.endpoints import DETECTORS
+from startrack.rate._endpoints import DETECTORS
 
 LEVEL = get_level("streak")
 SMALL = {"width": 512, "height": 512, "fov_deg": 11.4, "calibration_frames": 1}
@@ -76,7 +76,7 @@ def test_in_time_order_swaps_ends_to_the_truth():
 
 
 def test_star_count_auto_is_ten_short_and_four_long():
-    from startrack.analysis.campaign.levels.streak import star_count
+    from startrack.analysis.campaign.levels._streak import star_count
 
     assert star_count(params(), 0.1) == 10 and star_count(params(), 0.5) == 4
     assert star_count(params(stars=7), 0.5) == 7

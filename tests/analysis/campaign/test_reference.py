@@ -9,15 +9,15 @@ import numpy as np
 import pytest
 from synthetic_campaign import BAD, GOOD, synthetic_campaign
 
-from startrack.analysis.campaign.aggregate import read_campaign
-from startrack.analysis.campaign.reference import (
+from startrack.analysis.campaign._aggregate import read_campaign
+from startrack.analysis.campaign._reference import (
     check_references,
     evaluate_reference,
     match_cells,
     reference_tables,
     reference_text,
 )
-from startrack.analysis.campaign.spec import parse_spec
+from startrack.analysis.campaign._spec import parse_spec
 from startrack.errors import InvalidInputError
 
 SWEEP = {"fov_deg": [10.0, 20.0], "centroid_sigma_px": [0.1, 0.5]}

@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 from synthetic_campaign import BAD, GOOD, cell_rows, make_manifest, synthetic_campaign, write_campaign
 
-from startrack.analysis.campaign import report as report_module
-from startrack.analysis.campaign.aggregate import read_campaign
-from startrack.analysis.campaign.figures import report_figures
-from startrack.analysis.campaign.report import SECTIONS, register_section, rerun_command, write_report
-from startrack.analysis.campaign.run import run_campaign
+from startrack.analysis.campaign import _report as report_module
+from startrack.analysis.campaign._aggregate import read_campaign
+from startrack.analysis.campaign._figures import report_figures
+from startrack.analysis.campaign._report import SECTIONS, register_section, rerun_command, write_report
+from startrack.analysis.campaign._run import run_campaign
 
 SWEEP = {"fov_deg": [10.0, 20.0], "centroid_sigma_px": [0.1, 0.5]}
 PNG = b"\x89PNG\r\n\x1a\n"

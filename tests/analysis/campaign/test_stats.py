@@ -11,14 +11,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from startrack.analysis.campaign.stats import (
-    Metric,
-    parse_metric,
-    percentiles,
-    rate_upper_bound,
-    rms,
-    wilson_interval,
-)
+from startrack.analysis.campaign._stats import Metric, parse_metric, percentiles, rate_upper_bound, rms, wilson_interval
 from startrack.errors import InvalidInputError
 
 

@@ -8,42 +8,28 @@ See ``docs/campaigns.md``. Needs the ``campaign`` extra (Dask distributed and py
 
 from __future__ import annotations
 
-from ... import _lazy_exports
+from typing import TYPE_CHECKING
 
-_EXPORTS = {  # name -> the module that defines it, imported on first use (PEP 562)
-    "as_columns": ".aggregate",
-    "cell_table": ".aggregate",
-    "read_campaign": ".aggregate",
-    "budget_text": ".budget_report",
-    "contribution": ".budget_terms",
-    "ecss_terms": ".budget_terms",
-    "variance_components": ".budget_terms",
-    "dask_client": ".engine",
-    "run_dask": ".engine",
-    "SpecError": ".params",
-    "param_table": ".params",
-    "check_references": ".reference",
-    "reference_tables": ".reference",
-    "reference_text": ".reference",
-    "register_section": ".report",
-    "write_report": ".report",
-    "Rerun": ".rerun",
-    "rerun_trial": ".rerun",
-    "rows_agree": ".rerun",
-    "default_chunk_size": ".run",
-    "run_campaign": ".run",
-    "find_spec": ".shipped",
-    "list_specs": ".shipped",
-    "CampaignSpec": ".spec",
-    "Cell": ".spec",
-    "load_spec": ".spec",
-    "parse_spec": ".spec",
-    "percentiles": ".stats",
-    "rms": ".stats",
-    "CampaignStore": ".store",
-    "summary_text": ".summary",
-    "plan_chunks": ".trials",
-}
+from ... import _exports_of, _lazy_exports
+
+if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
+    from ._aggregate import as_columns, cell_table, read_campaign
+    from ._budget_report import budget_text
+    from ._budget_terms import contribution, ecss_terms, variance_components
+    from ._engine import dask_client, run_dask
+    from ._params import SpecError, param_table
+    from ._reference import check_references, reference_tables, reference_text
+    from ._report import register_section, write_report
+    from ._rerun import Rerun, rerun_trial, rows_agree
+    from ._run import default_chunk_size, run_campaign
+    from ._shipped import find_spec, list_specs
+    from ._spec import CampaignSpec, Cell, load_spec, parse_spec
+    from ._stats import percentiles, rms
+    from ._store import CampaignStore
+    from ._summary import summary_text
+    from ._trials import plan_chunks
+
+_EXPORTS = _exports_of(__file__)
 
 __all__ = sorted(_EXPORTS)
 

@@ -6,17 +6,20 @@ a figure (matplotlib ``Figure``, object API) with the numbers behind it as table
 >>> result = run_analysis("radial", [images])                                     # doctest: +SKIP
 >>> result.write("out/radial")             # radial.png, radial_stars.csv, radial_fit.csv  # doctest: +SKIP
 
-Modules: :mod:`.core` (the types, parameter checks), :mod:`.registry` (names, ``run_analysis``),
-:mod:`.records_io` (records from image files), :mod:`.spots` (per-spot tables), :mod:`.ground`
-(sites, truth, error components), :mod:`.figures` (drawing helpers), :mod:`.rerun` (detection
-run again), and one module per analysis: :mod:`.histograms`, :mod:`.gallery`, :mod:`.radial`,
-:mod:`.magnitude`, :mod:`.corrections`, :mod:`.repeatability`, :mod:`.thresholds`,
-:mod:`.compare`, :mod:`.sweep`. See ``docs/analysis.md``.
+Modules: :mod:`._core` (the types, parameter checks), :mod:`._registry` (names, ``run_analysis``),
+:mod:`._records_io` (records from image files), :mod:`._spots` (per-spot tables), :mod:`._ground`
+(sites, truth, error components), :mod:`._figures` (drawing helpers), :mod:`._rerun` (detection
+run again), and one module per analysis: :mod:`._histograms`, :mod:`._gallery`, :mod:`._radial`,
+:mod:`._magnitude`, :mod:`._corrections`, :mod:`._repeatability`, :mod:`._thresholds`,
+:mod:`._compare`, :mod:`._sweep`. See ``docs/analysis.md``.
 """
 
-from .core import AnalysisInfo, AnalysisResult, ResultSet, check_params, parse_param
-from .records_io import image_paths, record_pixels, records_from_images
-from .registry import ANALYSES, get_info, run_analysis
+from ._core import AnalysisInfo, AnalysisResult, ResultSet, check_params, csv_cell, parse_param
+from ._corrections import pinhole
+from ._ground import error_arcsec
+from ._records_io import image_paths, record_pixels, records_from_images, true_rotation_from_file
+from ._registry import ANALYSES, get_info, run_analysis
 
-__all__ = ["ANALYSES", "AnalysisInfo", "AnalysisResult", "ResultSet", "check_params", "get_info", "image_paths",
-           "parse_param", "record_pixels", "records_from_images", "run_analysis"]
+__all__ = ["ANALYSES", "AnalysisInfo", "AnalysisResult", "ResultSet", "check_params", "csv_cell", "error_arcsec",
+           "get_info", "image_paths", "parse_param", "pinhole", "record_pixels", "records_from_images", "run_analysis",
+           "true_rotation_from_file"]

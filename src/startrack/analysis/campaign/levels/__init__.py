@@ -1,7 +1,7 @@
 """Campaign levels: what one trial does, and the parameters it takes.
 
-A :class:`Level` has its parameters (:class:`~startrack.analysis.campaign.params.Param`), the
-extra columns its rows add to :data:`~startrack.analysis.campaign.outcome.COLUMNS`, ``run``, one
+A :class:`Level` has its parameters (:class:`~startrack.analysis.campaign._params.Param`), the
+extra columns its rows add to :data:`~startrack.analysis.campaign._outcome.COLUMNS`, ``run``, one
 trial: ``run(params, attitude, rng, tolerance_px) -> TrialOutput``, and optionally ``check``, which
 refuses a cell's combination of parameters before any work (``SpecError``). A worker is warmed
 for a cell by running one throwaway trial of it (:func:`warm`), which loads the catalog and the
@@ -10,8 +10,8 @@ number of trials sent to a worker at once (about a second of work). ``warm_key(p
 given, says which cells need the same warm-up (e.g. leaving out a parameter that only picks a
 frame): one throwaway trial is run per distinct key instead of per distinct cell.
 
-Built-in levels: ``stars`` (:mod:`.stars`), ``image`` (:mod:`.image`), ``sequence``
-(:mod:`.sequence`), and every other module of this package whose name does not start with an
+Built-in levels: ``stars`` (:mod:`._stars`), ``image`` (:mod:`._image`), ``sequence``
+(:mod:`._sequence`), and every other module of this package whose name does not start with an
 underscore and is not a helper (:data:`HELPERS`): the module ``name.py`` defines level ``name``
 and registers it on import. Code elsewhere registers more with :func:`register`.
 """
@@ -28,7 +28,7 @@ import numpy as np
 import pyarrow as pa
 from scipy.spatial.transform import Rotation
 
-from ..params import Param, SpecError
+from .._params import Param, SpecError
 
 __all__ = ["HELPERS", "WARM_ROTATION", "Level", "TrialOutput", "get_level", "level_names", "register", "warm"]
 
@@ -72,7 +72,10 @@ HELPERS = frozenset({"common", "scene"})
 
 
 def _builtin() -> list[str]:
-    return [m.name for m in pkgutil.iter_modules(__path__) if not m.name.startswith("_") and m.name not in HELPERS]
+    """The built-in levels: each is the module ``_<level name>`` of this package (private like
+    every implementation module; the level's name is its public handle)."""
+    names = (m.name[1:] for m in pkgutil.iter_modules(__path__) if m.name.startswith("_"))
+    return [name for name in names if name and not name.startswith("_") and name not in HELPERS]
 
 
 def register(level: Level) -> Level:
@@ -97,7 +100,7 @@ def get_level(name: str) -> Level:
         For an unknown name, listing the valid ones.
     """
     if name not in _LEVELS and name in _builtin():
-        importlib.import_module(f".{name}", __name__)
+        importlib.import_module(f"._{name}", __name__)
     if name not in _LEVELS:
         raise SpecError(f"[campaign] level: unknown level {name!r}; valid: {', '.join(level_names())}")
     return _LEVELS[name]

@@ -2,7 +2,7 @@
 photometry, detection time, smear): their common columns, and truth-to-detection matching.
 
 Such a trial has no attitude solution, so :func:`measurement_columns` fills the common columns
-of :data:`~startrack.analysis.campaign.outcome.COLUMNS` this way (``docs/campaigns.md``):
+of :data:`~startrack.analysis.campaign._outcome.COLUMNS` this way (``docs/campaigns.md``):
 ``status`` is "OK" when the trial measured what it should and a :class:`~startrack.results.Status`
 name saying why not otherwise (``TOO_FEW_STARS``); ``solved`` is ``status == "OK"``;
 ``correct`` is the level's own judgement (documented with the level); the attitude errors, the
@@ -25,8 +25,8 @@ from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from ....errors import InvalidInputError
-from ..outcome import NAN, truth_columns
-from ..params import SpecError
+from .._outcome import NAN, truth_columns
+from .._params import SpecError
 
 
 def measurement_columns(*, status: str, correct: bool, n_stars: int, n_matched: int, time_s: float,

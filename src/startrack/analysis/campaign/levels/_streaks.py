@@ -4,7 +4,7 @@ Sease 2013 states no camera. The defaults are those of
 ``benchmarks/streak_benchmark.py`` and ``docs/attitude_and_rate.md``: 1024 x 1024 px, 22.8 deg
 field (80 arcsec/px, matching the seed's "1/2 px = 40 arcsec"), Gaussian PSF sigma 1 px, sky
 20 e- and read noise 5 e- per pixel, stars of 1e5-5e5 e- per exposure
-(:mod:`startrack.analysis.streak_scenes`). The module name starts with an underscore, so it is
+(:mod:`startrack.analysis._streak_scenes`). The module name starts with an underscore, so it is
 not taken for a level.
 """
 
@@ -20,9 +20,9 @@ from scipy.spatial.transform import Rotation
 
 from ....camera import Camera
 from ....simulate import Snapshot
-from ...streak_scenes import StreakScene, render_streak_scene
-from ..params import Param, SpecError
-from .common import CAMERA_PARAMS
+from ..._streak_scenes import StreakScene, render_streak_scene
+from .._params import Param, SpecError
+from ._common import CAMERA_PARAMS
 
 
 def camera_params(**defaults: Any) -> tuple[Param, ...]:
@@ -59,7 +59,7 @@ def check_range(params: Mapping[str, Any], name: str) -> None:
 
 def render(params: Mapping[str, Any], rot_start: Rotation, omega: NDArray, exposure_s: float, vectors: NDArray,
            flux: NDArray, rng: np.random.Generator, rso: Snapshot | None = None) -> StreakScene:
-    """:func:`~startrack.analysis.streak_scenes.render_streak_scene` with the cell's camera and noise."""
+    """:func:`~startrack.analysis._streak_scenes.render_streak_scene` with the cell's camera and noise."""
     return render_streak_scene(streak_camera(params), rot_start, omega, exposure_s, vectors, flux, rso=rso,
                                psf_sigma_px=params["psf_sigma_px"], background_e=params["sky_e"],
                                read_noise_e=params["read_noise_e"], rng=rng)

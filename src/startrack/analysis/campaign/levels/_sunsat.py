@@ -1,6 +1,6 @@
 """Jacobs 1995's matching experiment (Jacobs 1995 §3.5, Tables 3-5 to 3-7
 §2.2): the Sunsat attitude region, its star lists and its guide catalogues, for the level
-:mod:`.groupmatch`.
+:mod:`._groupmatch`.
 
 **Attitudes.** The seed drew 1000 attitudes within roll +-10 deg, pitch +-5 deg, yaw
 130-140 deg, any orbit position, inclination 97 deg and node 0-120 deg. Approximated here: the
@@ -16,7 +16,7 @@ limit); a star within 3 px of a brighter one is merged into its spot (left out).
 
 **Guide catalogues.** Every V <= 6 star (a pair directory of 14 deg), and the seed's
 ``MakeCat`` analogue: the stars within the field's half-diagonal + 0.5 deg of 20,000 boresights
-sampled from the attitude region (:func:`~startrack.identify.match_groups.region_mask`), about
+sampled from the attitude region (:func:`~startrack.identify._match_groups.region_mask`), about
 the seed's 540 stars.
 
 The module name starts with an underscore, so it is not taken for a level.
@@ -35,8 +35,7 @@ from scipy.spatial.transform import Rotation
 from ....camera import get_preset
 from ....catalog import load_catalog
 from ....frames import angle_between, rotation_from_radec_roll, vector_to_radec
-from ....identify.match_groups import region_mask, sub_catalogue
-from ....identify.pair_database import PairDatabase, PairSettings, load_pair_database
+from ....identify import PairDatabase, PairSettings, load_pair_database, region_mask, sub_catalogue
 from ....units import DEG
 
 CAMERA = get_preset("sunsat")

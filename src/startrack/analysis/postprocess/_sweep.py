@@ -1,0 +1,59 @@
+"""Analysis 9: a parameter sweep over one detection setting (StellarSolver's tester table of
+settings against results; issue 16 item 4).
+
+``setting`` names a :class:`~startrack.detect.StarDetector` field with a number, boolean or
+string value; each of ``values`` replaces it in the records' own detector, and the images are
+detected and solved again (:mod:`._rerun`, the engine of the threshold comparison): success,
+matches, rms residual and time per value.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import fields
+
+from ...detect import StarDetector
+from ...errors import InvalidInputError
+from ._core import AnalysisInfo, AnalysisResult, ResultSet
+from ._rerun import draw_per_value, per_value, rerun
+
+SWEEPABLE = tuple(f.name for f in fields(StarDetector)
+                  if f.name not in ("dark_frame", "dark_columns", "smear_px", "channel", "max_block_px"))
+"""Settings with a single number, boolean or string value."""
+
+INFO = AnalysisInfo(
+    name="sweep",
+    title="Parameter sweep over a detection setting",
+    description="A grid over one detector setting: each value replaces the setting in the images' own "
+                "detector, and the images are detected and solved again, giving success, matches, rms "
+                "residual and time per value.",
+    min_sets=1, max_sets=1, needs_images=True,
+    params={"setting": (str, "sigma", "the StarDetector setting to vary"),
+            "values": (list, [3.0, 4.0, 5.0, 6.0], "its values")},
+    limits={"values": (1, 30)},
+    choices={"setting": SWEEPABLE},
+)
+
+
+def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
+    """The analysis of this module over result sets and parameters already checked by
+    :func:`~.registry.run_analysis` (see :data:`INFO` and the module docstring)."""
+    setting, values = params["setting"], list(params["values"])
+    if len(set(map(repr, values))) != len(values):
+        raise InvalidInputError(f"sweep: parameter 'values' holds a value twice: {values!r}")
+    values = [_typed(setting, v) for v in values]
+    images = rerun(INFO.name, "values", sets, setting, values)
+    table = per_value(images, values)
+    fig = draw_per_value(table, setting, f"{INFO.title}: {setting}")
+    summary = {f"success rate at {setting}={v}": rate for v, rate in zip(values, table["success_rate"], strict=True)}
+    return AnalysisResult(INFO.name, INFO.title, fig, {"images": images, "values": table}, summary)
+
+
+def _typed(setting: str, value):
+    """A float setting takes whole numbers as floats (``sigma=4``); an int one refuses 4.5."""
+    default = getattr(StarDetector(), setting)
+    if isinstance(default, float) and isinstance(value, int) and not isinstance(value, bool):
+        return float(value)
+    if isinstance(default, int) and not isinstance(default, bool) and isinstance(value, float) and value.is_integer():
+        return int(value)
+    return value

@@ -1,0 +1,283 @@
+"""Pieces the solving subcommands share: FOV and epoch options, the output formats, exit codes.
+
+Exit status of every subcommand: 0 solved (or written), 1 an expected failure (not solved: the
+status and reason are printed), 2 misuse (a bad option, an unreadable file, an invalid image or
+star list), reported as one line ``startrack <cmd>: error: ...`` on standard error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any
+
+import numpy as np
+
+from ..camera import Camera, get_preset
+from ..errors import InvalidInputError, require
+from ..identify import MATCHERS
+from ..io import solution_to_dict, streak_fields
+from ..results import AttitudeSolution, Detections
+from ..solve import check_fov_deg, epoch_jyear
+
+SOLUTION_FORMATS = """\
+output (table, the default)
+  status       solved, or the status of a failure (too_few_stars, no_match, timeout)
+  RA, Dec      boresight in ICRS, deg
+  roll         deg, the startrack.frames definition (equal to tetra3 / cedar-solve roll)
+  FOV          horizontal field of view, deg, and the focal length, px
+  stars        stars matched (of those detected, for an image)
+  residual     rms angle between matched stars and the catalog after the fit, arcsec
+  1-sigma      attitude uncertainty across the boresight and about it (roll), arcsec
+  false match  upper bound on the probability that the identification is wrong
+  time         solve time (detection and identification), ms
+  qx qy qz qw  the quaternion of rot_cam_from_icrs, scalar last
+  alt, az      (with a ground site) apparent altitude and azimuth of the boresight, deg
+  When not solved: status, reason, (stars detected) and time.
+
+output (--json)
+  One object. Always: status ("ok", "too_few_stars", "no_match", "timeout"), reason (empty
+  when solved), solve_time_s, and for an image n_detections. When solved also: ra_deg,
+  dec_deg, roll_deg, fov_deg, qx, qy, qz, qw, focal_px, sigma_cross_boresight_arcsec,
+  sigma_roll_arcsec, residual_rms_arcsec, false_match_prob, and matches: a list of
+  {index, hip, residual_arcsec[, x, y]} (index into the detections or star list; x, y in
+  0-based pixels). Values that are undefined are null. With a ground site (solve --site or
+  --latitude-deg / --longitude-deg) also: time_utc, site, latitude_deg, longitude_deg,
+  altitude_deg, azimuth_deg.
+
+exit status
+  0 solved; 1 not solved (the reason is printed); 2 misuse (bad option, unreadable file or
+  invalid input), with one line 'startrack <cmd>: error: ...' on standard error.
+"""
+
+
+def add_fov_options(parser: argparse.ArgumentParser) -> None:
+    """--fov-deg, --fov-range-deg, --camera (mutually exclusive)."""
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--fov-deg", type=float, metavar="F",
+                       help="horizontal field of view in deg (0.5 to 100), trusted to +-3 %%")
+    group.add_argument("--fov-range-deg", type=float, nargs=2, metavar=("LO", "HI"),
+                       help="range of horizontal fields of view to search, deg (default 5 35)")
+    group.add_argument("--camera", metavar="PRESET", help="a calibrated camera preset (fixes the focal length)")
+
+
+def add_method_option(parser: argparse.ArgumentParser) -> None:
+    """--method: the lost-in-space matcher (the overlay needs a prior, so it is Python-only)."""
+    names = [name for name in MATCHERS if name != "overlay"]
+    parser.add_argument("--method", choices=names, default="quads",
+                        help="star-identification matcher (default quads; the others need --fov-deg or --camera); "
+                             "see docs/identification.md")
+
+
+def add_epoch_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--epoch", type=float, metavar="YEAR",
+                        help="catalog epoch as a Julian year, e.g. 2025.5 (default 2000.0)")
+
+
+def fov_kwargs(args: argparse.Namespace) -> dict[str, Any]:
+    """Keyword arguments ``fov_deg, fov_range_deg, camera`` for the solvers, checked.
+
+    Raises
+    ------
+    InvalidInputError
+        Naming the option: a FOV outside 0.5..100 deg or not a number, LO > HI, an unknown preset.
+    """
+    camera: Camera | None = get_preset(args.camera) if args.camera else None
+    if args.fov_deg is not None:
+        check_fov_deg(args.fov_deg, "--fov-deg")
+    fov_range = None
+    if args.fov_range_deg:
+        lo, hi = (check_fov_deg(v, "--fov-range-deg") for v in args.fov_range_deg)
+        if lo > hi:
+            raise InvalidInputError(f"--fov-range-deg LO HI needs LO <= HI, got {lo:g} {hi:g}")
+        fov_range = (lo, hi)
+    return {"fov_deg": args.fov_deg, "fov_range_deg": fov_range, "camera": camera}
+
+
+def epoch_option(args: argparse.Namespace) -> float | None:
+    """The checked --epoch (Julian year) or None.
+
+    Every command that takes --epoch calls this before any work, so it also refuses what no
+    option of such a command may be: a NaN or infinite number in any float option
+    (:func:`check_finite_options`) and a --time that is not a time (:func:`time_option`).
+    """
+    check_finite_options(args)
+    time_option(args)
+    if args.epoch is None:
+        return None
+    try:
+        return epoch_jyear(args.epoch)
+    except InvalidInputError:
+        raise InvalidInputError(f"--epoch must be a Julian year such as 2025.5, got {args.epoch:g}") from None
+
+
+def _option_name(dest: str) -> str:
+    return "--" + dest.replace("_", "-")
+
+
+def _floats(value: Any) -> list[float]:
+    if isinstance(value, float):
+        return [value]
+    if isinstance(value, list | tuple):
+        return [v for v in value if isinstance(v, float)]
+    return []
+
+
+def check_finite_options(args: argparse.Namespace) -> None:
+    """Refuse NaN or an infinity given to any float option of a parsed command line.
+
+    Raises
+    ------
+    InvalidInputError
+        Naming the first such option (e.g. ``--max-mag must be a finite number, got nan``).
+    """
+    for dest, value in sorted(vars(args).items()):
+        bad = [v for v in _floats(value) if not np.isfinite(v)]
+        if bad:
+            raise InvalidInputError(f"{_option_name(dest)} must be a finite number, got {bad[0]:g}")
+
+
+def parse_utc_time(text: str, option: str = "--time"):
+    """An ISO 8601 UTC time (``2024-08-12T03:15:00``, a date, or ``2024-08-12 03:15:00``) as an
+    astropy Time; InvalidInputError naming ``option`` otherwise."""
+    from astropy.time import Time
+
+    try:
+        when = Time(str(text).strip(), scale="utc")
+    except (ValueError, TypeError):
+        when = None
+    if when is None or not when.isscalar or not np.isfinite(when.jd):
+        raise InvalidInputError(f"{option} must be an ISO 8601 UTC time such as 2024-08-12T03:15:00, got {text!r}")
+    return when
+
+
+def time_option(args: argparse.Namespace):
+    """The parsed --time of a command (an astropy Time), None when it has none or it is not given."""
+    text = getattr(args, "time", None)
+    return None if text is None else parse_utc_time(text, "--time")
+
+
+def add_max_pixels_option(parser: argparse.ArgumentParser) -> None:
+    """--max-pixels: the size limit of the images read (or rendered), see startrack.io._limits."""
+    from ..io import DEFAULT_MAX_PIXELS, ENV_VAR
+
+    parser.add_argument("--max-pixels", type=positive_count, metavar="N",
+                        help=f"largest image accepted, width x height in pixels (default {DEFAULT_MAX_PIXELS:,}, "
+                             f"or ${ENV_VAR}); checked from the file header before decoding")
+
+
+def max_pixels_option(args: argparse.Namespace) -> int:
+    """The limit --max-pixels gives (or the one in force without it)."""
+    from ..io import resolve_max_pixels
+
+    return resolve_max_pixels(getattr(args, "max_pixels", None))
+
+
+def apply_max_pixels_option(args: argparse.Namespace) -> None:
+    """Make --max-pixels the limit of every image the rest of the command reads (the command's
+    context, :func:`startrack.cli._run_context.command_context`, undoes it when the command ends)."""
+    from ..io import set_max_pixels
+
+    set_max_pixels(getattr(args, "max_pixels", None))
+
+
+def print_json(data: dict[str, Any]) -> None:
+    """Standard JSON (no NaN: callers put None for undefined values) on standard output."""
+    json.dump(data, sys.stdout, indent=2, allow_nan=False)
+    sys.stdout.write("\n")
+
+
+def solution_table(solution: AttitudeSolution, detections: Detections | None = None) -> str:
+    """A short human-readable table of a solve (the format is in :data:`SOLUTION_FORMATS`)."""
+    n_det = f" of {len(detections)} detected" if detections is not None else ""
+    if not solution.solved:
+        lines = [("status", solution.status.value), ("reason", solution.reason)]
+        if detections is not None:
+            lines.append(("stars", f"{len(detections)} detected"))
+        lines.append(("time", f"{solution.solve_time_s * 1e3:.1f} ms"))
+        return _table(lines)
+    rms = float(np.sqrt(np.mean(solution.residuals_arcsec**2)))
+    camera = require(solution.camera, "a solved frame's camera")
+    return _table([
+        ("status", "solved"),
+        ("RA, Dec", f"{solution.ra_deg:.5f} deg, {solution.dec_deg:+.5f} deg (boresight, ICRS)"),
+        ("roll", f"{solution.roll_deg:.4f} deg"),
+        ("FOV", f"{solution.fov_deg:.4f} deg horizontal (focal length {camera.fx:.1f} px)"),
+        ("stars", f"{len(solution.matches)} matched{n_det}"),
+        ("residual", f"{rms:.2f} arcsec rms"),
+        ("1-sigma", f"{solution.sigma_cross_boresight_arcsec:.2f} arcsec cross-boresight, "
+                    f"{solution.sigma_roll_arcsec:.2f} arcsec roll"),
+        ("false match", f"{solution.false_match_prob:.1e} (upper bound)"),
+        ("time", f"{solution.solve_time_s * 1e3:.1f} ms"),
+        ("qx qy qz qw", " ".join(f"{v:+.9f}" for v in require(solution.quaternion_xyzw, "the quaternion"))),
+    ])
+
+
+def _table(lines: list[tuple[str, str]]) -> str:
+    return "\n".join(f"{k:<12}{v}" for k, v in lines)
+
+
+def report(solution: AttitudeSolution, detections: Detections | None, as_json: bool, ground=None) -> int:
+    """Print a solve as JSON or as a table; exit status 0 when solved, 1 otherwise.
+
+    ``ground`` (a :class:`startrack.calibrate._ground_solve.GroundSolution`) adds the time, site,
+    altitude and azimuth of a photo taken from the ground."""
+    extra = {} if ground is None else {
+        "time_utc": ground.time.utc.isot, "site": ground.site.name,
+        "latitude_deg": ground.site.latitude_deg, "longitude_deg": ground.site.longitude_deg,
+        "altitude_deg": _finite_or_none(ground.altitude_deg), "azimuth_deg": _finite_or_none(ground.azimuth_deg)}
+    streak = streak_fields(solution)
+    if as_json:
+        print_json({**solution_to_dict(solution, detections), **extra})
+    else:
+        print(solution_table(solution, detections))
+        if streak and solution.solved:
+            print(_table(_streak_rows(streak)))
+        if extra and solution.solved:
+            print(_table([("time", f"{extra['time_utc']} UTC at {extra['site']}"),
+                          ("alt, az", f"{ground.altitude_deg:.4f} deg, {ground.azimuth_deg:.4f} deg "
+                                      "(apparent altitude, azimuth east of north)")]))
+    return 0 if solution.solved else 1
+
+
+def _streak_rows(streak: dict) -> list[tuple[str, str]]:
+    """Table rows of :func:`streak_fields`."""
+    when = f"{streak['t_mid_s']:.4f} s after the exposure starts (mid-exposure)" if streak["t_mid_s"] is not None \
+        else "mid-exposure"
+    if streak["time_mid_utc"]:
+        when += f", {streak['time_mid_utc']} UTC"
+    if streak["rate_deg_s"] is not None:
+        rate = "(" + ", ".join(f"{v:+.4f}" for v in streak["rate_deg_s"]) + ") deg/s, camera frame" \
+            + ("" if streak["time_order_known"] else " (or its opposite: one frame cannot order the exposure in time)")
+    else:
+        rate = "(" + ", ".join(f"{v:+.4f}" for v in streak["turn_deg"]) + ") deg per exposure (no exposure time)"
+    status = streak["rate_status"] + (f": {streak['rate_reason']}" if streak["rate_reason"] else "")
+    return [("mode", "streaks (the stars smeared: solved from their streaks)"), ("attitude at", when),
+            ("rate", rate), ("rate status", status)]
+
+
+def _finite_or_none(value: float) -> float | None:
+    return float(value) if np.isfinite(value) else None
+
+
+def positive_count(text: str) -> int:
+    """argparse type: a whole number >= 1 (underscores allowed: 400_000_000)."""
+    try:
+        value = int(text.replace("_", ""))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text}")
+    return value
+
+
+def positive_int(text: str) -> int:
+    """argparse type: a whole number >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number of pixels, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive whole number of pixels, got {text}")
+    return value

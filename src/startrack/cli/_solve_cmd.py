@@ -1,0 +1,159 @@
+"""startrack solve IMAGE: lost-in-space attitude of an image (FITS, PNG, JPEG or TIFF, 8 or
+16 bit, grey or colour). Stars are detected and identified against Hipparcos with no prior
+attitude; give the field of view if you know it (faster, more robust), else 3 to 100 deg are
+searched. The catalog epoch is --epoch, else the time of --time, else the time the image's header
+states (FITS CATEPOCH, DATE-OBS or MJD-OBS, EXIF DateTimeOriginal), else J2000.0; the solution
+says which (epoch_jyear, epoch_source). A frame whose stars smear into streaks is solved from
+them without being asked: the output then says mode "streak", the mid-exposure time the attitude
+refers to (t_mid_s, from the header's EXPTIME / EXPOSURE / ExposureTime) and the fitted rate
+(rate_deg_s, rate_status, time_order_known)."""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import replace
+
+import numpy as np
+
+from ..errors import InvalidInputError, require
+from ..identify import resolve_epoch
+from ..io import Image, read_image
+from ..results import AttitudeSolution, Detections, Status
+from ..solve import solve_image
+from ._batch import BATCH_EPILOG, add_batch_options, is_batch
+from ._batch_warmup import warm_up
+from ._common import (
+    SOLUTION_FORMATS,
+    add_epoch_option,
+    add_fov_options,
+    add_max_pixels_option,
+    add_method_option,
+    apply_max_pixels_option,
+    fov_kwargs,
+    report,
+)
+from ._progress import ensure_database_for
+from ._solve_stars_cmd import add_aspect_option, aspect_option, solver_epoch, time_option
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="startrack solve", description=__doc__,
+                                     epilog=SOLUTION_FORMATS + "\n" + BATCH_EPILOG,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("image", nargs="+", metavar="IMAGE",
+                        help="FITS, PNG, JPEG or TIFF file; several files or folders for a batch")
+    add_fov_options(parser)
+    add_method_option(parser)
+    parser.add_argument("--channel", choices=("r", "g", "b"),
+                        help="colour channel to use (default: the mean of R, G and B)")
+    add_epoch_option(parser)
+    add_aspect_option(parser)
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.add_argument("--wcs", metavar="OUT",
+                        help="when solved, write the image's FITS WCS (TAN-SIP, FITS 1-based pixels) to OUT "
+                             "(one image only)")
+    add_max_pixels_option(parser)
+    add_batch_options(parser)
+    ground = parser.add_argument_group(
+        "a photo from the ground (adds altitude / azimuth and corrects for aberration and refraction)")
+    ground.add_argument("--site", help="a saved or built-in site name (see startrack.calibrate._sites)")
+    ground.add_argument("--latitude-deg", type=float, help="site latitude, north positive")
+    ground.add_argument("--longitude-deg", type=float, help="site longitude, east positive")
+    ground.add_argument("--height-m", type=float, default=0.0, help="site height (default 0 m)")
+    ground.add_argument("--time", metavar="UTC",
+                        help="UTC time of the photo, ISO 8601 (default: from the EXIF / FITS header); also the "
+                             "catalog epoch unless --epoch is given, with or without a site")
+    ground.add_argument("--utc-offset-hours", type=float, help="offset of a local EXIF time from UTC")
+    return parser
+
+
+def _site(args):
+    """The site the options name, or None for a photo not taken from the ground."""
+    from ..calibrate import Site, get_site
+
+    if args.site:
+        return get_site(args.site)
+    if args.latitude_deg is None and args.longitude_deg is None:
+        return None
+    if args.latitude_deg is None or args.longitude_deg is None:
+        raise InvalidInputError("give both --latitude-deg and --longitude-deg (or --site NAME)")
+    return Site("command-line", args.latitude_deg, args.longitude_deg, args.height_m)
+
+
+def main(argv: list[str]) -> int:
+    args = _parser().parse_args(argv)
+    apply_max_pixels_option(args)
+    solver_options = {**fov_kwargs(args), "epoch": solver_epoch(args), "method": args.method,
+                      "pixel_aspect": aspect_option(args)}
+    fov_options = {key: solver_options[key] for key in ("fov_deg", "fov_range_deg", "camera")}
+    if is_batch(args.image, args.csv):
+        return _batch(args, solver_options, fov_options)
+    args.image = args.image[0]
+    image = read_image(args.image, channel=args.channel)
+    ensure_database_for(**fov_options)
+    site = _site(args)
+    # the compiled kernels loaded (or compiled, with a message) outside the solve time, and the catalog stars
+    # of the image's epoch prepared
+    warm_up(**fov_options, epoch=None if site is not None else _image_epoch(image, solver_options["epoch"]),
+            image=image.data)
+    try:
+        if site is None:
+            solution, ground = solve_image(image, **solver_options), None
+        else:
+            ground = _solve_ground(image, site, args, solver_options)
+            solution = ground.solution
+        detections = require(solution.detections, "the image solve's detections")
+    except InvalidInputError as exc:  # a problem with this image's content (size, no finite pixel...)
+        raise InvalidInputError(f"{args.image}: {exc}") from exc
+    if args.wcs and solution.solved:
+        from ..io import write_wcs  # astropy.wcs: loaded only when asked for
+
+        write_wcs(args.wcs, solution.rot_cam_from_icrs, require(solution.camera, "the solution's camera"))
+    return report(explain_blank(solution, detections, image), detections, args.json, ground=ground)
+
+
+def _batch(args: argparse.Namespace, solver_options: dict, fov_options: dict) -> int:
+    """Several images, a folder or --csv: :func:`startrack.cli._batch.run_batch` (lost-in-space only)."""
+    from ._batch import run_batch
+    from ._batch_solve import solve_spec
+
+    if args.wcs:
+        raise InvalidInputError("--wcs writes the WCS of one image; leave it out for a batch")
+    if args.site or args.latitude_deg is not None or args.longitude_deg is not None:
+        raise InvalidInputError("--site, --latitude-deg and --longitude-deg take one image; leave them out "
+                                "for a batch")
+    ensure_database_for(**fov_options)
+    warm_up(**fov_options, every_detection=True)  # the images' types are not known yet
+    return run_batch(solve_spec(solver_options, args.channel), args.image, as_json=args.json,
+                     csv_out=args.csv, jobs=args.jobs)
+
+
+def _image_epoch(image: Image, epoch) -> float | None:
+    """The catalog epoch the solve of ``image`` will take (Julian year), or None when its header
+    states a time that cannot be read (the solve then says so, naming the file)."""
+    try:
+        return resolve_epoch(epoch, image.header).jyear
+    except InvalidInputError:
+        return None
+
+
+def _solve_ground(image, site, args, solver_options):
+    from ..calibrate import solve_ground_photo
+
+    options = {k: v for k, v in solver_options.items() if k != "epoch"}
+    return solve_ground_photo(image, site, time=time_option(args), utc_offset_hours=args.utc_offset_hours, **options)
+
+
+def explain_blank(solution: AttitudeSolution, detections: Detections, image: Image) -> AttitudeSolution:
+    """Name the problem when nothing was detected because every pixel has the same value."""
+    if solution.status is not Status.TOO_FEW_STARS or len(detections) or not _uniform(image.data):
+        return solution
+    value = np.nanmax(image.data)
+    saturated = image.data.dtype.kind == "u" and value == np.iinfo(image.data.dtype).max
+    what = "saturated" if saturated else "blank"
+    return replace(solution, reason=f"no stars: the image is {what}, every pixel is {value:g}")
+
+
+def _uniform(data: np.ndarray) -> bool:
+    finite = data[np.isfinite(data)] if data.dtype.kind == "f" else data
+    return finite.size > 0 and np.min(finite) == np.max(finite)

@@ -1,0 +1,413 @@
+"""Background level and noise of an image, global or on a coarse grid of tiles.
+
+Huffman 2006 §4.1 subtracts a dark frame and thresholds at k times the
+noise; a single image has no dark frame, so the level and the noise are estimated from the
+image itself with the robust statistics of :mod:`._robust`.
+
+The tiled model (SExtractor-like) takes the median and noise of each tile, median-filters the
+tile grid (3 x 3) so that a bright star or a small cluster cannot pull one tile, and
+interpolates bilinearly between tile centres. Busy regions (trees, roofs, clouds) get a high
+local noise, hence a high threshold; the global noise is the lower quartile of the tile
+noises, i.e. that of the clean sky. A frame whose noise is clipped at zero, and so skewed
+upwards, gets its noise scaled to the width of the upper half (:func:`upper_tail_factor`),
+the side a threshold cuts. A third grid, the *clutter* ratio, compares each tile's
+lower-half width (median - 15.87 % quantile, which stars cannot raise) with the clean sky's:
+about 1 on sky with or without stars, several times more on lit leaves or roof texture.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import ndimage
+
+from ._compiled import kernels
+from ._robust import GAUSS_HI, GAUSS_LO, clipped_level_noise, quantization_step, strided_sample
+
+TILE_SAMPLES = 256
+"""Pixels per tile used for the tile statistics (a strided subsample)."""
+
+CLEAN_SKY_QUANTILE = 0.25
+"""The global noise of a tiled model is this quantile of the tile noises: the clean sky even
+when trees or a roof fill more than half of the frame."""
+
+CLIPPED_FRACTION = 0.05
+"""A frame with this fraction of its pixels at its minimum has a clipped low side."""
+
+MIN_NOISE_RATIO = 0.7
+"""No tile's noise is taken below this fraction of the global noise (guards flat or quantized
+tiles against a zero noise)."""
+
+
+@dataclass(frozen=True)
+class TileGrid:
+    """The per-tile grids of a tiled background model, all set together.
+
+    Attributes
+    ----------
+    level, noise : ndarray, shape (ny, nx)
+        Per-tile level and noise (standard deviation), in the image's units.
+    clutter : ndarray, shape (ny, nx)
+        Per-tile clutter ratio (module docstring).
+    centres_y, centres_x : ndarray, shape (ny,), (nx,)
+        Tile-centre coordinates, in the pixel convention of the image they are evaluated on.
+    """
+
+    level: NDArray[np.float64]
+    noise: NDArray[np.float64]
+    clutter: NDArray[np.float64]
+    centres_y: NDArray[np.float64]
+    centres_x: NDArray[np.float64]
+
+    def map(self, grid: NDArray, ys: NDArray, xs: NDArray, extrapolate: bool) -> NDArray[np.float32]:
+        """``grid`` (one of these grids) on the grid of rows ``ys`` x columns ``xs``
+        (:func:`_grid_map`)."""
+        return _grid_map(grid, self.centres_y, self.centres_x, ys, xs, extrapolate)
+
+    def weights(self, x: NDArray, y: NDArray) -> tuple[tuple, tuple]:
+        """The axis weights of points (x, y) (:func:`_point_weights`), rows then columns."""
+        return _point_weights(self.centres_y, y), _point_weights(self.centres_x, x)
+
+
+@dataclass(frozen=True)
+class BackgroundModel:
+    """Background level and noise of an image, constant or on a grid of tile centres.
+
+    Attributes
+    ----------
+    level, noise : float
+        Global background level and noise (standard deviation), in the image's units.
+    tiles : TileGrid or None
+        The per-tile level, noise and clutter grids and the tile centres; None for a constant
+        model.
+    level_map : ndarray of float32, shape of the measured image, or None
+        The interpolated level at every pixel of the image the model was measured on, when it
+        was computed anyway (tiles covering the whole image); saves the thresholding one
+        interpolation.
+    """
+
+    level: float
+    noise: float
+    tiles: TileGrid | None = None
+    level_map: NDArray[np.float32] | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def is_tiled(self) -> bool:
+        return self.tiles is not None
+
+    def maps(self, ys: NDArray, xs: NDArray) -> tuple[NDArray | float, NDArray | float]:
+        """Level and noise on the grid of rows ``ys`` x columns ``xs``: float32 arrays of shape
+        (len(ys), len(xs)), or the two floats for a constant model."""
+        tiles = self.tiles
+        if tiles is None:
+            return self.level, self.noise
+        return tiles.map(tiles.level, ys, xs, True), tiles.map(tiles.noise, ys, xs, False)
+
+    def noise_map(self, ys: NDArray, xs: NDArray) -> NDArray | float:
+        """The noise alone on the grid of rows ``ys`` x columns ``xs`` (see :meth:`maps`)."""
+        tiles = self.tiles
+        if tiles is None:
+            return self.noise
+        return tiles.map(tiles.noise, ys, xs, False)
+
+    def at(self, x: NDArray, y: NDArray) -> tuple[NDArray, NDArray]:
+        """Level and noise at points (x, y) (arrays of one shape), bilinearly interpolated."""
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        tiles = self.tiles
+        if tiles is None:
+            return np.full(x.shape, self.level), np.full(x.shape, self.noise)
+        wy, wx = tiles.weights(x, y)
+        return _bilinear(tiles.level, wy, wx, True), _bilinear(tiles.noise, wy, wx, False)
+
+    def level_at(self, x: NDArray, y: NDArray) -> NDArray:
+        """The level alone at points (x, y) (see :meth:`at`)."""
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        tiles = self.tiles
+        if tiles is None:
+            return np.full(x.shape, self.level)
+        return _bilinear(tiles.level, *tiles.weights(x, y), True)
+
+    def clutter_at(self, x: NDArray, y: NDArray) -> NDArray:
+        """Clutter ratio at points (x, y): 1 on clean sky, larger on structure."""
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        tiles = self.tiles
+        if tiles is None:
+            return np.ones(x.shape)
+        return _bilinear(tiles.clutter, *tiles.weights(x, y), False)
+
+
+def _point_weights(centres: NDArray, coords: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """:func:`_axis_weights` with extrapolation (the held weights are these clipped to [0, 1])."""
+    return _axis_weights(centres, coords, True)
+
+
+def _bilinear(grid: NDArray, wy: tuple, wx: tuple, extrapolate: bool) -> NDArray:
+    """Bilinear interpolation of ``grid`` with the axis weights of :func:`_point_weights`; held
+    constant beyond the outer centres unless ``extrapolate`` (:func:`_axis_weights`)."""
+    (y0, y1, ty), (x0, x1, tx) = wy, wx
+    if not extrapolate:
+        ty, tx = np.minimum(np.maximum(ty, 0.0), 1.0), np.minimum(np.maximum(tx, 0.0), 1.0)
+    top = grid[y0, x0] * (1 - tx) + grid[y0, x1] * tx
+    bottom = grid[y1, x0] * (1 - tx) + grid[y1, x1] * tx
+    return top * (1 - ty) + bottom * ty
+
+
+def _axis_weights(centres: NDArray, coords: NDArray, extrapolate: bool
+                  ) -> tuple[NDArray, NDArray, NDArray]:
+    """Lower index, upper index and upper weight of linear interpolation along one axis.
+
+    ``centres`` are equally spaced. Beyond the outer centres (the outer half tile) the value
+    is held constant, or, with ``extrapolate``, the line through the two outer centres is
+    extended (the weight clipped to [-0.75, 1.75]) so that a gradient is followed to the edge.
+    """
+    n = centres.size
+    if n == 1:
+        zero = np.zeros(coords.shape, dtype=np.int64)
+        return zero, zero, np.zeros(coords.shape)
+    pos = (coords - centres[0]) / (centres[1] - centres[0])
+    i0 = np.minimum(np.maximum(np.floor(pos).astype(np.int64), 0), n - 2)
+    low, high = (-0.75, 1.75) if extrapolate else (0.0, 1.0)
+    return i0, i0 + 1, np.minimum(np.maximum(pos - i0, low), high)
+
+
+def _grid_map(grid: NDArray, centres_y: NDArray, centres_x: NDArray, ys: NDArray, xs: NDArray,
+              extrapolate: bool) -> NDArray[np.float32]:
+    """Bilinear interpolation of ``grid`` (values at centres_y x centres_x) on the grid of rows
+    ``ys`` x columns ``xs`` (beyond the outer centres: see :func:`_axis_weights`); float32
+    array of shape (len(ys), len(xs)), along x first (:func:`.frame_kernels.grid_map`)."""
+    y0, y1, wy = _axis_weights(centres_y, np.asarray(ys, dtype=float), extrapolate)
+    x0, x1, wx = _axis_weights(centres_x, np.asarray(xs, dtype=float), extrapolate)
+    return kernels().grid_map(grid.astype(np.float32), y0, y1, wy.astype(np.float32), x0, x1, wx.astype(np.float32))
+
+
+def global_background(image: NDArray) -> BackgroundModel:
+    """A constant background model from a subsample of the whole image.
+
+    Parameters
+    ----------
+    image : ndarray, shape (H, W)
+        NaN pixels are left out.
+    """
+    sample = _finite(strided_sample(image)[0])
+    if sample.size == 0:  # the finite pixels are sparse: take them all
+        sample = _finite(image)
+    if sample.size == 0:
+        return BackgroundModel(level=0.0, noise=0.0)
+    level, noise = clipped_level_noise(sample, quantization_step(sample))
+    return BackgroundModel(level=level, noise=noise)
+
+
+def _finite(values: NDArray) -> NDArray:
+    """The finite values, flattened."""
+    values = values.ravel()
+    return values if np.issubdtype(values.dtype, np.integer) else values[np.isfinite(values)]
+
+
+def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: float = 0.0,
+                     skewed: bool = False) -> BackgroundModel:
+    """A background model on a grid of ``tile`` x ``tile`` pixel tiles.
+
+    Parameters
+    ----------
+    image : ndarray, shape (H, W)
+        NaN pixels are left out; a tile without any other takes its nearest neighbour's
+        values.
+    tile : int
+        Tile side in pixels of ``image``; the grid has max(1, H // tile) x max(1, W // tile)
+        tiles of equal size, the last H % tile rows (W % tile columns) are left out.
+    scale, offset : float
+        Coordinates of the returned tile centres are ``offset + scale * (centre in image)``,
+        so that a model measured on a binned image is evaluated in full-resolution pixels.
+    skewed : bool
+        The frame's low side is clipped (:func:`low_side_clipped`): scale the noise to the
+        width of its upper half (:func:`upper_tail_factor`).
+
+    Returns
+    -------
+    BackgroundModel
+        ``level`` is the median of the tile levels, ``noise`` the lower quartile of the tile
+        noises (:data:`CLEAN_SKY_QUANTILE`).
+    """
+    rows, cols = _tile_rows_cols(image.shape, tile)
+    ny, nx = max(1, image.shape[0] // tile), max(1, image.shape[1] // tile)
+    centres_y = rows.reshape(ny, -1).mean(axis=1)  # the mean sampled row of each tile
+    centres_x = cols.reshape(nx, -1).mean(axis=1)
+    q_lo, median, q_hi = _stack_quantiles(_gather(image, rows, cols, (ny, nx)), (GAUSS_LO, 0.5, GAUSS_HI))
+    if not np.isfinite(median).any():
+        return global_background(image)
+    level, lower = _median3(median, linear=True), _median3(median - q_lo)
+    # noise from the residual, so that a gradient across a tile does not count as noise
+    keep_map = rows.size == image.shape[0] and cols.size == image.shape[1]
+    level_map = np.empty((rows.size, cols.size), np.float32)
+    residual = _gather(image, rows, cols, (ny, nx), (level, centres_y, centres_x), level_map)
+    q_lo, q_mid, q_hi = _stack_quantiles(residual, (GAUSS_LO, 0.5, GAUSS_HI))
+    noise = _median3(0.5 * (q_hi - q_lo) * (upper_tail_factor(q_lo, q_mid, q_hi) if skewed else 1.0))
+    noise_global = float(np.quantile(noise, CLEAN_SKY_QUANTILE))
+    if noise_global <= 0:  # quantized, nearly flat tiles: fall back on the global estimate
+        noise_global = global_background(image).noise
+    lower_global = float(np.quantile(lower, CLEAN_SKY_QUANTILE))
+    clutter = lower / lower_global if lower_global > 0 else np.ones_like(lower)
+    tiles = TileGrid(level=level, noise=np.maximum(noise, MIN_NOISE_RATIO * noise_global), clutter=clutter,
+                     centres_y=offset + scale * centres_y, centres_x=offset + scale * centres_x)
+    return BackgroundModel(level=float(np.median(level)), noise=noise_global, tiles=tiles,
+                           level_map=level_map if keep_map else None)
+
+
+def low_side_clipped(image: NDArray) -> bool:
+    """Whether at least :data:`CLIPPED_FRACTION` of a subsample of ``image`` sits at its lowest
+    value: a sensor or a file that clips the dark side of its noise at zero."""
+    sample = _finite(strided_sample(image)[0])
+    return bool(sample.size) and float(np.mean(sample == sample.min())) >= CLIPPED_FRACTION
+
+
+def upper_tail_factor(q_lo: NDArray, q_mid: NDArray, q_hi: NDArray) -> float:
+    """How much wider the noise's upper half is than its symmetric width, over the whole frame
+    (the median over tiles of ``(q_hi - q_mid) / ((q_hi - q_lo) / 2)``), at least 1.
+
+    Thresholds cut the upper tail. Low-signal frames whose pixels pile up at a clipped zero
+    have an upper half several per cent wider than the lower (8.5 % on the openstartracker
+    frames of ``../shared/realdata``, where a quarter of the pixels are 0), and at 5 sigma of
+    the symmetric width such a tail gives dozens of false spots per frame; scaling the noise
+    by this factor removes most of them. (Stars raise the upper quantile as well, so the
+    factor is applied only to frames whose low side is clipped.)
+    """
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = (q_hi - q_mid) / (0.5 * (q_hi - q_lo))
+    ratio = ratio[np.isfinite(ratio)]
+    return max(1.0, float(np.median(ratio))) if ratio.size else 1.0
+
+
+def _median3(grid: NDArray, linear: bool = False) -> NDArray:
+    """3 x 3 median filter of a tile grid (a single odd tile is replaced by its neighbours').
+
+    Borders repeat the edge value, or with ``linear`` are padded by linear extrapolation, so
+    that a plane (a uniform gradient of the level) passes unchanged up to the border.
+    """
+    padded = np.pad(grid, 1, mode="reflect", reflect_type="odd") if linear else np.pad(grid, 1, mode="edge")
+    return kernels().median3(padded)
+
+
+def _tile_rows_cols(shape: tuple[int, int], tile: int) -> tuple[NDArray, NDArray]:
+    """The rows and columns of a regular subsample of every tile, about :data:`TILE_SAMPLES`
+    pixels each, tile after tile: shapes (ny * n_rows,), (nx * n_cols,) of int64.
+
+    The grid has max(1, H // tile) x max(1, W // tile) equal tiles; the last H % tile rows and
+    W % tile columns are left out.
+    """
+    h, w = shape
+    ny, nx = max(1, h // tile), max(1, w // tile)
+    tile_h, tile_w = h // ny, w // nx
+    step = max(1, int(np.sqrt(tile_h * tile_w / TILE_SAMPLES)))
+    rows = (np.arange(ny)[:, None] * tile_h + np.arange(0, tile_h, step)).ravel()
+    cols = (np.arange(nx)[:, None] * tile_w + np.arange(0, tile_w, step)).ravel()
+    return rows, cols
+
+
+def _gather(image: NDArray, rows: NDArray, cols: NDArray, grid: tuple[int, int],
+            level: tuple[NDArray, NDArray, NDArray] | None = None,
+            level_map: NDArray[np.float32] | None = None) -> NDArray:
+    """The samples ``image[rows] x [cols]`` (:func:`_tile_rows_cols`) tile by tile, shape
+    (ny, nx, n_rows * n_cols), in the image's type; with ``level`` (a level grid and its tile
+    centres in the image's pixels), their residuals from the level interpolated bilinearly
+    (extrapolated beyond the outer centres, :func:`_axis_weights`), which is also written to
+    ``level_map`` (shape (len(rows), len(cols)), allocated when None) -- one compiled pass
+    (:func:`.frame_kernels.gather_tiles`, :func:`.frame_kernels.gather_residuals`)."""
+    ny, nx = grid
+    size = (rows.size // ny) * (cols.size // nx)
+    if level is None:
+        return kernels().gather_tiles(image, rows, cols, np.empty((ny, nx, size), image.dtype))
+    values, centres_y, centres_x = level
+    y0, y1, wy = _axis_weights(centres_y, rows.astype(float), True)
+    x0, x1, wx = _axis_weights(centres_x, cols.astype(float), True)
+    out = np.empty((ny, nx, size), np.result_type(image.dtype, np.float32))
+    level_map = np.empty((rows.size, cols.size), np.float32) if level_map is None else level_map
+    return kernels().gather_residuals(image, rows, cols, values.astype(np.float32), y0, y1, wy.astype(np.float32),
+                                      x0, x1, wx.astype(np.float32), out, level_map)
+
+
+def _tile_samples(image: NDArray, tile: int) -> tuple[NDArray, NDArray, NDArray]:
+    """The subsample of every tile (:func:`_tile_rows_cols`) as one array (ny * n_rows,
+    nx * n_cols) (a view when it is every pixel), and its row and column indices in ``image``."""
+    rows, cols = _tile_rows_cols(image.shape, tile)
+    if rows.size > 1 and cols.size > 1 and rows[1] - rows[0] == 1 and cols[1] - cols[0] == 1:
+        return image[: rows.size, : cols.size], rows, cols
+    return image[np.ix_(rows, cols)], rows, cols
+
+
+def _tile_quantiles(sample: NDArray, grid: tuple[int, int], q: tuple[float, ...]) -> list[NDArray]:
+    """Quantiles ``q`` of each tile of a :func:`_tile_samples` sample, on the tile ``grid``
+    (ny, nx) (see :func:`_stack_quantiles`)."""
+    return _stack_quantiles(_gather(sample, np.arange(sample.shape[0]), np.arange(sample.shape[1]), grid), q)
+
+
+def _stack_quantiles(stack: NDArray, q: tuple[float, ...]) -> list[NDArray]:
+    """Quantiles ``q`` of each tile of a :func:`_gather` stack (ny, nx, S), ignoring NaN, each of
+    shape (ny, nx); a tile with no finite value takes its nearest neighbour's (all NaN when
+    no tile has one). The stack is sorted in place."""
+    return [_fill_from_nearest(v) for v in _last_axis_quantiles(stack, q)]
+
+
+def _last_axis_quantiles(stack: NDArray, q: tuple[float, ...]) -> list[NDArray]:
+    """Quantiles along the last axis, NaN left out (linear interpolation, as ``np.quantile``);
+    sorting the short rows is about 20 times faster than ``np.nanquantile`` here. ``stack``
+    itself is sorted (no copy)."""
+    stack.sort(axis=-1)  # NaN go last
+    ordered = stack
+    if not np.isnan(ordered[..., -1]).any():
+        last = stack.shape[-1] - 1
+        return [_row_quantile(ordered, quantile * last, last) for quantile in q]
+    last = np.sum(~np.isnan(ordered), axis=-1, keepdims=True) - 1
+    out = []
+    for quantile in q:
+        pos = quantile * np.maximum(last, 0)
+        lo = np.floor(pos).astype(np.int64)
+        low = np.take_along_axis(ordered, lo, axis=-1)
+        high = np.take_along_axis(ordered, np.minimum(lo + 1, np.maximum(last, 0)), axis=-1)
+        value = low + (pos - lo) * (high - low)
+        out.append(np.where(last >= 0, value, np.nan)[..., 0])
+    return out
+
+
+def _row_quantile(ordered: NDArray, pos: float, last: int) -> NDArray:
+    """Linear interpolation at position ``pos`` of sorted rows without NaN."""
+    lo = int(np.floor(pos))
+    hi = min(lo + 1, last)
+    return ordered[..., lo] + (pos - lo) * (ordered[..., hi] - ordered[..., lo])
+
+
+def _fill_from_nearest(grid: NDArray) -> NDArray:
+    """NaN cells of ``grid`` replaced by the nearest finite cell (unchanged if none is)."""
+    missing = np.isnan(grid)
+    if not missing.any() or missing.all():
+        return grid
+    index = ndimage.distance_transform_edt(missing, return_distances=False, return_indices=True)
+    return grid[tuple(index)]
+
+
+def pixel_noise(image: NDArray, model: BackgroundModel) -> float:
+    """Noise (standard deviation) of single pixels of ``image``, robust to a clipped low side.
+
+    The model's level (in the pixel coordinates of ``image``), rounded to the data's
+    quantization step, is subtracted from a subsample, and the upper-half width is measured
+    (:func:`clipped_level_noise` with ``upper_half=True``).
+    """
+    sample, step = strided_sample(image)
+    tiles = model.tiles
+    level: NDArray | float = model.level
+    if tiles is not None:
+        level = tiles.map(tiles.level, step * np.arange(sample.shape[0]), step * np.arange(sample.shape[1]), True)
+    finite = np.ravel if np.issubdtype(sample.dtype, np.integer) else _finite  # integers are finite (so is the level)
+    sample = sample.astype(np.float64)
+    q = quantization_step(finite(sample))
+    if q > 0:
+        level = q * np.round(np.asarray(level, dtype=np.float64) / q)
+    residual = finite(sample - level)
+    return clipped_level_noise(residual, q, upper_half=True)[1] if residual.size else 0.0
+
+
+def with_noise_floor(model: BackgroundModel, floor: float) -> BackgroundModel:
+    """The model with every noise value raised to at least ``floor``."""
+    tiles = None if model.tiles is None else replace(model.tiles, noise=np.maximum(model.tiles.noise, floor))
+    return replace(model, noise=max(model.noise, floor), tiles=tiles)

@@ -1,0 +1,137 @@
+"""Spot filters: reject clusters that are not star images.
+
+From Fowler 2013 §II.B ("Noise-removal techniques" 5-7) and Huffman 2006 §4.1:
+
+* **area** -- fewer than ``min_area_px`` pixels (speckle noise) or more than ``max_area_px``
+  (banding, compression blobs, the Moon, lit trees);
+* **peak** -- peak pixel below ``min_peak_snr`` times the pixel noise;
+* **elongation** -- principal-axis ratio above ``max_elongation`` (lines, edges, streaks of
+  roofs); Fowler 2013 gives no number, we use the ratio rather than the eccentricity
+  e = sqrt(1 - 1 / elongation^2);
+* **flatness** -- std / peak below ``min_flatness`` (plateaus of nearly equal pixels; Fowler 2013
+  finds > 0.10 for focused stars);
+* **hot pixels** -- a single bright pixel: its value is more than ``max_peak_fraction`` of the
+  sum of the 3 x 3 pixels around it (a focused star with a 0.5 px sigma puts under half of
+  that sum in its peak; a hot pixel puts nearly all);
+* **clutter** -- the background's lower-half noise there is more than ``max_clutter`` times
+  that of the clean sky (lit leaves, roof texture: structure, not stars; stars do not raise
+  the lower half);
+* **edge** -- the cluster's core (its pixels above the detection threshold) touches the image
+  border, so part of the star may be cut off and the centroid pulled inwards; the detector
+  keeps a small spot whose peak is inside (:func:`peak_away_from_edge`): a star whose centre is
+  two pixels inside is measured well.
+
+Each function returns a boolean "keep" array of shape (N,); the detector ANDs them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._label import Regions
+
+NEIGHBOURS_3X3 = np.stack(np.divmod(np.arange(9), 3), axis=1) - 1
+"""Offsets (dy, dx) of a pixel's 3 x 3 neighbourhood, shape (9, 2)."""
+
+
+def area_ok(area_px: NDArray, min_area_px: int, max_area_px: int | None) -> NDArray[np.bool_]:
+    """Area within [min_area_px, max_area_px] (no upper limit when None)."""
+    keep = area_px >= min_area_px
+    if max_area_px is not None:
+        keep &= area_px <= max_area_px
+    return keep
+
+
+def peak_ok(peak_snr: NDArray, min_peak_snr: float) -> NDArray[np.bool_]:
+    """Peak pixel at least ``min_peak_snr`` pixel-noise units above the background."""
+    return peak_snr >= min_peak_snr
+
+
+def elongation_ok(elongation: NDArray, max_elongation: float | None) -> NDArray[np.bool_]:
+    """Principal-axis ratio at most ``max_elongation`` (no limit when None)."""
+    if max_elongation is None:
+        return np.ones(elongation.shape, dtype=bool)
+    return elongation <= max_elongation
+
+
+def flatness_ok(flatness: NDArray, min_flatness: float) -> NDArray[np.bool_]:
+    """Flatness factor (std / peak) at least ``min_flatness``."""
+    return flatness >= min_flatness
+
+
+def peak_fraction(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y: NDArray
+                  ) -> NDArray[np.float64]:
+    """Peak value over the sum of the 3 x 3 neighbourhood, both background-subtracted.
+
+    Parameters
+    ----------
+    signal_image : ndarray, shape (H, W)
+        The full-resolution image.
+    level : ndarray, shape (N,)
+        Background level at each peak.
+    peak_x, peak_y : ndarray of int, shape (N,)
+        Peak pixels. Neighbours beyond the border are replaced by the nearest pixel inside.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        About 1 for an isolated hot pixel, 0.1-0.5 for a star image.
+    """
+    h, w = signal_image.shape
+    ys = np.clip(peak_y[:, None] + NEIGHBOURS_3X3[:, 0], 0, h - 1)
+    xs = np.clip(peak_x[:, None] + NEIGHBOURS_3X3[:, 1], 0, w - 1)
+    window = signal_image[ys, xs].astype(np.float64) - level[:, None]
+    peak = signal_image[peak_y, peak_x] - level
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return peak / np.nansum(window, axis=1)  # NaN (missing) neighbours count as 0
+
+
+def hot_pixel_ok(fraction: NDArray, max_peak_fraction: float | None) -> NDArray[np.bool_]:
+    """Not a single hot pixel: peak fraction of the 3 x 3 sum at most ``max_peak_fraction``
+    (a non-positive sum, i.e. a fraction < 0, counts as a hot pixel)."""
+    if max_peak_fraction is None:
+        return np.ones(fraction.shape, dtype=bool)
+    return (fraction >= 0) & (fraction <= max_peak_fraction)
+
+
+def clutter_ok(clutter: NDArray, max_clutter: float | None) -> NDArray[np.bool_]:
+    """Clutter ratio of the background (see :mod:`._background`) at most ``max_clutter``
+    (no limit when None)."""
+    if max_clutter is None:
+        return np.ones(clutter.shape, dtype=bool)
+    return clutter <= max_clutter
+
+
+def away_from_edge(regions: Regions, shape: tuple[int, int], core: NDArray[np.bool_] | None = None
+                   ) -> NDArray[np.bool_]:
+    """True for regions whose core does not touch the border of ``shape``.
+
+    Parameters
+    ----------
+    regions : Regions
+        Regions on the image of shape ``shape`` (rows, columns).
+    core : ndarray of bool, shape (M,), optional
+        Which region pixels count (e.g. those above the detection threshold, not the wings
+        grown to a lower one); all of them when None.
+    """
+    h, w = shape
+    on_border = (regions.y == 0) | (regions.y == h - 1) | (regions.x == 0) | (regions.x == w - 1)
+    if core is not None:
+        on_border &= core
+    return regions.max(on_border.astype(np.int8)) == 0
+
+
+def peak_away_from_edge(regions: Regions, values: NDArray, shape: tuple[int, int], margin: int,
+                        core: NDArray[np.bool_], max_core_px: int) -> NDArray[np.bool_]:
+    """The edge filter of the detector: a region is rejected when its core touches the border of
+    ``shape`` (:func:`away_from_edge`) and either its highest pixel (of ``values``, shape (M,))
+    lies within ``margin`` pixels of it or the core has more than ``max_core_px`` pixels. A
+    star whose centre is a few pixels inside keeps its measurable centroid; a glow, a limb or
+    a bright star cut by the border does not."""
+    h, w = shape
+    top = regions.argmax(values)
+    y, x = regions.y[top], regions.x[top]
+    inside = (y >= margin) & (x >= margin) & (y < h - margin) & (x < w - margin)
+    small = regions.sum(core.astype(np.int64)) <= max_core_px
+    return away_from_edge(regions, shape, core) | (inside & small)

@@ -1,0 +1,124 @@
+"""Point sources told apart from extended and elongated spots (nebula knots, glow, limbs).
+
+Real photographs hold bright spots that are not stars: knots of a nebula, the glow around a
+planet or the Moon, a lit limb or an edge. They pass the area and shape filters one by one, yet
+patterns built on them never match. A star is the point-spread function (PSF) of the camera,
+the same for every star of the frame, so what gives a spot away is its size and shape against
+the frame's own stars.
+
+Per spot, the pixels at or above half its peak (background subtracted) are its core: their
+number ``A`` gives the half-maximum size ``s = sqrt(A / (2 pi ln 2))`` (the standard deviation
+of a Gaussian with that core), independent of the spot's brightness and blind to the wings
+(JPEG ringing, halos, a neighbour); their second moments give its elongation (the ratio of
+the principal axes, measured on cores of at least :data:`MIN_SHAPE_PIXELS` pixels, else 1).
+
+The frame's reference size is a low quantile of the sizes of its significant spots (the stars
+are the narrowest significant things in a frame; knots and glow are wider), at least
+:data:`MIN_REFERENCE_SIZE_PX` (a core of a few pixels is a point source), its reference
+elongation the median elongation (1 for round stars, more when the whole frame is smeared).
+The quality is the product of two ramps, each 1 up to the lower end of :data:`SIZE_RAMP` /
+:data:`ELONGATION_RAMP` times the reference and 0 from the upper end. Saturated spots (clipped
+at the frame's largest value) have a flat core wider than the PSF, so only their elongation
+counts. SExtractor's CLASS_STAR and DAOFIND's sharpness and roundness serve the same end with
+a neural network and a fitted profile; this is the cheap, moment-based version.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._centroid import axis_ratio
+from ._label import Regions
+from ._windows import fast_median, fast_quantile
+
+SIZE_RAMP = (1.6, 2.4)
+"""Quality falls from 1 to 0 as the spot's size goes from 1.6 to 2.4 times the frame's."""
+
+ELONGATION_RAMP = (1.7, 2.7)
+"""... and as its elongation goes from 1.7 to 2.7 times the frame's."""
+
+REFERENCE_QUANTILE = 0.3
+"""The frame's star size: this quantile of the significant spots' sizes."""
+
+MIN_REFERENCE_SNR = 10.0
+"""Spots with a peak SNR at least this make the reference (all spots when fewer than
+:data:`MIN_REFERENCE_SPOTS` do)."""
+
+MIN_REFERENCE_SPOTS = 5
+MIN_REFERENCE_SIZE_PX = 0.75
+"""The reference size is at least this: a core of a few pixels is as small as a sampled star
+can be, whatever the frame's smallest spots (noise, hot pixels) measure."""
+MIN_SHAPE_PIXELS = 6
+HALF_MAX_AREA = 2.0 * np.pi * np.log(2.0)
+"""Area above half maximum of a Gaussian of unit standard deviation, px^2."""
+
+
+def core_shape(regions: Regions, signal: NDArray, peak: NDArray
+               ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Half-maximum size (px) and elongation (>= 1) of N spots (module docstring).
+
+    Parameters
+    ----------
+    regions : Regions
+        The spots' full-resolution pixels.
+    signal : ndarray, shape (M,)
+        Background-subtracted value of each region pixel (NaN or 0 where missing).
+    peak : ndarray, shape (N,)
+        Each spot's largest signal.
+    """
+    core = (signal >= 0.5 * peak[regions.index]).astype(np.float64)
+    area = regions.sum(core)
+    x, y = regions.x.astype(np.float64), regions.y.astype(np.float64)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mx, my = regions.sum(core * x) / area, regions.sum(core * y) / area
+        dx, dy = x - mx[regions.index], y - my[regions.index]
+        cxx = regions.sum(core * dx * dx) / area + 1.0 / 12.0
+        cyy = regions.sum(core * dy * dy) / area + 1.0 / 12.0
+        cxy = regions.sum(core * dx * dy) / area
+    elongation = np.where(area >= MIN_SHAPE_PIXELS, axis_ratio(cxx, cyy, cxy), 1.0)
+    return np.sqrt(area / HALF_MAX_AREA), elongation
+
+
+def saturated_spots(regions: Regions, raw: NDArray, data: NDArray) -> NDArray[np.bool_]:
+    """Spots with at least two pixels at the frame's largest value (clipped cores), shape (N,).
+
+    Parameters
+    ----------
+    regions : Regions
+    raw : ndarray, shape (M,)
+        Value of every region pixel in ``data`` (NaN where missing).
+    data : ndarray, shape (H, W)
+        The frame.
+    """
+    top = float(np.nanmax(data)) if data.size else np.inf
+    with np.errstate(invalid="ignore"):
+        return regions.sum((raw >= top).astype(np.float64)) >= 2
+
+
+def point_quality(size: NDArray, elongation: NDArray, peak_snr: NDArray,
+                  saturated: NDArray[np.bool_]) -> NDArray[np.float64]:
+    """Point-source quality in [0, 1] of N spots from their sizes and elongations (module
+    docstring); a spot without a finite measurement counts as a point source (1)."""
+    ref_size, ref_elongation = _references(size, elongation, peak_snr)
+    q_size = _ramp(size / ref_size, *SIZE_RAMP)
+    q_size[saturated] = 1.0
+    quality = q_size * _ramp(elongation / ref_elongation, *ELONGATION_RAMP)
+    return np.where(np.isfinite(quality), quality, 1.0)
+
+
+def _references(size: NDArray, elongation: NDArray, peak_snr: NDArray) -> tuple[float, float]:
+    """The frame's star size and elongation from its significant, measurable spots."""
+    ok = np.isfinite(size) & np.isfinite(elongation) & (size > 0)
+    strong = ok & (np.nan_to_num(peak_snr) >= MIN_REFERENCE_SNR)
+    use = strong if strong.sum() >= MIN_REFERENCE_SPOTS else ok
+    if not use.any():
+        return 1.0, 1.0
+    ref_size = fast_quantile(size[use], REFERENCE_QUANTILE)  # np.quantile's and np.median's values
+    return max(ref_size, MIN_REFERENCE_SIZE_PX), max(float(fast_median(elongation[use])), 1.0)
+
+
+def _ramp(ratio: NDArray, start: float, stop: float) -> NDArray[np.float64]:
+    """1 up to ``start``, 0 from ``stop``, linear between (NaN stays NaN)."""
+    with np.errstate(invalid="ignore"):
+        return np.clip((stop - ratio) / (stop - start), 0.0, 1.0)

@@ -1,0 +1,369 @@
+"""Lost-in-space identification by four-star patterns, with an unknown or known focal length.
+
+The default matcher. Steps (after tetra3's pattern hashing, with a sorted key index over all scales):
+
+1. Form four-star patterns from the brightest image stars, brightest combinations first, in
+   batches (:func:`pattern_batches`); steps 2-4 run on a whole batch at once
+   (:mod:`._quad_search`).
+2. For each, the image vectors depend on the focal length; when it is only known as a range,
+   choose the few trial focal lengths that change the pattern's edge ratios by more than the
+   tolerance. Wide fields need several, narrow fields one.
+3. Look the ratios up in the levels of the database whose scale fits the trial field of view:
+   key ranges on a key of the three smallest ratios, then all five ratios, then the scale.
+4. For each candidate, take the star correspondence whose edges agree best, correct the focal
+   length from the edge sums, fit the rotation (q-method) and check the residuals.
+5. Verify against the level's verification stars and bound the false-match probability
+   (:mod:`._confirm`, :mod:`._verify`); the first candidate below the threshold wins.
+6. (In :mod:`startrack.solve`) refine attitude and focal length on all matched stars (:mod:`._refine`).
+
+A mirror image has the same edge ratios but no rotation fits it, so step 4 rejects it.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import math
+import time
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..camera import Camera
+from ..errors import InvalidInputError
+from ..results import Status
+from ._candidate import Candidate, MatchOutcome
+from ._confirm import Confirmer, StarSet, match_radius_px
+from ._database import PatternDatabase
+from ._options_base import MatcherOptionsBase
+from ._quad_search import Fits, SearchSetup, focal_grid, search_batch, warm_up
+from ._refine import pixel_vectors
+from ._verify import SkyBands
+
+MAX_RATIO_TOLERANCE = 0.1
+"""Patterns whose edge ratios are less certain than this (tiny patterns) are not looked up."""
+
+
+@dataclass(frozen=True)
+class MatcherOptions(MatcherOptionsBase):
+    """Settings of the lost-in-space matcher.
+
+    Attributes
+    ----------
+    pattern_stars : int
+        Image stars combined into patterns at a time (C(20, 4) = 4845 patterns at most, tried
+        brightest first until one verifies or time runs out).
+    verify_stars : int
+        Brightest image stars tested against the predicted catalog stars.
+    centroid_sigma_px : float
+        Assumed 1-sigma centroid error; sets the pattern tolerances (3 sigma).
+    match_radius_px : float or None
+        Verification radius; None: 0.3 % of the larger image side, at least 2 px. A candidate
+        that falls short at it is fitted to its matches at a wider radius and verified again
+        (:mod:`._confirm`).
+    max_false_match_prob : float
+        A match is accepted only when its false-match bound is below this.
+    focal_step : float
+        Largest change of an edge ratio between two trial focal lengths.
+    timeout_s : float
+        Give up (status TIMEOUT) after this much wall-clock time.
+    max_distortion : float
+        Bound on |k1| of a lens that is not calibrated (the radial distortion
+        r -> r (1 + k1 r^2) of the normalised pinhole radius r = tan(angle off axis)): the
+        pattern tolerances allow for it (:func:`.quad_kernel.shape_bound`), and a candidate's
+        confirmation fits k1. Ignored with a calibrated camera.
+    max_pattern_stars : int
+        When no pattern of the first ``pattern_stars`` stars matches, the pool slides on by half
+        its size (stars 10-29, then 20-39, ...) up to this many stars: bright spots that are not
+        stars (nebula knots, glow, a lit foreground) can fill the first pool.
+    """
+
+    pattern_stars: int = 20
+    centroid_sigma_px: float = 0.5
+    focal_step: float = 0.0015
+    timeout_s: float = 5.0
+    max_distortion: float = 0.05
+    max_pattern_stars: int = 60
+
+    def __post_init__(self) -> None:
+        _check_options(self)
+
+
+@functools.cache
+def _default_options() -> MatcherOptions:
+    """The default :class:`MatcherOptions`, checked once (they are immutable)."""
+    return MatcherOptions()
+
+
+def _check_options(options: MatcherOptions) -> None:
+    """Refuse settings the search cannot use, naming the field."""
+    for name in ("pattern_stars", "verify_stars", "max_pattern_stars"):
+        value = getattr(options, name)
+        if not (isinstance(value, int | np.integer) and value >= 4):
+            raise InvalidInputError(f"MatcherOptions.{name} must be a whole number of stars >= 4, got {value!r}")
+    for name in ("centroid_sigma_px", "max_false_match_prob", "focal_step", "timeout_s"):
+        value = getattr(options, name)
+        if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+            raise InvalidInputError(f"MatcherOptions.{name} must be a positive finite number, got {value!r}")
+    if not (isinstance(options.max_distortion, int | float) and 0 <= options.max_distortion <= 1):
+        raise InvalidInputError(f"MatcherOptions.max_distortion must be between 0 and 1, "
+                                f"got {options.max_distortion!r}")
+    radius = options.match_radius_px
+    if radius is not None and not (isinstance(radius, int | float) and math.isfinite(radius) and radius > 0):
+        raise InvalidInputError(f"MatcherOptions.match_radius_px must be None or a positive number of pixels, "
+                                f"got {radius!r}")
+
+
+FIRST_BATCH_STARS = 6
+"""The first batch holds every pattern of the 6 brightest stars (15 patterns)."""
+
+
+def pattern_batches(n: int, first_new: int = 0) -> tuple[NDArray[np.int64], ...]:
+    """Four-star combinations of ``n`` stars (brightest first), in batches: the first holds every
+    pattern of the brightest :data:`FIRST_BATCH_STARS`, each later one every pattern whose
+    faintest star is the next star; inside a batch, patterns of brighter stars come first.
+    With ``first_new`` > 0 only the patterns with a star at index ``first_new`` or beyond (those
+    a pool of the first ``first_new`` stars did not hold), one batch per faintest star.
+    (Cached, read-only.)"""
+    return _pattern_batches(int(n), int(first_new))
+
+
+@functools.cache
+def _pattern_batches(n: int, first_new: int) -> tuple[NDArray[np.int64], ...]:
+    first = min(n, FIRST_BATCH_STARS) if first_new == 0 else first_new
+    batches = [np.array(list(itertools.combinations(range(first), 4)), dtype=np.int64)] \
+        if first_new == 0 and first >= 4 else []
+    for last in range(max(first, 3), n):
+        head = np.array(list(itertools.combinations(range(last), 3)), dtype=np.int64)
+        batches.append(np.column_stack([head, np.full(len(head), last)]))
+    for batch in batches:
+        batch.flags.writeable = False
+    return tuple(batches)
+
+
+def pattern_pools(n: int, size: int, limit: int) -> list[tuple[int, int]]:
+    """The pools of image stars the search forms patterns from, as (start, first_new) star ranks
+    of ``n`` distinct stars: the first ``size`` stars, then windows of ``size`` stars sliding on
+    by half a pool while their end stays within ``limit`` (and ``n``). ``first_new`` is the
+    first rank the previous pool did not hold, relative to ``start``."""
+    pools, end = [(0, 0)], min(n, size)
+    step = max(1, size // 2)
+    while end < min(n, limit):
+        start = end + step - size
+        pools.append((start, end - start))
+        end = min(start + size, n, limit)
+    return pools
+
+
+MIN_SEPARATION_PX = 1.0
+"""A star closer than this to a brighter one takes no part in patterns (coincident entries)."""
+
+
+def distinct_stars(x: NDArray, y: NDArray, count: int) -> NDArray[np.int64]:
+    """The first ``count`` stars (in order) that are not within MIN_SEPARATION_PX of a brighter one."""
+    n = min(len(x), 4 * count)  # enough candidates, and the (n, n) test stays small
+    d2 = (x[:n, None] - x[None, :n]) ** 2 + (y[:n, None] - y[None, :n]) ** 2
+    close = (d2 < MIN_SEPARATION_PX**2) & _below_diagonal(n)  # pairs (i, j) with j brighter than i
+    return np.flatnonzero(~close.any(axis=1))[:count]
+
+
+@functools.cache
+def _below_diagonal(n: int) -> NDArray[np.bool_]:
+    """The (n, n) mask of the entries below the diagonal (j < i), made once per size (read-only)."""
+    mask = np.tri(n, n, k=-1, dtype=bool)
+    mask.flags.writeable = False
+    return mask
+
+
+class _Search:
+    """State of one lost-in-space search with one nominal camera (one pixel aspect).
+
+    ``trials`` is shared between the searches of one solve (a list holding the count of
+    candidates tried so far): the false-match bound multiplies by all of them."""
+
+    def __init__(self, x, y, camera: Camera, focal_range, db: PatternDatabase, options: MatcherOptions,
+                 trials: list[int], shape_floor: float = 0.0, fit_aspect: bool = False):
+        self.x, self.y, self.camera, self.db, self.options, self.trials = x, y, camera, db, options, trials
+        vec = pixel_vectors(camera, x, y)
+        self.u, self.w = vec[:, 0] / vec[:, 2], vec[:, 1] / vec[:, 2]
+        calibrated = focal_range is None
+        focal_range = focal_range or (camera.fx, camera.fx)
+        fit_focal = focal_range[1] > focal_range[0]
+        grid = focal_grid((camera.fx / focal_range[1], camera.fx / focal_range[0]), options.focal_step)
+        tall = camera.fx / camera.fy  # a y pixel spans this many x pixels' angle
+        distortion = 0.0 if calibrated else options.max_distortion
+        self.setup = SearchSetup(grid, camera.fx, min(camera.width, camera.height * tall),
+                                 options.centroid_sigma_px * max(1.0, tall), options.focal_step, MAX_RATIO_TOLERANCE,
+                                 fit_focal, distortion, shape_floor)
+        self.confirmer = Confirmer(x, y, match_radius_px(camera, options.match_radius_px), options.verify_stars,
+                                   options.max_false_match_prob, fit_focal,
+                                   fit_distortion=distortion > 0 and camera.fov_deg >= CONFIRM_K1_FOV_DEG,
+                                   fit_aspect=fit_aspect)
+        self.pattern_index = distinct_stars(x, y, options.max_pattern_stars)
+
+    def try_batch(self, quads: NDArray, start: int) -> Candidate | None:
+        """Look up and verify a batch of patterns (indices into :attr:`pattern_index`, offset by
+        ``start``); the first verified candidate wins. The look-up stops at each pattern that
+        yields candidates, to confirm them before searching the rest."""
+        patterns, next_pattern = self.pattern_index[quads + start], 0
+        while next_pattern < len(patterns):
+            fits = search_batch(self.db, self.u, self.w, patterns, self.setup, next_pattern)
+            self.trials[0] += fits.n_tried
+            next_pattern = fits.next_pattern
+            found = self._confirmed(fits, int(patterns.max()) + 1)
+            if found is not None:
+                return found
+        return None
+
+    def _confirmed(self, fits: Fits, pool_end: int) -> Candidate | None:
+        levels = np.searchsorted(self.db.level_offsets, fits.row, side="right") - 1
+        for i in range(fits.row.size):
+            found = self.confirmer.confirm(self._level_stars(int(levels[i])), fits.quat[i],
+                                           self.camera.with_focal(fits.focal[i]), fits.image_stars[i],
+                                           self.trials[0], pool_end)
+            if found is not None:
+                return found
+        return None
+
+    def _level_stars(self, level: int) -> StarSet:
+        return level_stars(self.db, level)
+
+    def reachable_levels(self) -> NDArray[np.int64]:
+        """The database levels a look-up of this search can return candidates from: those whose
+        field of view lies within the level ratio of the short-side fields of view of the focal
+        grid (the test of :func:`.quad_kernel._level_fits`, over the whole grid)."""
+        s, scales = self.setup, self.setup.grid
+        fov_lo, fov_hi = (2.0 * math.atan(s.short_px * scale / (2.0 * s.focal_nominal))
+                          for scale in (float(scales.min()), float(scales.max())))
+        ratio = self.db.settings.level_ratio
+        return np.flatnonzero((self.db.level_fov_rad >= fov_lo / ratio) & (self.db.level_fov_rad <= fov_hi * ratio))
+
+
+class _DatabaseStars:
+    """The verification star sets of one database, by level, and the order of all its stars by
+    ICRS z (one sort; each level's stars are read in that order, so their :class:`.verify.SkyBands`
+    index needs no sort of its own)."""
+
+    def __init__(self, db: PatternDatabase):
+        self.z_order = np.argsort(db.vectors[:, 2])
+        self.levels: dict[int, StarSet] = {}
+
+
+_LEVEL_STARS: dict[int, _DatabaseStars] = {}
+"""Each loaded database's :class:`_DatabaseStars` (keyed by ``id(db)``; an entry goes with its database)."""
+
+
+def level_stars(db: PatternDatabase, level: int) -> StarSet:
+    """Level ``level``'s verification stars of ``db`` (those whose bit k of
+    :attr:`PatternDatabase.verify_levels` is set) as a :class:`.confirm.StarSet` over a
+    :class:`.verify.SkyBands` index, in ascending order of z: made on first use, then kept while
+    the database lives. The first call for a database sorts its stars by z (once); a level is
+    then a selection in that order, much cheaper than building a KD-tree
+    (:meth:`PatternDatabase.verification_stars`) for each level first used inside a solve, and a
+    cone query reads one band of z."""
+    stars = _LEVEL_STARS.get(id(db))
+    if stars is None:
+        stars = _LEVEL_STARS[id(db)] = _DatabaseStars(db)
+        weakref.finalize(db, _LEVEL_STARS.pop, id(db), None)
+    if level not in stars.levels:
+        bits = db.verify_levels.dtype.type
+        members = stars.z_order[((db.verify_levels[stars.z_order] >> bits(level)) & bits(1)).astype(bool)]
+        vectors = np.take(db.vectors, members, axis=0)  # faster than db.vectors[members] here
+        stars.levels[level] = StarSet(SkyBands(vectors), vectors, db.cat_index[members])
+    return stars.levels[level]
+
+
+_INDEXED: set[tuple] = set()
+"""(id of the database, id of the focal grid, short side, nominal focal length) of the searches
+whose levels :func:`_index_levels` has indexed (the grids are cached by :func:`.quad_search.focal_grid`)."""
+
+
+def _index_levels(db: PatternDatabase, searches: list[_Search]) -> None:
+    """Index (:func:`level_stars`) the verification stars of every level the searches can reach,
+    once per database and search geometry, so that no level is first indexed inside a solve's
+    timed search; a check here costs a set look-up."""
+    for search in searches:
+        key = (id(db), id(search.setup.grid), search.setup.short_px, search.setup.focal_nominal)
+        if key not in _INDEXED:
+            for level in search.reachable_levels().tolist():
+                level_stars(db, level)
+            _INDEXED.add(key)
+
+
+CONFIRM_K1_FOV_DEG = 25.0
+"""The confirmation of a candidate from a lens that is not calibrated fits k1 when the nominal
+field is at least this wide (narrower, k1 is poorly determined by a few stars and moves them by
+less than the match radius)."""
+
+ASPECT_TOLERANCE = 0.005
+"""A searched pixel aspect is tried in steps of twice this (relative), each trial's patterns
+allowing an edge stretch of this much (:func:`aspect_trials`)."""
+
+
+def aspect_trials(aspect_range: tuple[float, float]) -> NDArray[np.float64]:
+    """Pixel aspects (fx / fy) to try for a range (lo, hi): geometric steps of 2 ASPECT_TOLERANCE,
+    nearest to 1 (square pixels) first, so a search stops soonest for the commonest sensors."""
+    lo, hi = aspect_range
+    count = max(1, math.ceil(math.log(hi / lo) / math.log1p(2 * ASPECT_TOLERANCE)))
+    edges = np.geomspace(lo, hi, count + 1)
+    centres = np.sqrt(edges[:-1] * edges[1:])
+    return centres[np.argsort(np.abs(np.log(centres)), kind="stable")]
+
+
+def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatabase,
+                        focal_range_px: tuple[float, float] | None = None,
+                        options: MatcherOptions | None = None,
+                        aspect_range: tuple[float, float] | None = None, fit_aspect: bool = False) -> MatchOutcome:
+    """Identify image stars with no prior attitude.
+
+    Parameters
+    ----------
+    x, y : ndarray, shape (N,)
+        Star positions (our pixel convention), brightest (or most trusted) first.
+    camera : Camera
+        Image size, principal point and distortion; its focal lengths are the nominal ones.
+    db : PatternDatabase
+    focal_range_px : (float, float) or None
+        Range of focal lengths fx to search (pixels); None: the camera is calibrated (focal
+        length and distortion known).
+    options : MatcherOptions or None
+    aspect_range : (float, float) or None
+        Range of pixel aspects fx / fy to search (:func:`aspect_trials`); None: the camera's.
+    fit_aspect : bool
+        The camera's pixel aspect is a guess: the confirmation refits it (always when a range
+        is searched).
+
+    Returns
+    -------
+    MatchOutcome
+        With a :class:`Candidate` when the false-match bound is below the threshold; otherwise
+        status NO_MATCH, TOO_FEW_STARS or TIMEOUT and a reason.
+    """
+    options = options or _default_options()
+    if len(x) < 4:
+        return MatchOutcome(Status.TOO_FEW_STARS,
+                            f"lost-in-space identification needs at least 4 stars, got {len(x)}", None, 0)
+    x, y, trials = np.asarray(x, float), np.asarray(y, float), [0]
+    if aspect_range is None:
+        searches = [_Search(x, y, camera, focal_range_px, db, options, trials, fit_aspect=fit_aspect)]
+    else:
+        searches = [_Search(x, y, camera.with_focal(camera.fx, camera.fx / a), focal_range_px, db, options, trials,
+                            ASPECT_TOLERANCE, True) for a in aspect_trials(aspect_range)]
+    warm_up(db)  # compiling is not searching: before the clock starts
+    _index_levels(db, searches)  # nor is indexing the levels' verification stars (once per process)
+    deadline = time.perf_counter() + options.timeout_s
+    n_stars = searches[0].pattern_index.size
+    for start, first_new in pattern_pools(n_stars, options.pattern_stars, options.max_pattern_stars):
+        for quads in pattern_batches(min(options.pattern_stars, n_stars - start), first_new):
+            for search in searches:
+                found = search.try_batch(quads, start)
+                if found is not None:
+                    return MatchOutcome(Status.OK, "", found, trials[0])
+                if time.perf_counter() > deadline:
+                    return MatchOutcome(Status.TIMEOUT, f"no match within the {options.timeout_s:g} s time limit",
+                                        None, trials[0])
+    return MatchOutcome(Status.NO_MATCH, f"no pattern of the {min(n_stars, options.max_pattern_stars)} brightest "
+                        f"distinct stars matched the catalog with a false-match probability below "
+                        f"{options.max_false_match_prob:g} ({trials[0]} candidates tried)", None, trials[0])

@@ -1,0 +1,136 @@
+"""Camera RAW files (CR2, NEF, ARW, DNG, ...) through ``rawpy`` (LibRaw), without demosaicing.
+
+A RAW file holds one count per photosite under a colour filter (the Bayer mosaic). For star
+positions the honest image is the mosaic reduced cell by cell: each 2 x 2 cell (R, G, G, B in some
+order) becomes one pixel, either the **sum** of its four counts (the colour rule of
+:mod:`startrack.io._channels`: counts stay counts) or one colour (``"r"``, ``"g"`` = the sum of
+the two greens, ``"b"``; Fowler 2013 used the green channel of its phone, the best SNR). The result
+has half the resolution. Pixel (i, j) of the reduced image samples the full-resolution position
+``(2 i + ox, 2 j + oy)`` (our convention, pixel centres), where the *origin* ``(ox, oy)`` is the
+mean position of the sites used inside their cell: (0.5, 0.5) for the sum and for green (two
+diagonal sites), but the R or B site itself for one of those, e.g. (0, 0) for R in an RGGB
+mosaic - half a full-resolution pixel from the cell centre in x and y. :func:`read_raw` stores it
+in the header as ``raw_origin_xy``; :func:`full_resolution_xy` maps positions back with it. The
+black level of every site is subtracted; nothing is scaled.
+
+``rawpy`` is imported only when a RAW file is read (``pip install rawpy``).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import ImageReadError, InvalidInputError
+from ._image import Image
+from ._limits import check_image_size
+
+_COLOURS = {"r": (0,), "g": (1, 3), "b": (2,)}
+
+
+def bayer_cells(mosaic: NDArray, pattern: NDArray, channel: str | None = None) -> NDArray[np.int64]:
+    """Reduce a Bayer mosaic (H, W) to cells (H // 2, W // 2).
+
+    Parameters
+    ----------
+    mosaic : ndarray (H, W)
+        Counts, black level already removed (may be negative from noise).
+    pattern : ndarray (2, 2) of int
+        Colour index of each site of a cell, LibRaw's convention: 0 R, 1 G, 2 B, 3 the second G.
+    channel : {None, "r", "g", "b"}
+        None: the sum of the four sites; else that colour (two sites summed for "g").
+    """
+    key = None if channel is None else str(channel).lower()
+    if key is not None and key not in _COLOURS:
+        raise InvalidInputError(f"channel must be None, 'r', 'g' or 'b', got {channel!r}")
+    pattern = np.asarray(pattern)
+    if pattern.shape != (2, 2):
+        raise InvalidInputError(f"pattern must be a 2 x 2 array of colour indices, got shape {pattern.shape}")
+    h, w = (mosaic.shape[0] // 2) * 2, (mosaic.shape[1] // 2) * 2
+    m = np.asarray(mosaic[:h, :w], dtype=np.int64)
+    out = np.zeros((h // 2, w // 2), dtype=np.int64)
+    for dy in range(2):
+        for dx in range(2):
+            if key is None or pattern[dy, dx] in _COLOURS[key]:
+                out += m[dy::2, dx::2]
+    return out
+
+
+def cell_origin(pattern: NDArray, channel: str | None = None) -> tuple[float, float]:
+    """Mean (x, y) position, inside a 2 x 2 cell, of the sites :func:`bayer_cells` adds for
+    ``channel`` (full-resolution pixels from the cell's first site): (0.5, 0.5) for the sum."""
+    pattern = np.asarray(pattern)
+    if channel is None:
+        return 0.5, 0.5
+    rows, cols = np.nonzero(np.isin(pattern, _COLOURS[str(channel).lower()]))
+    return float(cols.mean()), float(rows.mean())
+
+
+def full_resolution_xy(x: ArrayLike, y: ArrayLike, origin_xy: tuple[float, float] = (0.5, 0.5)
+                       ) -> tuple[NDArray, NDArray]:
+    """Positions in a cell-reduced image -> positions (x, y) in the full-resolution mosaic.
+
+    ``origin_xy`` is the image's ``header["raw_origin_xy"]`` (:func:`cell_origin`); the default,
+    the cell centre, is right for the sum of the four sites and for green.
+    """
+    return 2.0 * np.asarray(x, float) + origin_xy[0], 2.0 * np.asarray(y, float) + origin_xy[1]
+
+
+def read_raw(path: str | os.PathLike, channel: str | None = None, max_pixels: int | None = None) -> Image:
+    """Read a camera RAW file as a cell-reduced single-channel :class:`~startrack.io.Image`.
+
+    Parameters
+    ----------
+    path : path
+        Any file LibRaw reads (CR2, NEF, ARW, DNG, ...) with a 2 x 2 Bayer mosaic.
+    channel : {None, "r", "g", "b"}
+        See :func:`bayer_cells`.
+    max_pixels : int, optional
+        Largest number of photosites (:mod:`startrack.io._limits`), checked from LibRaw's sizes
+        before the mosaic is converted (LibRaw itself unpacks the file when it opens it).
+
+    Returns
+    -------
+    Image
+        ``data`` (H // 2, W // 2) int64 counts above the black level. The header holds
+        ``raw_cells`` = True (the half-resolution geometry), ``raw_origin_xy``
+        (:func:`full_resolution_xy`), and when LibRaw reports them ``ExposureTime`` (s) and
+        ``DateTimeOriginal`` (EXIF format, the camera clock) for :func:`.ground.time_from_header`.
+    """
+    try:
+        import rawpy
+    except ImportError:  # pragma: no cover - depends on the environment
+        raise ImportError("RAW files need rawpy: pip install rawpy") from None
+    try:
+        with rawpy.imread(os.fspath(path)) as raw:
+            check_image_size(int(raw.sizes.width), int(raw.sizes.height), max_pixels, path)
+            pattern = _bayer_pattern(raw, path)
+            black = np.asarray(raw.black_level_per_channel, dtype=np.int64)[raw.raw_colors_visible]
+            data = bayer_cells(raw.raw_image_visible.astype(np.int64) - black, pattern, channel)
+            header = {"raw_cells": True, "raw_origin_xy": cell_origin(pattern, channel), **_exif(raw)}
+    except (rawpy.LibRawError, OSError) as exc:
+        raise ImageReadError(f"{path}: not a readable RAW file ({exc})") from exc
+    return Image(data=data, path=Path(path), header=header, bit_depth=16, colour=True)
+
+
+def _bayer_pattern(raw, path) -> NDArray:
+    pattern = raw.raw_pattern
+    if pattern is None or np.shape(pattern) != (2, 2) or sorted(np.ravel(pattern)) not in ([0, 1, 2, 3], [0, 1, 1, 2]):
+        raise ImageReadError(f"{path}: not a 2 x 2 Bayer mosaic (LibRaw pattern {pattern!r})")
+    return np.asarray(pattern)
+
+
+def _exif(raw) -> dict:
+    """ExposureTime and DateTimeOriginal from LibRaw (``RawPy.other``, rawpy >= 0.25)."""
+    other = getattr(raw, "other", None)
+    out: dict = {}
+    if other is None:
+        return out
+    if other.shutter_speed > 0:
+        out["ExposureTime"] = float(other.shutter_speed)
+    if other.timestamp.year > 1970:  # LibRaw's 0 = unknown; local-time round trip = camera clock
+        out["DateTimeOriginal"] = other.timestamp.strftime("%Y:%m:%d %H:%M:%S")
+    return out
