@@ -2,6 +2,7 @@
 options of the wrong class are refused; each refusal names the parameter, the value (or class)
 given and what would be valid. One test of a wrong choice and one of the right ones per selector."""
 
+import dataclasses
 import typing
 
 import numpy as np
@@ -10,7 +11,9 @@ from scipy.spatial.transform import Rotation
 
 from startrack.attitude._wahba import METHODS as WAHBA_METHODS
 from startrack.attitude._wahba import WahbaMethod, solve_wahba
+from startrack.detect._denoise import DENOISE_METHODS
 from startrack.detect._detector import StarDetector
+from startrack.detect._settings import DetectionSettings
 from startrack.errors import InvalidInputError
 from startrack.identify._options_base import MatcherOptionsBase
 from startrack.identify._registry import METHOD_NAMES, OPTIONS, MethodName, check_method, check_options
@@ -131,7 +134,17 @@ _DETECTOR_SELECTORS = [(name, typing.get_args(hint)) for name, hint in typing.ge
 
 
 def test_the_star_detector_has_literal_selectors():
-    assert {"background", "threshold", "grouping", "centroid"} <= {name for name, _ in _DETECTOR_SELECTORS}
+    assert {"background", "threshold", "grouping", "centroid", "denoise"} <= {name for name, _ in _DETECTOR_SELECTORS}
+
+
+def test_a_wrong_denoise_method_is_refused_at_construction_naming_the_valid_ones():
+    assert typing.get_args(typing.get_type_hints(StarDetector)["denoise"]) == DENOISE_METHODS
+    for build in (lambda: StarDetector(denoise="median"),
+                  lambda: dataclasses.replace(StarDetector(), denoise="median"),
+                  lambda: DetectionSettings(denoise="median")):
+        with pytest.raises(InvalidInputError) as err:
+            build()
+        _names_all(str(err.value), "denoise", "median", DENOISE_METHODS)
 
 
 @pytest.mark.parametrize("name, valid", _DETECTOR_SELECTORS)

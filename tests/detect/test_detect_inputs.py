@@ -2,11 +2,20 @@
 
 from __future__ import annotations
 
+import ast
+import dataclasses
+import pickle
+from pathlib import Path
+
 import numpy as np
 import pytest
 from star_render import random_positions, render_stars
 
-from startrack.detect import StarDetector, detect, to_single_channel
+import startrack.detect
+from startrack.detect import DetectionSettings, StarDetector, detect, to_single_channel
+from startrack.detect._blocks import detect_in_strips
+from startrack.detect._pipeline import detect_frame
+from startrack.detect._predictive import measure_windows
 from startrack.errors import InvalidInputError
 from startrack.results import Detections
 from startrack.units import PIXEL
@@ -211,3 +220,47 @@ def test_bad_new_settings_raise(settings):
 def test_settings_show_the_dark_frame_as_its_shape():
     settings = StarDetector(dark_frame=np.zeros((4, 5))).settings()
     assert settings["dark_frame"] == "array(4, 5)" and settings["centroid"] == "windowed"
+
+
+# --- the settings object and the facade ------------------------------------------------------
+
+
+def test_the_detector_is_its_settings_replaced_compared_and_pickled_as_one():
+    detector = StarDetector(sigma=8, centroid="mle", dark_frame=np.zeros((4, 5)))
+    assert isinstance(detector, DetectionSettings)
+    changed = dataclasses.replace(detector, sigma=6)
+    assert type(changed) is StarDetector and (changed.sigma, changed.centroid) == (6, "mle")
+    assert changed.dark_frame is detector.dark_frame
+    assert detector == StarDetector(sigma=8, centroid="mle") != changed  # the dark frame is not compared
+    assert detector != DetectionSettings(sigma=8, centroid="mle")  # a facade is not its bare settings
+    restored = pickle.loads(pickle.dumps(detector))
+    assert type(restored) is StarDetector and restored == detector
+    np.testing.assert_array_equal(restored.dark_frame, detector.dark_frame)
+    assert repr(changed).startswith("StarDetector(") and "dark_frame" not in repr(changed)
+    with pytest.raises(InvalidInputError, match="sigma"):
+        dataclasses.replace(detector, sigma=0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        detector.sigma = 4  # type: ignore[misc]
+
+
+def test_the_stages_run_on_bare_settings_as_the_facade_runs_them(field):
+    image, x, y = field
+    settings, detector = DetectionSettings(sigma=8, max_stars=5), StarDetector(sigma=8, max_stars=5)
+    np.testing.assert_array_equal(detect_frame(settings, image, None).detections.x, detector.detect(image).x)
+    tall = np.vstack([image, image])  # 256 rows: two strips of at most 8192 px
+    whole = detect_frame(settings, tall, None).detections
+    strips = detect_in_strips(dataclasses.replace(settings, max_block_px=8192), tall).detections
+    assert len(whole) == 5
+    np.testing.assert_allclose(np.sort(strips.x), np.sort(whole.x), atol=0.01 * PIXEL)
+    windows = measure_windows(settings, image, x, y, 6).detections
+    np.testing.assert_array_equal(windows.x, detector.measure_windows(image, x, y).detections.x)
+
+
+def test_no_detect_module_but_the_package_imports_the_facade():
+    """The stages take a DetectionSettings: only __init__ (the lazy export) names ._detector."""
+    importers = []
+    for path in sorted(Path(startrack.detect.__file__).parent.glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and node.level == 1 and node.module == "_detector":
+                importers.append(path.name)
+    assert importers == ["__init__.py"]

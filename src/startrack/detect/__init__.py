@@ -15,7 +15,8 @@ one module per stage::
                  centroid about it (the default ``centroid="windowed"``, within a few per cent
                  of the Cramér-Rao bound, see docs/detection.md) with its 1-sigma error
 
-Every stage has alternatives selectable by name (:class:`StarDetector`): dark / median-frame
+Every stage has alternatives selectable by name (:class:`StarDetector`, whose settings are a
+:class:`DetectionSettings`, the object the stages read): dark / median-frame
 and row-reference subtraction (:mod:`._dark`), denoising (:mod:`._denoise`), k-sigma, dynamic and
 Huffman 2006 pre-filter thresholds (:mod:`._threshold`, :mod:`._prefilters`), 8-connected labelling
 or Jacobs 1995 region growing (:mod:`._region_grow`), shape and smear tests (:mod:`._shape`), and six
@@ -42,13 +43,14 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._dark import median_frame, subtract_dark
     from ._denoise import stack_frames
     from ._details import DetectionDetails
-    from ._detector import THRESHOLDS, StarDetector, detect
+    from ._detector import StarDetector, detect
     from ._filters import peak_fraction
     from ._fine_pass import MAX_RING_NOISE, fine_significance, quiet_surroundings, ring_noise_ratio, stands_above_ring
     from ._magnitude import calibrate_zero_point, instrument_magnitude
     from ._pipeline import background_model, noise_floor, preprocess
     from ._predictive import WindowDetections
     from ._prefilters import PREFILTER_FORMS, prefilter
+    from ._settings import THRESHOLDS, DetectionSettings
     from ._smooth import detection_image
     from ._threshold import significance
     from ._windows import extract_windows
@@ -58,6 +60,7 @@ _EXPORTS = _exports_of(__file__)
 __all__ = [
     "CENTROIDERS",
     "DetectionDetails",
+    "DetectionSettings",
     "MAX_RING_NOISE",
     "StarDetector",
     "THRESHOLDS",

@@ -267,11 +267,11 @@ def upper_tail_factor(q_lo: NDArray, q_mid: NDArray, q_hi: NDArray) -> float:
     (the median over tiles of ``(q_hi - q_mid) / ((q_hi - q_lo) / 2)``), at least 1.
 
     Thresholds cut the upper tail. Low-signal frames whose pixels pile up at a clipped zero
-    have an upper half several per cent wider than the lower (8.5 % on the openstartracker
-    frames of ``../shared/realdata``, where a quarter of the pixels are 0), and at 5 sigma of
-    the symmetric width such a tail gives dozens of false spots per frame; scaling the noise
-    by this factor removes most of them. (Stars raise the upper quantile as well, so the
-    factor is applied only to frames whose low side is clipped.)
+    (the openstartracker frames of ``../shared/realdata``) have an upper half wider than the
+    lower, and at 5 sigma of the symmetric width such a tail gives many false spots per frame;
+    scaling the noise by this factor removes most of them (``benchmarks/detect_realdata.py``
+    counts the unconfirmed detections on those frames). (Stars raise the upper quantile as
+    well, so the factor is applied only to frames whose low side is clipped.)
     """
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = (q_hi - q_mid) / (0.5 * (q_hi - q_lo))
@@ -351,8 +351,9 @@ def _stack_quantiles(stack: NDArray, q: tuple[float, ...]) -> list[NDArray]:
 
 def _last_axis_quantiles(stack: NDArray, q: tuple[float, ...]) -> list[NDArray]:
     """Quantiles along the last axis, NaN left out (linear interpolation, as ``np.quantile``);
-    sorting the short rows is about 20 times faster than ``np.nanquantile`` here. ``stack``
-    itself is sorted (no copy)."""
+    sorting the short rows in place and reading the quantiles off them is faster than
+    ``np.nanquantile``, which loops over the rows in Python (``benchmarks/detect_speed.py``
+    times the detector). ``stack`` itself is sorted (no copy)."""
     stack.sort(axis=-1)  # NaN go last
     ordered = stack
     if not np.isnan(ordered[..., -1]).any():

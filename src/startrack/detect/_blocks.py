@@ -14,8 +14,6 @@ the caller's and is never copied whole.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 from numpy.typing import NDArray
 
@@ -23,9 +21,7 @@ from ..results import Detections
 from ._details import PER_DETECTION, DetectionDetails
 from ._merge import brightest_first
 from ._pipeline import detect_frame
-
-if TYPE_CHECKING:
-    from ._detector import StarDetector
+from ._settings import DetectionSettings
 
 MARGIN_PX = 64
 """Rows shared by neighbouring strips: more than the largest spot's half-height."""
@@ -38,7 +34,7 @@ def strip_rows(height: int, width: int, max_block_px: int, tile_px: int) -> list
     return [(start, min(height, start + rows)) for start in range(0, height, rows)]
 
 
-def detect_in_strips(cfg: StarDetector, image: NDArray) -> DetectionDetails:
+def detect_in_strips(cfg: DetectionSettings, image: NDArray) -> DetectionDetails:
     """Detect strip by strip and merge (module docstring)."""
     h, w = image.shape[:2]
     parts, levels, noises, k_sigmas = [], [], [], []
@@ -56,7 +52,7 @@ def detect_in_strips(cfg: StarDetector, image: NDArray) -> DetectionDetails:
                   float(np.median(k_sigmas)))
 
 
-def _merge(cfg: StarDetector, parts: list[tuple[DetectionDetails, int]], width: int, height: int,
+def _merge(cfg: DetectionSettings, parts: list[tuple[DetectionDetails, int]], width: int, height: int,
            level: float, noise: float, k_sigma: float) -> DetectionDetails:
     """Concatenate the strips' detections (y shifted to the frame), merge the ones two strips
     both kept (:mod:`._merge`), brightest first."""

@@ -59,8 +59,12 @@ def warm_up_detect(dtypes: Sequence[DTypeLike] = (np.uint8, np.uint16, np.float3
     """Run the default detector on a small frame of each of ``dtypes`` (with a star, and a NaN
     pixel in a float frame; ``channels`` 3 for a colour frame), so that the compiled loops a
     detection of such frames uses are compiled or loaded (free after the first call of a process)."""
-    from ._detector import StarDetector
+    # the pipeline itself, with the default settings: what StarDetector().detect runs on a frame
+    # this small (under max_block_px, no dark frame), without importing the facade
+    from ._pipeline import detect_frame
+    from ._settings import DetectionSettings
 
+    settings = DetectionSettings()
     yy, xx = np.mgrid[0:96, 0:96]
     star = 200.0 * np.exp(-((xx - 40.3) ** 2 + (yy - 50.6) ** 2) / 4.5)
     noise = np.random.default_rng(0).normal(20.0, 2.0, (96, 96))
@@ -69,4 +73,4 @@ def warm_up_detect(dtypes: Sequence[DTypeLike] = (np.uint8, np.uint16, np.float3
         image = frame.astype(dtype)
         if np.issubdtype(image.dtype, np.floating):
             image[3, 5] = np.nan
-        StarDetector().detect(np.stack([image] * channels, axis=-1) if channels > 1 else image)
+        detect_frame(settings, np.stack([image] * channels, axis=-1) if channels > 1 else image, None)

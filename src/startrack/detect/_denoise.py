@@ -15,13 +15,18 @@
 
 from __future__ import annotations
 
+from typing import Literal, get_args
+
 import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
 from ..errors import InvalidInputError
 
-DENOISE_METHODS = ("none", "gaussian", "diffusion")
+DenoiseMethod = Literal["none", "gaussian", "diffusion"]
+"""The ``denoise`` setting of :class:`startrack.detect.StarDetector`: no noise removal, the Gaussian
+low-pass filter or Perona-Malik diffusion (module docstring)."""
+DENOISE_METHODS: tuple[str, ...] = get_args(DenoiseMethod)
 DIFFUSION_STEP = 0.2
 
 

@@ -1,4 +1,5 @@
-"""The detection pipeline of one frame, stage by stage, for a :class:`.StarDetector`'s settings.
+"""The detection pipeline of one frame, stage by stage, for the settings of a
+:class:`.DetectionSettings` (the :class:`.StarDetector` facade passes itself).
 
 prepare (+ dark, row reference, denoise) -> detection image -> background -> threshold and
 grouping -> deblend, edge -> spot measurements and filters -> centroid -> Detections.
@@ -7,7 +8,6 @@ grouping -> deblend, edge -> spot measurements and filters -> centroid -> Detect
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -45,12 +45,10 @@ from ._point_source import core_shape, point_quality, saturated_spots
 from ._prefilters import packing, prefilter
 from ._prepare import PreparedImage, prepare_image
 from ._region_grow import grow_regions
+from ._settings import DetectionSettings
 from ._shape import smear_ok, spot_shape
 from ._smooth import detection_image
 from ._threshold import significance
-
-if TYPE_CHECKING:
-    from ._detector import StarDetector
 
 EDGE_MARGIN_PX = 2
 """A spot whose peak is closer than this to the border (full-resolution px) is cut off."""
@@ -115,7 +113,7 @@ class Frame:
     x_offset: int
 
 
-def detect_frame(cfg: StarDetector, image: NDArray, dark: NDArray | None) -> DetectionDetails:
+def detect_frame(cfg: DetectionSettings, image: NDArray, dark: NDArray | None) -> DetectionDetails:
     """Run the whole pipeline on one frame (or one strip of a large frame)."""
     prepared, x_offset = preprocess(cfg, image, dark)
     binning = min(cfg.binning, *prepared.data.shape)
@@ -133,7 +131,7 @@ def detect_frame(cfg: StarDetector, image: NDArray, dark: NDArray | None) -> Det
     return measure(cfg, frame, kept, k_sigma, image.shape[1])
 
 
-def preprocess(cfg: StarDetector, image: NDArray, dark: NDArray | None
+def preprocess(cfg: DetectionSettings, image: NDArray, dark: NDArray | None
                ) -> tuple[PreparedImage, int]:
     """Check and reduce the image, subtract the dark frame and the row reference, denoise.
     Returns the prepared plane and the number of leading columns cut off."""
@@ -158,7 +156,7 @@ def preprocess(cfg: StarDetector, image: NDArray, dark: NDArray | None
     return PreparedImage(data, invalid), x_offset
 
 
-def background_model(cfg: StarDetector, det: NDArray, binning: int, skewed: bool = False) -> BackgroundModel:
+def background_model(cfg: DetectionSettings, det: NDArray, binning: int, skewed: bool = False) -> BackgroundModel:
     """Background of the detection image, tile centres in full-resolution pixels; ``skewed``:
     the frame's low side is clipped (:func:`.background.low_side_clipped`)."""
     if cfg.background == "global":
@@ -178,12 +176,12 @@ def noise_floor(values: NDArray, level: float) -> float:
 
 # --- threshold and grouping -------------------------------------------------------------------
 
-def group(cfg: StarDetector, mask: NDArray[np.bool_], jump: int) -> Regions:
+def group(cfg: DetectionSettings, mask: NDArray[np.bool_], jump: int) -> Regions:
     """8-connected labelling, or Jacobs 1995's region growing from a jump grid."""
     return grow_regions(mask, jump) if cfg.grouping == "region-grow" else label_regions(mask)
 
 
-def find_regions(cfg: StarDetector, frame: Frame, det: NDArray) -> tuple[Regions, float]:
+def find_regions(cfg: DetectionSettings, frame: Frame, det: NDArray) -> tuple[Regions, float]:
     """Threshold and group by the chosen method; deblend; drop spots at the edge.
 
     Returns full-resolution regions and the threshold used (noise units).
@@ -205,7 +203,7 @@ def find_regions(cfg: StarDetector, frame: Frame, det: NDArray) -> tuple[Regions
     return regions.upsample(binning), k_sigma
 
 
-def with_fine_pass(cfg: StarDetector, frame: Frame, kept: MeasuredRegions, found: Regions, k_sigma: float
+def with_fine_pass(cfg: DetectionSettings, frame: Frame, kept: MeasuredRegions, found: Regions, k_sigma: float
                    ) -> MeasuredRegions:
     """``kept`` (the binned pass's spots that passed the filters, out of all it ``found``)
     plus the filtered spots of the full-resolution pass (:mod:`._fine_pass`) that share no pixel
@@ -260,7 +258,7 @@ def stars_are_sharp(frame: Frame, kept: MeasuredRegions) -> bool:
     return significant.sum() < 3 or float(np.median(size[significant])) < SHARP_CORE_PX
 
 
-def dynamic_sigma(peak_snr: NDArray, cfg: StarDetector) -> float:
+def dynamic_sigma(peak_snr: NDArray, cfg: DetectionSettings) -> float:
     """Huffman 2006 §8.2.3's dynamic threshold for one frame: the lowest k in [sigma, max_sigma]
     that leaves at most ``target_stars`` spots (by their peak significance)."""
     if peak_snr.size <= cfg.target_stars:
@@ -269,7 +267,7 @@ def dynamic_sigma(peak_snr: NDArray, cfg: StarDetector) -> float:
     return float(min(max(cfg.sigma, kth), cfg.max_sigma))
 
 
-def _prefiltered_regions(cfg: StarDetector, frame: Frame) -> Regions:
+def _prefiltered_regions(cfg: DetectionSettings, frame: Frame) -> Regions:
     """Huffman 2006's single-pixel threshold + 5 x 5 pre-filter (window or grid), at full
     resolution, then grouping and the edge filter."""
     data = frame.prepared.data
@@ -300,14 +298,14 @@ def measure_regions(frame: Frame, regions: Regions) -> MeasuredRegions:
     return MeasuredRegions(regions, raw, signal, spots, peak_level, frame.noise_px * peak_noise / model.noise)
 
 
-def filter_spots(cfg: StarDetector, frame: Frame, found: MeasuredRegions) -> MeasuredRegions:
+def filter_spots(cfg: DetectionSettings, frame: Frame, found: MeasuredRegions) -> MeasuredRegions:
     """The regions that pass every spot filter (:func:`spot_filters`)."""
     if len(found) == 0:
         return found
     return found.take(spot_filters(cfg, frame, found.regions, found.spots, found.local_noise, found.peak_level))
 
 
-def measure(cfg: StarDetector, frame: Frame, kept: MeasuredRegions, k_sigma: float,
+def measure(cfg: DetectionSettings, frame: Frame, kept: MeasuredRegions, k_sigma: float,
             full_width: int) -> DetectionDetails:
     """Centroid the (filtered) spots and pack the result."""
     inputs = CentroidInputs(frame.prepared.data, frame.prepared.invalid, kept.regions, kept.spots, kept.raw,
@@ -315,7 +313,7 @@ def measure(cfg: StarDetector, frame: Frame, kept: MeasuredRegions, k_sigma: flo
     return pack(cfg, frame, inputs, k_sigma, full_width)
 
 
-def spot_filters(cfg: StarDetector, frame: Frame, regions: Regions, spots: SpotMeasurements,
+def spot_filters(cfg: DetectionSettings, frame: Frame, regions: Regions, spots: SpotMeasurements,
                  local_noise: NDArray, peak_level: NDArray) -> NDArray[np.bool_]:
     """The AND of all spot filters (see :mod:`._filters`, :mod:`._prefilters`, :mod:`._shape`)."""
     data = frame.prepared.data
@@ -335,7 +333,7 @@ def spot_filters(cfg: StarDetector, frame: Frame, regions: Regions, spots: SpotM
     return keep
 
 
-def pack(cfg: StarDetector, frame: Frame, inputs: CentroidInputs, k_sigma: float,
+def pack(cfg: DetectionSettings, frame: Frame, inputs: CentroidInputs, k_sigma: float,
          full_width: int) -> DetectionDetails:
     """Centroid with the chosen method (falling back to the weighted sum where it fails), merge
     coincident detections (:mod:`._merge`), sort brightest first, cut to ``max_stars``, and pack
@@ -374,7 +372,7 @@ def point_quality_of(inputs: CentroidInputs, peak_snr: NDArray) -> NDArray[np.fl
     return point_quality(size, elongation, peak_snr, saturated_spots(regions, raw, inputs.data))
 
 
-def empty_details(frame: Frame, full_width: int, cfg: StarDetector,
+def empty_details(frame: Frame, full_width: int, cfg: DetectionSettings,
                   k_sigma: float | None = None) -> DetectionDetails:
     """No detection: the frame's background and noise only."""
     detections = Detections(background=frame.model.level, noise=frame.noise_px, width=full_width,

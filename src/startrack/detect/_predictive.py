@@ -16,9 +16,9 @@ Per window (all windows at once, as one (N, S, S) stack):
 3. the detector's centroider: the window methods (``windowed``, ``mle``) on the window, the
    region methods on the window's pixels above ``grow_sigma`` times the noise. The window
    methods' start, flux, peak and shape are those pixels' spot measurements, taken by
-   :func:`window_spots` from separable moments of the whole windows (no pixel lists): with the
-   separable sums of :mod:`._centroid_windowed`, a pass over 20 windows of 13 x 13 px takes
-   about 0.6 ms (``benchmarks/detect_speed.py``).
+   :func:`window_spots` from separable moments of the whole windows (no pixel lists), with the
+   separable sums of :mod:`._centroid_windowed`: a few array operations on the whole stack
+   instead of a loop over windows (``benchmarks/detect_speed.py`` times the predictive pass).
 
 The window's half-width follows the rule of the Huffman 2006 Table 5.1, §5.1): ``ceil(3 s) + smear / 2 +
 prediction margin``; the caller passes it.
@@ -27,7 +27,6 @@ prediction margin``; the caller passes it.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -40,10 +39,8 @@ from ._centroid_mle import mle_centroid
 from ._centroid_windowed import windowed_centroid
 from ._centroiders import WINDOW_METHODS, CentroidInputs, estimate_psf_sigma, run_centroider
 from ._label import Regions
+from ._settings import DetectionSettings
 from ._windows import Centroids, Windows, fast_median, separable_moments
-
-if TYPE_CHECKING:
-    from ._detector import StarDetector
 
 MAD_TO_SIGMA = 1.4826
 
@@ -145,7 +142,7 @@ def window_spots(signal: NDArray, windows: Windows, threshold: NDArray) -> SpotM
         size_px=np.sqrt(np.maximum(0.5 * (cxx + cyy) - PIXEL_VARIANCE, 0.0)))
 
 
-def measure_windows(cfg: StarDetector, image: NDArray, x: NDArray, y: NDArray, half: int
+def measure_windows(cfg: DetectionSettings, image: NDArray, x: NDArray, y: NDArray, half: int
                     ) -> WindowDetections:
     """Find and centroid stars in windows of half-width ``half`` around (x, y) (module
     docstring); see :meth:`StarDetector.measure_windows`."""
@@ -167,7 +164,7 @@ def measure_windows(cfg: StarDetector, image: NDArray, x: NDArray, y: NDArray, h
     return _centroid_windows(cfg, windows.take(index), signal[index], level[index], noise[index], index)
 
 
-def _centroid_windows(cfg: StarDetector, windows: Windows, signal: NDArray, level: NDArray,
+def _centroid_windows(cfg: DetectionSettings, windows: Windows, signal: NDArray, level: NDArray,
                       noise: NDArray, index: NDArray) -> WindowDetections:
     """Centroid the windows with a star (each has a pixel above ``grow_sigma`` x noise): the
     window methods straight from the windows (:func:`window_spots` gives their start), the
@@ -194,7 +191,7 @@ def _centroid_windows(cfg: StarDetector, windows: Windows, signal: NDArray, leve
     return WindowDetections(det, index[order].astype(np.int64))
 
 
-def _run_window_method(cfg: StarDetector, windows: Windows, spots: SpotMeasurements, level: NDArray,
+def _run_window_method(cfg: DetectionSettings, windows: Windows, spots: SpotMeasurements, level: NDArray,
                        noise: NDArray) -> Centroids:
     """The configured window method (``windowed``, or ``mle`` started from it) on the windows."""
     sigma = estimate_psf_sigma(spots) if cfg.psf_sigma_px is None else cfg.psf_sigma_px

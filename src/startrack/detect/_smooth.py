@@ -71,7 +71,8 @@ def smooth(image: NDArray[np.float32], kernel: str, size: int) -> NDArray[np.flo
 PAGE_BYTES = 4096
 """Loads and stores whose addresses agree modulo this many bytes are taken for the same one
 until the store's address is known (x86 "4K aliasing"): a loop that reads one frame row and
-writes another, both at the start of a 4 KiB-strided row, runs up to 10 times slower."""
+writes another, both at the start of a 4 KiB-strided row, waits on false dependences and runs
+much slower (``benchmarks/detect_speed.py`` times the detector)."""
 
 
 def _apart(n: int, dtype, arrays: tuple[NDArray, ...]) -> NDArray:
