@@ -14,13 +14,7 @@ from wahba_problems import (
 )
 
 from startrack.attitude import METHODS as ALL_METHODS
-from startrack.attitude import _esoq2 as esoq2
-from startrack.attitude import _foam as foam
-from startrack.attitude import _olae as olae
-from startrack.attitude import _pad as pad
-from startrack.attitude import _quest as quest
-from startrack.attitude import _triad as triad
-from startrack.attitude import q_method, solve_wahba, svd_method
+from startrack.attitude import esoq2, foam, olae, pad, q_method, quest, solve_wahba, svd_method, triad
 from startrack.attitude._quest import quest_step
 from startrack.attitude._wahba import attitude_profile_matrix, davenport_matrix
 from startrack.frames import radec_roll_from_rotation, radec_to_vector, rotation_from_radec_roll

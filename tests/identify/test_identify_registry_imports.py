@@ -5,7 +5,7 @@ import sys
 
 from startrack.identify._registry import MATCHERS, OPTIONS, options_for
 
-PAIR_MODULES = ("angle_pivot", "match_groups", "nvertex", "overlay", "pyramid", "triangles")
+PAIR_MODULES = ("_angle_pivot", "_match_groups", "_nvertex", "_overlay", "_pyramid", "_triangles")
 
 
 def _imported_after(code: str) -> set[str]:
@@ -16,9 +16,9 @@ def _imported_after(code: str) -> set[str]:
 
 
 def test_the_registry_imports_no_matcher_and_a_look_up_only_its_own():
-    assert not _imported_after("import startrack.identify._registry") & {*PAIR_MODULES, "quad_matcher"}
+    assert not _imported_after("import startrack.identify._registry") & {*PAIR_MODULES, "_quad_matcher"}
     after = _imported_after("from startrack.identify._registry import OPTIONS\nOPTIONS['pyramid']")
-    assert "pyramid" in after and not after & {"angle_pivot", "nvertex", "triangles", "match_groups", "overlay"}
+    assert "_pyramid" in after and not after & {"_angle_pivot", "_nvertex", "_triangles", "_match_groups", "_overlay"}
 
 
 def test_every_matcher_has_its_options_class():

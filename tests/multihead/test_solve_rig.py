@@ -3,6 +3,8 @@ head solves alone, the consistency angle of a wrong mounting, and misuse naming 
 
 from __future__ import annotations
 
+import typing
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -10,7 +12,8 @@ from scipy.spatial.transform import Rotation
 from startrack import Status, solve_rig
 from startrack.errors import InvalidInputError
 from startrack.frames import random_rotations
-from startrack.multihead import IDENTIFIED_JOINTLY, consistency_chi2
+from startrack.identify import MethodName
+from startrack.multihead import IDENTIFIED_JOINTLY, RIG_METHODS, consistency_chi2
 from startrack.multihead._joint import HeadMatch, fit_joint
 from startrack.multihead._stars import HeadStars
 from startrack.simulate._rig import rig_star_lists
@@ -153,5 +156,6 @@ def test_misuse_names_the_head():
         solve_rig({"a": np.zeros((2, 2))}, rig)
     with pytest.raises(InvalidInputError, match="'split' is the detector of split fields left, right"):
         solve_rig({"split": star}, split_rig())
-    with pytest.raises(InvalidInputError, match="method must be one of"):
-        solve_rig({"a": star}, rig, method="overlay")
+    with pytest.raises(InvalidInputError, match="method must be one of quads, pyramid, .*van-bezooijen, got 'overlay'"):
+        solve_rig({"a": star}, rig, method="overlay")  # needs a prior attitude, which a rig's lost-in-space has not
+    assert "overlay" not in RIG_METHODS and set(RIG_METHODS) | {"overlay"} == set(typing.get_args(MethodName))

@@ -40,7 +40,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, check_choice
 from ..results import Status
 from ._covariance import covariance_batch
 from ._inputs import as_per_vector, as_vector_pair, degenerate_mask, normalised_weights
@@ -57,7 +57,7 @@ DEGENERATE_REASON = (
 WahbaMethod = Literal["quest", "qmethod", "svd", "foam", "esoq2", "olae", "pad", "triad"]
 """The solvers :func:`solve_wahba` selects by name (one module each)."""
 
-METHODS: tuple[str, ...] = get_args(WahbaMethod)
+METHODS: tuple[WahbaMethod, ...] = get_args(WahbaMethod)
 """Names accepted by :func:`solve_wahba`'s ``method``, in :data:`WahbaMethod`'s order."""
 
 _MODULES = {
@@ -309,8 +309,6 @@ def solve_wahba(
 
 def _solver(method: str) -> Callable[..., WahbaResult]:
     """The public solver function named ``method``."""
-    if not isinstance(method, str) or method not in _MODULES:
-        raise InvalidInputError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    module_name, function = _MODULES[method]
+    module_name, function = _MODULES[check_choice(method, METHODS, "method")]
     module = importlib.import_module(f"{__package__}._{module_name}")  # deferred: they import us
     return getattr(module, function)

@@ -34,7 +34,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._mounting import MountingEstimate, calibrate_mountings, recalibrated
     from ._report import rig_solution_table, rig_solution_to_dict
     from ._solution import IDENTIFIED_BY_HEAD, IDENTIFIED_JOINTLY, RigOptions, RigSolution
-    from ._solve import check_method, consistency_chi2, solve_head_stars, solve_rig
+    from ._solve import RIG_METHODS, check_method, consistency_chi2, solve_head_stars, solve_rig
     from ._split_fov import FieldClassification, classify_fields, moments_radius_px, spot_moments
     from ._stars import HeadStars
     from ._tracking import RigTracker, RigTrackStep

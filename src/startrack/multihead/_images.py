@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,6 +24,11 @@ from ._solution import RigOptions, RigSolution
 from ._solve import check_method, solve_head_stars
 from ._split_fov import DEFAULT_MARGIN, FieldClassification, classify_fields, moments_radius_px, spot_moments
 from ._stars import HeadStars
+
+if TYPE_CHECKING:
+    from astropy.time import Time
+
+    from ..identify import MethodName
 
 
 def detector_stars(image, rig: CameraRig, detector_name: str, detector=None, margin: float = DEFAULT_MARGIN,
@@ -59,7 +65,8 @@ def _image_data(image) -> np.ndarray:
     return image.data if isinstance(image, Image) else read_image(image).data
 
 
-def solve_rig_images(images: Mapping[str, object], rig: CameraRig, *, epoch=None, method: str = "quads",
+def solve_rig_images(images: Mapping[str, object], rig: CameraRig, *, epoch: Time | float | None = None,
+                     method: MethodName = "quads",
                      options: RigOptions | None = None, detector=None,
                      margin: float = DEFAULT_MARGIN) -> RigSolution:
     """Detect, classify and solve one exposure of a rig.
@@ -82,7 +89,7 @@ def solve_rig_images(images: Mapping[str, object], rig: CameraRig, *, epoch=None
     RigSolution
         With ``detections`` (per detector) and ``fields`` (the classification of split detectors).
     """
-    check_method(method)
+    method = check_method(method)
     detectors = rig.detectors
     unknown = [name for name in images if name not in detectors]
     if unknown:

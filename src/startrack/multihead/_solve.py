@@ -28,15 +28,15 @@ import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, get_args
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..catalog import load_catalog
-from ..errors import InvalidInputError, require
+from ..errors import check_choice, require
 from ..frames import angle_between
-from ..identify import MATCHERS, field_stars
-from ..identify import check_method as matcher_name
+from ..identify import MethodName, field_stars
 from ..results import AttitudeSolution, StarMatches, Status
 from ..rig import CameraRig
 from ..solve import epoch_jyear, solve_stars
@@ -58,6 +58,9 @@ from ._pattern import joint_pattern
 from ._predict import head_matcher, match_predicted, predicted_sigma_px
 from ._solution import IDENTIFIED_BY_HEAD, IDENTIFIED_JOINTLY, RigOptions, RigSolution
 from ._stars import HeadStars, rig_stars
+
+if TYPE_CHECKING:
+    from astropy.time import Time
 
 LIS_MIN_STARS = 4
 """A head is identified lost-in-space on its own only with this many stars (a pattern and one more)."""
@@ -85,11 +88,12 @@ class _Work:
     matchers: dict[str, WindowMatcher]
     options: RigOptions
     epoch: float
-    method: str
+    method: MethodName
     lis: dict[str, AttitudeSolution]
 
 
-def solve_rig(stars: Mapping[str, tuple], rig: CameraRig, *, epoch=None, method: str = "quads",
+def solve_rig(stars: Mapping[str, tuple], rig: CameraRig, *, epoch: Time | float | None = None,
+              method: MethodName = "quads",
               options: RigOptions | None = None) -> RigSolution:
     """One attitude from the stars of every head of a rig (module docstring).
 
@@ -103,8 +107,8 @@ def solve_rig(stars: Mapping[str, tuple], rig: CameraRig, *, epoch=None, method:
     epoch : astropy.time.Time or float, optional
         Catalog epoch (Julian year, TDB); default J2000.0.
     method : str
-        Lost-in-space matcher for a single head (:data:`startrack.identify._registry.MATCHERS`,
-        "overlay" excepted).
+        Lost-in-space matcher for a single head: one of :data:`RIG_METHODS` (every
+        :data:`startrack.identify.MethodName` but "overlay", which needs a prior attitude).
     options : RigOptions, optional
 
     Returns
@@ -119,18 +123,20 @@ def solve_rig(stars: Mapping[str, tuple], rig: CameraRig, *, epoch=None, method:
         A star list for a head that is not in the rig, a malformed list (naming the head), an
         unknown ``method``.
     """
-    check_method(method)
-    return solve_head_stars(rig_stars(stars, rig), rig, epoch_jyear(epoch), method, options or RigOptions())
+    return solve_head_stars(rig_stars(stars, rig), rig, epoch_jyear(epoch), check_method(method),
+                            options or RigOptions())
 
 
-def check_method(method: str) -> None:
-    """Refuse a matcher a single head cannot run lost-in-space ("overlay" needs a prior)."""
-    if method not in MATCHERS or method == "overlay":
-        raise InvalidInputError(f"method must be one of {', '.join(m for m in MATCHERS if m != 'overlay')}, "
-                                f"got {method!r}")
+RIG_METHODS: tuple[MethodName, ...] = tuple(m for m in get_args(MethodName) if m != "overlay")
+"""The matchers a rig can run on one head lost-in-space: all but "overlay", which needs a prior."""
 
 
-def solve_head_stars(stars: dict[str, HeadStars], rig: CameraRig, epoch: float, method: str,
+def check_method(method: str) -> MethodName:
+    """``method`` as one of :data:`RIG_METHODS`; an InvalidInputError naming it and the valid ones."""
+    return check_choice(method, RIG_METHODS, "method")
+
+
+def solve_head_stars(stars: dict[str, HeadStars], rig: CameraRig, epoch: float, method: MethodName,
                      options: RigOptions) -> RigSolution:
     """:func:`solve_rig` on checked star lists (:func:`.stars.rig_stars`)."""
     t0 = time.perf_counter()
@@ -156,7 +162,7 @@ def _lost_in_space(work: _Work, stars: HeadStars) -> AttitudeSolution:
                                    f"lost-in-space on one head needs {LIS_MIN_STARS}")
         else:
             sol = solve_stars(stars.x, stars.y, camera=head.camera, epoch=work.epoch,
-                              method=matcher_name(work.method))
+                              method=work.method)
             if sol.solved:
                 sol = replace(sol, matches=replace(sol.matches, det_index=stars.index[sol.matches.det_index]))
             else:
@@ -351,4 +357,4 @@ def consistency_chi2(solution: RigSolution, rig: CameraRig, name: str) -> float:
     return chi2_against_joint(rot, cov, joint, name in solution.heads_used)
 
 
-__all__ = ["check_method", "consistency_chi2", "solve_head_stars", "solve_rig"]
+__all__ = ["RIG_METHODS", "check_method", "consistency_chi2", "solve_head_stars", "solve_rig"]
