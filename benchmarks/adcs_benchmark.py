@@ -1,4 +1,4 @@
-"""The closed loop of seed 001 ch. 5 with each feedback source: metrics side by side with the
+"""The closed loop of Sease 2013 ch. 5 with each feedback source: metrics side by side with the
 seed's, and where the wall time of a run goes.
 
     python benchmarks/adcs_benchmark.py [--duration-s 700] [--feedback truth imu tracker]
@@ -78,7 +78,7 @@ def main(argv: list[str] | None = None) -> int:
     for label, record, *_ in results:
         print(_row(label, run_metrics(record)[1]))
     s, w = SEED_TABLE_5_3, SEED_POWER_W
-    print(f"| seed 001 Table 5.3 (hardware) | < {s['steady_state_error_deg']} | < {s['overshoot_pct']} | "
+    print(f"| Sease 2013 Table 5.3 (hardware) | < {s['steady_state_error_deg']} | < {s['overshoot_pct']} | "
           f"< {s['rise_time_s']} | < {s['settling_time_s']} | ~{w['avg_power_w']} (PID {w['pid_avg_power_w']}) | "
           f"~{w['peak_power_w']} |")
     print("\n| feedback | wall (with set-up) | CPU | loop wall | rendering images | detect + track | "

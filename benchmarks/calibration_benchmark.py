@@ -1,6 +1,6 @@
-"""Calibration accuracy: the seed 003 cameras from simulated *images*, and the real images.
+"""Calibration accuracy: the Fowler 2013 cameras from simulated *images*, and the real images.
 
-1. Simulated frames of the Aptina MT9P031 and Droid X2 (seed 003's published focal lengths,
+1. Simulated frames of the Aptina MT9P031 and Droid X2 (Fowler 2013's published focal lengths,
    principal points and distortion) at random attitudes: rendered, detected and centroided by the
    ordinary pipeline; detections are paired with the rendered stars within 2 px (identification is
    not what is measured here) and the camera is calibrated from 1 frame and from 20, starting from

@@ -12,7 +12,7 @@ loops; its time is printed apart). A solve succeeds when its attitude is within 
 of the truth (see :mod:`scoring`). Targets on the 2-core reference machine: median under 50 ms
 for PNG; for an uncompressed frame (FITS or raw array) 6 ms (issue 20, item 5).
 
-The sensor is the seed 000 FAR-MST one (``get_sensor_preset("far-mst")``) with a 1.0 s exposure
+The sensor is the Huffman 2006 FAR-MST one (``get_sensor_preset("far-mst")``) with a 1.0 s exposure
 and a 1.5 px PSF, and stars to V 7.0 are rendered at epoch 2025.0 (also given to the solver):
 that gives 25-70 detections per frame at a 15 deg FOV. (With the preset's 0.1 s and 2.5 px,
 only one or two stars clear the detection threshold of a 1024 px, 15 deg frame.)
@@ -52,7 +52,7 @@ EPOCH_JYEAR = 2025.0
 
 
 def benchmark_sensor(exposure_s: float, psf_sigma_px: float):
-    """The FAR-MST sensor of seed 000 with another exposure time and PSF width."""
+    """The FAR-MST sensor of Huffman 2006 with another exposure time and PSF width."""
     from startrack.simulate import get_sensor_preset
 
     base = get_sensor_preset("far-mst").with_exposure(exposure_s)

@@ -22,7 +22,7 @@ a's boresight, "roll" about it. Printed:
 4. The roll ratio for two heads against their separation.
 5. Split-FOV frames (two orthogonal fields, V <= 7.5, the generic-cmos sensor) over ``--frames``
    random attitudes per elongation: misclassified and ambiguous spots with intensity-weighted
-   moments and with seed 004 eq. 4's unweighted mask sums.
+   moments and with Samaan 2002 eq. 4's unweighted mask sums.
 6. Two heads with head b's mounting off by a known angle, about b's boresight (the axis a single
    head knows worst) or across it: how often the rig flags b inconsistent, the median consistency
    angle and the rms error of the joint solution.

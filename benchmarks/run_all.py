@@ -9,16 +9,16 @@
    detection quality of every threshold method;
 6. ``detect_speed.py``: detection time and accuracy beside SEP and photutils, the predictive
    pass;
-7. ``detect_seed000.py``: seed 000's Table 4.2 (WS vs MLE) and Table 7.2 (pre-filter time),
+7. ``detect_huffman2006.py``: Huffman 2006's Table 4.2 (WS vs MLE) and Table 7.2 (pre-filter time),
    campaigns of their shipped specs;
 8. ``detect_realdata.py``: detections on the real images against astrometry.net;
 9. ``attitude_benchmark.py``: every Wahba solver batched and one by one, beside scipy and ahrs
    (``benchmarks/.venv-ahrs``, created on first use);
-10. ``streak_benchmark.py``: seed 001 Tables 3.1, 4.1, 4.2, 4.4 and seed 004 Table 2;
-11. ``simulate_benchmark.py``: simulator speed beside a plain per-pixel loop, seed 004 Table 1,
-    seed 000 Tables 5.1 and 5.3 (campaigns of their shipped specs);
-12. ``seed000_table82.py``: seed 000's Table 8.2 (time to match a 14-frame sequence by method);
-13. ``seed002_matching.py``: seed 002's Tables 3-5 to 3-7 (lost-in-space matching trade).
+10. ``streak_benchmark.py``: Sease 2013 Tables 3.1, 4.1, 4.2, 4.4 and Samaan 2002 Table 2;
+11. ``simulate_benchmark.py``: simulator speed beside a plain per-pixel loop, Samaan 2002 Table 1,
+    Huffman 2006 Tables 5.1 and 5.3 (campaigns of their shipped specs);
+12. ``huffman2006_table82.py``: Huffman 2006's Table 8.2 (time to match a 14-frame sequence by method);
+13. ``jacobs1995_matching.py``: Jacobs 1995's Tables 3-5 to 3-7 (lost-in-space matching trade).
 
 The cedar-solve environment (``benchmarks/.venv-cedar``) and the SEP / photutils one
 (``benchmarks/.venv-detectpeers``) are created first if needed. A benchmark
@@ -39,13 +39,13 @@ import attitude_benchmark  # noqa: E402
 import calibration_benchmark  # noqa: E402
 import database_report  # noqa: E402
 import detect_accuracy  # noqa: E402
+import detect_huffman2006  # noqa: E402
 import detect_realdata  # noqa: E402
-import detect_seed000  # noqa: E402
 import detect_speed  # noqa: E402
+import huffman2006_table82  # noqa: E402
 import image_path_benchmark  # noqa: E402
+import jacobs1995_matching  # noqa: E402
 import lis_benchmark  # noqa: E402
-import seed000_table82  # noqa: E402
-import seed002_matching  # noqa: E402
 import simulate_benchmark  # noqa: E402
 import streak_benchmark  # noqa: E402
 import tracking_benchmark  # noqa: E402
@@ -78,13 +78,13 @@ def main(argv: list[str] | None = None) -> int:
         _run("calibration_benchmark", calibration_benchmark.main, []),
         _run("detect_accuracy", detect_accuracy.main, []),
         _run("detect_speed", detect_speed.main, []),
-        _run("detect_seed000", detect_seed000.main, []),
+        _run("detect_huffman2006", detect_huffman2006.main, []),
         _run("detect_realdata", detect_realdata.main, []),
         _run("attitude_benchmark", attitude_benchmark.main, []),
         _run("streak_benchmark", streak_benchmark.main, []),
         _run("simulate_benchmark", simulate_benchmark.main, []),
-        _run("seed000_table82", seed000_table82.main, []),
-        _run("seed002_matching", seed002_matching.main, []),
+        _run("huffman2006_table82", huffman2006_table82.main, []),
+        _run("jacobs1995_matching", jacobs1995_matching.main, []),
     ]
     return 0 if all(ok) else 1
 

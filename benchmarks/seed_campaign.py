@@ -1,7 +1,7 @@
 """Run a shipped seed-table spec through the campaign engine and print ours beside the seed's.
 
-The seed-table benchmarks (``detect_seed000.py``, ``simulate_benchmark.py``,
-``seed000_table82.py``, ``seed002_matching.py``) are thin: each runs the specs of
+The seed-table benchmarks (``detect_huffman2006.py``, ``simulate_benchmark.py``,
+``huffman2006_table82.py``, ``jacobs1995_matching.py``) are thin: each runs the specs of
 ``startrack/analysis/campaign/specs/`` (the one implementation of the experiment, in the
 campaign levels) with ``run_campaign`` and prints the spec's reference tables
 (``startrack.analysis.campaign._reference``). What they may change is what a spec leaves open:

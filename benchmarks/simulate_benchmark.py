@@ -18,14 +18,14 @@ out the fixed pattern); the table prints the ratio, and the largest difference o
 noise-free star image from the simulator's, relative to the brightest pixel.
 
 Seed reproductions, run as campaigns of their shipped specs (``seed_campaign.py``; conditions
-and results in docs/seed_tables_000_002.md), each printing ours beside the seed's:
+and results in docs/seed_tables_huffman_jacobs_samaan.md), each printing ours beside the seed's:
 
-- seed 004 Table 1 (``seed004-table1-smear-rate``): the largest rate for negligible smear
+- Samaan 2002 Table 1 (``samaan2002-table1-smear-rate``): the largest rate for negligible smear
   (0.1 px) with StarNav I, and the smear the simulator renders at it;
-- seed 000 Table 5.1 (``seed000-table5.1-star-availability``): the magnitude limit that
+- Huffman 2006 Table 5.1 (``huffman2006-table5.1-star-availability``): the magnitude limit that
   guarantees 4 or 6 stars in every field (a 1 deg Fibonacci lattice of boresights), cone and
   square fields, with Hipparcos-2;
-- seed 000 Table 5.3 (``seed000-table5.3-magnitude-error``): magnitude error of thresholded
+- Huffman 2006 Table 5.3 (``huffman2006-table5.3-magnitude-error``): magnitude error of thresholded
   (5 sigma), weighted-sum photometry of stars of V 0-4 (Table 5.2's camera), with the seed's
   literal eq. 3.4 signal scale and with our physical one.
 
@@ -173,9 +173,10 @@ def _loop_row(frame, sensor, ms: float) -> dict:
 
 
 # ---------------------------------------------------------------- seed reproductions
-SEED_SPECS = ("seed004-table1-smear-rate", "seed000-table5.1-star-availability", "seed000-table5.3-magnitude-error")
-QUICK_TRIALS = {"seed004-table1-smear-rate": 2, "seed000-table5.1-star-availability": 4000,
-                "seed000-table5.3-magnitude-error": 20}
+SEED_SPECS = ("samaan2002-table1-smear-rate", "huffman2006-table5.1-star-availability",
+              "huffman2006-table5.3-magnitude-error")
+QUICK_TRIALS = {"samaan2002-table1-smear-rate": 2, "huffman2006-table5.1-star-availability": 4000,
+                "huffman2006-table5.3-magnitude-error": 20}
 """Trials per cell with --quick (a 3.2 deg lattice for Table 5.1: its limits come out lower)."""
 
 

@@ -4,21 +4,21 @@ Each part runs a shipped spec (``startrack/analysis/campaign/specs/``) through t
 engine (``seed_campaign.py``) and prints its reference tables; the per-trial logic lives in the
 campaign levels ``streak``, ``rso`` and ``smear`` (``startrack.analysis.campaign.levels``) and the
 scenes in ``startrack.analysis._streak_scenes`` / ``startrack.analysis._rso_passes``. Conditions
-and results: ``docs/seed_tables_001_004.md``.
+and results: ``docs/seed_tables_sease_samaan.md``.
 
-1. Seed 001 Table 3.1 (``seed001-table3.1-streak-endpoints``): endpoint error (px) and rate
+1. Sease 2013 Table 3.1 (``sease2013-table3.1-streak-endpoints``): endpoint error (px) and rate
    error (% of |omega|) of the Harris, minimum-eigenvalue, Trajkovic-4 and Trajkovic-8 endpoint
    detectors at 10 % and 50 % streak length, spin axes 30-90 deg from the boresight, each
    detector's bias calibrated on separate frames.
-2. Seed 001 Tables 4.1 and 4.2 (``seed001-tables4.1-4.2-catalog-free-rate``): catalog-free rate,
+2. Sease 2013 Tables 4.1 and 4.2 (``sease2013-tables4.1-4.2-catalog-free-rate``): catalog-free rate,
    T = 0.5 s, 2 deg/s and 0.05 rad/s about the camera y axis, with and without an Mv-1 RSO.
-3. Seed 001 Tables 4.3 and 4.4 (``seed001-tables4.3-4.4-rso-detection``): RSO detections of the
+3. Sease 2013 Tables 4.3 and 4.4 (``sease2013-tables4.3-4.4-rso-detection``): RSO detections of the
    three indicators over the observation opportunities of the Table 4.3 orbits.
-4. Seed 004 Table 2 (``seed004-table2-smear-centroids``): centroid error against smear
+4. Samaan 2002 Table 2 (``samaan2002-table2-smear-centroids``): centroid error against smear
    (interstar-angle sigma and image-plane STD, microradians), StarNav I (512 x 512, 8 deg).
 5. Issue 19, streak mode on ordinary catalog frames (``streak-mode``): whole sky, 12 and 20 deg
    fields, 1024 x 1024, 0.5-8 deg/s about random axes, streaks of 5-30 % of the field: the share
-   solved lost-in-space, the rate and axis errors of the trusted rates beside the seed 001 targets,
+   solved lost-in-space, the rate and axis errors of the trusted rates beside the Sease 2013 targets,
    the frames with at least 5 identified streaks that meet the target, the time per frame, and a
    list of those that miss it (:func:`print_streak_misses`).
 6. Issue 19, the Tracker through a slew (:func:`run_slew`): the simulator's sequence
@@ -64,10 +64,10 @@ from startrack.analysis.campaign._reference import reference_tables  # noqa: E40
 
 RESULTS_DIR = ROOT / "results"
 PARTS = {
-    1: ("seed001-table3.1-streak-endpoints", "frames"),
-    2: ("seed001-tables4.1-4.2-catalog-free-rate", "frames"),
-    3: ("seed001-tables4.3-4.4-rso-detection", "rso_trials"),
-    4: ("seed004-table2-smear-centroids", "smear_images"),
+    1: ("sease2013-table3.1-streak-endpoints", "frames"),
+    2: ("sease2013-tables4.1-4.2-catalog-free-rate", "frames"),
+    3: ("sease2013-tables4.3-4.4-rso-detection", "rso_trials"),
+    4: ("samaan2002-table2-smear-centroids", "smear_images"),
     5: ("streak-mode", "streak_frames"),
 }
 SLEW_PART, SPEED_PART = 6, 7

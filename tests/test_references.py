@@ -1,6 +1,8 @@
 """Citations anyone can resolve (issue 21 item 5): every "Author YYYY" key that ``src/`` and
 ``docs/`` cite is listed in docs/references.md, and none cites a seed by number ("seed 000 §5.4")
-or a notes file ("notes seed-000.md §1.16") any more.
+or a notes file ("notes seed-000.md §1.16") any more; nor does any .py, .toml or .html file of
+``src/``, any page of ``docs/`` or README.md, code, spec names and program output included
+(:func:`test_no_document_is_cited_by_seed_number`).
 
 The files checked are a parameter (:func:`checked_files`); :data:`NOT_YET_REWRITTEN` (empty now
 that every file is rewritten) names any left out, with the reason beside it.
@@ -22,7 +24,7 @@ REFERENCES = ROOT / "docs" / "references.md"
 NOT_YET_REWRITTEN: tuple[str, ...] = ()
 
 NOT_CITATIONS = {"September 2013"}
-"""Author-year look-alikes that are not citations (a date in docs/seed_tables_001_004.md)."""
+"""Author-year look-alikes that are not citations (a date in docs/seed_tables_sease_samaan.md)."""
 
 AUTHOR = r"(?:van |de )?[A-Z][A-Za-z\-]+"
 CITATION = re.compile(rf"(?P<first>{AUTHOR})(?:(?:,\s+{AUTHOR})*,?\s+(?:&|and)\s+{AUTHOR}|\s+et\s+al\.)?,?\s+"
@@ -96,3 +98,34 @@ def test_every_cited_key_is_in_the_references(path):
     assert not unknown, f"cited in {path.name} but not in docs/references.md: {unknown}"
     left = sorted({m.group(0) for m in SEED_NUMBER.finditer(text)})
     assert not left, f"{path.name} still cites seeds by number or notes file: {left}"
+
+
+SEED_CITATION = re.compile(r"\bseeds?[ -]?0\d\d\b", re.I)
+"""A document cited by its old seed number: "seed 000", "Seed 003's", the spec name "seed000-table4.2",
+the notes file "seed-001-004.md". Not a random-number seed ("seed=42", "--seed 3", "seed 4003", "seeded")
+nor an identifier that still carries the number inside a word ("SEED000_EQ34", "seed002_brightness")."""
+
+
+def seed_cited_files() -> list[Path]:
+    """Every .py, .toml and .html source file of src/, every page of docs/ and README.md."""
+    src = [f for f in sorted((ROOT / "src").rglob("*")) if f.suffix in (".py", ".toml", ".html")]
+    return src + sorted((ROOT / "docs").rglob("*.md")) + [ROOT / "README.md"]
+
+
+def test_seed_citation_finder():
+    for cited in ("as seed 000 §5.4 says", "Seed 003's analyses", "run seed000-table4.2-ws-vs-mle",
+                  "notes seed-001-004.md §3.5", "the seeds 001 and 002"):
+        assert SEED_CITATION.search(cited), cited
+    for not_cited in ("rng(seed=42)", "--seed 3", "campaign seed 4003", "seeded with 0", "SEED000_EQ34",
+                      "seed002_brightness", "seed 1, 14 frames"):
+        assert not SEED_CITATION.search(not_cited), not_cited
+
+
+def test_no_document_is_cited_by_seed_number():
+    files = seed_cited_files()
+    assert {ROOT / "README.md", ROOT / "src/startrack/camera.py"} <= set(files)
+    assert any(f.suffix == ".toml" for f in files) and len(files) > 200
+    left = [f"{f.relative_to(ROOT)}:{n}: {m.group(0)}" for f in files
+            for n, line in enumerate(f.read_text(encoding="utf-8").splitlines(), 1)
+            for m in SEED_CITATION.finditer(line)]
+    assert not left, "cite the source by its key in docs/references.md, not by seed number:\n" + "\n".join(left)

@@ -6,15 +6,17 @@ arrays: name, dtype, shape and the CRC-32 of the array's bytes. A file that fail
 rebuilt, never trusted: its arrays missing, extra, of another shape or type, or replaced.
 
 Loading maps the file (copy-on-write) rather than reading it: :func:`save` pads the zip members
-so that every array starts at a multiple of 64 bytes, and a load takes views of the mapping
-(1.5-2 ms for the 123 MB default pattern database, against 0.1 s reading it and checking its
-CRCs; a solve then touches only the pages it uses). The CRCs are computed the first time a
-process meets a file, which is then remembered in :data:`VERIFIED_NAME` by its size, times and
-inode; later loads compare only names, dtypes and shapes with the manifest. A file rewritten or
-replaced changes its stamp and is checked again; one damaged in place with all of its stamp kept
-is not (as for numba's cache, :mod:`startrack.numba_cache`); remove the record to check every
-file again. Files of the earlier, unaligned layout are read (zipfile checks their members' CRCs),
-checked and written again aligned, once.
+so that every array starts at a multiple of 64 bytes, and a load takes views of the mapping: it
+neither reads the whole file nor checks its CRCs, so its time does not grow with the size of the
+table (the default pattern database is the largest), and a solve then touches only the pages it
+uses (``benchmarks/startup_benchmark.py`` times the database load of a new process). The CRCs
+are computed the first time a process meets a file, which is then remembered in
+:data:`VERIFIED_NAME` by its size, times and inode; later loads compare only names, dtypes and
+shapes with the manifest. A file rewritten or replaced changes its stamp and is checked again;
+one damaged in place with all of its stamp kept is not (as for numba's cache,
+:mod:`startrack.numba_cache`); remove the record to check every file again. Files of the
+earlier, unaligned layout are read (zipfile checks their members' CRCs), checked and written
+again aligned, once.
 
 Writes are atomic (a temporary file ``.NAME.PID.RANDOM.tmp`` in the same folder, flushed to disk,
 then renamed); temporary files of writers that died are removed by the next write. A folder that

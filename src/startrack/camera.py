@@ -360,24 +360,24 @@ def _from_pitch(name: str, width: int, height: int, focal_mm: float, pitch_um: f
 PRESETS: dict[str, Camera] = {
     "far-mst": _from_pitch(
         "far-mst", 1280, 1024, 15.97, 6.7,
-        "seed 000 Table 7.1 (p.127): FAR-MST simulation camera, IBIS5-A-1300, 30 x 24.25 deg"),
+        "Huffman 2006 Table 7.1 (p.127): FAR-MST simulation camera, IBIS5-A-1300, 30 x 24.25 deg"),
     "sunsat": _from_pitch(
         "sunsat", 752, 582, 25.0, 6.5, pitch_v_um=6.25,
-        source="seed 002 §2.1-2.2: Sunsat star camera CCD, 752 x 582 effective pixels, "
+        source="Jacobs 1995 §2.1-2.2: Sunsat star camera CCD, 752 x 582 effective pixels, "
                "6.5 x 6.25 um pitch, 25 mm f/1.4"),
     "aptina-mt9p031": Camera(
         width=2592, height=1944, fx=2745.88, fy=2747.75, cx=1351.9, cy=975.691,
         k1=-0.1755, k2=0.1983, p1=0.0002264, p2=0.0, k3=0.0, pixel_pitch_um=2.2,
         name="aptina-mt9p031",
-        source="seed 003 Table 1.3 and Table 4.4 (12.5 mm grid calibration, the one used)"),
+        source="Fowler 2013 Table 1.3 and Table 4.4 (12.5 mm grid calibration, the one used)"),
     "droid-x2": Camera(
         width=3264, height=2448, fx=3520.75, fy=3521.15, cx=1620.66, cy=1214.52,
         k1=0.1043, k2=-0.4592, pixel_pitch_um=1.4, name="droid-x2",
-        source="seed 003 Table 1.2 and Table 4.3 (6 mm grid calibration, the one used)"),
+        source="Fowler 2013 Table 1.2 and Table 4.3 (6 mm grid calibration, the one used)"),
     "starnav-i": _from_pitch(
         "starnav-i", 512, 512, 58.0, 15.84,
-        "seed 004 Table 1 / §simulation: StarNav I, 512 x 512, f = 58 mm; pitch 15.84 um gives the "
-        "8 deg FOV that Table 1 implies (the text's 7 deg is an erratum, notes seed-001-004.md)"),
+        "Samaan 2002 Table 1 / §simulation: StarNav I, 512 x 512, f = 58 mm; pitch 15.84 um gives the "
+        "8 deg FOV that Table 1 implies (the text's 7 deg is an erratum: Table 1's rates follow from 8 deg)"),
 }
 
 

@@ -13,17 +13,18 @@ with an UnpicklingError. So:
 * :func:`heal` checks the files of that folder once per process, before the first table is loaded
   from the cache: an index (``.nbi``) must be numba's version string followed by a complete pickle
   stream, a data file (``.nbc``) a complete pickle stream (its opcodes are walked to the STOP
-  opcode without building anything, so nothing is imported; about 40 ms for 9 MB); a file that
-  fails is deleted, and numba compiles that function again (a few seconds) and rewrites it.
+  opcode without building anything, so nothing is imported); a file that fails is deleted, and
+  numba compiles that function again (the slow start the cache is there to avoid) and rewrites it.
   Temporary files of killed writers (``*.tmp.*`` older than an hour) are removed too. A data file
   whose bytes are damaged inside the compiled code itself is beyond what can be checked without
   loading it.
 * Files found whole are remembered in :data:`CHECKED_NAME` in that folder, by their size and
   modification time (ns): a later process reads only the files that are new or changed since
   (numba writes every file anew, through a temporary file and a rename, so a rewrite changes
-  both), and otherwise only lists the folder (a few ms for 700 files, against 0.37 s to read
-  the 32 MB of a development cache in full). A file damaged in place with its size and time
-  kept as they were is not read again; remove :data:`CHECKED_NAME` to check everything.
+  both), and otherwise only lists the folder, instead of reading in full a cache that grows with
+  every edited kernel (``benchmarks/startup_benchmark.py`` times the first solve of a new process,
+  this check included, and with ``--cold`` a fresh cache). A file damaged in place with its size
+  and time kept as they were is not read again; remove :data:`CHECKED_NAME` to check everything.
 """
 
 from __future__ import annotations

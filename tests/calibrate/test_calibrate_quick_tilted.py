@@ -10,7 +10,7 @@ from startrack.calibrate._quick import (
     centre_from_rotation,
     focal_from_pair,
     focal_from_stars,
-    seed002_focal_sensitivity,
+    focal_sensitivity,
 )
 from startrack.calibrate._stars import calibrate_from_stars
 from startrack.calibrate._tilted_ccd import TiltedCcdCamera, TiltedCcdModel
@@ -41,9 +41,9 @@ def test_focal_from_identified_stars():
         focal_from_stars([1.0], [2.0], [[0, 0, 1]], 0.0, 0.0)
 
 
-def test_seed002_sensitivity_25_um_of_focal_error_is_about_one_pixel_corner_to_corner():
+def test_jacobs1995_sensitivity_25_um_of_focal_error_is_about_one_pixel_corner_to_corner():
     """Jacobs 1995 §6.1: stars at opposite corners (+-2.44, +-1.82) mm, f 25 mm: 25 um -> 0.23 mrad."""
-    err = seed002_focal_sensitivity(2.44, 1.82, -2.44, -1.82, 25.0, 25.025)
+    err = focal_sensitivity(2.44, 1.82, -2.44, -1.82, 25.0, 25.025)
     assert abs(err) == pytest.approx(0.23e-3, rel=0.1)
 
 

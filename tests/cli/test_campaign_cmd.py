@@ -104,6 +104,10 @@ def test_refusals_name_the_problem(campaign, tmp_path):
     _refused(run("campaign", "run", bad, "--sync", "--out", tmp_path / "x"), "[base] max_mag")
     assert not (tmp_path / "x").exists()
     _refused(run("campaign", "run", "no-such-spec", "--sync"), "no-such-spec", "campaign list")
+    code, _, err = run("campaign", "run", "no-such-spec", "--sync")
+    assert "named after their source" not in err
+    _refused(run("campaign", "run", "seed000-table4.2-ws-vs-mle", "--sync"), "seed000-table4.2-ws-vs-mle",
+             "huffman2006-table4.2-ws-vs-mle", "named after their source now", "docs/references.md")
     good = tmp_path / "good.toml"
     good.write_text(SPEC)
     _refused(run("campaign", "run", good, "--sync", "--out", out), "already holds a campaign", "--resume")

@@ -52,7 +52,7 @@ def test_track_prints_the_smear_limits_and_the_mode_switches(tmp_path, capsys, s
     assert code == 0, printed.err
     lines = printed.out.splitlines()
     # Samaan 2002 Table 1's rate for 0.1 px: 0.1 / fx / T, fx = 1452 px for 512 px over 20 deg
-    assert lines[0].startswith("smear limit (seed 004 Table 1): exposure 0.1 s") and "0.03946 deg/s" in lines[0]
+    assert lines[0].startswith("smear limit (Samaan 2002 Table 1): exposure 0.1 s") and "0.03946 deg/s" in lines[0]
     switches = [line for line in lines if " mode (smear " in line]
     assert len(switches) == 2 and "point -> streak mode" in switches[0] and "streak -> point mode" in switches[1]
     with open(out, newline="") as fh:

@@ -99,7 +99,7 @@ def centre_from_rotation(tracks: Sequence[tuple[ArrayLike, ArrayLike]]) -> tuple
     return cx, cy, radii
 
 
-def seed002_focal_sensitivity(u1, v1, u2, v2, f_true: float, f_used: float) -> float:
+def focal_sensitivity(u1, v1, u2, v2, f_true: float, f_used: float) -> float:
     """Angular error (rad) of a pair's separation measured with the wrong focal length
     (Jacobs 1995 §6.1; the angle with f_used minus the angle with f_true)."""
     def angle(f):

@@ -1,7 +1,7 @@
 """Instrument magnitudes of detected stars, and their calibration against a catalogue.
 
 Huffman 2006 §5.3 inverts its signal model, eq. 3.4, to get a visual
-magnitude from the measured electrons; Jacobs 1995 §2.2.4 (Jacobs 1995 §2.2.4, App C.1) does the same
+magnitude from the measured electrons; Jacobs 1995 (§2.2.4, App C.1) does the same
 with an illuminance constant ``k_illum`` calibrated by matching imaged stars to the catalogue.
 Both are, in magnitudes, one zero point::
 

@@ -39,7 +39,7 @@ class SmearLimits:
 
     def describe(self) -> str:
         """One line for a user (``startrack track``)."""
-        return (f"smear limit (seed 004 Table 1): exposure {self.exposure_s:g} s, 1 px = {self.pixel_arcsec:.1f} "
+        return (f"smear limit (Samaan 2002 Table 1): exposure {self.exposure_s:g} s, 1 px = {self.pixel_arcsec:.1f} "
                 f"arcsec: 0.1 px of smear at {self.max_rate_deg_s:.4g} deg/s across the boresight; streak mode from "
                 f"{self.streak_on_px:g} px ({self.streak_on_deg_s:.3g} deg/s), point mode again below "
                 f"{self.streak_off_px:g} px ({self.streak_off_deg_s:.3g} deg/s)")

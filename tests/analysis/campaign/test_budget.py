@@ -209,7 +209,8 @@ def test_shared_attitudes_follow_fields_and_dithers_and_ignore_the_cell():
     assert trial_key(np.random.default_rng(0)) is None and trial_key(trial_rng(5, 2, 9)) == (5, 2, 9)
 
 
-@pytest.mark.parametrize(("name", "cases"), [("error-budget", ["base"]), ("seed003-error-budget", ["aptina", "droid"])])
+@pytest.mark.parametrize(("name", "cases"), [("error-budget", ["base"]),
+                                             ("fowler2013-error-budget", ["aptina", "droid"])])
 def test_the_shipped_budgets_parse_and_their_references_select_cells(name, cases):
     from startrack.analysis.campaign._reference import match_cells
     from startrack.analysis.campaign._run import _manifest

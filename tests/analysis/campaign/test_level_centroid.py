@@ -69,16 +69,16 @@ SEED_42 = {1.0: (5.74, 81.07), 2.0: (5.10, 77.57), 3.0: (2.81, 74.56), 4.0: (1.6
 
 
 def test_table42_spec_holds_the_seed_times():
-    spec = shipped("seed000-table4.2-ws-vs-mle")
+    spec = shipped("huffman2006-table4.2-ws-vs-mle")
     assert spec.sweep == {"mag_v": tuple(SEED_42), "detect_centroid": ("weighted", "mle")}
     assert spec.base["aperture_area_m2"] == 3.14e-4 and spec.base["stars_per_image"] == 30
-    seeds = seed_numbers(spec, "seed 000 Table 4.2")
+    seeds = seed_numbers(spec, "Huffman 2006 Table 4.2")
     assert {(dict(k)["mag_v"], dict(k)["detect_centroid"]): v for k, v in seeds.items()} == {
         (m, c): SEED_42[m][i] for m in SEED_42 for i, c in enumerate(("weighted", "mle"))}
 
 
 def test_table42_tiny_run_gives_every_reference_a_number(tmp_path):
-    trials, tables = tiny_run("seed000-table4.2-ws-vs-mle", tmp_path,
+    trials, tables = tiny_run("huffman2006-table4.2-ws-vs-mle", tmp_path,
                               base={"width": 640, "height": 512, "stars_per_image": 6})  # small, to stay quick
     assert tables and all(finite(rows) for rows in tables.values())
     assert not any(math.isnan(v) for v in trials["centroid_rms_axis_px"].to_pylist())

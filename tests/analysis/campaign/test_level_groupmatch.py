@@ -77,16 +77,16 @@ SEED_ROWS = {1: (0.819, 4, 177), 2: (0.978, 5, 17), 3: (0.988, 3, 9), 4: (0.994,
 
 
 def test_tables_spec_holds_the_seed_rows_as_shares_of_1000():
-    spec = shipped("seed002-tables3-5-3-7-matching")
+    spec = shipped("jacobs1995-tables3-5-3-7-matching")
     assert spec.sweep == {"seed_row": (1, 2, 3, 4, 5), "match_method": ("vb-sub", "vb-group", "vb-allsky", "quads")}
-    for title, i, scale in (("seed 002 Tables 3-5 to 3-7: success", 0, 1.0),
-                            ("seed 002 Tables 3-5 to 3-7: failures with fewer", 1, 1e-3),
-                            ("seed 002 Tables 3-5 to 3-7: failures with 3", 2, 1e-3)):
+    for title, i, scale in (("Jacobs 1995 Tables 3-5 to 3-7: success", 0, 1.0),
+                            ("Jacobs 1995 Tables 3-5 to 3-7: failures with fewer", 1, 1e-3),
+                            ("Jacobs 1995 Tables 3-5 to 3-7: failures with 3", 2, 1e-3)):
         for where, value in seed_numbers(spec, title).items():
             assert value == pytest.approx(SEED_ROWS[dict(where)["seed_row"]][i] * scale, abs=1e-12)
-    assert set(seed_numbers(spec, "seed 002 Tables 3-5 to 3-7: wrong").values()) == {0.0}
+    assert set(seed_numbers(spec, "Jacobs 1995 Tables 3-5 to 3-7: wrong").values()) == {0.0}
 
 
 def test_tables_tiny_run_gives_every_reference_a_number(tmp_path):
-    _, tables = tiny_run("seed002-tables3-5-3-7-matching", tmp_path)
+    _, tables = tiny_run("jacobs1995-tables3-5-3-7-matching", tmp_path)
     assert len(tables) == 6 and all(finite(rows) for rows in tables.values())

@@ -60,14 +60,15 @@ SEED_53 = {0.0: (0.0309, 0.0427), 1.0: (0.0311, 0.0324), 2.0: (0.0353, 0.0419), 
 
 
 def test_table53_spec_holds_the_seed_numbers_for_both_signal_scales():
-    spec = shipped("seed000-table5.3-magnitude-error")
+    spec = shipped("huffman2006-table5.3-magnitude-error")
     assert spec.sweep == {"sensor": ("far-mst-seed-eq34", "far-mst"), "mag_v": tuple(SEED_53)}
     assert spec.base["aperture_area_m2"] == pytest.approx(math.pi * 0.01**2, rel=1e-8)
     seed_scale = "far-mst-seed-eq34"
-    for title, i, sensor in (("seed 000 Table 5.3: mean magnitude error (measured - true), seed", 0, seed_scale),
-                             ("seed 000 Table 5.3: standard deviation of the magnitude error, seed", 1, seed_scale),
-                             ("seed 000 Table 5.3: mean magnitude error, physical", 0, "far-mst"),
-                             ("seed 000 Table 5.3: standard deviation of the magnitude error, physical", 1, "far-mst")):
+    for title, i, sensor in (("Huffman 2006 Table 5.3: mean magnitude error (measured - true), seed", 0, seed_scale),
+                             ("Huffman 2006 Table 5.3: standard deviation of the magnitude error, seed", 1, seed_scale),
+                             ("Huffman 2006 Table 5.3: mean magnitude error, physical", 0, "far-mst"),
+                             ("Huffman 2006 Table 5.3: standard deviation of the magnitude error, physical", 1,
+                              "far-mst")):
         seeds = {dict(k)["mag_v"]: v for k, v in seed_numbers(spec, title).items() if dict(k)["sensor"] == sensor}
         assert seeds == {m: SEED_53[m][i] for m in SEED_53}
 
@@ -75,10 +76,10 @@ def test_table53_spec_holds_the_seed_numbers_for_both_signal_scales():
 def test_table53_tiny_run_gives_the_seed_scale_references_a_number(tmp_path):
     """On small frames (the 512 px StarNav I) with 5 stars, to stay quick; a mean needs one kept
     frame, a standard deviation two."""
-    _, tables = tiny_run("seed000-table5.3-magnitude-error", tmp_path, trials=3,
+    _, tables = tiny_run("huffman2006-table5.3-magnitude-error", tmp_path, trials=3,
                          base={"camera": "starnav-i", "stars_per_image": 5})
     for title, rows in tables.items():
         need = 2 if "standard deviation" in title else 1
         assert [math.isfinite(r["ours"]) for r in rows] == [r["n_used"] >= need for r in rows]
-    assert finite(tables["seed 000 Table 5.3: mean magnitude error (measured - true), seed's eq. 3.4 signal "
+    assert finite(tables["Huffman 2006 Table 5.3: mean magnitude error (measured - true), seed's eq. 3.4 signal "
                          "scale"][1:3])  # V 1-2: bright, all measured in these frames

@@ -64,10 +64,11 @@ SEED_72 = {1.0: ((10, 17, 1.1860), (8, 15, 0.3339)), 1.5: ((8, 15, 0.4976), (4, 
 
 
 def test_table72_spec_holds_the_seed_ranges_and_times():
-    spec = shipped("seed000-table7.2-prefilter-speed")
+    spec = shipped("huffman2006-table7.2-prefilter-speed")
     assert spec.trials == 14 and spec.sweep["detect_pixel_sigma"] == tuple(SEED_72)
-    for title, i in (("seed 000 Table 7.2: pre-filter time", 2), ("seed 000 Table 7.2: stars centroided, fewest", 0),
-                     ("seed 000 Table 7.2: stars centroided, most", 1)):
+    for title, i in (("Huffman 2006 Table 7.2: pre-filter time", 2),
+                     ("Huffman 2006 Table 7.2: stars centroided, fewest", 0),
+                     ("Huffman 2006 Table 7.2: stars centroided, most", 1)):
         got = {(dict(w)["detect_pixel_sigma"], dict(w)["detect_threshold"]): v
                for w, v in seed_numbers(spec, title).items()}
         assert got == {(k, f"prefilter-{form}"): SEED_72[k][j][i] for k in SEED_72
@@ -76,6 +77,6 @@ def test_table72_spec_holds_the_seed_ranges_and_times():
 
 def test_table72_tiny_run_gives_every_reference_a_number(tmp_path):
     """On a small pinhole frame of the same field and scale, to stay quick."""
-    _, tables = tiny_run("seed000-table7.2-prefilter-speed", tmp_path,
+    _, tables = tiny_run("huffman2006-table7.2-prefilter-speed", tmp_path,
                          base={"camera": "", "width": 320, "height": 256, "fov_deg": 7.5})
     assert len(tables) == 3 and all(finite(rows) for rows in tables.values())

@@ -27,8 +27,8 @@ LEVEL = get_level("rso")
 SMALL = {"width": 512, "height": 512, "fov_deg": 11.4}
 """The Sease 2013 camera's 80 arcsec/px on a quarter of its pixels: fast frames for the tests."""
 CAMERA = Camera.from_fov(1024, 1024, fov_deg=22.8)
-SPEC_41_42 = "seed001-tables4.1-4.2-catalog-free-rate"
-SPEC_44 = "seed001-tables4.3-4.4-rso-detection"
+SPEC_41_42 = "sease2013-tables4.1-4.2-catalog-free-rate"
+SPEC_44 = "sease2013-tables4.3-4.4-rso-detection"
 
 
 def params(**changes):
@@ -129,7 +129,7 @@ opportunity = 500
 
 def test_the_specs_hold_tables_4_1_to_4_4():
     spec = shipped(SPEC_41_42)
-    rows = {r["label"]: r["seed"] for ref in spec.reference if ref["title"].startswith("seed 001 Table 4.")
+    rows = {r["label"]: r["seed"] for ref in spec.reference if ref["title"].startswith("Sease 2013 Table 4.")
             for r in ref["rows"]}
     assert rows["rate (deg/s)"] == 1.986 and rows["rate (rad/s)"] == 0.0497
     assert rows["displacement (deg)"] == 0.993 and rows["displacement (rad)"] == 0.0248

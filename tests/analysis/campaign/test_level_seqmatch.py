@@ -40,14 +40,14 @@ SEED_82 = {"triangle": 9.06, "rate": 15.12, "nvertex-3": 8.30, "nvertex-4": 8.27
 
 
 def test_table82_spec_holds_the_seed_times():
-    spec = shipped("seed000-table8.2-sequence-matching")
+    spec = shipped("huffman2006-table8.2-sequence-matching")
     assert spec.sweep == {"match_method": (*SEED_82, "quads")}
     assert (spec.base["n_frames"], spec.base["frame_rate_hz"], spec.base["turn_rate_deg_s"]) == (14, 1.0, 0.2)
-    got = {dict(w)["match_method"]: v for w, v in seed_numbers(spec, "seed 000 Table 8.2").items()}
+    got = {dict(w)["match_method"]: v for w, v in seed_numbers(spec, "Huffman 2006 Table 8.2").items()}
     assert got == SEED_82
 
 
 def test_table82_tiny_run_gives_every_reference_a_number(tmp_path):
-    _, tables = tiny_run("seed000-table8.2-sequence-matching", tmp_path,
+    _, tables = tiny_run("huffman2006-table8.2-sequence-matching", tmp_path,
                          base={"n_frames": 2, "width": 512, "height": 512})
     assert len(tables) == 3 and all(finite(rows) for rows in tables.values())

@@ -17,7 +17,7 @@ from startrack.camera import Camera
 from startrack.units import DEG
 
 LEVEL = get_level("smear")
-SPEC = "seed004-table2-smear-centroids"
+SPEC = "samaan2002-table2-smear-centroids"
 IFOV_URAD = 1e6 * math.radians(8.0) / 512  # 272.7 urad: StarNav I as Table 1 implies it
 
 
@@ -70,8 +70,8 @@ def test_the_default_noise_gives_the_seed_baseline_within_a_quarter():
 def test_the_spec_holds_table_2():
     spec = shipped(SPEC)
     assert spec.sweep["exposure_s"] == (0.01, 0.02, 0.03) and len(spec.cells()) == 27
-    sigma = seed_numbers(spec, "seed 004 Table 2: interstar")
-    std = seed_numbers(spec, "seed 004 Table 2: image-plane")
+    sigma = seed_numbers(spec, "Samaan 2002 Table 2: interstar")
+    std = seed_numbers(spec, "Samaan 2002 Table 2: image-plane")
     assert sigma[(("exposure_s", 0.01), ("rate_deg_s", 0.0))] == 35.6
     assert std[(("exposure_s", 0.01), ("rate_deg_s", 0.0))] == 39.1
     assert [sigma[(("exposure_s", 0.03), ("rate_deg_s", r))] for r in (0.01, 0.02, 0.05, 0.10, 0.15, 0.20, 0.25)] == [
@@ -85,7 +85,7 @@ def test_a_tiny_run_of_the_spec_gives_every_reference(tmp_path):
     trials, tables = tiny_run(SPEC, tmp_path, trials=1)
     assert trials.num_rows == 27
     for title, rows in tables.items():
-        if title.startswith("seed 004"):
+        if title.startswith("Samaan 2002"):
             assert finite(rows), title
     again = rerun_trial(tmp_path / "out", 14, 0, save_dir=tmp_path / "frames")  # the image and its truth
     assert again.same and [f.suffix for f in again.files] == [".fits"]

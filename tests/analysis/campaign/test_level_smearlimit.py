@@ -39,18 +39,19 @@ SEED_1 = {0.01: 0.156, 0.02: 0.078, 0.03: 0.052, 0.05: 0.0313}
 
 
 def test_table1_spec_holds_the_seed_rates_for_both_fields():
-    spec = shipped("seed004-table1-smear-rate")
+    spec = shipped("samaan2002-table1-smear-rate")
     assert spec.sweep == {"camera": ("starnav-i", ""), "exposure_s": tuple(SEED_1)}
     assert (spec.base["fov_deg"], spec.base["width"], spec.base["height"]) == (7.0, 512, 512)
-    for title, camera in (("seed 004 Table 1: largest rate", "starnav-i"), ("seed 004 Table 1 beside a 7 deg", "")):
+    for title, camera in (("Samaan 2002 Table 1: largest rate", "starnav-i"),
+                          ("Samaan 2002 Table 1 beside a 7 deg", "")):
         got = {dict(w)["exposure_s"]: v for w, v in seed_numbers(spec, title).items() if dict(w)["camera"] == camera}
         assert got == SEED_1
 
 
 def test_table1_tiny_run_reproduces_the_printed_digits(tmp_path):
-    _, tables = tiny_run("seed004-table1-smear-rate", tmp_path)
+    _, tables = tiny_run("samaan2002-table1-smear-rate", tmp_path)
     assert all(finite(rows) for rows in tables.values())
-    for r in tables["seed 004 Table 1: largest rate for 1/10 px of smear, StarNav I (8 deg field, as the table "
+    for r in tables["Samaan 2002 Table 1: largest rate for 1/10 px of smear, StarNav I (8 deg field, as the table "
                     "implies)"]:
         digits = len(r["seed"].split(".")[1])
         assert round(r["ours"], digits) == pytest.approx(r["seed_value"], abs=0.6 * 10.0**-digits)

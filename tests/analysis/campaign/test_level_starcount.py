@@ -72,11 +72,11 @@ FIG_51 = {0: 0.021e-3, 1: 1.05e-3, 2: 4.53e-3, 3: 15.46e-3, 4: 35.13e-3}
 
 
 def test_table51_spec_holds_the_seed_numbers_on_a_1_deg_lattice():
-    spec = shipped("seed000-table5.1-star-availability")
+    spec = shipped("huffman2006-table5.1-star-availability")
     assert spec.attitudes == "fibonacci" and spec.trials == 41253  # 4 pi sr / (1 deg)^2
     assert spec.sweep == {"shape": ("cone", "image"), "fov_deg": tuple(TABLE_51), "min_stars": (4, 6)}
-    for title in ("seed 000 Table 5.1: V limit for at least n stars in every field (cone",
-                  "seed 000 Table 5.1: V limit for at least n stars in every field (square"):
+    for title in ("Huffman 2006 Table 5.1: V limit for at least n stars in every field (cone",
+                  "Huffman 2006 Table 5.1: V limit for at least n stars in every field (square"):
         seeds = seed_numbers(spec, title)
         assert len(seeds) == 10
         for (fov, n, _), value in ((tuple(v for _, v in k), s) for k, s in seeds.items()):
@@ -84,16 +84,16 @@ def test_table51_spec_holds_the_seed_numbers_on_a_1_deg_lattice():
 
 
 def test_fig51_spec_holds_the_seed_probabilities():
-    spec = shipped("seed002-fig5-1-stars-per-fov")
+    spec = shipped("jacobs1995-fig5-1-stars-per-fov")
     assert spec.base["camera"] == "sunsat" and spec.sweep == {"max_mag": (6.0, 5.9)}
     for k, p in FIG_51.items():
-        seeds = seed_numbers(spec, f"seed 002 Fig. 5-1: probability of exactly {k} ")
+        seeds = seed_numbers(spec, f"Jacobs 1995 Fig. 5-1: probability of exactly {k} ")
         assert list(seeds.values()) == [pytest.approx(p, rel=1e-12)] * 2
-    assert set(seed_numbers(spec, "seed 002 Fig. 5-1: probability of fewer than 3").values()) == {0.0056}
-    assert set(seed_numbers(spec, "seed 002 Fig. 5-1: most stars").values()) == {49}
+    assert set(seed_numbers(spec, "Jacobs 1995 Fig. 5-1: probability of fewer than 3").values()) == {0.0056}
+    assert set(seed_numbers(spec, "Jacobs 1995 Fig. 5-1: most stars").values()) == {49}
 
 
-@pytest.mark.parametrize("name", ["seed000-table5.1-star-availability", "seed002-fig5-1-stars-per-fov"])
+@pytest.mark.parametrize("name", ["huffman2006-table5.1-star-availability", "jacobs1995-fig5-1-stars-per-fov"])
 def test_tiny_runs_give_every_reference_a_number(name, tmp_path):
     trials, tables = tiny_run(name, tmp_path, trials=3)
     assert set(trials["status"].to_pylist()) == {"OK"}

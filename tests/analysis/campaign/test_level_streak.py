@@ -21,7 +21,7 @@ from startrack.rate._endpoints import DETECTORS
 LEVEL = get_level("streak")
 SMALL = {"width": 512, "height": 512, "fov_deg": 11.4, "calibration_frames": 1}
 """The Sease 2013 camera's 80 arcsec/px on a quarter of its pixels: fast frames for the tests."""
-SPEC = "seed001-table3.1-streak-endpoints"
+SPEC = "sease2013-table3.1-streak-endpoints"
 TABLE_3_1 = {  # the notes' Table 3.1: detector -> (endpoint px 10 %, 50 %; rate % 10 %, 50 %)
     "harris": (0.10, 0.10, 0.69, 0.07), "min_eigenvalue": (0.19, 0.20, 1.20, 0.19),
     "trajkovic4": (0.39, 0.37, 2.44, 0.38), "trajkovic8": (0.55, 0.29, 3.49, 0.47),
@@ -100,8 +100,8 @@ def test_the_spec_holds_table_3_1():
     assert spec.level == "streak"
     assert {(c.params["detector"], c.params["streak_fraction"]) for c in spec.cells()} == {
         (d, f) for d in DETECTORS for f in (0.1, 0.5)}
-    endpoint = seed_numbers(spec, "seed 001 Table 3.1: single-endpoint")
-    rate = seed_numbers(spec, "seed 001 Table 3.1: rate error")
+    endpoint = seed_numbers(spec, "Sease 2013 Table 3.1: single-endpoint")
+    rate = seed_numbers(spec, "Sease 2013 Table 3.1: rate error")
     for detector, (e10, e50, r10, r50) in TABLE_3_1.items():
         for fraction, e, r in ((0.1, e10, r10), (0.5, e50, r50)):
             key = (("detector", detector), ("streak_fraction", fraction))

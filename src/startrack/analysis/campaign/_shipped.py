@@ -1,11 +1,13 @@
 """The specs shipped with the package (``startrack/analysis/campaign/specs/*.toml``), by name.
 
-``startrack campaign list`` lists them; ``startrack campaign run NAME`` runs one. Each seed
-table's spec reproduces one reference result of the seeds and prints ours beside the seed's.
+``startrack campaign list`` lists them; ``startrack campaign run NAME`` runs one. Each spec named
+after a source's key (``huffman2006-table4.2-ws-vs-mle``: Huffman 2006 Table 4.2, docs/references.md)
+reproduces one reference result of that source and prints ours beside the source's.
 """
 
 from __future__ import annotations
 
+import re
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -50,5 +52,7 @@ def find_spec(name_or_path: str | Path) -> Path:
     if shipped.is_file():
         return shipped
     names = ", ".join(s.name for s in list_specs()) or "none"
+    renamed = ("; the specs named seedNNN-... before are named after their source now, as huffman2006-..., "
+               "docs/references.md" if re.match(r"seed\d{3}-", str(name_or_path)) else "")
     raise InvalidInputError(f"no spec file {str(name_or_path)!r} and no shipped spec of that name "
-                            f"(shipped: {names}; see 'startrack campaign list')")
+                            f"(shipped: {names}; see 'startrack campaign list'{renamed})")

@@ -1,7 +1,7 @@
-"""Seed 000 Table 8.2: time to match a 14-frame sequence, by matching method, ours beside the seed's.
+"""Huffman 2006 Table 8.2: time to match a 14-frame sequence, by matching method, ours beside the seed's.
 
-Runs the shipped spec ``seed000-table8.2-sequence-matching`` (level ``seqmatch``; the seed's
-conditions and ours in ``docs/seed_tables_000_002.md``): per method, sequences of 14 simulated
+Runs the shipped spec ``huffman2006-table8.2-sequence-matching`` (level ``seqmatch``; the seed's
+conditions and ours in ``docs/seed_tables_huffman_jacobs_samaan.md``): per method, sequences of 14 simulated
 frames (1024 x 1024 px, 15 deg, generic CMOS sensor, 0.2 deg/s about a random axis, one frame
 per second), each detected, then matched frame to frame (``triangle``, ``rate``, chained from a
 ``quads`` solve of frame 0) or lost-in-space on every frame (``nvertex-3/4/5``, ``quads``).
@@ -11,7 +11,7 @@ methods by mean time, ours and the seed's.
 
 Usage::
 
-    python benchmarks/seed000_table82.py [--trials 10] [--seed N] [--workers 2 | --sync] [--out DIR]
+    python benchmarks/huffman2006_table82.py [--trials 10] [--seed N] [--workers 2 | --sync] [--out DIR]
 """
 
 from __future__ import annotations
@@ -28,9 +28,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from seed_campaign import add_run_arguments, out_for, print_references, run_spec, spec_text  # noqa: E402
 
-SPEC = "seed000-table8.2-sequence-matching"
+SPEC = "huffman2006-table8.2-sequence-matching"
 SEED_TOTAL_S = {"triangle": 9.06, "rate": 15.12, "nvertex-3": 8.30, "nvertex-4": 8.27, "nvertex-5": 8.33}
-"""Seed 000 Table 8.2 (Matlab, 14 frames, threshold + centroid + match + QUEST), for the ranking."""
+"""Huffman 2006 Table 8.2 (Matlab, 14 frames, threshold + centroid + match + QUEST), for the ranking."""
 
 
 def ranking(trials: pa.Table) -> str:

@@ -1,8 +1,8 @@
-"""Seed 002's lost-in-space matching trade (Jacobs 1995 §3.5, Tables 3-5 / 3-6 / 3-7; notes
-``seed-002.md`` §2.2) reproduced with our van Bezooijen matcher and our default solver.
+"""The lost-in-space matching trade of Jacobs 1995 (§3.5, Tables 3-5 / 3-6 / 3-7) reproduced with
+our van Bezooijen matcher and our default solver.
 
-Runs the shipped spec ``seed002-tables3-5-3-7-matching`` (level ``groupmatch``, whose docstring
-and ``docs/seed_tables_000_002.md`` give the attitude region, the star lists, the guide
+Runs the shipped spec ``jacobs1995-tables3-5-3-7-matching`` (level ``groupmatch``, whose docstring
+and ``docs/seed_tables_huffman_jacobs_samaan.md`` give the attitude region, the star lists, the guide
 catalogues and the four methods: ``vb-sub``, ``vb-group``, ``vb-allsky``, ``quads``) and prints
 the size of the rebuilt sub-catalogue beside the seed's, then the reference tables: success,
 wrong matches, failures with fewer / more than 3 stars, average and longest match time, each
@@ -10,7 +10,7 @@ beside the seed's row.
 
 Usage::
 
-    python benchmarks/seed002_matching.py [--trials 200] [--seed N] [--timeout-s 5]
+    python benchmarks/jacobs1995_matching.py [--trials 200] [--seed N] [--timeout-s 5]
         [--workers 2 | --sync] [--out DIR]
 """
 
@@ -26,7 +26,7 @@ from seed_campaign import add_run_arguments, out_for, print_references, run_spec
 
 from startrack.analysis.campaign.levels._sunsat import guides  # noqa: E402
 
-SPEC = "seed002-tables3-5-3-7-matching"
+SPEC = "jacobs1995-tables3-5-3-7-matching"
 SEED_SUBCATALOGUE = {"stars": 540, "pairs": 16281}
 
 
