@@ -40,15 +40,17 @@ from .._params import Param, SpecError
 _SCALARS = {"float": "float", "int": "int", "bool": "bool", "str": "str"}
 
 
-def _kind(cls: type, annotation: str) -> tuple[str, bool, tuple[str, ...] | None] | None:
-    """(kind, optional, choices) of a field of ``cls`` by its annotation, or None when it is not a
-    scalar; a ``Literal`` alias of the class's module (``ThresholdMethod``) is a str with its choices."""
+def _kind(cls: type, name: str, annotation: str) -> tuple[str, bool, tuple[str, ...] | None] | None:
+    """(kind, optional, choices) of the field ``name`` of ``cls`` by its annotation, or None when it
+    is not a scalar; a ``Literal`` alias (``ThresholdMethod``) of the module of the class that
+    declares the field (``cls`` or a base) is a str with its choices."""
     parts = [p.strip() for p in annotation.split("|")]
     optional = "None" in parts
     parts = [p for p in parts if p != "None"]
     if len(parts) != 1:
         return None
-    alias = vars(sys.modules[cls.__module__]).get(parts[0])
+    owner = next(c for c in cls.__mro__ if name in vars(c).get("__annotations__", {}))
+    alias = vars(sys.modules[owner.__module__]).get(parts[0])
     if get_origin(alias) is Literal:
         return "str", optional, get_args(alias)
     return (_SCALARS[parts[0]], optional, None) if parts[0] in _SCALARS else None
@@ -62,7 +64,7 @@ def dataclass_params(cls: type, prefix: str, doc: str, *, auto: bool, skip: tupl
     """
     out = []
     for f in dataclasses.fields(cls):
-        kind = _kind(cls, str(f.type))
+        kind = _kind(cls, f.name, str(f.type))
         if kind is None or f.name in skip or (f.default is dataclasses.MISSING and not auto):
             continue
         default = None if auto else f.default
