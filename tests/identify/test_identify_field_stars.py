@@ -22,3 +22,20 @@ def test_around_equals_a_brute_force_search(radius_deg, centre):
     if radius_deg > 1:  # some directions had more stars in reach than the first query fetches
         counts = (cos_angle >= np.cos(radius_deg * DEG)).sum(axis=0)
         assert counts.max() > AROUND_FIRST_K
+
+
+def test_a_new_process_maps_the_cached_arrays_it_would_build():
+    """field_stars keeps its arrays in the user cache: what a later process loads is what it builds."""
+    from startrack import cache
+    from startrack.identify._field_stars import FIELD_STARS_KIND, FIELD_STARS_VERSION, _field_arrays
+
+    field_stars.cache_clear()
+    stars = field_stars(6.0, 2031.5)  # builds and saves (or loads what an earlier run saved)
+    params = {"max_mag": 6.0, "epoch_jyear": 2031.5, "catalog_stars": len(stars.index_of_row)}
+    cached = cache.load(FIELD_STARS_KIND, FIELD_STARS_VERSION, params)
+    built = _field_arrays(6.0, 2031.5)
+    assert cached is not None and set(cached) == set(built) == {"rows", "vectors", "brighter_neighbour_rad"}
+    for name, array in built.items():
+        assert np.array_equal(cached[name], array), name
+    assert np.array_equal(stars.rows, built["rows"]) and np.array_equal(stars.vectors, built["vectors"])
+    assert stars.tree.n == len(built["rows"]) and np.array_equal(stars.tree.data, built["vectors"])
