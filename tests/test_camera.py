@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -215,9 +217,13 @@ def test_get_preset_names():
 
 
 def test_presets_record_their_source():
+    """Each preset names the document it comes from by its key in docs/references.md, then where."""
+    references = (Path(__file__).resolve().parents[1] / "docs" / "references.md").read_text(encoding="utf-8")
     for name, cam in PRESETS.items():
         assert cam.name == name
-        assert "seed" in cam.source
+        key = re.match(r"[A-Z][a-z]+ (19|20)\d\d", cam.source)
+        assert key and f"**{key.group(0)}**" in references, cam.source
+        assert len(cam.source) > len(key.group(0)) + 5, "and where in it (a table or section)"
 
 
 @pytest.mark.parametrize("fov", [np.float32(10.0), np.int64(10)])
