@@ -103,7 +103,7 @@ def test_every_cited_key_is_in_the_references(path):
 SEED_CITATION = re.compile(r"\bseeds?[ -]?0\d\d\b", re.I)
 """A document cited by its old seed number: "seed 000", "Seed 003's", the spec name "seed000-table4.2",
 the notes file "seed-001-004.md". Not a random-number seed ("seed=42", "--seed 3", "seed 4003", "seeded")
-nor an identifier that still carries the number inside a word ("SEED000_EQ34", "seed002_brightness")."""
+nor an identifier that still carries the number inside a word ("SEED000_EQ34", "jacobs1995_brightness")."""
 
 
 def seed_cited_files() -> list[Path]:
@@ -117,7 +117,7 @@ def test_seed_citation_finder():
                   "notes seed-001-004.md §3.5", "the seeds 001 and 002"):
         assert SEED_CITATION.search(cited), cited
     for not_cited in ("rng(seed=42)", "--seed 3", "campaign seed 4003", "seeded with 0", "SEED000_EQ34",
-                      "seed002_brightness", "seed 1, 14 frames"):
+                      "jacobs1995_brightness", "seed 1, 14 frames"):
         assert not SEED_CITATION.search(not_cited), not_cited
 
 

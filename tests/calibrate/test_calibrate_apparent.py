@@ -88,7 +88,7 @@ def test_the_effects_are_large_enough_for_the_comparison_to_mean_something():
     assert np.max(angle_between(no_aberration, _ref_vectors(entry, "gcrs"))) > 10 * ARCSEC
 
 
-def test_seed002_aberration_magnitudes():
+def test_jacobs1995_aberration_magnitudes():
     """Jacobs 1995 §7.5.1: 29.785 km/s -> 20.5 arcsec (99.39 urad), 7.4 km/s -> 5.1 arcsec (24.69 urad)."""
     assert aberration_angle_rad(29_785.0) / ARCSEC == pytest.approx(20.5, abs=0.05)
     assert aberration_angle_rad(7_400.0) / ARCSEC == pytest.approx(5.1, abs=0.05)

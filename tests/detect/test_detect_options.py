@@ -243,7 +243,7 @@ def test_zero_point_calibration_against_a_catalog():
     assert zp == pytest.approx(21.5, abs=1e-9) and scatter < 0.1
     np.testing.assert_allclose(instrument_magnitude(flux[:4], zp), catalog[:4])
     assert np.isnan(instrument_magnitude([-1.0])[0])
-    assert magnitude.seed002_brightness(100.0, 10, 2.0) == pytest.approx(140.0)
+    assert magnitude.jacobs1995_brightness(100.0, 10, 2.0) == pytest.approx(140.0)
     with pytest.raises(ValueError, match="catalog_mag"):
         calibrate_zero_point([1.0, 2.0], [1.0])
 

@@ -11,7 +11,7 @@ import scipy.constants as const
 from startrack import get_preset
 from startrack.errors import InvalidInputError
 from startrack.simulate import (
-    SEED000_EQ34_ZERO_POINT_PHOTONS_S_M2,
+    HUFFMAN2006_EQ34_ZERO_POINT_PHOTONS_S_M2,
     V_MAG0_PHOTONS_S_M2,
     Detector,
     Optics,
@@ -118,4 +118,4 @@ def test_seed_scale_preset_reproduces_seed_000_eq_3_4():
     assert float(seed.electrons(6.0)) == pytest.approx(literal, rel=1e-4)
     assert float(seed.electrons(6.0)) == pytest.approx(1.34e4, rel=0.01)
     assert seed.detector == get_sensor_preset("far-mst").detector
-    assert seed.optics.zero_point_photons_s_m2 == SEED000_EQ34_ZERO_POINT_PHOTONS_S_M2
+    assert seed.optics.zero_point_photons_s_m2 == HUFFMAN2006_EQ34_ZERO_POINT_PHOTONS_S_M2

@@ -36,9 +36,9 @@ from ..camera import Camera
 from ..errors import InvalidInputError
 from ..simulate import R_EARTH_KM, RSO, KeplerElements, Orbit, OrbitalScene, Snapshot
 
-SEED001_CAMERA_ELEMENTS = (6748.0, 0.0, 28.5, 0.0, 0.0, 0.0)
+SEASE2013_CAMERA_ELEMENTS = (6748.0, 0.0, 28.5, 0.0, 0.0, 0.0)
 """Table 4.3, camera spacecraft: a (km), e, i, RAAN, argument of perigee, true anomaly (deg)."""
-SEED001_RSO_ELEMENTS = (7078.0, 0.0, 89.0, 0.0, 30.0, 120.0)
+SEASE2013_RSO_ELEMENTS = (7078.0, 0.0, 89.0, 0.0, 30.0, 120.0)
 """Table 4.3, the RSO (the row the table labels "Spacecraft")."""
 KNOT_S = 10.0
 """Spacing of the propagated states that the candidate search interpolates (s)."""

@@ -12,7 +12,7 @@ star of flux 1. :func:`calibrate_zero_point` finds it from detections matched to
 (the Jacobs 1995 procedure, with a median instead of a mean so that a mismatched star or a saturated
 one does not pull it). Jacobs 1995's ``brightness = sum b_i + k_area n delta_th`` adds back the
 threshold its region pixels had subtracted; our flux is measured above the background, not above
-the threshold, so :func:`seed002_brightness` is only needed to reproduce that thesis.
+the threshold, so :func:`jacobs1995_brightness` is only needed to reproduce that thesis.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import InvalidInputError
 
 MAG_PER_DEX = 2.5
-SEED002_K_AREA = 2.0
+JACOBS1995_K_AREA = 2.0
 """Jacobs 1995's empirical area factor k_area (Jacobs 1995 §2.2.4, App C.1)."""
 
 
@@ -69,8 +69,8 @@ def calibrate_zero_point(flux: ArrayLike, catalog_mag: ArrayLike) -> tuple[float
     return zero_point, float(1.4826 * np.median(np.abs(values - zero_point)))
 
 
-def seed002_brightness(flux_above_threshold: ArrayLike, area_px: ArrayLike, delta_threshold: float,
-                       k_area: float = SEED002_K_AREA) -> NDArray[np.float64]:
+def jacobs1995_brightness(flux_above_threshold: ArrayLike, area_px: ArrayLike, delta_threshold: float,
+                       k_area: float = JACOBS1995_K_AREA) -> NDArray[np.float64]:
     """Jacobs 1995 eq. (§2.2.4): ``sum b_i + k_area * n * delta_th``, the region's summed values
     above the threshold plus the threshold's share, with its empirical ``k_area = 2``."""
     return (np.asarray(flux_above_threshold, dtype=np.float64)

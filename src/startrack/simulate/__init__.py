@@ -55,7 +55,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._profile_file import load_profile, save_profile
     from ._psf import add_stamps, render_gaussian_psf
     from ._radiometry import (
-        SEED000_EQ34_ZERO_POINT_PHOTONS_S_M2,
+        HUFFMAN2006_EQ34_ZERO_POINT_PHOTONS_S_M2,
         SENSOR_PRESETS,
         V_MAG0_PHOTONS_S_M2,
         Detector,

@@ -307,7 +307,7 @@ def magnitude_from_electrons(electrons: ArrayLike, sensor: Sensor) -> NDArray[np
 _FFSR_A_W = 0.12
 _QE_FROM_FFSR = _FFSR_A_W * 1239.84198 / V_BAND_CENTER_NM  # R = QE * e * lambda / (h c) -> 0.27
 
-SEED000_EQ34_ZERO_POINT_PHOTONS_S_M2: float = (
+HUFFMAN2006_EQ34_ZERO_POINT_PHOTONS_S_M2: float = (
     _FFSR_A_W * 10.0 * 10.0 ** (28.0 / 2.5) / _QE_FROM_FFSR)
 """The zero point that makes this model equal Huffman 2006 eq. 3.4 literally (FFSR 0.12 A/W, g = 10,
 zero point "28"): 7.0e11 photons s^-1 m^-2, 80 times the V-band value. That scale is
@@ -343,7 +343,7 @@ SENSOR_PRESETS: dict[str, Sensor] = {
     "far-mst-seed-eq34": replace(
         _FAR_MST,
         optics=replace(_FAR_MST.optics,
-                       zero_point_photons_s_m2=SEED000_EQ34_ZERO_POINT_PHOTONS_S_M2),
+                       zero_point_photons_s_m2=HUFFMAN2006_EQ34_ZERO_POINT_PHOTONS_S_M2),
         name="far-mst-seed-eq34",
         source="as 'far-mst', with the signal scale of Huffman 2006 eq. 3.4 taken literally "
                "(M_V 6 -> 1.34e4 e-); for reproducing the seed's tables only"),

@@ -11,7 +11,7 @@ from astropy.time import Time, TimeDelta
 from scipy.spatial.transform import Rotation
 from seed_tables_checks import finite, shipped, tiny_run
 
-from startrack.analysis._rso_passes import SEED001_CAMERA_ELEMENTS, SEED001_RSO_ELEMENTS, camera_rotation, elements
+from startrack.analysis._rso_passes import SEASE2013_CAMERA_ELEMENTS, SEASE2013_RSO_ELEMENTS, camera_rotation, elements
 from startrack.analysis.campaign._params import SpecError
 from startrack.analysis.campaign._spec import parse_spec
 from startrack.analysis.campaign.levels import get_level
@@ -86,8 +86,8 @@ def test_each_opportunity_sees_the_rso_lit_inside_the_image_with_no_earth_or_sun
     assert len(found) >= 4
     epoch = Time(p["epoch_utc"], scale="utc")
     t = np.unique(np.concatenate([c.start_s + np.array([0.0, 0.25, 0.5]) for c in found]))
-    obs = Orbit.from_elements(epoch, elements(SEED001_CAMERA_ELEMENTS, "c")).states(t)[0]
-    rso = Orbit.from_elements(epoch, elements(SEED001_RSO_ELEMENTS, "r")).states(t)[0]
+    obs = Orbit.from_elements(epoch, elements(SEASE2013_CAMERA_ELEMENTS, "c")).states(t)[0]
+    rso = Orbit.from_elements(epoch, elements(SEASE2013_RSO_ELEMENTS, "r")).states(t)[0]
     rots = camera_rotation((0.0, 0.05, 0.0), t)
     x, y = CAMERA.vector_to_pixel(rots.apply(rso - obs))
     assert np.all(CAMERA.in_image(x, y, 29.0))  # px: 30 asked, the light time moves it < 1 px
@@ -135,8 +135,8 @@ def test_the_specs_hold_tables_4_1_to_4_4():
     assert rows["displacement (deg)"] == 0.993 and rows["displacement (rad)"] == 0.0248
     assert len(spec.cells()) == 8
     spec = shipped(SPEC_44)
-    assert spec.base["camera_elements"] == SEED001_CAMERA_ELEMENTS
-    assert spec.base["rso_elements"] == SEED001_RSO_ELEMENTS and spec.base["rso_mag"] == 4.0
+    assert spec.base["camera_elements"] == SEASE2013_CAMERA_ELEMENTS
+    assert spec.base["rso_elements"] == SEASE2013_RSO_ELEMENTS and spec.base["rso_mag"] == 4.0
     assert spec.sweep["opportunity"] == tuple(range(len(passes(spec.cells()[0].params))))
     correct = next(r for r in spec.reference if "(Correct)" in r["title"])
     false = next(r for r in spec.reference if "(False)" in r["title"])

@@ -53,7 +53,7 @@ from scipy.spatial.transform import Rotation
 from ....errors import InvalidInputError
 from ....rate import DETECTORS, INDICATORS, SEGMENT, RateEstimate, StreakRate, axis_error_rad, streak_rate
 from ....units import DEG
-from ..._rso_passes import SEED001_CAMERA_ELEMENTS, SEED001_RSO_ELEMENTS, Pass, elements, find_passes
+from ..._rso_passes import SEASE2013_CAMERA_ELEMENTS, SEASE2013_RSO_ELEMENTS, Pass, elements, find_passes
 from ..._streak_scenes import StreakScene, rso_path, separated_field, star_field, turning_rso_snapshot
 from .._outcome import NAN
 from .._params import Param, SpecError, params_by_name
@@ -86,9 +86,9 @@ RSO_PARAMS = (
           lo=0.5, hi=100.0),
     Param("rate_tolerance_pct", "float", 5.0, "a rate is correct within this share of |omega| (%)",
           lo=0.0, hi=1000.0),
-    Param("camera_elements", "floats", SEED001_CAMERA_ELEMENTS, "orbit scenario: the camera spacecraft's "
+    Param("camera_elements", "floats", SEASE2013_CAMERA_ELEMENTS, "orbit scenario: the camera spacecraft's "
           "a (km), e, i, RAAN, argp, true anomaly (deg) (Table 4.3)", lo=-360.0, hi=1e6, length=6),
-    Param("rso_elements", "floats", SEED001_RSO_ELEMENTS, "orbit scenario: the RSO's elements (Table 4.3)",
+    Param("rso_elements", "floats", SEASE2013_RSO_ELEMENTS, "orbit scenario: the RSO's elements (Table 4.3)",
           lo=-360.0, hi=1e6, length=6),
     Param("epoch_utc", "str", "2013-01-01T00:00:00", "orbit scenario: epoch of the elements and the identity "
           "attitude (ISO, UTC; the seed gives none)"),
