@@ -58,7 +58,7 @@ def coil_torque_body(currents_a: ArrayLike, normals_body: NDArray, moment_per_am
     """Torque of coils (normals (n, 3), currents (n,)) in the body-frame field ``b_body_t``, N m."""
     mx, my, mz = (moment_per_amp * np.asarray(currents_a, dtype=float) @ normals_body).tolist()
     bx, by, bz = (float(b) for b in b_body_t)
-    return np.array([my * bz - mz * by, mz * bx - mx * bz, mx * by - my * bx])  # m x b (np.cross costs ~30 us)
+    return np.array([my * bz - mz * by, mz * bx - mx * bz, mx * by - my * bx])  # m x b (np.cross is slow on 3-vectors)
 
 
 def y_rotation(theta_rad: float) -> Rotation:
@@ -168,7 +168,7 @@ class ThreeAxisPlant:
         return self._state[4:].copy()
 
     def _derivative(self, y: NDArray, t: float, moment: tuple[float, float, float]) -> list[float]:
-        """d/dt of (quaternion, rate), in plain floats (numpy's small-array calls cost ~10 us each)."""
+        """d/dt of (quaternion, rate), in plain floats (numpy's calls on small arrays cost more than the arithmetic)."""
         x, yq, z, w = y[:4] / math.sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2] + y[3] * y[3])
         p, q, r = y[4], y[5], y[6]
         bx, by, bz = _rotate_inverse((x, yq, z, w), self.field.field_ref(t))

@@ -5,11 +5,9 @@ about ``max_block_px`` pixels including an overlap of :data:`MARGIN_PX` rows on 
 each strip runs through the whole pipeline on a view of the input (no copy of the frame), and a
 detection is kept by the strip whose own rows (without the overlap) contain its centroid. Strip
 boundaries fall on multiples of the background tile, so the tiles are the ones a single pass
-would use. The working memory is that of one strip, whatever the frame's size: measured with
-``tracemalloc`` (``benchmarks/detect_speed.py --huge``), about 5 bytes per strip pixel for
-integer input (81 MiB for a 20,000 x 20,000 uint16 frame at the default 16.8 Mpx strips) and 9
-bytes for float input, which is copied to float32 strip by strip (144 MiB); the input itself is
-the caller's and is never copied whole.
+would use. The working memory is that of one strip, whatever the frame's size (measured with
+``tracemalloc`` by ``benchmarks/detect_speed.py --huge``): float input is copied to float32
+strip by strip, and the input itself is the caller's and is never copied whole.
 """
 
 from __future__ import annotations

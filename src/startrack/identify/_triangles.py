@@ -6,7 +6,7 @@ Candidate catalog triangles come from a **triangle directory** (:mod:`._triangle
 catalog triangle of the pair directory's stars, sorted by area with a k-vector), not from the pair
 directory: one k-vector query on the area and a vectorised moment test per image triangle. On
 15-deg fields this is about as fast as deriving triangles from pairs, and it is the method as
-published; the directory is built once into the user cache (about 1 s planar, 10 s spherical).
+published; the directory is built once into the user cache (the spherical one takes longer).
 
 1. Triads of the brightest image stars in Mortari's order (:func:`.star_order.ordered_star_sets`).
 2. The image triangle's area A and polar moment I (:mod:`._triangle_features`), with 1-sigma errors
