@@ -20,7 +20,7 @@ from . import _settings_checks as checks
 from ._centroid import UNCERTAINTY_MODELS, UncertaintyModel
 from ._centroiders import CENTROIDERS, CentroidMethod
 from ._denoise import DENOISE_METHODS, DenoiseMethod
-from ._smooth import KERNELS
+from ._smooth import KERNELS, SmoothingKernel
 
 BackgroundMode = Literal["tiled", "global"]
 ThresholdMethod = Literal["ksigma", "dynamic", "prefilter-window", "prefilter-grid"]
@@ -93,7 +93,7 @@ class DetectionSettings:
     diffusion_iterations: int = 10
     diffusion_kappa_sigma: float = 3.0
     binning: int = 2
-    kernel: str = "binomial"
+    kernel: SmoothingKernel = "binomial"
     kernel_px: int = 3
     threshold: ThresholdMethod = "ksigma"
     sigma: float = 5.0

@@ -17,6 +17,8 @@ beats the wider box: averaging does not divide correlated noise by the window wi
 
 from __future__ import annotations
 
+from typing import Literal, get_args
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -38,7 +40,9 @@ def bin_mean(image: NDArray, factor: int) -> NDArray[np.float32]:
     return kernels().bin_mean(image, factor, out, scratch_row(out.shape[1] * factor, image, out), exact)
 
 
-KERNELS = ("binomial", "box")
+SmoothingKernel = Literal["binomial", "box"]
+"""The detection image's smoothing kernels (a binomial or a flat box of ``kernel_px`` pixels)."""
+KERNELS: tuple[SmoothingKernel, ...] = get_args(SmoothingKernel)
 
 
 def kernel_weights(kernel: str, size: int) -> NDArray[np.float32]:
