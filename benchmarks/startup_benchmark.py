@@ -68,12 +68,13 @@ from startrack.cli._batch_warmup import warm_up
 t1 = time.perf_counter()
 import startrack.solve, startrack.detect._detector, startrack.identify._quad_search, startrack.identify._refine
 from numba.core.registry import CPUDispatcher
-from startrack.identify import match_kernel, pose_kernel, quad_kernel
+from startrack.identify import _match_kernel as match_kernel, _pose_kernel as pose_kernel, _quad_kernel as quad_kernel
 loads = {}
 for module in (quad_kernel, pose_kernel, match_kernel):
     for name, fn in vars(module).items():
         if isinstance(fn, CPUDispatcher):
-            def timed(sig, ctx, _load=fn._cache.load_overload, _key=module.__name__.split(".")[-1] + "." + name):
+            key = module.__name__.split(".")[-1].lstrip("_") + "." + name
+            def timed(sig, ctx, _load=fn._cache.load_overload, _key=key):
                 t = time.perf_counter()
                 try:
                     return _load(sig, ctx)
