@@ -134,7 +134,8 @@ _DETECTOR_SELECTORS = [(name, typing.get_args(hint)) for name, hint in typing.ge
 
 
 def test_the_star_detector_has_literal_selectors():
-    assert {"background", "threshold", "grouping", "centroid", "denoise", "kernel"} <= {name for name, _ in _DETECTOR_SELECTORS}
+    expected = {"background", "threshold", "grouping", "centroid", "denoise", "kernel"}
+    assert expected <= {name for name, _ in _DETECTOR_SELECTORS}
 
 
 def test_a_wrong_denoise_method_is_refused_at_construction_naming_the_valid_ones():
