@@ -27,11 +27,12 @@ def test_around_equals_a_brute_force_search(radius_deg, centre):
 def test_a_new_process_maps_the_cached_arrays_it_would_build():
     """field_stars keeps its arrays in the user cache: what a later process loads is what it builds."""
     from startrack import cache
+    from startrack.catalog import catalog_identity
     from startrack.identify._field_stars import FIELD_STARS_KIND, FIELD_STARS_VERSION, _field_arrays
 
     field_stars.cache_clear()
     stars = field_stars(6.0, 2031.5)  # builds and saves (or loads what an earlier run saved)
-    params = {"max_mag": 6.0, "epoch_jyear": 2031.5, "catalog_stars": len(stars.index_of_row)}
+    params = {"max_mag": 6.0, "epoch_jyear": 2031.5, "catalog": catalog_identity()}
     cached = cache.load(FIELD_STARS_KIND, FIELD_STARS_VERSION, params)
     built = _field_arrays(6.0, 2031.5)
     assert cached is not None and set(cached) == set(built) == {"rows", "vectors", "brighter_neighbour_rad"}

@@ -12,7 +12,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._cone import ConeIndex, cone_search, query_cone
     from ._doubles import flag_doubles, merge_doubles
     from ._epoch import EPOCH_RANGE_JYEAR, epoch_jyear, jyear_tdb
-    from ._hipparcos import load_catalog
+    from ._hipparcos import catalog_identity, load_catalog
     from ._star_catalog import StarCatalog
     from ._thinning import fibonacci_sphere, thin_uniform
 

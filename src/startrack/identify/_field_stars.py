@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from .. import cache
-from ..catalog import angle_from_chord, chord_from_angle, load_catalog, query_cone
+from ..catalog import angle_from_chord, catalog_identity, chord_from_angle, load_catalog, query_cone
 
 
 @dataclass(frozen=True)
@@ -92,11 +92,12 @@ def field_stars(max_mag: float, epoch_jyear: float) -> FieldStars:
     """Catalog stars with V <= ``max_mag``, brightest first (built once per process and limit).
 
     The rows, their vectors at the epoch and the brighter-neighbour angles are kept in the user
-    cache (:func:`startrack.cache.load_or_build`), keyed on the limit, the epoch and the catalog's
-    size, so that a new process only maps them and builds the KD-tree.
+    cache (:func:`startrack.cache.load_or_build`), keyed on the limit, the epoch and the catalog
+    (:func:`startrack.catalog.catalog_identity`), so that a new process only maps them and builds
+    the KD-tree.
     """
     catalog = load_catalog()
-    params = {"max_mag": float(max_mag), "epoch_jyear": float(epoch_jyear), "catalog_stars": len(catalog.hip)}
+    params = {"max_mag": float(max_mag), "epoch_jyear": float(epoch_jyear), "catalog": catalog_identity()}
     arrays = cache.load_or_build(FIELD_STARS_KIND, FIELD_STARS_VERSION, params,
                                  lambda: _field_arrays(max_mag, epoch_jyear))
     rows, vectors = arrays["rows"], arrays["vectors"]
