@@ -75,7 +75,8 @@ SLEW_PART, SPEED_PART = 6, 7
 
 
 MISS_COLUMNS = ("fov_deg", "rate_deg_s", "n_matched", "streak_px", "rate_status", "rate_err_any_pct", "axis_err_deg",
-                "rate_sigma3_pct", "rate_sigma_roll_deg_s", "rate_sigma_cross_deg_s", "birge")
+                "rate_sigma3_pct", "rate_sigma_roll_deg_s", "rate_sigma_cross_deg_s", "birge", "rate_bound_pct",
+                "target_chance")
 
 
 def print_streak_misses(trials) -> list[dict]:
@@ -94,15 +95,17 @@ def print_streak_misses(trials) -> list[dict]:
     rows = [{k: (v.item() if hasattr(v, "item") else v) for k, v in ((c, cols[c][i]) for c in MISS_COLUMNS)}
             for i in miss]
     print(f"\nframes with at least 5 identified streaks that miss the target ({len(rows)} of "
-          f"{int(cols['five_streaks'].astype(bool).sum())}): sigmas are the solver's, % of the rate")
+          f"{int(cols['five_streaks'].astype(bool).sum())}): sigmas are the solver's, % of the rate; bound: the "
+          "Cramer-Rao 1-sigma of the rate vector at the true state, % of the rate; chance: that an efficient "
+          "estimator of these streaks meets the target")
     print(f"  {'fov':>4} {'deg/s':>5} {'streaks':>7} {'length px':>9} {'rate status':>13} {'err %':>6} {'axis deg':>8} "
-          f"{'3 sigma %':>9} {'roll 1s %':>9} {'cross 1s %':>10} {'birge':>5}")
+          f"{'3 sigma %':>9} {'roll 1s %':>9} {'cross 1s %':>10} {'birge':>5} {'bound %':>7} {'chance':>6}")
     for r in rows:
         speed = r["rate_deg_s"]
         print(f"  {r['fov_deg']:4.0f} {speed:5.1f} {r['n_matched']:7d} {r['streak_px']:9.0f} {r['rate_status']:>13} "
               f"{r['rate_err_any_pct']:6.2f} {r['axis_err_deg']:8.2f} {r['rate_sigma3_pct']:9.2f} "
               f"{100 * r['rate_sigma_roll_deg_s'] / speed:9.2f} {100 * r['rate_sigma_cross_deg_s'] / speed:10.2f} "
-              f"{r['birge']:5.2f}")
+              f"{r['birge']:5.2f} {r['rate_bound_pct']:7.2f} {r['target_chance']:6.2f}")
     return rows
 
 

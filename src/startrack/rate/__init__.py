@@ -30,6 +30,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._from_vectors import match_frames, rate_from_vectors
     from ._rso import INDICATORS, IndicatorName
     from ._smear_mode import SmearLimits, image_smear_px, usable_for_prediction
+    from ._streak_bound import rate_bound, target_chance
     from ._streak_detect import find_streaks
     from ._streak_find import find_streak_candidates
     from ._streak_fit import first_guesses, fit_streaks

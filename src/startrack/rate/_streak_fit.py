@@ -33,7 +33,13 @@ CAPACITY = 200_000
 MAX_ITER = 25
 TOL_PX = 0.01
 FIRST_TOL_PX = 0.05
-"""The first pass stops at this step: the second, on every pixel of a tight window, refines it."""
+FIRST_STEP_SIGMAS = 0.5
+"""The first pass stops at a step of this size, or this many of each end's, the sag's and the
+blur's 1-sigma: the second, on every pixel of a tight window, refines it."""
+STEP_SIGMAS = 0.2
+"""The second pass stops at a step of ``TOL_PX`` or this many 1-sigma (:mod:`._streak_kernel`)."""
+MAX_WINDOWS = 3
+"""Windows one fit may move through (:func:`._streak_kernel.fit_arcs`)."""
 BLUR_RANGE_PX = (0.45, 4.5)
 """A fitted blur outside this range is not one star's streak."""
 MIN_FLUX_SNR = 8.0
@@ -229,6 +235,7 @@ def fit_streaks(
     shot: float | None = None,
     saturation: float | None = None,
     passes: int = 2,
+    max_windows: int = MAX_WINDOWS,
 ) -> StreakFits:
     """Fit arcs to a frame from first guesses (module docstring).
 
@@ -253,6 +260,9 @@ def fit_streaks(
     passes : int
         2 (module docstring) or 1: only the second pass, in the tight window around ``start``
         (a first guess within a pixel or so, such as a prediction), its weights from ``start``.
+    max_windows : int
+        Windows a fit may move through when an end walks to its window's edge (1: a fit stays in
+        the window around ``start``, as a prediction's must to agree with it).
 
     Returns
     -------
@@ -272,10 +282,11 @@ def fit_streaks(
         raise InvalidInputError(f"noise must be a positive sigma, got {noise!r}")
     reach, band = np.asarray(reach, dtype=float), np.asarray(band, dtype=float)
     if passes == 1:
-        params, cov, stats = _run(img, labels, bin_px, own, start, reach, band, sat, var_bg, shot or 0.0, False, TOL_PX)
+        params, cov, stats = _run(img, labels, bin_px, own, start, reach, band, sat, var_bg, shot or 0.0, False,
+                                  (TOL_PX, STEP_SIGMAS, max_windows))
         return _judged(params, cov, stats, img.shape, own, shot or 0.0, float(noise), _median_bg(start))
     params, cov, stats = _run(img, labels, bin_px, own, start, reach, band, sat, var_bg, shot or 0.0, True,
-                              FIRST_TOL_PX)
+                              (FIRST_TOL_PX, FIRST_STEP_SIGMAS, max_windows))
     # a first pass that ran out of steps may still be a streak: its background-only weights make a
     # bright streak's photon noise look like misfit, which the second pass's weights remove
     flags = np.where(stats[:, 3] == 1, 0, stats[:, 3]).astype(int)
@@ -286,7 +297,7 @@ def fit_streaks(
     again = np.flatnonzero(promising)
     if again.size:
         second = _run(img, labels, bin_px, own[again], params[again], tight_reach[again], tight_band[again], sat,
-                      var_bg, shot, False, TOL_PX)
+                      var_bg, shot, False, (TOL_PX, STEP_SIGMAS, max_windows))
         params[again], cov[again], stats[again] = second
     return _judged(params, cov, stats, img.shape, own, shot, float(noise), _median_bg(start))
 
@@ -295,12 +306,15 @@ def _median_bg(start: NDArray) -> float:
     return float(np.median(start[:, 7])) if len(start) else 0.0
 
 
-def _run(img, labels, bin_px, own, start, reach, band, sat, var_bg, shot, half, tol_px):
+def _run(img, labels, bin_px, own, start, reach, band, sat, var_bg, shot, half, stopping):
+    """One pass of the compiled fit; ``stopping`` is (tol_px, step_sigmas, max_windows)."""
+    tol_px, step_sigmas, max_windows = stopping
     k = len(start)
     params, covs, stats = np.zeros((k, NPAR)), np.zeros((k, NPAR, NPAR)), np.zeros((k, 4))
     kernel().fit_arcs(img, labels, int(bin_px), own, np.ascontiguousarray(start, dtype=np.float64),
                       np.ascontiguousarray(reach, dtype=np.float64), np.ascontiguousarray(band, dtype=np.float64),
-                      sat, var_bg, float(shot), bool(half), MAX_ITER, float(tol_px), CAPACITY, params, covs, stats)
+                      sat, var_bg, float(shot), bool(half), MAX_ITER, float(tol_px), float(step_sigmas),
+                      int(max_windows), CAPACITY, params, covs, stats)
     return params, covs, stats
 
 

@@ -53,6 +53,22 @@ def geometry(p, geo):
     geo[10], geo[11] = p[SIG], 1.0 / p[SIG]
 
 
+ERF_P = 0.3275911
+ERF_A = (0.254829592, -0.284496736, 1.421413741, -1.453152027, 1.061405429)
+"""Abramowitz & Stegun (1964) 7.1.26: erf(z) = 1 - t (a1 + a2 t + ... + a5 t^4) exp(-z^2) with
+t = 1 / (1 + p z), z >= 0, to within 1.5e-7: the model's along factor at a fifth of math.erf's
+cost, since its derivatives need exp(-z^2) anyway."""
+
+
+@njit(cache=True, fastmath=True, inline="always")
+def erf_given_exp(z, exp_minus_z2):
+    """erf(z) from ``exp(-z^2)`` (A&S 7.1.26, :data:`ERF_A`; absolute error under 1.5e-7)."""
+    a1, a2, a3, a4, a5 = ERF_A
+    t = 1.0 / (1.0 + ERF_P * abs(z))
+    value = 1.0 - t * (a1 + t * (a2 + t * (a3 + t * (a4 + t * a5)))) * exp_minus_z2
+    return value if z >= 0.0 else -value
+
+
 @njit(cache=True, fastmath=True)
 def arc_value(x, y, geo):
     """The model at pixel (x, y) from the arc's constants ``geo`` (no derivatives)."""
@@ -65,7 +81,7 @@ def arc_value(x, y, geo):
     k = inv_s / SQRT2
     zp, zm = (t + half) * k, (t - half) * k
     if not (zp > 4.5 and zm < -4.5):
-        along = 0.5 * (math.erf(zp) - math.erf(zm))
+        along = 0.5 * (erf_given_exp(zp, math.exp(-zp * zp)) - erf_given_exp(zm, math.exp(-zm * zm)))
     return geo[9] + geo[7] * (1.0 + geo[8] * t * inv_half) * math.exp(-0.5 * zs * zs) * along
 
 
@@ -90,8 +106,8 @@ def arc_jacobian(x, y, geo, jac):
     if zp > 4.5 and zm < -4.5:  # inside the arc, away from its ends: the along factor is 1 to 1e-9
         along, e_t, e_h, e_s = 1.0, 0.0, 0.0, 0.0
     else:
-        along = 0.5 * (math.erf(zp) - math.erf(zm))
         ep, em = math.exp(-zp * zp), math.exp(-zm * zm)
+        along = 0.5 * (erf_given_exp(zp, ep) - erf_given_exp(zm, em))
         c = k / SQRTPI
         e_t, e_h, e_s = c * (ep - em), c * (ep + em), (zp * ep - zm * em) * inv_s / SQRTPI
     core = across * along
@@ -223,11 +239,6 @@ def _weights(p, xs, ys, n, var_bg, shot, wts):
         wts[i] = 1.0 / (var_bg + shot * max(signal, 0.0))
 
 
-STEP_SIGMAS = 0.2
-"""A fit has converged when a step moves each end, the sag and the blur by less than this many of
-their own 1-sigma (or by less than the fit's ``tol_px``)."""
-
-
 @njit(cache=True)
 def _small_step(step, jtj, fraction):
     """Whether ``step`` (9,) moves each end (in x and in y), the sag and the blur by less than
@@ -246,16 +257,16 @@ def _small_step(step, jtj, fraction):
 
 
 @njit(cache=True)
-def levenberg_marquardt(p, xs, ys, vs, wts, n, max_iter, tol_px, cov):
+def levenberg_marquardt(p, xs, ys, vs, wts, n, max_iter, tol_px, step_sigmas, cov):
     """Fit ``p`` (9,) in place to n pixels; ``cov`` (9, 9) gets (J^T W J)^-1 at the end.
 
     Returns (chi^2, iterations, flag) with flag :data:`FIT_OK`, :data:`FIT_NOT_CONVERGED` or
     :data:`FIT_SINGULAR`. Converged: a step moves no end, the sag or the blur by more than
-    ``tol_px``, or moves each of them by less than :data:`STEP_SIGMAS` of its own 1-sigma
+    ``tol_px``, or moves each of them by less than ``step_sigmas`` of its own 1-sigma
     (:func:`_small_step`: a faint streak's ends are known to a pixel or so, and chasing them to
     ``tol_px`` took most of the iterations)."""
-    jtj = np.zeros((NPAR, NPAR))
-    jtr = np.zeros(NPAR)
+    jtj, trial_jtj = np.zeros((NPAR, NPAR)), np.zeros((NPAR, NPAR))
+    jtr, trial_jtr = np.zeros(NPAR), np.zeros(NPAR)
     jac = np.zeros(NPAR)
     trial = np.zeros(NPAR)
     lam = 1e-3
@@ -274,14 +285,16 @@ def levenberg_marquardt(p, xs, ys, vs, wts, n, max_iter, tol_px, cov):
             break
         trial[:] = p + step
         _clamped(trial)
-        new = _chi2(trial, xs, ys, vs, wts, n)
+        new = _system(trial, xs, ys, vs, wts, n, trial_jtj, trial_jtr, jac)  # most steps are taken
         if new <= chi2:
             moved = max(abs(step[CX]) + abs(step[HX]), abs(step[CY]) + abs(step[HY]))
             moved = max(moved, max(abs(step[SAG]), abs(step[SIG])))
             p[:] = trial
-            chi2 = _system(p, xs, ys, vs, wts, n, jtj, jtr, jac)
+            jtj[:, :] = trial_jtj
+            jtr[:] = trial_jtr
+            chi2 = new
             lam = max(lam / 3.0, 1e-9)
-            if moved < tol_px or _small_step(step, jtj, STEP_SIGMAS):
+            if moved < tol_px or _small_step(step, jtj, step_sigmas):
                 flag = FIT_OK
                 break
         else:
@@ -298,7 +311,7 @@ def levenberg_marquardt(p, xs, ys, vs, wts, n, max_iter, tol_px, cov):
 
 @njit(cache=True)
 def fit_arcs(image, labels, bin_px, own, start, reach, band, saturation, var_bg, shot, checkerboard, max_iter,
-             tol_px, capacity, params, covs, stats):
+             tol_px, step_sigmas, max_windows, capacity, params, covs, stats):
     """Fit K arcs to ``image`` (H, W): ``start`` (K, 9) the first guesses, ``own`` (K,) each one's
     label (0: none), ``reach`` and ``band`` (K,) the window around each first guess (px beyond the
     ends, px across). Results into ``params`` (K, 9), ``covs`` (K, 9, 9) and ``stats`` (K, 4):
@@ -307,23 +320,24 @@ def fit_arcs(image, labels, bin_px, own, start, reach, band, saturation, var_bg,
     Each pixel is weighted by 1 / (``var_bg`` + ``shot`` x signal), the signal being the first
     guess's model above its background and ``shot`` the variance per unit of signal (1 / gain in
     image units; 0: background noise only), so that a bright streak's photon noise is in its
-    covariance; ``checkerboard`` fits every other pixel only (:func:`gather`). An arc whose end
-    moves more than half of ``reach`` from the window's is fitted again in a window around its
-    new ends (at most :data:`MAX_WINDOWS` windows), so that a first guess too short finds the
-    ends."""
+    covariance; ``checkerboard`` fits every other pixel only (:func:`gather`). ``max_iter``,
+    ``tol_px`` and ``step_sigmas`` are :func:`levenberg_marquardt`'s. An arc whose end moves
+    more than half of ``reach`` from the window's is fitted again in a window around its new
+    ends (at most ``max_windows`` windows), so that a first
+    guess too short finds the ends."""
     xs, ys, vs, wts = np.empty(capacity), np.empty(capacity), np.empty(capacity), np.empty(capacity)
     cov = np.zeros((NPAR, NPAR))
     for k in range(start.shape[0]):
         p = start[k].copy()
         window = p.copy()
         iterations, chi2, flag, n = 0, 0.0, FIT_TOO_FEW_PIXELS, 0
-        for _ in range(MAX_WINDOWS):
+        for _ in range(max_windows):
             n = gather(image, labels, bin_px, own[k], window, reach[k], band[k], saturation, checkerboard, xs, ys, vs)
             if n < 4 * NPAR:
                 flag = FIT_TOO_FEW_PIXELS
                 break
             _weights(window, xs, ys, n, var_bg, shot, wts)
-            chi2, more, flag = levenberg_marquardt(p, xs, ys, vs, wts, n, max_iter, tol_px, cov)
+            chi2, more, flag = levenberg_marquardt(p, xs, ys, vs, wts, n, max_iter, tol_px, step_sigmas, cov)
             iterations += more
             if flag == FIT_SINGULAR or _end_shift(p, window) < 0.5 * reach[k]:
                 break
@@ -332,10 +346,6 @@ def fit_arcs(image, labels, bin_px, own, start, reach, band, saturation, var_bg,
         params[k] = p
         covs[k] = cov
         stats[k, 0], stats[k, 2], stats[k, 3] = chi2, iterations, flag
-
-
-MAX_WINDOWS = 3
-"""Windows one fit may move through (an end that reaches the edge of its window starts another)."""
 
 
 @njit(cache=True)

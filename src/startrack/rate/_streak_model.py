@@ -266,3 +266,26 @@ def _result(problem: _Problem, meas: NDArray, q: NDArray, used: NDArray, chi2: N
     cov[np.ix_(problem.free, problem.free)] = np.linalg.pinv(a.T @ a) * max(birge, 1.0) ** 2
     rot, omega, alpha, camera = problem.state(q)
     return JointFit(rot, omega, alpha, cov, used, chi2, birge, meas, problem.predicted(q)[0], camera)
+
+
+def information_covariance(camera: Camera, stars_icrs: NDArray, cov: NDArray, rot_mid: Rotation, omega: ArrayLike,
+                           alpha: ArrayLike, timing: Timing, *, fit_alpha: bool = False,
+                           fit_focal: bool = False) -> NDArray[np.float64]:
+    """The Cramér-Rao covariance (10, 10) of (attitude error rotvec, omega, alpha, ln focal
+    length) that K streaks measured with covariance ``cov`` (K, 6, 6; px^2) allow at the state
+    (``rot_mid``, ``omega`` rad/s, ``alpha`` rad/s^2; camera frame) of stars ``stars_icrs``
+    (K, 3): the inverse of the joint fit's information ``J^T C^-1 J`` with J evaluated at that
+    state (the true one, to bound what any unbiased fit of these streaks can do), without the
+    Birge-ratio scaling of :func:`fit_joint`. Zero rows and columns for what is not fitted."""
+    free = np.array([True] * 6 + [fit_alpha] * 3 + [fit_focal])
+    v0 = rot_mid.apply(np.asarray(stars_icrs, dtype=float)).reshape(-1, 3)
+    problem = _Problem(camera, v0, whitening(np.asarray(cov, dtype=float)), rot_mid, timing, free)
+    full = np.zeros(10)
+    full[3:6], full[6:9] = np.asarray(omega, dtype=float), np.asarray(alpha, dtype=float)
+    q = full[free]
+    _, jac = _jacobian(problem, problem.predicted(q)[0], q, np.ones(len(v0), dtype=bool))
+    a = jac.reshape(-1, len(q))
+    out = np.zeros((10, 10))
+    out[np.ix_(free, free)] = np.linalg.pinv(a.T @ a)
+    return out
+

@@ -22,7 +22,7 @@ from scipy.spatial.transform import Rotation
 from ..camera import Camera
 from ..catalog import load_catalog
 from ..identify import FieldStars
-from ._streak_fit import NPAR, StreakFits, fit_streaks
+from ._streak_fit import MAX_WINDOWS, NPAR, StreakFits, fit_streaks
 from ._streak_model import Timing, predict
 
 CROWDED_PX = 6.0
@@ -131,8 +131,9 @@ def fit_predicted(image: NDArray, camera: Camera, stars_icrs: NDArray, rot_mid: 
     image, not crowded by another star of the S (with ``flux``, one of at least
     :data:`CONTAMINATION_SNR`) and, given each star's expected light ``flux`` (S,), at least
     :data:`MIN_PREDICTED_SNR`; returns the star indices fitted and their fits (``passes`` of
-    :func:`.streak_fit.fit_streaks`: one from a close prediction, two from a rough one), each
-    fit's ``ok`` also requiring it to agree with the prediction within ``tolerance_px``."""
+    :func:`.streak_fit.fit_streaks`: one from a close prediction, which stays in the window
+    around it, two from a rough one, which may move its window), each fit's ``ok`` also requiring
+    it to agree with the prediction within ``tolerance_px``."""
     predicted = predict(camera, rot_mid, omega, alpha, stars_icrs, timing)
     use = inside(predicted, camera, EDGE_PX + 3.0 * blur_px)
     if wanted is not None:
@@ -148,7 +149,8 @@ def fit_predicted(image: NDArray, camera: Camera, stars_icrs: NDArray, rot_mid: 
     if index.size == 0:
         return index, None
     start, reach, band = guesses(predicted[index], image, background, blur_px, slack_px)
-    fits = fit_streaks(image, start, reach, band, noise=noise, shot=shot, passes=passes)
+    fits = fit_streaks(image, start, reach, band, noise=noise, shot=shot, passes=passes,
+                       max_windows=1 if passes == 1 else MAX_WINDOWS)
     agree = agreement_px(fits, predicted[index]) <= tolerance_px
     reasons = tuple(r or ("" if a else "does not agree with the predicted streak")
                     for r, a in zip(fits.reasons, agree, strict=True))

@@ -26,8 +26,11 @@ uncertainty of the rate vector over |omega|), ``rate_sigma_roll_deg_s`` / ``rate
 simulator's), ``streak_fraction`` (drawn), ``exposure_s``, ``streak_px`` (the true median streak
 length of the stars in the image), ``n_true`` (those stars), ``cpu_s`` (process time of the
 solve), ``time_order_known``, ``five_streaks`` (solved with at least five identified streaks: the
-frames the issue's target is about) and ``meets_target`` (a trusted rate within 1 % and an axis
-within 0.5 deg, the target of issue 19 and Sease 2013 ch. 6).
+frames the issue's target is about), ``meets_target`` (a trusted rate within 1 % and an axis
+within 0.5 deg, the target of issue 19 and Sease 2013 ch. 6), ``rate_bound_pct`` (the Cramér-Rao
+bound of the rate vector, 1 sigma over |omega|, that the identified streaks allow at the true state:
+:func:`startrack.rate.rate_bound`) and ``target_chance`` (the chance that an efficient unbiased
+estimator with those streaks meets the target: :func:`startrack.rate.target_chance`).
 """
 
 from __future__ import annotations
@@ -42,7 +45,7 @@ import pyarrow as pa
 from scipy.spatial.transform import Rotation
 
 from ....camera import Camera
-from ....rate import StreakOptions, StreakSolution, axis_error_rad, solve_streaked
+from ....rate import StreakOptions, StreakSolution, axis_error_rad, rate_bound, solve_streaked, target_chance
 from ....simulate import SENSOR_PRESETS, FrameTiming, VaryingRate, simulate_frame
 from ....units import DEG
 from .._outcome import NAN, solution_columns
@@ -143,6 +146,16 @@ def _uncertainty(solution: StreakSolution, omega: np.ndarray) -> dict[str, float
             "rate_sigma_roll_deg_s": roll, "rate_sigma_cross_deg_s": cross}
 
 
+def _bound(solution: StreakSolution, truth, omega: np.ndarray, alpha: np.ndarray, fit_alpha: bool) -> dict[str, float]:
+    """The Cramér-Rao bound of the rate that the frame's identified streaks allow at the true
+    state, and the chance that an efficient unbiased estimator meets the target with them."""
+    cov = rate_bound(solution, truth.camera, truth.rot_cam_from_icrs, omega, alpha, fit_alpha=fit_alpha)
+    if not np.all(np.isfinite(cov)):
+        return {"rate_bound_pct": NAN, "target_chance": NAN}
+    return {"rate_bound_pct": 100.0 * math.sqrt(float(np.trace(cov))) / float(np.linalg.norm(omega)),
+            "target_chance": target_chance(cov, omega, TARGET_RATE_PCT / 100.0, math.radians(TARGET_AXIS_DEG))}
+
+
 def run(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generator, tolerance_px: float) -> TrialOutput:
     """One streaked catalog frame with its mid-exposure attitude ``rot``, solved and scored."""
     sim, omega, alpha, exposure, fraction = draw(params, rot, rng)
@@ -165,7 +178,8 @@ def run(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generator, tole
                time_order_known=solution.time_order_known,
                t_mid_err_s=solution.t_mid_s - (truth.t_mid_s - (-0.5 * exposure - 0.5 * (truth.camera.height - 1)
                                                                   * params["line_time_s"])),
-               **rate_scores(solution, omega, alpha), **_uncertainty(solution, omega))
+               **rate_scores(solution, omega, alpha), **_uncertainty(solution, omega),
+               **_bound(solution, truth, omega, alpha, params["fit_alpha"]))
     row.update(five_streaks=bool(solution.solved and solution.n_streaks >= TARGET_STREAKS),
                meets_target=bool(row["rate_ok"] and row["rate_err_pct"] <= TARGET_RATE_PCT
                                  and row["axis_err_deg"] <= TARGET_AXIS_DEG))
@@ -194,7 +208,8 @@ COLUMNS = {"rate_status": pa.string(), "rate_ok": pa.bool_(), "rate_err_pct": pa
            "rate_sigma_cross_deg_s": pa.float64(), "birge": pa.float64(), "t_mid_err_s": pa.float64(),
            "streak_fraction": pa.float64(), "exposure_s": pa.float64(), "streak_px": pa.float64(),
            "n_true": pa.int32(), "cpu_s": pa.float64(), "time_order_known": pa.bool_(),
-           "five_streaks": pa.bool_(), "meets_target": pa.bool_()}
+           "five_streaks": pa.bool_(), "meets_target": pa.bool_(), "rate_bound_pct": pa.float64(),
+           "target_chance": pa.float64()}
 
 LEVEL = register(Level(
     name="streak_frames", doc=" ".join(__doc__.split("\n\n")[0].split()), params=PARAMS, run=run, check=check,
