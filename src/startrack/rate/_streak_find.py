@@ -94,20 +94,19 @@ def robust_level(image: NDArray, step: int = 8) -> tuple[float, float]:
 
 def binned(image: NDArray, bin_px: int) -> NDArray[np.float64]:
     """Sums over ``bin_px`` x ``bin_px`` blocks (trailing rows and columns that do not fill a block
-    are dropped)."""
-    h, w = (image.shape[0] // bin_px) * bin_px, (image.shape[1] // bin_px) * bin_px
-    blocks = np.asarray(image[:h, :w], dtype=np.float64).reshape(h // bin_px, bin_px, w // bin_px, bin_px)
-    return blocks.sum(axis=(1, 3))
+    are dropped), in one compiled pass over the frame (:func:`._streak_kernel.block_sums`)."""
+    img = np.ascontiguousarray(image)
+    if img.dtype.kind not in "uif" or img.dtype.itemsize > 8:
+        img = img.astype(np.float64)
+    out = np.empty((img.shape[0] // bin_px, img.shape[1] // bin_px))
+    kernel().block_sums(img, int(bin_px), out)
+    return out
 
 
-def _moments(values: NDArray, ys: NDArray, xs: NDArray):
-    """Centroid (2,), variances along and across and the unit major axis (x, y) of weights."""
-    total = values.sum()
-    cx, cy = values @ xs / total, values @ ys / total
-    dx, dy = xs - cx, ys - cy
-    cov = np.array([[values @ (dx * dx), values @ (dx * dy)], [values @ (dx * dy), values @ (dy * dy)]]) / total
+def _axes(cov: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """Variances along and across (K,) and the unit major axes (K, 2; x, y) of 2 x 2 covariances (K, 2, 2)."""
     var, vec = np.linalg.eigh(cov)
-    return np.array([cx, cy]), var[1], var[0], vec[:, 1]
+    return var[:, 1], var[:, 0], vec[:, :, 1]
 
 
 def find_streak_candidates(image: ArrayLike, *, bin_px: int = BIN_PX, line_bins: int = LINE_BINS,
@@ -148,37 +147,47 @@ def find_streak_candidates(image: ArrayLike, *, bin_px: int = BIN_PX, line_bins:
     snr = total / (noise * bin_px * np.sqrt(np.maximum(area, 1)))
     keep = np.flatnonzero(snr >= min_snr)
     keep = keep[np.argsort(-total[keep], kind="stable")][:max_candidates]
-    boxes = ndimage.find_objects(labels)
-    found = [(int(i), _candidate(blocks, labels, boxes[i], int(i) + 1, bin_px)) for i in keep]
-    rows = [(i, r) for i, r in found if r is not None]
-    if not rows:
+    table, good = _candidates(blocks, labels, keep + 1, bin_px)
+    if not good.any():
         return _empty(background, noise, labels, bin_px)
-    index = np.array([i for i, _ in rows])
-    table = np.array([r for _, r in rows])
+    index, table = keep[good], table[good]
     return StreakCandidates(background, noise, labels, bin_px, (index + 1).astype(np.int32), table[:, 0:2],
                             table[:, 2:4], table[:, 4], table[:, 5], table[:, 6:8], total[index], snr[index])
 
 
-def _candidate(blocks: NDArray, labels: NDArray, box, label: int, bin_px: int) -> NDArray | None:
-    """(cx, cy, ux, uy, length, width, t_first, t_last) of one blob in full-frame pixels, from its
-    blocks' moments and extent along the major axis."""
-    part = blocks[box]
-    mask = labels[box] == label
-    ys, xs = np.nonzero(mask)
-    values = np.clip(part[ys, xs], 0.0, None)
-    if values.sum() <= 0 or len(values) < 2:
-        return None
+def _candidates(blocks: NDArray, labels: NDArray, wanted: NDArray, bin_px: int) -> tuple[NDArray, NDArray]:
+    """(cx, cy, ux, uy, length, width, t_first, t_last) (K, 8) of the blobs ``wanted`` (labels,
+    K) in full-frame pixels, from their blocks' moments (the blocks' positive sums as weights)
+    and extent along the major axis, and which are usable (K,: some light on two blocks or more)."""
+    lookup = np.full(int(labels.max()) + 1, -1, dtype=np.intp)
+    lookup[wanted] = np.arange(wanted.size)
+    row, col = np.nonzero(lookup[labels] >= 0)
+    k = lookup[labels[row, col]]
+    values = np.clip(blocks[row, col], 0.0, None)
     # block (i, j) covers pixels bin_px*i .. bin_px*i + bin_px - 1: its centre is at bin_px*i + (bin_px - 1) / 2
-    centre = 0.5 * (bin_px - 1)
-    fx = (xs + box[1].start) * bin_px + centre
-    fy = (ys + box[0].start) * bin_px + centre
-    centroid, var_along, var_across, axis = _moments(values, fy.astype(float), fx.astype(float))
+    fx, fy = col * bin_px + 0.5 * (bin_px - 1), row * bin_px + 0.5 * (bin_px - 1)
+
+    def sums(weights):
+        return np.bincount(k, weights=weights, minlength=wanted.size)
+
+    total = sums(values)
+    good = (total > 0) & (np.bincount(k, minlength=wanted.size) >= 2)
+    safe = np.where(good, total, 1.0)
+    cx, cy = sums(values * fx) / safe, sums(values * fy) / safe
+    dx, dy = fx - cx[k], fy - cy[k]
+    cross = sums(values * dx * dy)
+    cov = np.stack([sums(values * dx * dx), cross, cross, sums(values * dy * dy)], axis=1).reshape(-1, 2, 2)
+    var_along, var_across, axis = _axes(cov / safe[:, None, None])
     block_var = bin_px**2 / 12.0  # a block's own extent, in both directions
-    length = float(np.sqrt(max(12.0 * (var_along - max(var_across, block_var)), 0.0)))
-    width = float(np.sqrt(max(var_across - block_var, 0.0)))
-    t = (fx - centroid[0]) * axis[0] + (fy - centroid[1]) * axis[1]
-    corner = 0.5 * bin_px * (abs(axis[0]) + abs(axis[1]))  # a block's half-extent along the axis
-    return np.array([centroid[0], centroid[1], axis[0], axis[1], length, width, t.min() - corner, t.max() + corner])
+    length = np.sqrt(np.maximum(12.0 * (var_along - np.maximum(var_across, block_var)), 0.0))
+    width = np.sqrt(np.maximum(var_across - block_var, 0.0))
+    t = dx * axis[k, 0] + dy * axis[k, 1]
+    first, last = np.full(wanted.size, np.inf), np.full(wanted.size, -np.inf)
+    np.minimum.at(first, k, t)
+    np.maximum.at(last, k, t)
+    corner = 0.5 * bin_px * (np.abs(axis[:, 0]) + np.abs(axis[:, 1]))  # a block's half-extent along the axis
+    table = np.column_stack([cx, cy, axis[:, 0], axis[:, 1], length, width, first - corner, last + corner])
+    return table, good
 
 
 def _empty(background: float, noise: float, labels: NDArray, bin_px: int) -> StreakCandidates:

@@ -463,3 +463,18 @@ def line_filter(image, length, orientations, out):
                 mean = total / length
                 if mean > out[y, x]:
                     out[y, x] = mean
+
+
+@njit(cache=True)
+def block_sums(image, bin_px, out):
+    """Sums of ``image`` (H, W) over ``bin_px`` x ``bin_px`` blocks into ``out``
+    (H // bin_px, W // bin_px), in one pass (trailing rows and columns are left out)."""
+    rows, cols = out.shape
+    for i in range(rows):
+        for j in range(cols):
+            out[i, j] = 0.0
+    for y in range(rows * bin_px):
+        i = y // bin_px
+        for x in range(cols * bin_px):
+            out[i, x // bin_px] += image[y, x]
+

@@ -237,20 +237,23 @@ def fit_joint(camera: Camera, stars_icrs: NDArray, measured: NDArray, cov: NDArr
     return _result(problem, meas, q, used, chi2)
 
 
-def _jacobian(problem: _Problem, meas: NDArray, q: NDArray, used: NDArray) -> tuple[NDArray, NDArray]:
-    """Whitened residuals (K', 6) of the streaks ``used`` and their derivatives (K', 6, P), by
-    forward differences evaluated in one batch."""
+def _linearised(problem: _Problem, measured: NDArray, q: NDArray, used: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """(the measurements (K, 6) in the time order that q predicts, the whitened residuals
+    (K', 6) of the streaks ``used`` and their derivatives (K', 6, P)), by forward differences:
+    q and its P steps are predicted in one batch, whose first set also orders the ends."""
     steps = problem.steps()
     sets = q[None, :] + np.vstack([np.zeros(len(q)), np.diag(steps)])
-    r = problem.residuals(sets, meas, used)
-    return r[0], np.moveaxis((r[1:] - r[0][None]) / steps[:, None, None], 0, -1)
+    predicted = problem.predicted(sets)
+    meas = ordered(measured, predicted[0], problem.white)
+    diff = meas[used][None] - predicted[:, used]
+    r = np.einsum("kij,bkj->bki", problem.white[used], diff)
+    return meas, r[0], np.moveaxis((r[1:] - r[0][None]) / steps[:, None, None], 0, -1)
 
 
 def _gauss_newton(problem: _Problem, measured: NDArray, q: NDArray, used: NDArray):
     """Iterate to convergence on the streaks ``used``; returns q and the time-ordered measurements."""
     for _ in range(MAX_ITERATIONS):
-        meas = ordered(measured, problem.predicted(q)[0], problem.white)
-        r, jac = _jacobian(problem, meas, q, used)
+        _, r, jac = _linearised(problem, measured, q, used)
         step = np.linalg.lstsq(jac.reshape(-1, len(q)), -r.ravel(), rcond=None)[0]
         q = q + step
         if np.all(np.abs(step) < 1e-2 * problem.steps()):
@@ -259,7 +262,7 @@ def _gauss_newton(problem: _Problem, measured: NDArray, q: NDArray, used: NDArra
 
 
 def _result(problem: _Problem, meas: NDArray, q: NDArray, used: NDArray, chi2: NDArray) -> JointFit:
-    r, jac = _jacobian(problem, meas, q, used)
+    _, r, jac = _linearised(problem, meas, q, used)
     a = jac.reshape(-1, len(q))
     birge = float(np.sqrt(np.sum(r**2) / max(a.shape[0] - a.shape[1], 1)))
     cov = np.zeros((10, 10))
@@ -283,7 +286,7 @@ def information_covariance(camera: Camera, stars_icrs: NDArray, cov: NDArray, ro
     full = np.zeros(10)
     full[3:6], full[6:9] = np.asarray(omega, dtype=float), np.asarray(alpha, dtype=float)
     q = full[free]
-    _, jac = _jacobian(problem, problem.predicted(q)[0], q, np.ones(len(v0), dtype=bool))
+    _, _, jac = _linearised(problem, problem.predicted(q)[0], q, np.ones(len(v0), dtype=bool))
     a = jac.reshape(-1, len(q))
     out = np.zeros((10, 10))
     out[np.ix_(free, free)] = np.linalg.pinv(a.T @ a)
