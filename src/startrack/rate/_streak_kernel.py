@@ -152,6 +152,25 @@ def _inside(x, y, p, reach, band):
 
 
 @njit(cache=True)
+def _row_span(dy, ux, uy, across, t_lo, t_hi):
+    """The x offsets (lo, hi) from a line's point c, on the row ``dy`` px from it, of the pixels
+    within ``across`` px of the line (direction (ux, uy), unit) and between ``t_lo`` and ``t_hi``
+    px from c along it: the two slabs' intersection (lo > hi when the row misses it)."""
+    lo, hi = -math.inf, math.inf
+    if abs(uy) > 1e-12:  # |-x uy + dy ux| <= across
+        a, b = (dy * ux - across) / uy, (dy * ux + across) / uy
+        lo, hi = max(lo, min(a, b)), min(hi, max(a, b))
+    elif abs(dy * ux) > across:
+        return 1.0, -1.0
+    if abs(ux) > 1e-12:  # t_lo <= x ux + dy uy <= t_hi
+        a, b = (t_lo - dy * uy) / ux, (t_hi - dy * uy) / ux
+        lo, hi = max(lo, min(a, b)), min(hi, max(a, b))
+    elif not t_lo <= dy * uy <= t_hi:
+        return 1.0, -1.0
+    return lo, hi
+
+
+@njit(cache=True)
 def gather(image, labels, bin_px, own, p, reach, band, saturation, checkerboard, xs, ys, vs):
     """Pixels of ``image`` (H, W) near the arc ``p`` into ``xs, ys, vs`` (their capacity bounds
     the count); returns the count. A pixel whose label (``labels`` on a grid ``bin_px`` times
@@ -165,8 +184,11 @@ def gather(image, labels, bin_px, own, p, reach, band, saturation, checkerboard,
     y0, y1 = max(int(math.floor(cy - extent)), 0), min(int(math.ceil(cy + extent)), height - 1)
     count, capacity = 0, xs.shape[0]
     lh, lw = labels.shape
+    ux, uy = hx / half, hy / half
+    across, along = band + abs(p[4]) + 1.0, half + reach + 1.0  # slabs that hold every pixel _inside accepts
     for y in range(y0, y1 + 1):
-        for x in range(x0, x1 + 1):
+        lo, hi = _row_span(y - cy, ux, uy, across, -along, along)
+        for x in range(max(x0, int(math.floor(cx + lo))), min(x1, int(math.ceil(cx + hi))) + 1):
             if count >= capacity:
                 return count
             if checkerboard and (x + y) % 2 == 1:
@@ -395,7 +417,8 @@ def profile_runs(image, cx, cy, ux, uy, t_lo, t_hi, band, background, smooth, mi
     x0, x1 = max(int(cx - extent), 0), min(int(cx + extent) + 1, width - 1)
     y0, y1 = max(int(cy - extent), 0), min(int(cy + extent) + 1, height - 1)
     for y in range(y0, y1 + 1):
-        for x in range(x0, x1 + 1):
+        lo, hi = _row_span(y - cy, ux, uy, band + 1.0, t_lo - 1.0, t_hi + 1.0)
+        for x in range(max(x0, int(math.floor(cx + lo))), min(x1, int(math.ceil(cx + hi))) + 1):
             t = (x - cx) * ux + (y - cy) * uy
             d = -(x - cx) * uy + (y - cy) * ux
             if abs(d) > band or t < t_lo or t > t_hi:
