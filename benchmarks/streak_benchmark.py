@@ -106,6 +106,12 @@ def print_streak_misses(trials) -> list[dict]:
               f"{r['rate_err_any_pct']:6.2f} {r['axis_err_deg']:8.2f} {r['rate_sigma3_pct']:9.2f} "
               f"{100 * r['rate_sigma_roll_deg_s'] / speed:9.2f} {100 * r['rate_sigma_cross_deg_s'] / speed:10.2f} "
               f"{r['birge']:5.2f} {r['rate_bound_pct']:7.2f} {r['target_chance']:6.2f}")
+    if "target_chance_trusted" in cols:
+        five = cols["five_streaks"].astype(bool)
+        ideal = float(np.nansum(1.0 - cols["target_chance"][five]))
+        refusing = float(np.nansum(1.0 - cols["target_chance_trusted"][five]))
+        print(f"  misses expected of an efficient unbiased estimator of the same streaks: {ideal:.1f} of {five.sum()}, "
+              f"{refusing:.1f} when it also refuses a 3-sigma bound over the trust limit; ours: {len(rows)}")
     return rows
 
 

@@ -30,7 +30,9 @@ frames the issue's target is about), ``meets_target`` (a trusted rate within 1 %
 within 0.5 deg, the target of issue 19 and Sease 2013 ch. 6), ``rate_bound_pct`` (the Cramér-Rao
 bound of the rate vector, 1 sigma over |omega|, that the identified streaks allow at the true state:
 :func:`startrack.rate.rate_bound`) and ``target_chance`` (the chance that an efficient unbiased
-estimator with those streaks meets the target: :func:`startrack.rate.target_chance`).
+estimator with those streaks meets the target: :func:`startrack.rate.target_chance`) and
+``target_chance_trusted`` (the same for an efficient estimator that, like the solver, refuses a rate
+whose 3-sigma exceeds ``StreakOptions.max_rate_uncertainty``: 0 where the bound itself is over it).
 """
 
 from __future__ import annotations
@@ -146,14 +148,18 @@ def _uncertainty(solution: StreakSolution, omega: np.ndarray) -> dict[str, float
             "rate_sigma_roll_deg_s": roll, "rate_sigma_cross_deg_s": cross}
 
 
-def _bound(solution: StreakSolution, truth, omega: np.ndarray, alpha: np.ndarray, fit_alpha: bool) -> dict[str, float]:
+def _bound(solution: StreakSolution, truth, omega: np.ndarray, alpha: np.ndarray,
+           options: StreakOptions) -> dict[str, float]:
     """The Cramér-Rao bound of the rate that the frame's identified streaks allow at the true
-    state, and the chance that an efficient unbiased estimator meets the target with them."""
-    cov = rate_bound(solution, truth.camera, truth.rot_cam_from_icrs, omega, alpha, fit_alpha=fit_alpha)
+    state, the chance that an efficient unbiased estimator meets the target with them, and the
+    same when that estimator also refuses a rate whose 3-sigma bound exceeds the solver's limit."""
+    cov = rate_bound(solution, truth.camera, truth.rot_cam_from_icrs, omega, alpha, fit_alpha=options.fit_alpha)
     if not np.all(np.isfinite(cov)):
-        return {"rate_bound_pct": NAN, "target_chance": NAN}
-    return {"rate_bound_pct": 100.0 * math.sqrt(float(np.trace(cov))) / float(np.linalg.norm(omega)),
-            "target_chance": target_chance(cov, omega, TARGET_RATE_PCT / 100.0, math.radians(TARGET_AXIS_DEG))}
+        return {"rate_bound_pct": NAN, "target_chance": NAN, "target_chance_trusted": NAN}
+    bound = math.sqrt(float(np.trace(cov))) / float(np.linalg.norm(omega))
+    chance = target_chance(cov, omega, TARGET_RATE_PCT / 100.0, math.radians(TARGET_AXIS_DEG))
+    return {"rate_bound_pct": 100.0 * bound, "target_chance": chance,
+            "target_chance_trusted": chance if 3.0 * bound <= options.max_rate_uncertainty else 0.0}
 
 
 def run(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generator, tolerance_px: float) -> TrialOutput:
@@ -179,7 +185,7 @@ def run(params: Mapping[str, Any], rot: Rotation, rng: np.random.Generator, tole
                t_mid_err_s=solution.t_mid_s - (truth.t_mid_s - (-0.5 * exposure - 0.5 * (truth.camera.height - 1)
                                                                   * params["line_time_s"])),
                **rate_scores(solution, omega, alpha), **_uncertainty(solution, omega),
-               **_bound(solution, truth, omega, alpha, params["fit_alpha"]))
+               **_bound(solution, truth, omega, alpha, solver_options(params)))
     row.update(five_streaks=bool(solution.solved and solution.n_streaks >= TARGET_STREAKS),
                meets_target=bool(row["rate_ok"] and row["rate_err_pct"] <= TARGET_RATE_PCT
                                  and row["axis_err_deg"] <= TARGET_AXIS_DEG))
@@ -209,7 +215,7 @@ COLUMNS = {"rate_status": pa.string(), "rate_ok": pa.bool_(), "rate_err_pct": pa
            "streak_fraction": pa.float64(), "exposure_s": pa.float64(), "streak_px": pa.float64(),
            "n_true": pa.int32(), "cpu_s": pa.float64(), "time_order_known": pa.bool_(),
            "five_streaks": pa.bool_(), "meets_target": pa.bool_(), "rate_bound_pct": pa.float64(),
-           "target_chance": pa.float64()}
+           "target_chance": pa.float64(), "target_chance_trusted": pa.float64()}
 
 LEVEL = register(Level(
     name="streak_frames", doc=" ".join(__doc__.split("\n\n")[0].split()), params=PARAMS, run=run, check=check,
