@@ -112,6 +112,10 @@ def print_streak_misses(trials) -> list[dict]:
         refusing = float(np.nansum(1.0 - cols["target_chance_trusted"][five]))
         print(f"  misses expected of an efficient unbiased estimator of the same streaks: {ideal:.1f} of {five.sum()}, "
               f"{refusing:.1f} when it also refuses a 3-sigma bound over the trust limit; ours: {len(rows)}")
+        claimed = cols["rate_sigma3_pct"][five] / (3.0 * cols["rate_bound_pct"][five])
+        spread = cols["rate_err_any_pct"][five] / cols["rate_bound_pct"][five]
+        print(f"  the solver's 3-sigma over the bound's: median {np.nanmedian(claimed):.3f}; its rate error over the "
+              f"bound: median {np.nanmedian(spread):.2f}, 95th percentile {np.nanpercentile(spread, 95):.2f}")
     return rows
 
 
