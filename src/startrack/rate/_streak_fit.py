@@ -281,6 +281,8 @@ def fit_streaks(
     if not var_bg > 0:
         raise InvalidInputError(f"noise must be a positive sigma, got {noise!r}")
     reach, band = np.asarray(reach, dtype=float), np.asarray(band, dtype=float)
+    if not (isinstance(max_windows, int | np.integer) and max_windows >= 1):
+        raise InvalidInputError(f"max_windows must be a whole number of windows, at least 1, got {max_windows!r}")
     if passes == 1:
         params, cov, stats = _run(img, labels, bin_px, own, start, reach, band, sat, var_bg, shot or 0.0, False,
                                   (TOL_PX, STEP_SIGMAS, max_windows))
