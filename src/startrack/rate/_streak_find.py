@@ -33,6 +33,9 @@ MIN_SNR = 12.0
 """Smallest summed signal of a blob over its pixels' noise (blocks of the binned frame)."""
 MAX_CANDIDATES = 60
 _EIGHT = np.ones((3, 3), dtype=bool)
+COMPILED_DTYPES = tuple(np.dtype(t) for t in (np.uint8, np.uint16, np.uint32, np.int16, np.int32, np.float32,
+                                              np.float64))
+"""Pixel types the compiled block sums take as they are (native byte order); others become float64."""
 
 
 @functools.cache
@@ -96,7 +99,7 @@ def binned(image: NDArray, bin_px: int) -> NDArray[np.float64]:
     """Sums over ``bin_px`` x ``bin_px`` blocks (trailing rows and columns that do not fill a block
     are dropped), in one compiled pass over the frame (:func:`._streak_kernel.block_sums`)."""
     img = np.ascontiguousarray(image)
-    if img.dtype.kind not in "uif" or img.dtype.itemsize > 8:
+    if img.dtype not in COMPILED_DTYPES:  # e.g. a FITS file's big-endian integers, float16, bool
         img = img.astype(np.float64)
     out = np.empty((img.shape[0] // bin_px, img.shape[1] // bin_px))
     kernel().block_sums(img, int(bin_px), out)
