@@ -165,6 +165,14 @@ def saturation_level(image: NDArray) -> float:
     return float(top) if any(top == 2**bits - 1 for bits in SATURATION_BITS) else np.inf
 
 
+def fit_pixels(image: ArrayLike) -> tuple[NDArray[np.float64], float]:
+    """The frame (H, W) as the contiguous float64 pixels the fits read, and its saturation level
+    (:func:`saturation_level` of the frame as given): made once per frame, so that each of its
+    fits does not copy the frame again (8 MB and about 2 ms for 1024 x 1024 px)."""
+    raw = np.asarray(image)
+    return np.ascontiguousarray(raw, dtype=np.float64), saturation_level(raw)
+
+
 PROFILE_SNR = 6.0
 """The profile along a blob is smoothed until its mean level is this many noise sigmas."""
 MIN_RUN_PX = 6

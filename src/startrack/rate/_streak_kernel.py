@@ -501,3 +501,23 @@ def block_sums(image, bin_px, out):
                 total += image[y, x]
             out[i, j] += total
 
+
+
+@njit(cache=True, fastmath=True)
+def rodrigues(vectors, theta, out):
+    """``exp(-[theta x]) v`` (Rodrigues) of vectors (N, 3) by rotation vectors theta (N, 3)
+    (rad), row by row, into ``out`` (N, 3): the rotations of the joint fit's predictions
+    (:func:`._streak_model.rotate`), without numpy's temporaries."""
+    for i in range(vectors.shape[0]):
+        tx, ty, tz = theta[i, 0], theta[i, 1], theta[i, 2]
+        vx, vy, vz = vectors[i, 0], vectors[i, 1], vectors[i, 2]
+        angle = math.sqrt(tx * tx + ty * ty + tz * tz)
+        if angle == 0.0:
+            out[i, 0], out[i, 1], out[i, 2] = vx, vy, vz
+            continue
+        kx, ky, kz = -tx / angle, -ty / angle, -tz / angle
+        cos, sin = math.cos(angle), math.sin(angle)
+        dot = (kx * vx + ky * vy + kz * vz) * (1.0 - cos)
+        out[i, 0] = vx * cos + (ky * vz - kz * vy) * sin + kx * dot
+        out[i, 1] = vy * cos + (kz * vx - kx * vz) * sin + ky * dot
+        out[i, 2] = vz * cos + (kx * vy - ky * vx) * sin + kz * dot

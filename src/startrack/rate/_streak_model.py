@@ -31,6 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
+from ._streak_find import kernel
 
 GAUSS_NODES, GAUSS_WEIGHTS = np.polynomial.legendre.leggauss(5)
 ROW_TIME_ITERATIONS = 3
@@ -62,15 +63,13 @@ class Timing:
 
 
 def rotate(vectors: NDArray, theta: NDArray) -> NDArray[np.float64]:
-    """``exp(-[theta x]) v`` for vectors (..., 3) and rotation vectors theta (..., 3) (Rodrigues)."""
-    angle = np.sqrt(np.sum(theta * theta, axis=-1, keepdims=True))
-    k = -theta / np.where(angle > 0, angle, 1.0)
-    cos, sin = np.cos(angle), np.sin(angle)
-    kx, ky, kz = k[..., 0], k[..., 1], k[..., 2]
-    vx, vy, vz = vectors[..., 0], vectors[..., 1], vectors[..., 2]
-    cross = np.stack([ky * vz - kz * vy, kz * vx - kx * vz, kx * vy - ky * vx], axis=-1)
-    dot = (kx * vx + ky * vy + kz * vz)[..., None]
-    return vectors * cos + cross * sin + k * dot * (1.0 - cos)
+    """``exp(-[theta x]) v`` for vectors (..., 3) and rotation vectors theta (..., 3), broadcast
+    against each other (Rodrigues; compiled: :func:`._streak_kernel.rodrigues`)."""
+    shape = np.broadcast_shapes(np.shape(vectors), np.shape(theta))
+    v, th, out = np.empty(shape), np.empty(shape), np.empty(shape)
+    v[...], th[...] = vectors, theta
+    kernel().rodrigues(v.reshape(-1, 3), th.reshape(-1, 3), out.reshape(-1, 3))
+    return out
 
 
 def positions(camera: Camera, v_mid: NDArray, omega: NDArray, alpha: NDArray, t: NDArray,
@@ -198,11 +197,6 @@ class _Problem:
         v_mid = rotate(self.v0[index][None, :, :], -full[:, None, 0:3])  # exp([delta x]) v0
         return predict_batch(self.camera, v_mid, full[:, 3:6], full[:, 6:9], full[:, 9], self.timing)
 
-    def residuals(self, q: NDArray, meas: NDArray, index=slice(None)) -> NDArray[np.float64]:
-        """Whitened residuals (B, K', 6) of parameter sets q (B, P)."""
-        diff = meas[index][None] - self.predicted(q, index)
-        return np.einsum("kij,bkj->bki", self.white[index], diff)
-
     def steps(self) -> NDArray[np.float64]:
         """Finite-difference steps: 1e-6 rad of attitude, of turn over the exposure, of
         acceleration over the exposure, 1e-6 in ln f."""
@@ -228,8 +222,8 @@ def fit_joint(camera: Camera, stars_icrs: NDArray, measured: NDArray, cov: NDArr
     q[3:6] = np.asarray(omega0, dtype=float)
     used = np.ones(len(measured), dtype=bool)
     for _ in range(len(measured)):
-        q, meas = _gauss_newton(problem, measured, q, used)
-        chi2 = np.sum(problem.residuals(q, meas)[0] ** 2, axis=1)
+        q, meas, predicted = _gauss_newton(problem, measured, q, used)
+        chi2 = np.sum(np.einsum("kij,kj->ki", problem.white, meas - predicted) ** 2, axis=1)
         worst = int(np.argmax(np.where(used, chi2, -np.inf)))
         if chi2[worst] <= outlier_chi2 or used.sum() <= 3:
             break
@@ -237,38 +231,42 @@ def fit_joint(camera: Camera, stars_icrs: NDArray, measured: NDArray, cov: NDArr
     return _result(problem, meas, q, used, chi2)
 
 
-def _linearised(problem: _Problem, measured: NDArray, q: NDArray, used: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+def _linearised(problem: _Problem, measured: NDArray, q: NDArray,
+                used: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """(the measurements (K, 6) in the time order that q predicts, the whitened residuals
-    (K', 6) of the streaks ``used`` and their derivatives (K', 6, P)), by forward differences:
-    q and its P steps are predicted in one batch, whose first set also orders the ends."""
+    (K', 6) of the streaks ``used``, their derivatives (K', 6, P), and q's predictions (K, 6)),
+    by forward differences: q and its P steps are predicted in one batch, whose first set also
+    orders the ends."""
     steps = problem.steps()
     sets = q[None, :] + np.vstack([np.zeros(len(q)), np.diag(steps)])
     predicted = problem.predicted(sets)
     meas = ordered(measured, predicted[0], problem.white)
     diff = meas[used][None] - predicted[:, used]
     r = np.einsum("kij,bkj->bki", problem.white[used], diff)
-    return meas, r[0], np.moveaxis((r[1:] - r[0][None]) / steps[:, None, None], 0, -1)
+    return meas, r[0], np.moveaxis((r[1:] - r[0][None]) / steps[:, None, None], 0, -1), predicted[0]
 
 
 def _gauss_newton(problem: _Problem, measured: NDArray, q: NDArray, used: NDArray):
-    """Iterate to convergence on the streaks ``used``; returns q and the time-ordered measurements."""
+    """Iterate to convergence on the streaks ``used``; returns q, the time-ordered measurements
+    (K, 6) and q's predictions (K, 6)."""
     for _ in range(MAX_ITERATIONS):
-        _, r, jac = _linearised(problem, measured, q, used)
+        _, r, jac, _ = _linearised(problem, measured, q, used)
         step = np.linalg.lstsq(jac.reshape(-1, len(q)), -r.ravel(), rcond=None)[0]
         q = q + step
         if np.all(np.abs(step) < 1e-2 * problem.steps()):
             break
-    return q, ordered(measured, problem.predicted(q)[0], problem.white)
+    predicted = problem.predicted(q)[0]
+    return q, ordered(measured, predicted, problem.white), predicted
 
 
 def _result(problem: _Problem, meas: NDArray, q: NDArray, used: NDArray, chi2: NDArray) -> JointFit:
-    _, r, jac = _linearised(problem, meas, q, used)
+    _, r, jac, predicted = _linearised(problem, meas, q, used)
     a = jac.reshape(-1, len(q))
     birge = float(np.sqrt(np.sum(r**2) / max(a.shape[0] - a.shape[1], 1)))
     cov = np.zeros((10, 10))
     cov[np.ix_(problem.free, problem.free)] = np.linalg.pinv(a.T @ a) * max(birge, 1.0) ** 2
     rot, omega, alpha, camera = problem.state(q)
-    return JointFit(rot, omega, alpha, cov, used, chi2, birge, meas, problem.predicted(q)[0], camera)
+    return JointFit(rot, omega, alpha, cov, used, chi2, birge, meas, predicted, camera)
 
 
 def information_covariance(camera: Camera, stars_icrs: NDArray, cov: NDArray, rot_mid: Rotation, omega: ArrayLike,
@@ -286,7 +284,7 @@ def information_covariance(camera: Camera, stars_icrs: NDArray, cov: NDArray, ro
     full = np.zeros(10)
     full[3:6], full[6:9] = np.asarray(omega, dtype=float), np.asarray(alpha, dtype=float)
     q = full[free]
-    _, _, jac = _linearised(problem, problem.predicted(q)[0], q, np.ones(len(v0), dtype=bool))
+    _, _, jac, _ = _linearised(problem, problem.predicted(q)[0], q, np.ones(len(v0), dtype=bool))
     a = jac.reshape(-1, len(q))
     out = np.zeros((10, 10))
     out[np.ix_(free, free)] = np.linalg.pinv(a.T @ a)

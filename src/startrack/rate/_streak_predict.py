@@ -72,15 +72,12 @@ def crowded(predicted: NDArray, candidates: NDArray, neighbours: NDArray, blur_p
     :data:`CROWDED_PX` + 4 blurs of the path of another star of ``neighbours`` (indices)."""
     if candidates.size == 0 or neighbours.size < 2:
         return np.zeros(candidates.size, dtype=bool)
-    points = _path_points(predicted[neighbours]).reshape(-1, 2)
-    owner = np.repeat(neighbours, PATH_SAMPLES)
-    tree = cKDTree(points)
-    radius = CROWDED_PX + 4.0 * blur_px
-    out = np.zeros(candidates.size, dtype=bool)
-    for k, path in enumerate(_path_points(predicted[candidates])):
-        hits = np.concatenate(tree.query_ball_point(path, radius)).astype(np.intp)
-        out[k] = bool(np.any(owner[hits] != candidates[k]))
-    return out
+    near = cKDTree(_path_points(predicted[candidates]).reshape(-1, 2)).sparse_distance_matrix(
+        cKDTree(_path_points(predicted[neighbours]).reshape(-1, 2)), CROWDED_PX + 4.0 * blur_px,
+        output_type="ndarray")
+    mine = near["i"] // PATH_SAMPLES  # the candidate of each close pair's first point
+    other = neighbours[near["j"] // PATH_SAMPLES] != candidates[mine]
+    return np.bincount(mine[other], minlength=candidates.size) > 0
 
 
 def guesses(predicted: NDArray, image: NDArray, background: float, blur_px: float,
@@ -124,8 +121,8 @@ def agreement_px(fits: StreakFits, predicted: NDArray) -> NDArray[np.float64]:
 def fit_predicted(image: NDArray, camera: Camera, stars_icrs: NDArray, rot_mid: Rotation, omega: NDArray,
                   alpha: NDArray, timing: Timing, *, noise: float, background: float, blur_px: float,
                   shot: float | None, slack_px: float, tolerance_px: float, limit: int,
-                  flux: NDArray | None = None, wanted: NDArray | None = None, passes: int = 1
-                  ) -> tuple[NDArray[np.intp], StreakFits | None]:
+                  flux: NDArray | None = None, wanted: NDArray | None = None, passes: int = 1,
+                  saturation: float | None = None) -> tuple[NDArray[np.intp], StreakFits | None]:
     """Fit the streaks of the first ``limit`` stars (S, 3, brightest first) predicted by
     (rot_mid, omega, alpha) that are ``wanted`` (S,) (default all: not measured yet), inside the
     image, not crowded by another star of the S (with ``flux``, one of at least
@@ -133,7 +130,8 @@ def fit_predicted(image: NDArray, camera: Camera, stars_icrs: NDArray, rot_mid: 
     :data:`MIN_PREDICTED_SNR`; returns the star indices fitted and their fits (``passes`` of
     :func:`.streak_fit.fit_streaks`: one from a close prediction, which stays in the window
     around it, two from a rough one, which may move its window), each fit's ``ok`` also requiring
-    it to agree with the prediction within ``tolerance_px``."""
+    it to agree with the prediction within ``tolerance_px``. ``saturation`` is
+    :func:`.streak_fit.fit_streaks`'s (None: from ``image``)."""
     predicted = predict(camera, rot_mid, omega, alpha, stars_icrs, timing)
     use = inside(predicted, camera, EDGE_PX + 3.0 * blur_px)
     if wanted is not None:
@@ -150,7 +148,7 @@ def fit_predicted(image: NDArray, camera: Camera, stars_icrs: NDArray, rot_mid: 
         return index, None
     start, reach, band = guesses(predicted[index], image, background, blur_px, slack_px)
     fits = fit_streaks(image, start, reach, band, noise=noise, shot=shot, passes=passes,
-                       max_windows=1 if passes == 1 else MAX_WINDOWS)
+                       max_windows=1 if passes == 1 else MAX_WINDOWS, saturation=saturation)
     agree = agreement_px(fits, predicted[index]) <= tolerance_px
     reasons = tuple(r or ("" if a else "does not agree with the predicted streak")
                     for r, a in zip(fits.reasons, agree, strict=True))

@@ -49,7 +49,7 @@ from ..units import DEG
 from ._catalog_free import consensus
 from ._estimate import RateEstimate, failed
 from ._streak_find import StreakCandidates, find_streak_candidates
-from ._streak_fit import StreakFits, first_guesses, fit_streaks
+from ._streak_fit import StreakFits, first_guesses, fit_pixels, fit_streaks
 from ._streak_model import JointFit, Timing, fit_joint, predict
 from ._streak_predict import Field, Identified, concatenated, fit_predicted, v_mags, zero_point
 from ._streak_screen import typical
@@ -252,10 +252,11 @@ def solve_streaked(
     timing = _timing(exposure_s, opts.line_time_s, img.shape[0])
     cand = find_streak_candidates(img)
     clock.mark("find")
-    guesses = _ordered_guesses(img, cand, opts)
+    pixels, saturation = fit_pixels(img)
+    guesses = _ordered_guesses(pixels, cand, opts)
     fits, lis, good = None, None, np.zeros(0, dtype=np.int64)
     for attempt in range(LIS_ATTEMPTS):  # more of the fainter candidates when the brightest do not identify
-        fits = _lis_fits(img, cand, guesses, opts.lis_streaks * (attempt + 1), fits, opts)
+        fits = _lis_fits(pixels, saturation, cand, guesses, opts.lis_streaks * (attempt + 1), fits, opts)
         clock.mark("fit")
         good = np.flatnonzero(fits.ok & typical(fits))
         if good.size < opts.min_streaks:
@@ -284,7 +285,7 @@ def solve_streaked(
                       lis.rot_cam_from_icrs, omega0, timing, fit_alpha=opts.fit_alpha, fit_focal=fit_focal)
     clock.mark("joint")
     found = Identified(fits, rows[keep], lis.matches.cat_vectors[keep], lis.matches.hip[keep])
-    found, joint = _extended(img, found, cand, joint, timing, opts, lis.epoch_jyear, fit_focal, clock)
+    found, joint = _extended(pixels, saturation, found, cand, joint, timing, opts, lis.epoch_jyear, fit_focal, clock)
     return streak_solution(found, joint, timing, opts, prior_omega_rad_s, exposure_s, clock,
                            false_match_prob=lis.false_match_prob, epoch_jyear=lis.epoch_jyear,
                            epoch_source=lis.epoch_source)
@@ -331,14 +332,16 @@ def _ordered_guesses(img: NDArray, cand: StreakCandidates, opts: StreakOptions):
     return start[order], own[order], reach[order], band[order]
 
 
-def _lis_fits(img: NDArray, cand: StreakCandidates, guesses, count: int, done: StreakFits | None,
+def _lis_fits(img: NDArray, saturation: float, cand: StreakCandidates, guesses, count: int, done: StreakFits | None,
               opts: StreakOptions) -> StreakFits:
-    """Fits of the first ``count`` guesses (those of ``done`` kept, the others fitted now)."""
+    """Fits of the first ``count`` guesses (those of ``done`` kept, the others fitted now) to
+    the pixels of :func:`.streak_fit.fit_pixels`."""
     start, own, reach, band = guesses
     first = 0 if done is None else len(done)
     new = slice(first, min(count, len(start)))
     fits = fit_streaks(img, start[new], reach[new], band[new], noise=cand.noise, labels=cand.labels,
-                       bin_px=cand.bin_px, own=own[new], shot=opts.shot if done is None else done.shot)
+                       bin_px=cand.bin_px, own=own[new], shot=opts.shot if done is None else done.shot,
+                       saturation=saturation)
     return fits if done is None else concatenated(done, fits)
 
 
@@ -391,9 +394,11 @@ def _agreeing(lis: AttitudeSolution, fits: StreakFits, rows: NDArray, measured: 
 
 
 def extend(img: NDArray, found: Identified, joint: JointFit, timing: Timing, field: Field, *, noise: float,
-           background: float, opts: StreakOptions, fit_focal: bool) -> tuple[Identified, JointFit]:
+           background: float, opts: StreakOptions, fit_focal: bool,
+           saturation: float | None = None) -> tuple[Identified, JointFit]:
     """Add the predicted streaks of the field's other catalog stars that agree with the joint
-    fit (one tight pass each, :func:`.streak_predict.fit_predicted`), and fit again."""
+    fit (one tight pass each, :func:`.streak_predict.fit_predicted`; ``saturation`` as there),
+    and fit again."""
     room = opts.max_streaks - found.rows.size
     if room <= 0:
         return found, joint
@@ -402,7 +407,7 @@ def extend(img: NDArray, found: Identified, joint: JointFit, timing: Timing, fie
     index, more = fit_predicted(img, joint.camera, field.vectors, joint.rot_mid, joint.omega_rad_s, joint.alpha_rad_s2,
                                 timing, noise=noise, background=background, blur_px=blur, shot=found.fits.shot,
                                 slack_px=1.0, tolerance_px=3.0, limit=room, flux=field.flux(zero),
-                                wanted=~np.isin(field.hips, found.hips))
+                                wanted=~np.isin(field.hips, found.hips), saturation=saturation)
     if more is None or not np.any(more.ok):
         return found, joint
     found = found.joined(more, field.vectors[index], field.hips[index])
@@ -412,13 +417,13 @@ def extend(img: NDArray, found: Identified, joint: JointFit, timing: Timing, fie
     return found, joint
 
 
-def _extended(img, found, cand, joint, timing, opts, epoch_jyear, fit_focal, clock):
+def _extended(img, saturation, found, cand, joint, timing, opts, epoch_jyear, fit_focal, clock):
     """:func:`extend` with the catalog stars of the field around the joint fit's attitude."""
     stars = field_stars(opts.catalog_max_mag, epoch_jyear)
     turn = float(np.linalg.norm(joint.omega_rad_s)) * timing.exposure_s
     field = Field.around(stars, joint.camera, joint.rot_mid, turn)
     found, joint = extend(img, found, joint, timing, field, noise=cand.noise, background=cand.background, opts=opts,
-                          fit_focal=fit_focal)
+                          fit_focal=fit_focal, saturation=saturation)
     clock.mark("predicted")
     return found, joint
 

@@ -23,6 +23,7 @@ from ..camera import Camera
 from ..identify import field_stars
 from ..results import Status
 from ._streak_find import robust_level
+from ._streak_fit import fit_pixels
 from ._streak_model import Timing, fit_joint
 from ._streak_predict import Field, Identified, fit_predicted
 from ._streak_solve import Stages, StreakOptions, StreakSolution, extend, failed_solution, streak_solution
@@ -71,10 +72,11 @@ def track_streaks(
     background, noise = robust_level(img)
     field = Field.around(field_stars(opts.catalog_max_mag, epoch_jyear), camera, rot_mid,
                          float(np.linalg.norm(omega)) * timing.exposure_s)
-    index, fits = fit_predicted(img, camera, field.vectors, rot_mid, omega, np.zeros(3), timing, noise=noise,
+    pixels, saturation = fit_pixels(img)
+    index, fits = fit_predicted(pixels, camera, field.vectors, rot_mid, omega, np.zeros(3), timing, noise=noise,
                                 background=background, blur_px=blur_px, shot=shot, slack_px=slack_px,
                                 tolerance_px=slack_px + 3.0, limit=opts.lis_streaks, flux=field.flux(zero_point),
-                                passes=2)
+                                passes=2, saturation=saturation)
     clock.mark("fit")
     if fits is None or fits.ok.sum() < opts.min_streaks:
         n_found = 0 if fits is None else int(fits.ok.sum())
@@ -85,8 +87,8 @@ def track_streaks(
     measured, cov = found.measurements()
     joint = fit_joint(camera, found.stars, measured, cov, rot_mid, omega, timing, fit_alpha=opts.fit_alpha)
     clock.mark("joint")
-    found, joint = extend(img, found, joint, timing, field, noise=noise, background=background, opts=opts,
-                          fit_focal=False)
+    found, joint = extend(pixels, found, joint, timing, field, noise=noise, background=background, opts=opts,
+                          fit_focal=False, saturation=saturation)
     clock.mark("predicted")
     return streak_solution(found, joint, timing, opts, omega, exposure_s, clock, epoch_jyear=epoch_jyear,
                            epoch_source="given")
