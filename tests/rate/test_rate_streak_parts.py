@@ -7,7 +7,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from startrack.rate import fit_streaks
-from startrack.rate._streak_fit import fit_pixels, saturation_level
+from startrack.rate._streak_fit import fit_pixels, saturation_level, verdicts
 from startrack.rate._streak_kernel import NGEO, arc_value, geometry
 from startrack.rate._streak_model import rotate
 from startrack.rate._streak_predict import CROWDED_PX, PATH_SAMPLES, crowded
@@ -70,3 +70,30 @@ def test_fit_pixels_keep_the_frames_saturation():
     direct = fit_streaks(raw, *args, noise=5.0)
     prepared = fit_streaks(pixels, *args, noise=5.0, saturation=saturation)
     assert np.array_equal(direct.params, prepared.params) and direct.ok[0]
+
+
+def test_verdicts_name_the_first_test_each_fit_fails():
+    good = np.array([60.0, 50.0, 20.0, 5.0, 0.0, 300.0, 0.0, 100.0, 1.2])  # in a 100 x 120 px frame
+    cov = np.eye(9) * 0.01
+
+    def case(flag=0, **changes):
+        p, c = good.copy(), cov.copy()
+        for name, value in changes.items():
+            if name == "amp_var":
+                c[5, 5] = value
+            elif name == "end_var":
+                c[0, 0] = value
+            else:
+                p["cx cy hx hy sag a g b s".split().index(name)] = value
+        return p, c, flag
+
+    cases = [(case(), ""), (case(flag=3), "singular fit"), (case(flag=1, s=9.0), "the fit did not converge"),
+             (case(s=5.0), "fitted blur 5.00 px: not one star's streak"),
+             (case(hx=1.0, hy=0.0), "streak 2.0 px long, shorter than 3 px"),
+             (case(amp_var=2000.0), "too faint"),
+             (case(cx=20.0), "an end at the image border: the star entered or left the field"),
+             (case(end_var=5.0), "ends less precise than 2 px"), (case(end_var=np.nan), "ends less precise than 2 px")]
+    params = np.array([c[0][0] for c in cases])
+    covs = np.array([c[0][1] for c in cases])
+    flags = np.array([c[0][2] for c in cases])
+    assert verdicts(params, covs, flags, (100, 120)) == tuple(want for _, want in cases)

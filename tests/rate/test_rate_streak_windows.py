@@ -50,3 +50,19 @@ def test_a_fit_held_to_its_window_cannot_reach_the_true_ends():
 def test_max_windows_is_a_positive_whole_number(bad):
     with pytest.raises(InvalidInputError, match="max_windows"):
         fit_streaks(_image(), _short_guess(), [8.0], [6.0], noise=NOISE, max_windows=bad)
+
+
+def test_a_fit_out_of_iterations_is_refused_and_one_with_enough_is_not():
+    reach, band = np.array([8.0]), np.array([6.0])
+    guess = TRUTH.copy()
+    guess[0] += 1.5  # px off along x: several steps from the truth
+    short = fit_streaks(_image(), guess[None], reach, band, noise=NOISE, passes=1, max_iter=1)
+    enough = fit_streaks(_image(), guess[None], reach, band, noise=NOISE, passes=1, max_iter=10)
+    assert short.reasons == ("the fit did not converge",) and not short.ok[0]
+    assert enough.ok[0] and _end_error_px(enough) < 0.5  # px
+
+
+@pytest.mark.parametrize("bad", [0, -2, 2.5, None])
+def test_max_iter_is_a_positive_whole_number(bad):
+    with pytest.raises(InvalidInputError, match="max_iter"):
+        fit_streaks(_image(), _short_guess(), [8.0], [6.0], noise=NOISE, max_iter=bad)

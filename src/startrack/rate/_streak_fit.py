@@ -244,6 +244,7 @@ def fit_streaks(
     saturation: float | None = None,
     passes: int = 2,
     max_windows: int = MAX_WINDOWS,
+    max_iter: int = MAX_ITER,
 ) -> StreakFits:
     """Fit arcs to a frame from first guesses (module docstring).
 
@@ -271,6 +272,9 @@ def fit_streaks(
     max_windows : int
         Windows a fit may move through when an end walks to its window's edge (1: a fit stays in
         the window around ``start``, as a prediction's must to agree with it).
+    max_iter : int
+        Levenberg-Marquardt iterations per window and pass; a fit that has not converged by then
+        is refused ("the fit did not converge").
 
     Returns
     -------
@@ -291,23 +295,26 @@ def fit_streaks(
     reach, band = np.asarray(reach, dtype=float), np.asarray(band, dtype=float)
     if not (isinstance(max_windows, int | np.integer) and max_windows >= 1):
         raise InvalidInputError(f"max_windows must be a whole number of windows, at least 1, got {max_windows!r}")
+    if not (isinstance(max_iter, int | np.integer) and max_iter >= 1):
+        raise InvalidInputError(f"max_iter must be a whole number of iterations, at least 1, got {max_iter!r}")
+    stopping = (TOL_PX, STEP_SIGMAS, max_windows, max_iter)
     if passes == 1:
         params, cov, stats = _run(img, labels, bin_px, own, start, reach, band, sat, var_bg, shot or 0.0, False,
-                                  (TOL_PX, STEP_SIGMAS, max_windows))
+                                  stopping)
         return _judged(params, cov, stats, img.shape, own, shot or 0.0, float(noise), _median_bg(start))
     params, cov, stats = _run(img, labels, bin_px, own, start, reach, band, sat, var_bg, shot or 0.0, True,
-                              (FIRST_TOL_PX, FIRST_STEP_SIGMAS, max_windows))
+                              (FIRST_TOL_PX, FIRST_STEP_SIGMAS, max_windows, max_iter))
     # a first pass that ran out of steps may still be a streak: its background-only weights make a
     # bright streak's photon noise look like misfit, which the second pass's weights remove
     flags = np.where(stats[:, 3] == 1, 0, stats[:, 3]).astype(int)
-    promising = np.array([not verdict(params[i], cov[i], flags[i], img.shape) for i in range(k)], dtype=bool)
+    promising = np.array([not reason for reason in verdicts(params, cov, flags, img.shape)], dtype=bool)
     tight_reach, tight_band = tight_window(params)
     if shot is None:
         shot = estimate_shot(img, labels, bin_px, own, params, tight_reach, tight_band, sat, var_bg, promising)
     again = np.flatnonzero(promising)
     if again.size:
         second = _run(img, labels, bin_px, own[again], params[again], tight_reach[again], tight_band[again], sat,
-                      var_bg, shot, False, (TOL_PX, STEP_SIGMAS, max_windows))
+                      var_bg, shot, False, stopping)
         params[again], cov[again], stats[again] = second
     return _judged(params, cov, stats, img.shape, own, shot, float(noise), _median_bg(start))
 
@@ -317,13 +324,13 @@ def _median_bg(start: NDArray) -> float:
 
 
 def _run(img, labels, bin_px, own, start, reach, band, sat, var_bg, shot, half, stopping):
-    """One pass of the compiled fit; ``stopping`` is (tol_px, step_sigmas, max_windows)."""
-    tol_px, step_sigmas, max_windows = stopping
+    """One pass of the compiled fit; ``stopping`` is (tol_px, step_sigmas, max_windows, max_iter)."""
+    tol_px, step_sigmas, max_windows, max_iter = stopping
     k = len(start)
     params, covs, stats = np.zeros((k, NPAR)), np.zeros((k, NPAR, NPAR)), np.zeros((k, 4))
     kernel().fit_arcs(img, labels, int(bin_px), own, np.ascontiguousarray(start, dtype=np.float64),
                       np.ascontiguousarray(reach, dtype=np.float64), np.ascontiguousarray(band, dtype=np.float64),
-                      sat, var_bg, float(shot), bool(half), MAX_ITER, float(tol_px), float(step_sigmas),
+                      sat, var_bg, float(shot), bool(half), int(max_iter), float(tol_px), float(step_sigmas),
                       int(max_windows), CAPACITY, params, covs, stats)
     return params, covs, stats
 
@@ -349,27 +356,43 @@ def _judged(params, cov, stats, shape, own, shot, noise, background) -> StreakFi
     n = stats[:, 1].astype(np.int64)
     chi2_red = stats[:, 0] / np.maximum(n - NPAR, 1)
     cov = cov * np.maximum(chi2_red, 1.0)[:, None, None]
-    reasons = tuple(verdict(params[i], cov[i], int(stats[i, 3]), shape) for i in range(len(params)))
+    reasons = verdicts(params, cov, stats[:, 3], shape)
     ok = np.array([not r for r in reasons], dtype=bool)
     return StreakFits(params, cov, chi2_red, n, ok, reasons, own.copy(), float(shot), noise, background)
 
 
-def verdict(p: NDArray, cov: NDArray, flag: int, shape: tuple[int, int]) -> str:
-    """Why one fit is not a clean streak ("" when it is)."""
+FLAG_REASONS = ("", "the fit did not converge", "too few pixels near the streak", "singular fit")
+"""Why a fit is not a clean streak, by the kernel's flag (:data:`._streak_kernel.FIT_OK` ...)."""
+
+
+def verdicts(params: NDArray, cov: NDArray, flags: NDArray, shape: tuple[int, int]) -> tuple[str, ...]:
+    """Why each of K fits (params (K, 9), cov (K, 9, 9), kernel flags (K,)) is not a clean
+    streak of a frame of ``shape`` ("" when it is); the first test a fit fails names it."""
+    p, flags = np.asarray(params, dtype=float).reshape(-1, NPAR), np.asarray(flags, dtype=int)
+    length, blur = 2.0 * np.hypot(p[:, 2], p[:, 3]), p[:, 8]
+    with np.errstate(invalid="ignore"):
+        faint = ~(p[:, 5] > MIN_FLUX_SNR * np.sqrt(np.maximum(cov[:, 5, 5], 0.0)))
+        ends = np.stack([p[:, 0:2] - p[:, 2:4], p[:, 0:2] + p[:, 2:4]], axis=1)
+        margin = (EDGE_MARGIN_SIGMAS * blur)[:, None, None]
+        border = np.any((ends < margin) | (ends > np.array([shape[1], shape[0]]) - 1 - margin), axis=(1, 2))
+        spread = np.maximum(cov[:, 0, 0] + cov[:, 2, 2], cov[:, 1, 1] + cov[:, 3, 3])
+        vague = ~((spread >= 0.0) & (spread <= MAX_END_SIGMA_PX**2))  # NaN or a negative variance: singular
+        bad_blur = ~((blur >= BLUR_RANGE_PX[0]) & (blur <= BLUR_RANGE_PX[1]))
+    failed = (flags != 0) | bad_blur | (length < MIN_LENGTH_PX) | faint | border | vague
+    return tuple(_reason(int(flags[i]), blur[i], length[i], faint[i], border[i]) if failed[i] else ""
+                 for i in range(len(p)))
+
+
+def _reason(flag: int, blur: float, length: float, faint: bool, border: bool) -> str:
+    """The message of a fit that fails :func:`verdicts` (its tests in their order)."""
     if flag != 0:
-        return ("", "the fit did not converge", "too few pixels near the streak", "singular fit")[flag]
-    length, blur = 2.0 * float(np.hypot(p[2], p[3])), float(p[8])
+        return FLAG_REASONS[flag]
     if not BLUR_RANGE_PX[0] <= blur <= BLUR_RANGE_PX[1]:
         return f"fitted blur {blur:.2f} px: not one star's streak"
     if length < MIN_LENGTH_PX:
         return f"streak {length:.1f} px long, shorter than {MIN_LENGTH_PX:g} px"
-    if not p[5] > MIN_FLUX_SNR * np.sqrt(max(cov[5, 5], 0.0)):
+    if faint:
         return "too faint"
-    ends = np.array([p[0:2] - p[2:4], p[0:2] + p[2:4]])
-    margin = EDGE_MARGIN_SIGMAS * blur
-    if np.any((ends < margin) | (ends > np.array([shape[1], shape[0]]) - 1 - margin)):
+    if border:
         return "an end at the image border: the star entered or left the field"
-    spread = max(cov[0, 0] + cov[2, 2], cov[1, 1] + cov[3, 3])
-    if not 0.0 <= spread <= MAX_END_SIGMA_PX**2:  # NaN or a negative variance: a singular fit
-        return f"ends less precise than {MAX_END_SIGMA_PX:g} px"
-    return ""
+    return f"ends less precise than {MAX_END_SIGMA_PX:g} px"
