@@ -257,3 +257,18 @@ def test_edge_filter_looks_at_the_core_only():
     np.testing.assert_array_equal(filters.away_from_edge(regions, mask.shape), [False, True])
     core = regions.y >= 1  # the part on row 0 is only a grown wing
     np.testing.assert_array_equal(filters.away_from_edge(regions, mask.shape, core), [True, True])
+
+
+def test_row_percentiles_are_numpys_nanpercentile_in_one_sort():
+    from startrack.detect._fine_pass import row_percentiles
+
+    rng = np.random.default_rng(4)
+    for _ in range(100):
+        values = rng.normal(size=(int(rng.integers(1, 40)), int(rng.integers(1, 90)))) * 300.0
+        values[rng.uniform(size=values.shape) < rng.uniform(0.0, 0.9)] = np.nan
+        values[0] = np.nan  # a ring of masked pixels only
+        with np.errstate(all="ignore"), pytest.warns(RuntimeWarning):
+            want = np.nanpercentile(values, [15.87, 84.13], axis=1)
+        got = row_percentiles(values, (15.87, 84.13))
+        assert np.array_equal(np.isnan(got), np.isnan(want))
+        assert np.allclose(got, want, rtol=1e-12, atol=1e-12, equal_nan=True)  # image units

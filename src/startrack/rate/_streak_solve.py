@@ -70,7 +70,8 @@ class StreakOptions:
     psf_sigma_px : float
         First guess of the blur (px).
     lis_streaks : int
-        Brightest candidate streaks fitted for the identification.
+        Brightest candidate streaks fitted for the identification (twice as many when they do
+        not identify: :data:`LIS_ATTEMPTS`).
     max_streaks : int
         Most streaks in the joint fit (identified plus predicted).
     catalog_max_mag : float

@@ -79,10 +79,11 @@ SOLVER_PARAMS = (
     Param("prior", "str", "sign", 'time order: "sign" gives the solver a rate of the right sign, "none" nothing',
           choices=("sign", "none")),
     Param("fit_alpha", "bool", False, "the solver fits a constant angular acceleration too"),
-    Param("lis_streaks", "int", 20, "brightest streaks fitted for the identification", lo=3, hi=200),
-    Param("max_streaks", "int", 40, "most streaks in the joint fit", lo=3, hi=500),
-    Param("catalog_max_mag", "float", 7.5, "faintest catalog star whose predicted streak is fitted (V)",
-          lo=-2.0, hi=12.0),
+    Param("lis_streaks", "int", StreakOptions.lis_streaks, "brightest streaks fitted for the identification "
+          "(then twice as many when they do not identify)", lo=3, hi=200),
+    Param("max_streaks", "int", StreakOptions.max_streaks, "most streaks in the joint fit", lo=3, hi=500),
+    Param("catalog_max_mag", "float", StreakOptions.catalog_max_mag,
+          "faintest catalog star whose predicted streak is fitted (V)", lo=-2.0, hi=12.0),
 )
 PARAMS = params_by_name(CAMERA_PARAMS, FRAME_PARAMS, SOLVER_PARAMS, SENSOR_FIELD_PARAMS, NOISE_PARAMS)
 
