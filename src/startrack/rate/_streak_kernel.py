@@ -502,7 +502,6 @@ def block_sums(image, bin_px, out):
             out[i, j] += total
 
 
-
 @njit(cache=True, fastmath=True)
 def rodrigues(vectors, theta, out):
     """``exp(-[theta x]) v`` (Rodrigues) of vectors (N, 3) by rotation vectors theta (N, 3)
