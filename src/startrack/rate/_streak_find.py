@@ -107,9 +107,13 @@ def binned(image: NDArray, bin_px: int) -> NDArray[np.float64]:
 
 
 def _axes(cov: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-    """Variances along and across (K,) and the unit major axes (K, 2; x, y) of 2 x 2 covariances (K, 2, 2)."""
+    """Variances along and across (K,) and the unit major axes (K, 2; x, y) of 2 x 2 covariances
+    (K, 2, 2), each axis pointing to +x (to +y when vertical): the sign of an eigenvector is
+    LAPACK's choice, which differs between builds, and the fits downstream start from it."""
     var, vec = np.linalg.eigh(cov)
-    return var[:, 1], var[:, 0], vec[:, :, 1]
+    axis = vec[:, :, 1]
+    flip = (axis[:, 0] < 0) | ((axis[:, 0] == 0) & (axis[:, 1] < 0))
+    return var[:, 1], var[:, 0], np.where(flip[:, None], -axis, axis)
 
 
 def find_streak_candidates(image: ArrayLike, *, bin_px: int = BIN_PX, line_bins: int = LINE_BINS,
