@@ -107,13 +107,9 @@ def binned(image: NDArray, bin_px: int) -> NDArray[np.float64]:
 
 
 def _axes(cov: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-    """Variances along and across (K,) and the unit major axes (K, 2; x, y) of 2 x 2 covariances
-    (K, 2, 2), each axis pointing to +x (to +y when vertical): the sign of an eigenvector is
-    LAPACK's choice, which differs between builds, and the fits downstream start from it."""
+    """Variances along and across (K,) and the unit major axes (K, 2; x, y) of 2 x 2 covariances (K, 2, 2)."""
     var, vec = np.linalg.eigh(cov)
-    axis = vec[:, :, 1]
-    flip = (axis[:, 0] < 0) | ((axis[:, 0] == 0) & (axis[:, 1] < 0))
-    return var[:, 1], var[:, 0], np.where(flip[:, None], -axis, axis)
+    return var[:, 1], var[:, 0], vec[:, :, 1]
 
 
 def find_streak_candidates(image: ArrayLike, *, bin_px: int = BIN_PX, line_bins: int = LINE_BINS,
