@@ -259,9 +259,9 @@ def test_edge_filter_looks_at_the_core_only():
     np.testing.assert_array_equal(filters.away_from_edge(regions, mask.shape, core), [True, True])
 
 
-def test_row_percentiles_are_numpys_nanpercentile_in_one_sort():
-    from startrack.detect._fine_pass import row_percentiles
 
+def test_ring_quantiles_are_numpys_nanpercentile():
+    """The fine pass's rings (some NaN, one all NaN) through background.last_axis_quantiles."""
     rng = np.random.default_rng(4)
     for _ in range(100):
         values = rng.normal(size=(int(rng.integers(1, 40)), int(rng.integers(1, 90)))) * 300.0
@@ -269,6 +269,6 @@ def test_row_percentiles_are_numpys_nanpercentile_in_one_sort():
         values[0] = np.nan  # a ring of masked pixels only
         with np.errstate(all="ignore"), pytest.warns(RuntimeWarning):
             want = np.nanpercentile(values, [15.87, 84.13], axis=1)
-        got = row_percentiles(values, (15.87, 84.13))
+        got = np.array(background.last_axis_quantiles(values.copy(), (0.1587, 0.8413)))
         assert np.array_equal(np.isnan(got), np.isnan(want))
         assert np.allclose(got, want, rtol=1e-12, atol=1e-12, equal_nan=True)  # image units

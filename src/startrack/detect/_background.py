@@ -346,14 +346,14 @@ def _stack_quantiles(stack: NDArray, q: tuple[float, ...]) -> list[NDArray]:
     """Quantiles ``q`` of each tile of a :func:`_gather` stack (ny, nx, S), ignoring NaN, each of
     shape (ny, nx); a tile with no finite value takes its nearest neighbour's (all NaN when
     no tile has one). The stack is sorted in place."""
-    return [_fill_from_nearest(v) for v in _last_axis_quantiles(stack, q)]
+    return [_fill_from_nearest(v) for v in last_axis_quantiles(stack, q)]
 
 
-def _last_axis_quantiles(stack: NDArray, q: tuple[float, ...]) -> list[NDArray]:
+def last_axis_quantiles(stack: NDArray, q: tuple[float, ...]) -> list[NDArray]:
     """Quantiles along the last axis, NaN left out (linear interpolation, as ``np.quantile``);
     sorting the short rows in place and reading the quantiles off them is faster than
     ``np.nanquantile``, which loops over the rows in Python (``benchmarks/detect_speed.py``
-    times the detector). ``stack`` itself is sorted (no copy)."""
+    times the detector; the fine pass's rings use it too). ``stack`` itself is sorted (no copy)."""
     stack.sort(axis=-1)  # NaN go last
     ordered = stack
     if not np.isnan(ordered[..., -1]).any():

@@ -35,7 +35,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ._background import tiled_background
+from ._background import last_axis_quantiles, tiled_background
 from ._deblend import split_regions
 from ._filters import peak_away_from_edge
 from ._label import Regions, label_regions, regions_from_index
@@ -190,28 +190,9 @@ def ring_noise_ratio(data: NDArray, x: NDArray, y: NDArray, pixel_noise: float,
     k = np.arange(-outer, outer + 1)
     r = np.hypot(k[None, :], k[:, None])
     ring = windows.values[:, (r >= inner) & (r <= outer)]
-    lo, hi = row_percentiles(ring, (15.87, 84.13))
+    lo, hi = last_axis_quantiles(ring, (0.1587, 0.8413))  # ring is a copy: sorted in place
     with np.errstate(all="ignore"):
         return 0.5 * (hi - lo) / pixel_noise
-
-
-def row_percentiles(values: NDArray, q: tuple[float, ...]) -> NDArray[np.float64]:
-    """Percentiles ``q`` (%) of each row of ``values`` (N, M), NaNs left out, shape (len(q), N):
-    ``np.nanpercentile(values, q, axis=1)`` (its default linear interpolation) in one sort of
-    the rows, where numpy's loops over them in Python (most of a tracking frame's detection
-    time, a ring for each of some hundred spots); NaN for a row with no number."""
-    ordered = np.sort(np.asarray(values, dtype=np.float64), axis=1)  # NaNs last
-    count = np.sum(~np.isnan(ordered), axis=1)
-    rows = np.arange(len(ordered))
-    out = np.full((len(q), len(ordered)), np.nan)
-    some = count > 0
-    for j, percent in enumerate(q):
-        pos = (count[some] - 1) * (float(percent) / 100.0)
-        below = np.floor(pos).astype(np.intp)
-        above = np.minimum(below + 1, count[some] - 1)
-        a, b = ordered[rows[some], below], ordered[rows[some], above]
-        out[j, some] = a + (b - a) * (pos - below)
-    return out
 
 
 def quiet_surroundings(data: NDArray, snr: NDArray | None, regions: Regions, x: NDArray, y: NDArray,
