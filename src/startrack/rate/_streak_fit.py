@@ -378,18 +378,21 @@ def verdicts(params: NDArray, cov: NDArray, flags: NDArray, shape: tuple[int, in
         spread = np.maximum(cov[:, 0, 0] + cov[:, 2, 2], cov[:, 1, 1] + cov[:, 3, 3])
         vague = ~((spread >= 0.0) & (spread <= MAX_END_SIGMA_PX**2))  # NaN or a negative variance: singular
         bad_blur = ~((blur >= BLUR_RANGE_PX[0]) & (blur <= BLUR_RANGE_PX[1]))
-    failed = (flags != 0) | bad_blur | (length < MIN_LENGTH_PX) | faint | border | vague
-    return tuple(_reason(int(flags[i]), blur[i], length[i], faint[i], border[i]) if failed[i] else ""
-                 for i in range(len(p)))
+    short = length < MIN_LENGTH_PX
+    failed = (flags != 0) | bad_blur | short | faint | border | vague
+    return tuple(_reason(int(flags[i]), blur[i], length[i], (bad_blur[i], short[i], faint[i], border[i]))
+                 if failed[i] else "" for i in range(len(p)))
 
 
-def _reason(flag: int, blur: float, length: float, faint: bool, border: bool) -> str:
-    """The message of a fit that fails :func:`verdicts` (its tests in their order)."""
+def _reason(flag: int, blur: float, length: float, tests: tuple[bool, bool, bool, bool]) -> str:
+    """The message of a fit that fails :func:`verdicts`: the first of its kernel flag and its
+    failed ``tests`` (bad blur, too short, too faint, at the border; else its ends are vague)."""
+    bad_blur, short, faint, border = tests
     if flag != 0:
         return FLAG_REASONS[flag]
-    if not BLUR_RANGE_PX[0] <= blur <= BLUR_RANGE_PX[1]:
+    if bad_blur:
         return f"fitted blur {blur:.2f} px: not one star's streak"
-    if length < MIN_LENGTH_PX:
+    if short:
         return f"streak {length:.1f} px long, shorter than {MIN_LENGTH_PX:g} px"
     if faint:
         return "too faint"
