@@ -62,7 +62,7 @@ def test_a_fit_out_of_iterations_is_refused_and_one_with_enough_is_not():
     assert enough.ok[0] and _end_error_px(enough) < 0.5  # px
 
 
-@pytest.mark.parametrize("bad", [0, -2, 2.5, None])
+@pytest.mark.parametrize("bad", [0, -2, 2.5, None, True])
 def test_max_iter_is_a_positive_whole_number(bad):
     with pytest.raises(InvalidInputError, match="max_iter"):
         fit_streaks(_image(), _short_guess(), [8.0], [6.0], noise=NOISE, max_iter=bad)

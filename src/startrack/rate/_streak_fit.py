@@ -293,10 +293,8 @@ def fit_streaks(
     if not var_bg > 0:
         raise InvalidInputError(f"noise must be a positive sigma, got {noise!r}")
     reach, band = np.asarray(reach, dtype=float), np.asarray(band, dtype=float)
-    if not (isinstance(max_windows, int | np.integer) and max_windows >= 1):
-        raise InvalidInputError(f"max_windows must be a whole number of windows, at least 1, got {max_windows!r}")
-    if not (isinstance(max_iter, int | np.integer) and max_iter >= 1):
-        raise InvalidInputError(f"max_iter must be a whole number of iterations, at least 1, got {max_iter!r}")
+    _check_count(max_windows, "max_windows", "windows")
+    _check_count(max_iter, "max_iter", "iterations")
     stopping = (TOL_PX, STEP_SIGMAS, max_windows, max_iter)
     if passes == 1:
         params, cov, stats = _run(img, labels, bin_px, own, start, reach, band, sat, var_bg, shot or 0.0, False,
@@ -317,6 +315,12 @@ def fit_streaks(
                       var_bg, shot, False, stopping)
         params[again], cov[again], stats[again] = second
     return _judged(params, cov, stats, img.shape, own, shot, float(noise), _median_bg(start))
+
+
+def _check_count(value: object, name: str, what: str) -> None:
+    """Refuse a ``value`` that is not a whole number of at least 1 (``what``: its unit, for the message)."""
+    if not (isinstance(value, int | np.integer) and not isinstance(value, bool) and value >= 1):
+        raise InvalidInputError(f"{name} must be a whole number of {what}, at least 1, got {value!r}")
 
 
 def _median_bg(start: NDArray) -> float:
