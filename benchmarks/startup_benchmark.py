@@ -14,6 +14,9 @@ Measured, each in fresh processes (the median of ``--repeat`` runs where it says
 * ``startrack solve IMAGE`` wall and CPU time (the console script in a new process), with
   startrack's bytecode kept as an install has it (see :func:`_with_bytecode`) and, when this
   environment turned bytecode off, once more as it runs here (compiled from source);
+* the floor under any command built on this stack: a new process of the same Python that imports
+  numpy, ``scipy.spatial`` (where ``Rotation`` lives) and numba and calls one trivial compiled
+  function from numba's cache, with nothing of startrack (:data:`STACK_FLOOR`);
 * a batch of 20 real photos: ``startrack solve FOLDER`` (one process) against 20 commands one
   after the other, total and per image;
 * cedar-solve (its own virtual environment, ``benchmarks/peers/cedar_env.py``): a new process
@@ -99,6 +102,27 @@ print(json.dumps({"import_s": t1 - t0, "solver_import_s": t2 - t1, "read_s": t2b
                   "first_reported_s": first.solve_time_s, "second_s": t6 - t5, "solved": first.solved,
                   "loads": loads}))
 """
+
+STACK_FLOOR = r"""
+import json, time
+t0 = time.perf_counter()
+import numpy
+t1 = time.perf_counter()
+import scipy.spatial.transform
+t2 = time.perf_counter()
+import numba
+t3 = time.perf_counter()
+
+@numba.njit(cache=True)
+def add(a, b):
+    return a + b
+
+add(1.0, 2.0)
+t4 = time.perf_counter()
+print(json.dumps({"numpy_s": t1 - t0, "scipy_spatial_s": t2 - t1, "numba_s": t3 - t2, "numba_first_s": t4 - t3}))
+"""
+"""The stack's floor: a file (numba caches only functions with a source file) run in a new process;
+its first run compiles ``add`` into a temporary numba cache, the timed runs load it."""
 
 CEDAR_SOLVE = r"""
 import json, logging, sys, time
@@ -189,6 +213,24 @@ def measure_first_solve(repeat: int) -> None:
     order = {name: k for k, name in enumerate(loads)}
     for name, seconds in sorted(loads.items(), key=lambda kv: -kv[1]):
         print(f"    {name:<34} {1e3 * seconds:7.1f} ms   (loaded {order[name] + 1}.)")
+
+
+def measure_floor(repeat: int) -> None:
+    """What a new process of this stack costs before any startrack code (:data:`STACK_FLOOR`)."""
+    print("\nthe floor of the stack, a new process with nothing of startrack (s; median of "
+          f"{repeat}): numpy, scipy.spatial, numba, one cached compiled function")
+    with tempfile.TemporaryDirectory() as tmp:
+        script = Path(tmp) / "floor.py"
+        script.write_text(STACK_FLOOR)
+        env = {**os.environ, "NUMBA_CACHE_DIR": str(Path(tmp) / "numba")}
+        _wall([str(PYTHON), str(script)], env=env)  # compiles add() into the cache
+        bare, _, _ = _median_wall([str(PYTHON), "-c", "pass"], repeat)
+        wall, low, _ = _median_wall([str(PYTHON), str(script)], repeat, env=env)
+        parts = [json.loads(_wall([str(PYTHON), str(script)], env=env)[1].stdout) for _ in range(repeat)]
+    med = {k: statistics.median(p[k] for p in parts) for k in parts[0]}
+    print(f"  whole process        median {wall:6.3f}  min {low:6.3f}   (python -c pass: {bare:.3f})\n"
+          f"  numpy {med['numpy_s']:.3f}, scipy.spatial {med['scipy_spatial_s']:.3f}, numba {med['numba_s']:.3f}, "
+          f"numba's first cached function {med['numba_first_s']:.3f}")
 
 
 def measure_cli(repeat: int, source_env: dict | None) -> None:
@@ -348,6 +390,7 @@ def measure_warm(args: argparse.Namespace, source_env: dict | None = None) -> No
     describe_numba_cache()
     measure_imports(args.repeat)
     measure_first_solve(args.repeat)
+    measure_floor(args.repeat)
     measure_cli(args.repeat, source_env)
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp) / "batch"
