@@ -22,7 +22,6 @@ A mirror image has the same edge ratios but no rotation fits it, so step 4 rejec
 from __future__ import annotations
 
 import functools
-import itertools
 import math
 import time
 import weakref
@@ -133,14 +132,31 @@ def pattern_batches(n: int, first_new: int = 0) -> tuple[NDArray[np.int64], ...]
 @functools.cache
 def _pattern_batches(n: int, first_new: int) -> tuple[NDArray[np.int64], ...]:
     first = min(n, FIRST_BATCH_STARS) if first_new == 0 else first_new
-    batches = [np.array(list(itertools.combinations(range(first), 4)), dtype=np.int64)] \
-        if first_new == 0 and first >= 4 else []
-    for last in range(max(first, 3), n):
-        head = np.array(list(itertools.combinations(range(last), 3)), dtype=np.int64)
-        batches.append(np.column_stack([head, np.full(len(head), last)]))
-    for batch in batches:
-        batch.flags.writeable = False
+    batches = [_read_only(_combinations(first, 4))] if first_new == 0 and first >= 4 else []
+    batches.extend(_ending_at(last) for last in range(max(first, 3), n))
     return tuple(batches)
+
+
+@functools.cache
+def _ending_at(last: int) -> NDArray[np.int64]:
+    """Every four-star pattern whose faintest star is ``last``: the triples of brighter stars in
+    lexicographic order, then ``last``, shape (C(last, 3), 4) (cached, read-only; shared by the
+    batches of every star count, so a solve with a new count builds none of them)."""
+    head = _combinations(last, 3)
+    return _read_only(np.column_stack([head, np.full(len(head), last, dtype=np.int64)]))
+
+
+def _combinations(m: int, r: int) -> NDArray[np.int64]:
+    """``itertools.combinations(range(m), r)`` as an array (C(m, r), r), in the same
+    (lexicographic) order: the strictly increasing index tuples of an r-dimensional grid, which
+    ``np.indices`` lists in that order, without a Python loop per combination."""
+    grid = np.indices((m,) * r).reshape(r, -1)
+    return np.ascontiguousarray(grid[:, np.all(grid[:-1] < grid[1:], axis=0)].T, dtype=np.int64)
+
+
+def _read_only(array: NDArray) -> NDArray:
+    array.flags.writeable = False
+    return array
 
 
 def pattern_pools(n: int, size: int, limit: int) -> list[tuple[int, int]]:
