@@ -155,6 +155,7 @@ def _combinations(m: int, r: int) -> NDArray[np.int64]:
 
 
 def _read_only(array: NDArray) -> NDArray:
+    """``array`` itself, made read-only (a cached batch is shared by every solve)."""
     array.flags.writeable = False
     return array
 
