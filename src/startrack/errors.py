@@ -6,6 +6,8 @@ exceptions; see :mod:`startrack.results`.
 
 from __future__ import annotations
 
+import math
+from numbers import Integral, Real
 from typing import TypeVar
 
 _T = TypeVar("_T")
@@ -65,6 +67,67 @@ def check_instance(value: object, cls: type[_T], what: str) -> _T:
     if not isinstance(value, cls):
         raise InvalidInputError(f"{what} must be a {public_name(cls)}, got a {type(value).__name__}")
     return value
+
+
+def is_real_number(value: object) -> bool:
+    """Whether ``value`` is a real number (Python or numpy), not a bool."""
+    return isinstance(value, Real) and not isinstance(value, bool)
+
+
+def _or_none(optional: bool) -> str:
+    return " or None" if optional else ""
+
+
+def check_positive(obj: object, names: tuple[str, ...], optional: bool = False) -> None:
+    """Each named attribute of ``obj`` (an options object) is a finite number > 0 (or None when
+    ``optional``); else an InvalidInputError naming it."""
+    for name in names:
+        value = getattr(obj, name)
+        if optional and value is None:
+            continue
+        if not (is_real_number(value) and math.isfinite(value) and value > 0):
+            raise InvalidInputError(f"{name} must be a positive number{_or_none(optional)}, got {value!r}")
+
+
+def check_non_negative(obj: object, names: tuple[str, ...]) -> None:
+    """Each named attribute of ``obj`` is a finite number >= 0."""
+    for name in names:
+        value = getattr(obj, name)
+        if not (is_real_number(value) and math.isfinite(value) and value >= 0):
+            raise InvalidInputError(f"{name} must be a number >= 0, got {value!r}")
+
+
+def check_finite(obj: object, names: tuple[str, ...]) -> None:
+    """Each named attribute of ``obj`` is a finite number."""
+    for name in names:
+        value = getattr(obj, name)
+        if not (is_real_number(value) and math.isfinite(value)):
+            raise InvalidInputError(f"{name} must be a finite number, got {value!r}")
+
+
+def check_int(obj: object, names: tuple[str, ...], minimum: int, optional: bool = False) -> None:
+    """Each named attribute of ``obj`` is an integer >= ``minimum`` (or None when ``optional``)."""
+    for name in names:
+        value = getattr(obj, name)
+        if optional and value is None:
+            continue
+        if not (isinstance(value, Integral) and not isinstance(value, bool) and int(value) >= minimum):
+            raise InvalidInputError(f"{name} must be an integer >= {minimum}{_or_none(optional)}, got {value!r}")
+
+
+def check_bool(obj: object, names: tuple[str, ...]) -> None:
+    """Each named attribute of ``obj`` is True or False."""
+    for name in names:
+        value = getattr(obj, name)
+        if not (isinstance(value, bool) or _is_numpy_bool(value)):
+            raise InvalidInputError(f"{name} must be True or False, got {value!r}")
+
+
+def _is_numpy_bool(value: object) -> bool:
+    """Whether ``value`` is numpy's bool (``np.bool_``, named ``bool`` since numpy 2), told without
+    importing numpy."""
+    kind = type(value)
+    return kind.__module__ == "numpy" and kind.__name__ in ("bool", "bool_")
 
 
 def public_name(cls: type) -> str:

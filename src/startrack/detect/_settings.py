@@ -14,7 +14,7 @@ from typing import Literal, get_args
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, check_bool, check_int, check_non_negative, check_positive
 from ..io import channel_index
 from . import _settings_checks as checks
 from ._centroid import UNCERTAINTY_MODELS, UncertaintyModel
@@ -140,23 +140,23 @@ class DetectionSettings:
         checks.check_pair(self, "smear_px", optional=True, integer=False)
         checks.check_dark(self.dark_frame)
         channel_index(self.channel)
-        checks.check_bool(self, ("reject_edge", "deblend"))
+        check_bool(self, ("reject_edge", "deblend"))
 
     def _check_numbers(self) -> None:
         """The numeric settings are in their ranges (InvalidInputError naming the first that is not)."""
-        checks.check_positive(self, ("sigma", "grow_sigma", "denoise_sigma_px",
+        check_positive(self, ("sigma", "grow_sigma", "denoise_sigma_px",
                                      "diffusion_kappa_sigma", "max_sigma", "pixel_sigma",
                                      "smear_tolerance_px", "smear_angle_deg"))
-        checks.check_positive(self, ("fine_sigma", "max_elongation", "max_peak_fraction", "max_clutter",
+        check_positive(self, ("fine_sigma", "max_elongation", "max_peak_fraction", "max_clutter",
                                      "psf_sigma_px", "gain_e_per_adu", "max_axis_difference_px"),
                               optional=True)
-        checks.check_int(self, ("binning", "kernel_px", "tile_px", "min_area_px", "jump_px",
+        check_int(self, ("binning", "kernel_px", "tile_px", "min_area_px", "jump_px",
                                 "target_stars", "diffusion_iterations"), minimum=1)
-        checks.check_int(self, ("prefilter_count",), minimum=1)
-        checks.check_int(self, ("max_block_px",), minimum=1024)
-        checks.check_int(self, ("max_area_px", "max_stars", "window_half_px"), minimum=1,
+        check_int(self, ("prefilter_count",), minimum=1)
+        check_int(self, ("max_block_px",), minimum=1024)
+        check_int(self, ("max_area_px", "max_stars", "window_half_px"), minimum=1,
                          optional=True)
-        checks.check_non_negative(self, ("min_peak_snr", "min_flatness", "min_packing"))
+        check_non_negative(self, ("min_peak_snr", "min_flatness", "min_packing"))
         if not isinstance(self.mag_zero_point, int | float) or not np.isfinite(self.mag_zero_point):
             raise InvalidInputError(f"mag_zero_point must be a finite number, got "
                                     f"{self.mag_zero_point!r}")

@@ -42,7 +42,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..attitude import roll_cross_boresight
 from ..camera import Camera
-from ..errors import InvalidInputError, check_instance, require
+from ..errors import (
+    InvalidInputError,
+    check_bool,
+    check_finite,
+    check_instance,
+    check_int,
+    check_non_negative,
+    check_positive,
+    require,
+)
 from ..frames import radec_roll_from_rotation
 from ..identify import MethodName, check_method, field_stars
 from ..results import AttitudeSolution, StarMatches, Status
@@ -115,6 +124,15 @@ class StreakOptions:
     gain_e_per_adu: float | None = None
     line_time_s: float = 0.0
     pixel_aspect: float | None = 1.0
+
+    def __post_init__(self) -> None:
+        """Refuse a setting the streak path cannot use (NaN, infinite, a wrong type), naming it."""
+        check_positive(self, ("psf_sigma_px", "max_rate_uncertainty", "max_birge"))
+        check_positive(self, ("gain_e_per_adu", "pixel_aspect"), optional=True)
+        check_non_negative(self, ("enough_rate_uncertainty", "line_time_s"))
+        check_finite(self, ("catalog_max_mag",))
+        check_int(self, ("lis_streaks", "max_streaks", "min_streaks"), 3)
+        check_bool(self, ("fit_alpha",))
 
     @property
     def shot(self) -> float | None:
