@@ -259,7 +259,6 @@ def test_edge_filter_looks_at_the_core_only():
     np.testing.assert_array_equal(filters.away_from_edge(regions, mask.shape, core), [True, True])
 
 
-
 def test_ring_quantiles_are_numpys_nanpercentile():
     """The fine pass's rings (some NaN, one all NaN) through background.last_axis_quantiles."""
     rng = np.random.default_rng(4)

@@ -424,11 +424,10 @@ def _agreeing(lis: AttitudeSolution, fits: StreakFits, rows: NDArray, measured: 
 def extend(img: NDArray, found: Identified, joint: JointFit, timing: Timing, field: Field, *, noise: float,
            background: float, opts: StreakOptions, fit_focal: bool, saturation: float) -> tuple[Identified, JointFit]:
     """Add the predicted streaks of the field's other catalog stars that agree with the joint
-    fit (one tight pass each, :func:`.streak_predict.fit_predicted`) to the pixels ``img`` and
-    ``saturation`` of :func:`.streak_fit.fit_pixels` (the float pixels no longer show the ADC's
-    ceiling, so it is given),
-    and fit again; unless the joint fit already knows the rate well enough
-    (:attr:`StreakOptions.enough_rate_uncertainty`) or has no room (``max_streaks``)."""
+    fit (one tight pass each, :func:`.streak_predict.fit_predicted`), and fit again; unless the
+    joint fit already knows the rate well enough (:attr:`StreakOptions.enough_rate_uncertainty`)
+    or has no room (``max_streaks``). ``img`` and ``saturation`` are :func:`.streak_fit.fit_pixels`'
+    pair: the float pixels no longer show the ADC's ceiling, so it is given."""
     room = opts.max_streaks - found.rows.size
     if room <= 0 or _known_enough(joint, opts):
         return found, joint
