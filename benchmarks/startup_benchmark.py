@@ -225,10 +225,11 @@ def measure_floor(repeat: int) -> None:
         env = {**os.environ, "NUMBA_CACHE_DIR": str(Path(tmp) / "numba")}
         _wall([str(PYTHON), str(script)], env=env)  # compiles add() into the cache
         bare, _, _ = _median_wall([str(PYTHON), "-c", "pass"], repeat)
-        wall, low, _ = _median_wall([str(PYTHON), str(script)], repeat, env=env)
-        parts = [json.loads(_wall([str(PYTHON), str(script)], env=env)[1].stdout) for _ in range(repeat)]
+        runs = [_wall([str(PYTHON), str(script)], env=env) for _ in range(repeat)]
+    walls, parts = [t for t, _ in runs], [json.loads(done.stdout) for _, done in runs]
     med = {k: statistics.median(p[k] for p in parts) for k in parts[0]}
-    print(f"  whole process        median {wall:6.3f}  min {low:6.3f}   (python -c pass: {bare:.3f})\n"
+    print(f"  whole process        median {statistics.median(walls):6.3f}  min {min(walls):6.3f}   "
+          f"(python -c pass: {bare:.3f})\n"
           f"  numpy {med['numpy_s']:.3f}, scipy.spatial {med['scipy_spatial_s']:.3f}, numba {med['numba_s']:.3f}, "
           f"numba's first cached function {med['numba_first_s']:.3f}")
 
