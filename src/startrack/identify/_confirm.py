@@ -2,8 +2,9 @@
 lost-in-space matcher (see :mod:`._verify` for the false-match probability).
 
 The candidate is tested at the tight match radius. If it falls short, its matches at a loose
-radius (``LOOSE_RADIUS_FACTOR`` times wider) are used to refit the attitude (and the focal length
-when it is free), and it is tested again at the tight radius, counting only the stars the fit
+radius (``LOOSE_RADIUS_FACTOR`` times wider), when they are more than chance would give a wrong
+candidate, are used to refit the attitude (and the focal length when it is free), and it is
+tested again at the tight radius, counting only the stars the fit
 did not use beyond those it had already matched (:meth:`Confirmer.confirm`): a pattern fitted
 on a few close stars can be off by more than the tight radius at the far side of the image. For a lens that is
 not calibrated the refit also takes the radial distortion k1 (and, when the pixel aspect is
@@ -24,7 +25,7 @@ from scipy.spatial.transform import Rotation
 from ..camera import Camera
 from ._candidate import Candidate
 from ._refine import fit_pose, predicted_pairs, warm_up_pose
-from ._verify import TEST_RADIUS_FRACTIONS, SkyBands, false_match_bound_counts, field_cone
+from ._verify import TEST_RADIUS_FRACTIONS, SkyBands, false_match_bound_counts, false_match_probability, field_cone
 
 LOOSE_RADIUS_FACTOR = 2.5
 """First verification pass: match radius as a multiple of the final one."""
@@ -34,6 +35,16 @@ MIN_EXTRA_MATCHES = 2
 
 LOOSE_ROUNDS_DISTORTED = 2
 """Loose passes for a lens whose distortion is fitted (one otherwise)."""
+
+MAX_LOOSE_CHANCE = 0.1
+"""... and that many are refitted only when a wrong candidate would match at least as many at the
+loose radius by chance with at most this probability (the binomial tail of :mod:`._verify`,
+without the Bonferroni factor: the test only decides whether a refit is worth its cost, the
+candidate still has to pass the tight test after it). On 100 lists of each condition of
+``benchmarks/lis_benchmark.py`` (standard and ``--easy``, FOV 10, 15 and 20 deg, known or 5-35),
+59 of the 73 candidates that reached a refit and were refused after it are turned away here; the
+8 that the refit confirmed had chances of at most 0.013 (2 loose matches of 14, a pattern 0.8 deg
+off)."""
 
 MIN_EXTRA_FOR_LENS = 6
 """The loose refit frees k1 and the pixel aspect only with at least this many stars beyond the
@@ -111,7 +122,7 @@ class Confirmer:
                 return field.candidate(given, tight, prob)
             img_i, cat_j, _ = field.matches(reach_px)
             extra = np.count_nonzero(_not_in(img_i, pattern_img))
-            if extra < MIN_EXTRA_MATCHES:
+            if not _worth_refit(field, int(extra), len(pattern_img), reach_px):
                 return None
             fitted = np.union1d(fitted, img_i[_not_in(img_i, tight) & _not_in(img_i, pattern_img)])
             lens = bool(extra >= MIN_EXTRA_FOR_LENS)
@@ -214,6 +225,18 @@ def _attitude(rot: Rotation | NDArray) -> tuple[NDArray[np.float64], Rotation | 
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]), values
+
+
+def _worth_refit(field: _Field, extra: int, n_pattern: int, reach_px: float) -> bool:
+    """Whether ``extra`` loose matches (image stars beyond the pattern's ``n_pattern`` within
+    ``reach_px`` of the ``field``'s predicted stars) are enough to refit on: at least
+    :data:`MIN_EXTRA_MATCHES`, and more than chance would give a wrong candidate
+    (:data:`MAX_LOOSE_CHANCE`)."""
+    if extra < MIN_EXTRA_MATCHES:
+        return False
+    chance = false_match_probability(extra, len(field.xs) - n_pattern, field.n_in_image, reach_px,
+                                     field.camera.width, field.camera.height, 1)
+    return chance <= MAX_LOOSE_CHANCE
 
 
 def _not_in(values: NDArray, few: NDArray) -> NDArray[np.bool_]:
