@@ -47,11 +47,37 @@ def test_a_ring_and_a_spiral_are_one_region_each():
 @pytest.mark.parametrize("linear", [False, True])
 def test_grid_median_is_scipys(linear):
     rng = np.random.default_rng(4)
-    for shape in ((32, 32), (1, 1), (3, 7), (2, 40)):
+    for shape in ((32, 32), (1, 1), (3, 7), (2, 40), (9, 1), (1, 6)):
         grid = np.round(rng.normal(size=shape) * 2)  # ties
         padded = np.pad(grid, 1, mode="reflect", reflect_type="odd") if linear else np.pad(grid, 1, mode="edge")
         expected = ndimage.median_filter(padded, size=3)[1:-1, 1:-1]
         np.testing.assert_array_equal(background._median3(grid, linear=linear), expected)
+
+
+@pytest.mark.parametrize("step", [1, 2])
+def test_residual_samples_are_the_samples_less_the_interpolated_level(step):
+    rng = np.random.default_rng(8)
+    image = rng.normal(100.0, 5.0, (70, 90)).astype(np.float32)
+    rows, cols = np.arange(0, 64, step), np.arange(0, 80, step)  # 4 x 5 tiles of 16 px
+    grid = rng.normal(100.0, 3.0, (4, 5)).astype(np.float32)
+    centres_y, centres_x = rows.reshape(4, -1).mean(axis=1), cols.reshape(5, -1).mean(axis=1)
+    level_map = np.empty((rows.size, cols.size), np.float32)
+    stack = background._gather(image, rows, cols, (4, 5), (grid, centres_y, centres_x), level_map)
+    expected_level = background._grid_map(grid, centres_y, centres_x, rows, cols, True)
+    np.testing.assert_array_equal(level_map, expected_level)
+    residual = image[np.ix_(rows, cols)] - expected_level
+    tiles = residual.reshape(4, rows.size // 4, 5, cols.size // 5).transpose(0, 2, 1, 3).reshape(4, 5, -1)
+    np.testing.assert_array_equal(stack, tiles)
+
+
+def test_grid_quantiles_are_numpys():
+    rng = np.random.default_rng(9)
+    for shape in ((32, 32), (1, 1), (2, 3), (5, 7)):
+        grid = np.round(rng.normal(size=shape), 1).astype(np.float32)  # ties
+        assert background._grid_quantile(grid, 0.25) == float(np.quantile(grid, 0.25))
+        assert background._grid_quantile(grid, 0.5) == float(np.median(grid))
+        grid[0, 0] = np.nan
+        assert np.isnan(background._grid_quantile(grid, 0.25))
 
 
 @pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.int32, np.float32, np.float64])
