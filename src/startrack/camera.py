@@ -68,6 +68,11 @@ class Camera:
         A label and where the numbers come from (a seed section, a calibration).
     pixel_pitch_um : float or None
         Pixel pitch, for radiometry and reporting.
+    mirrored : bool
+        The image is a mirror image of the sky (a star diagonal, a flipped file): pixel x runs
+        against the camera frame's x axis, x = cx - fx a (``DESIGN.md``, pixels and frames). The
+        camera frame stays right-handed, so an attitude stays a rotation; :meth:`mirror_image`
+        gives the camera of the same image flipped left to right.
     """
 
     width: int
@@ -85,6 +90,7 @@ class Camera:
     name: str = ""
     source: str = ""
     pixel_pitch_um: float | None = None
+    mirrored: bool = False
 
     def __post_init__(self) -> None:
         for key in ("width", "height"):
@@ -106,6 +112,9 @@ class Camera:
         for key in ("cx", "cy", "k1", "k2", "k3", "p1", "p2"):
             if not math.isfinite(getattr(self, key)):
                 raise InvalidInputError(f"camera parameter {key} must be finite, got {getattr(self, key)!r}")
+        if not isinstance(self.mirrored, bool | np.bool_):
+            raise InvalidInputError(f"camera mirrored must be True or False, got {self.mirrored!r}")
+        object.__setattr__(self, "mirrored", bool(self.mirrored))
         pitch = self.pixel_pitch_um
         number = isinstance(pitch, int | float | np.number) and not isinstance(pitch, bool)
         if pitch is not None and not (number and math.isfinite(pitch) and pitch > 0):
@@ -138,6 +147,14 @@ class Camera:
         if not (fx > 0 and fy > 0 and math.isfinite(fx) and math.isfinite(fy)):
             raise InvalidInputError(f"focal lengths must be positive and finite, got {fx!r}, {fy!r} px")
         return self._updated(fx=float(fx), fy=float(fy))
+
+    def mirror_image(self) -> Camera:
+        """The camera of this camera's image flipped left to right (column x to width - 1 - x):
+        the principal point reflected, :attr:`mirrored` toggled, everything else kept. Twice is
+        the camera itself."""
+        new = self._updated(cx=(self.width - 1) - self.cx)
+        object.__setattr__(new, "mirrored", not self.mirrored)
+        return new
 
     def with_distortion(self, **coefficients: float) -> Camera:
         """The same camera with other distortion coefficients (k1, k2, k3, p1, p2)."""
@@ -184,6 +201,11 @@ class Camera:
     def pixel_scale_arcsec(self) -> float:
         """Angular size of one pixel at the principal point, in arcseconds."""
         return math.degrees(1.0 / math.sqrt(self.fx * self.fy)) * 3600.0
+
+    @property
+    def x_sign(self) -> float:
+        """+1, or -1 for a :attr:`mirrored` image: pixel x = cx + x_sign fx a."""
+        return -1.0 if self.mirrored else 1.0
 
     @property
     def has_distortion(self) -> bool:
@@ -235,7 +257,7 @@ class Camera:
                 b = np.where(front, v[..., 1] / np.where(front, vz, 1.0), np.nan)
         if self.has_distortion:
             a, b = self._distort(a, b)
-        return self.cx + self.fx * a, self.cy + self.fy * b
+        return self.cx + self.x_sign * self.fx * a, self.cy + self.fy * b
 
     def project_with_jacobian(self, vectors: NDArray) -> tuple[NDArray, NDArray, NDArray]:
         """Pixel coordinates of camera-frame vectors (v_z > 0) and their derivatives.
@@ -256,15 +278,16 @@ class Camera:
         zero = np.zeros_like(a)
         da = np.stack([inv_z, zero, -a * inv_z], axis=-1)  # d a / d v
         db = np.stack([zero, inv_z, -b * inv_z], axis=-1)
+        fx = self.x_sign * self.fx
         if self.has_distortion:
             daa, dab, dba, dbb = self._distort_jacobian(a, b)
             ad, bd = self._distort(a, b)
-            dx = self.fx * (daa[:, None] * da + dab[:, None] * db)
+            dx = fx * (daa[:, None] * da + dab[:, None] * db)
             dy = self.fy * (dba[:, None] * da + dbb[:, None] * db)
         else:
             ad, bd = a, b
-            dx, dy = self.fx * da, self.fy * db
-        return self.cx + self.fx * ad, self.cy + self.fy * bd, np.stack([dx, dy], axis=1)
+            dx, dy = fx * da, self.fy * db
+        return self.cx + fx * ad, self.cy + self.fy * bd, np.stack([dx, dy], axis=1)
 
     def pixel_to_vector(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
         """Unit camera-frame vectors (..., 3) of pixel coordinates (distortion removed).
@@ -278,7 +301,7 @@ class Camera:
         y = np.asarray(y, dtype=float)
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
             raise InvalidInputError("pixel coordinates must be finite numbers (got NaN or inf)")
-        ad = (x - self.cx) / self.fx
+        ad = self.x_sign * (x - self.cx) / self.fx
         bd = (y - self.cy) / self.fy
         a, b = self._undistort(ad, bd) if self.has_distortion else (ad, bd)
         v = np.stack([a, b, np.ones_like(a)], axis=-1)

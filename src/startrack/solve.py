@@ -29,11 +29,13 @@ from .identify import (
     FieldStars,
     MatcherOptionsBase,
     MethodName,
+    Parity,
     SolveRequest,
     build_request,
     check_fov_deg,
     check_options,
     epoch_jyear,
+    mirror_x,
     pixel_vectors,
     prepare_matcher,
     resolve_epoch,
@@ -59,10 +61,12 @@ def _solution(problem: SolveRequest, stars: FieldStars, cand: Candidate, t0: flo
     covariance (Huffman 2006 §6.1.3), residuals and RA / Dec / roll, in one compiled call
     (:func:`.identify.refine.solution_terms`; the solvers and the covariance are in
     :mod:`startrack.attitude`). The attitude is a rotation matrix inside; the one Rotation is the
-    solution's."""
-    fit = settle_matches(problem.x, problem.y, stars, cand, problem.focal_range, fit_aspect=problem.fit_aspect)
+    solution's. A candidate found in the image's mirror (:mod:`.identify._parity`) is fitted there,
+    and the solution's camera is the ``mirrored`` camera of the image as given."""
+    x = mirror_x(problem.x, cand.camera.width) if cand.mirrored else problem.x
+    fit = settle_matches(x, problem.y, stars, cand, problem.focal_range, fit_aspect=problem.fit_aspect)
     camera, img, rows, ref, res_px = fit.camera, fit.image_index, fit.catalog_rows, fit.ref_icrs, fit.residual_px
-    observed = pixel_vectors(camera, problem.x[img], problem.y[img])
+    observed = pixel_vectors(camera, x[img], problem.y[img])
     usable = np.isfinite(observed).all(axis=1)  # a star where a fitted wide lens cannot be inverted: left out
     if not usable.all():
         img, rows, ref, res_px, observed = img[usable], rows[usable], ref[usable], res_px[usable], observed[usable]
@@ -74,7 +78,8 @@ def _solution(problem: SolveRequest, stars: FieldStars, cand: Candidate, t0: flo
     return AttitudeSolution(
         status=Status.OK, rot_cam_from_icrs=Rotation.from_quat(quat), covariance_rad2=covariance,
         ra_deg=math.degrees(ra), dec_deg=math.degrees(dec), roll_deg=math.degrees(roll),
-        fov_deg=camera.fov_deg, camera=camera, matches=matches, residuals_arcsec=residual_rad / ARCSEC,
+        fov_deg=camera.fov_deg, camera=camera.mirror_image() if cand.mirrored else camera, matches=matches,
+        residuals_arcsec=residual_rad / ARCSEC,
         false_match_prob=cand.false_match_prob, solve_time_s=time.perf_counter() - t0,
         epoch_jyear=problem.epoch.jyear, epoch_source=problem.epoch.source)
 
@@ -95,6 +100,13 @@ def _run(problem: SolveRequest, method: MethodName, options: MatcherOptionsBase 
     return _solution(problem, stars, outcome.candidate, t0)
 
 
+def _check_parity_method(request: SolveRequest, method: MethodName) -> None:
+    """Only the "quads" matcher searches mirror images (:mod:`.identify._parity`)."""
+    if request.parity != "normal" and method != "quads":
+        raise InvalidInputError(f"parity {request.parity!r} needs method 'quads' (the {method!r} matcher "
+                                "searches the image as given only); give parity='normal' or method='quads'")
+
+
 def _check_prior(prior_rot_cam_from_icrs, prior_sigma_deg) -> float:
     if prior_rot_cam_from_icrs is not None and not isinstance(prior_rot_cam_from_icrs, Rotation):
         raise InvalidInputError("prior_rot_cam_from_icrs must be a scipy Rotation, "
@@ -113,7 +125,8 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
                 camera: Camera | None = None, flux: ArrayLike | None = None, epoch: Time | float | None = None,
                 method: MethodName = "quads", options: MatcherOptionsBase | None = None,
                 prior_rot_cam_from_icrs: Rotation | None = None, prior_sigma_deg: float = 1.0,
-                pixel_aspect: float | tuple[float, float] | None = None) -> AttitudeSolution:
+                pixel_aspect: float | tuple[float, float] | None = None,
+                parity: Parity | None = None) -> AttitudeSolution:
     """Lost-in-space attitude from a list of star centroids.
 
     Parameters
@@ -157,6 +170,10 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
         (low, high) to search for it (slower: each aspect is a search). Not given: square pixels
         are assumed in the search and the aspect is fitted in the final solution. Not with a
         camera, which has its own. See :mod:`startrack.identify._request`.
+    parity : {"normal", "mirrored", "either"}, optional
+        Whether the stars are those of a mirror image of the sky (:mod:`startrack.identify._parity`):
+        default "normal", or the camera's when a ``mirrored`` camera is given; "either" searches
+        both (with the "quads" matcher only). A mirror image's solution has a ``mirrored`` camera.
 
     Returns
     -------
@@ -174,7 +191,9 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
     method = check_options(method, options)
     sigma = _check_prior(prior_rot_cam_from_icrs, prior_sigma_deg)
     request = build_request(x, y, width=width, height=height, fov_deg=fov_deg, fov_range_deg=fov_range_deg,
-                            camera=camera, flux=flux, epoch=resolve_epoch(epoch), pixel_aspect=pixel_aspect)
+                            camera=camera, flux=flux, epoch=resolve_epoch(epoch), pixel_aspect=pixel_aspect,
+                            parity=parity)
+    _check_parity_method(request, method)
     if prior_rot_cam_from_icrs is not None or sigma != request.prior_sigma_deg:  # else the defaults hold
         request = replace(request, prior_rot=prior_rot_cam_from_icrs, prior_sigma_deg=sigma)
     return _run(request, method, options)
@@ -195,7 +214,8 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
                 fov_range_deg: tuple[float, float] | None = None, camera: Camera | None = None,
                 epoch: Time | float | None = None, channel: str | int | None = None,
                 detector=None, method: MethodName = "quads", options: MatcherOptionsBase | None = None,
-                pixel_aspect: float | tuple[float, float] | None = None) -> AttitudeSolution:
+                pixel_aspect: float | tuple[float, float] | None = None,
+                parity: Parity | None = None) -> AttitudeSolution:
     """Lost-in-space attitude of an image: read, detect, solve.
 
     Parameters
@@ -212,6 +232,10 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
         Colour channel to use: 'r', 'g' or 'b' (default: R + G + B; see :mod:`startrack.io._channels`).
     detector : startrack.detect.StarDetector, optional
         Detection settings (default: :func:`startrack.detect.detect`'s).
+    parity : {"normal", "mirrored", "either"}, optional
+        As in :func:`solve_stars`, but the default is "either" (a photo may be a mirror image:
+        a star diagonal, a flipped file), or the camera's when one is given; with the default
+        method. The streak solve of a smeared frame takes the image as given.
 
     Returns
     -------
@@ -254,7 +278,9 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
     order = search_order(found)
     request = build_request(found.x[order], found.y[order], width=width, height=height, fov_deg=fov_deg,
                             fov_range_deg=fov_range_deg, camera=camera, flux=None, epoch=when,
-                            pixel_aspect=pixel_aspect)
+                            pixel_aspect=pixel_aspect, parity=parity,
+                            default_parity="either" if method == "quads" else "normal")
+    _check_parity_method(request, method)
     solution = _run(replace(request, rows=order[request.rows]), method, options)
     if not solution.solved and smeared_image.SOME_ELONGATION <= elongation < smeared_image.SMEARED_ELONGATION \
             and (streaked := smeared()).solved:

@@ -166,7 +166,8 @@ def self_calibrate(image, *, fov_deg: float | None = None, fov_range_deg: tuple[
     from ..io import Image, read_image
 
     img = image if isinstance(image, Image) else read_image(image, channel=channel)
-    solution = solve_image(img, fov_deg=fov_deg, fov_range_deg=fov_range_deg, camera=camera, epoch=epoch)
+    solution = solve_image(img, fov_deg=fov_deg, fov_range_deg=fov_range_deg, camera=camera, epoch=epoch,
+                           parity="normal")  # the calibration fits a plain camera
     if not solution.solved:
         return SelfCalibration(status=solution.status, reason=solution.reason, solution=solution)
     frame = CalibrationFrame.from_solution(solution)
@@ -176,7 +177,7 @@ def self_calibrate(image, *, fov_deg: float | None = None, fov_range_deg: tuple[
         new_cal = _calibrated(frame, require(solution.camera, "the solution's camera"), fit)
         if not new_cal.status:
             break
-        new_solution = solve_image(img, camera=new_cal.camera, epoch=epoch)
+        new_solution = solve_image(img, camera=new_cal.camera, epoch=epoch, parity="normal")
         if not new_solution.solved:
             break
         grew = len(new_solution.matches) > len(frame)

@@ -85,7 +85,8 @@ def _from_stars(args) -> dict[str, Any]:
     from ..calibrate import CalibrationFrame, calibrate_from_stars
 
     fit = _fit(args.fit)
-    solve_kw = {**fov_kwargs(args), "epoch": epoch_option(args)}
+    # the calibration fits a plain camera: a mirror image's solution would not give one
+    solve_kw = {**fov_kwargs(args), "epoch": epoch_option(args), "parity": "normal"}
     images = [read_image(p, channel=args.channel) for p in args.images]
     _same_size(args.images, [img.data.shape[:2] for img in images])
     solutions = [solve_image(img, **solve_kw) for img in images]
@@ -97,7 +98,7 @@ def _from_stars(args) -> dict[str, Any]:
     result = calibrate_from_stars([CalibrationFrame.from_solution(solutions[i]) for i in solved], start, fit=fit)
     if result.status:  # one self-improving round: re-solve with the calibrated camera, fit again
         calibrated = require(result.camera, "the calibrated camera")
-        again = [solve_image(images[i], camera=calibrated, epoch=solve_kw["epoch"]) for i in solved]
+        again = [solve_image(images[i], camera=calibrated, epoch=solve_kw["epoch"], parity="normal") for i in solved]
         if all(s.solved for s in again):
             solutions = [again[solved.index(i)] if i in solved else s for i, s in enumerate(solutions)]
             redo = calibrate_from_stars([CalibrationFrame.from_solution(s) for s in again], calibrated, fit=fit)

@@ -204,6 +204,7 @@ def solution_table(solution: AttitudeSolution, detections: Detections | None = N
         ("RA, Dec", f"{solution.ra_deg:.5f} deg, {solution.dec_deg:+.5f} deg (boresight, ICRS)"),
         ("roll", f"{solution.roll_deg:.4f} deg"),
         ("FOV", f"{solution.fov_deg:.4f} deg horizontal (focal length {camera.fx:.1f} px)"),
+        *([("parity", "mirrored: the image is a mirror image of the sky")] if camera.mirrored else []),
         ("stars", f"{len(solution.matches)} matched{n_det}"),
         ("residual", f"{rms:.2f} arcsec rms"),
         ("1-sigma", f"{solution.sigma_cross_boresight_arcsec:.2f} arcsec cross-boresight, "

@@ -33,7 +33,7 @@ from ._common import (
     report,
 )
 from ._progress import ensure_database_for
-from ._solve_stars_cmd import add_aspect_option, aspect_option, solver_epoch, time_option
+from ._solve_stars_cmd import add_aspect_option, add_parity_option, aspect_option, solver_epoch, time_option
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -48,6 +48,7 @@ def _parser() -> argparse.ArgumentParser:
                         help="colour channel to use (default: the mean of R, G and B)")
     add_epoch_option(parser)
     add_aspect_option(parser)
+    add_parity_option(parser, "either")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--wcs", metavar="OUT",
                         help="when solved, write the image's FITS WCS (TAN-SIP, FITS 1-based pixels) to OUT "
@@ -84,7 +85,7 @@ def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
     apply_max_pixels_option(args)
     solver_options = {**fov_kwargs(args), "epoch": solver_epoch(args), "method": args.method,
-                      "pixel_aspect": aspect_option(args)}
+                      "pixel_aspect": aspect_option(args), "parity": args.parity}
     fov_options = {key: solver_options[key] for key in ("fov_deg", "fov_range_deg", "camera")}
     if is_batch(args.image, args.csv):
         return _batch(args, solver_options, fov_options)

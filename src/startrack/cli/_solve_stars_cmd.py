@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 
 from ..errors import InvalidInputError
-from ..identify import check_pixel_aspect, parse_utc
+from ..identify import PARITIES, check_pixel_aspect, parse_utc
 from ..io import read_star_list
 from ..solve import solve_stars
 from ._batch_warmup import warm_up
@@ -42,6 +42,7 @@ def _parser() -> argparse.ArgumentParser:
     add_method_option(parser)
     add_epoch_option(parser)
     add_aspect_option(parser)
+    add_parity_option(parser, "normal")
     parser.add_argument("--time", metavar="UTC", help="when the stars were observed, ISO 8601 UTC: its year is the "
                                                       "catalog epoch unless --epoch is given")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
@@ -54,6 +55,14 @@ def add_aspect_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--pixel-aspect", type=float, nargs="+", metavar="A",
                         help="height of a pixel on the sky over its width (fx / fy; default: square, refined in the "
                              "fit), or LO HI to search that range (slower); not with --camera")
+
+
+def add_parity_option(parser: argparse.ArgumentParser, default: str) -> None:
+    """--parity normal | mirrored | either (shared with ``startrack solve``; ``default`` is what
+    the help says None means)."""
+    parser.add_argument("--parity", choices=PARITIES, default=None,
+                        help=f"whether the image is a mirror image of the sky (a star diagonal, a flipped file): "
+                             f"normal, mirrored, or either to search both (default: {default}, or the camera's)")
 
 
 def aspect_option(args: argparse.Namespace) -> float | tuple[float, float] | None:
@@ -83,7 +92,7 @@ def main(argv: list[str]) -> int:
         parser.error("--width and --height are required unless --camera gives them")
     apply_max_pixels_option(args)
     solver_options = {**fov_kwargs(args), "epoch": solver_epoch(args), "method": args.method,
-                      "pixel_aspect": aspect_option(args)}
+                      "pixel_aspect": aspect_option(args), "parity": args.parity}
     _check_size(args, solver_options["camera"])
     stars = read_star_list(args.starlist)
     flux = stars.get("flux")

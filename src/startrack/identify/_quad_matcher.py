@@ -16,7 +16,9 @@ The default matcher. Steps (after tetra3's pattern hashing, with a sorted key in
    (:mod:`._confirm`, :mod:`._verify`); the first candidate below the threshold wins.
 6. (In :mod:`startrack.solve`) refine attitude and focal length on all matched stars (:mod:`._refine`).
 
-A mirror image has the same edge ratios but no rotation fits it, so step 4 rejects it.
+A mirror image has the same edge ratios but no rotation fits it, so step 4 rejects it; with
+``mirrored`` (True, False) the search also runs on the image's left-right flip, batch by batch
+beside the image as given (:mod:`._parity`).
 """
 
 from __future__ import annotations
@@ -25,7 +27,8 @@ import functools
 import math
 import time
 import weakref
-from dataclasses import dataclass
+from collections.abc import Iterator
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -37,6 +40,7 @@ from ._candidate import Candidate, MatchOutcome
 from ._confirm import Confirmer, StarSet, match_radius_px
 from ._database import PatternDatabase
 from ._options_base import MatcherOptionsBase
+from ._parity import mirror_x, plain_mirror
 from ._quad_search import Fits, SearchSetup, focal_grid, search_batch, warm_up
 from ._refine import pixel_vectors
 from ._verify import SkyBands
@@ -220,27 +224,26 @@ class _Search:
                                    fit_aspect=fit_aspect)
         self.pattern_index = distinct_stars(x, y, options.max_pattern_stars)
 
-    def try_batch(self, quads: NDArray, start: int) -> Candidate | None:
+    def batch_steps(self, quads: NDArray, start: int, deadline: float) -> Iterator[Candidate | None]:
         """Look up and verify a batch of patterns (indices into :attr:`pattern_index`, offset by
-        ``start``); the first verified candidate wins. The look-up stops at each pattern that
-        yields candidates, to confirm them before searching the rest."""
+        ``start``), one step at a time: the look-up stops at each pattern that yields candidates,
+        and the step yields the first of them that verifies, or None (also when ``deadline``, a
+        ``time.perf_counter`` value, passes while they are confirmed: a pattern of a dense
+        field can yield thousands)."""
         patterns, next_pattern = self.pattern_index[quads + start], 0
         while next_pattern < len(patterns):
             fits = search_batch(self.db, self.u, self.w, patterns, self.setup, next_pattern)
             self.trials[0] += fits.n_tried
             next_pattern = fits.next_pattern
-            found = self._confirmed(fits, int(patterns.max()) + 1)
-            if found is not None:
-                return found
-        return None
+            yield self._confirmed(fits, int(patterns.max()) + 1, deadline)
 
-    def _confirmed(self, fits: Fits, pool_end: int) -> Candidate | None:
+    def _confirmed(self, fits: Fits, pool_end: int, deadline: float) -> Candidate | None:
         levels = np.searchsorted(self.db.level_offsets, fits.row, side="right") - 1
         for i in range(fits.row.size):
             found = self.confirmer.confirm(self._level_stars(int(levels[i])), fits.quat[i],
                                            self.camera.with_focal(fits.focal[i]), fits.image_stars[i],
                                            self.trials[0], pool_end)
-            if found is not None:
+            if found is not None or time.perf_counter() > deadline:
                 return found
         return None
 
@@ -329,10 +332,39 @@ def aspect_trials(aspect_range: tuple[float, float]) -> NDArray[np.float64]:
     return centres[np.argsort(np.abs(np.log(centres)), kind="stable")]
 
 
+def _searches(x: NDArray, y: NDArray, camera: Camera, focal_range_px, db: PatternDatabase, options: MatcherOptions,
+              trials: list[int], aspect_range: tuple[float, float] | None, fit_aspect: bool) -> list[_Search]:
+    """The searches of one image hypothesis: one, or one per pixel aspect of ``aspect_range``."""
+    if aspect_range is None:
+        return [_Search(x, y, camera, focal_range_px, db, options, trials, fit_aspect=fit_aspect)]
+    return [_Search(x, y, camera.with_focal(camera.fx, camera.fx / a), focal_range_px, db, options, trials,
+                    ASPECT_TOLERANCE, True) for a in aspect_trials(aspect_range)]
+
+
+def _taking_turns(searches: list[_Search], flipped: list[bool], quads: NDArray, start: int,
+                  deadline: float) -> Iterator[tuple[Candidate | None, bool]]:
+    """The steps (:meth:`_Search.batch_steps`) of every search on one batch, one step of each in
+    turn until all are done, each with its search's ``flipped``: an aspect or a parity that
+    does not fit a frame and makes many candidates cannot hold the others back for long."""
+    turns = [(search.batch_steps(quads, start, deadline), flip) for search, flip in zip(searches, flipped, strict=True)]
+    while turns:
+        for turn in list(turns):
+            step = next(turn[0], _DONE)
+            if step is _DONE:
+                turns.remove(turn)
+            else:
+                yield step, turn[1]  # type: ignore[misc]
+
+
+_DONE = object()
+"""What :func:`_taking_turns` reads off a search whose batch is done."""
+
+
 def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatabase,
                         focal_range_px: tuple[float, float] | None = None,
                         options: MatcherOptions | None = None,
-                        aspect_range: tuple[float, float] | None = None, fit_aspect: bool = False) -> MatchOutcome:
+                        aspect_range: tuple[float, float] | None = None, fit_aspect: bool = False,
+                        mirrored: tuple[bool, ...] = (False,)) -> MatchOutcome:
     """Identify image stars with no prior attitude.
 
     Parameters
@@ -351,6 +383,9 @@ def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatab
     fit_aspect : bool
         The camera's pixel aspect is a guess: the confirmation refits it (always when a range
         is searched).
+    mirrored : tuple of bool
+        The hypotheses to search, taking turns on each batch: False the image as given, True its
+        left-right flip (:mod:`._parity`; the candidate then says ``mirrored``).
 
     Returns
     -------
@@ -363,21 +398,20 @@ def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatab
         return MatchOutcome(Status.TOO_FEW_STARS,
                             f"lost-in-space identification needs at least 4 stars, got {len(x)}", None, 0)
     x, y, trials = np.asarray(x, float), np.asarray(y, float), [0]
-    if aspect_range is None:
-        searches = [_Search(x, y, camera, focal_range_px, db, options, trials, fit_aspect=fit_aspect)]
-    else:
-        searches = [_Search(x, y, camera.with_focal(camera.fx, camera.fx / a), focal_range_px, db, options, trials,
-                            ASPECT_TOLERANCE, True) for a in aspect_trials(aspect_range)]
+    searches = [search for flip in mirrored
+                for search in _searches(mirror_x(x, camera.width) if flip else x, y,
+                                        plain_mirror(camera) if flip else camera, focal_range_px, db, options,
+                                        trials, aspect_range, fit_aspect)]
+    flipped = [flip for flip in mirrored for _ in range(len(searches) // len(mirrored))]
     warm_up(db)  # compiling is not searching: before the clock starts
     _index_levels(db, searches)  # nor is indexing the levels' verification stars (once per process)
     deadline = time.perf_counter() + options.timeout_s
     n_stars = searches[0].pattern_index.size
     for start, first_new in pattern_pools(n_stars, options.pattern_stars, options.max_pattern_stars):
         for quads in pattern_batches(min(options.pattern_stars, n_stars - start), first_new):
-            for search in searches:
-                found = search.try_batch(quads, start)
+            for found, flip in _taking_turns(searches, flipped, quads, start, deadline):
                 if found is not None:
-                    return MatchOutcome(Status.OK, "", found, trials[0])
+                    return MatchOutcome(Status.OK, "", replace(found, mirrored=flip), trials[0])
                 if time.perf_counter() > deadline:
                     return MatchOutcome(Status.TIMEOUT, f"no match within the {options.timeout_s:g} s time limit",
                                         None, trials[0])

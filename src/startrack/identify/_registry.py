@@ -82,6 +82,8 @@ class MatchRequest(Protocol):
     def aspect_range(self) -> tuple[float, float] | None: ...
     @property
     def fit_aspect(self) -> bool: ...
+    @property
+    def parity(self) -> str: ...
 
 
 Matcher = Callable[[MatcherOptionsBase | None], "MatchOutcome"]
@@ -122,6 +124,7 @@ def _load(module: str, name: str):
 def _quads(request: MatchRequest) -> tuple[Matcher, FieldStars]:
     from ._database import load_database
     from ._field_stars import field_stars
+    from ._parity import searched_mirrors
     from ._quad_matcher import MatcherOptions, match_lost_in_space
     from ._quad_search import warm_up
 
@@ -131,7 +134,8 @@ def _quads(request: MatchRequest) -> tuple[Matcher, FieldStars]:
     def run(options: MatcherOptionsBase | None) -> MatchOutcome:
         return match_lost_in_space(request.x, request.y, request.camera, db, request.focal_range,
                                    _own(options, "quads", MatcherOptions),
-                                   aspect_range=request.aspect_range, fit_aspect=request.fit_aspect)
+                                   aspect_range=request.aspect_range, fit_aspect=request.fit_aspect,
+                                   mirrored=searched_mirrors(request.parity))  # type: ignore[arg-type]
 
     return run, field_stars(db.settings.max_mag, request.epoch_jyear)
 

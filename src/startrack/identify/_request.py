@@ -27,6 +27,7 @@ from scipy.spatial.transform import Rotation
 from ..camera import Camera, focal_px_from_fov
 from ..errors import InvalidInputError
 from ._image_epoch import Epoch
+from ._parity import Parity, check_parity
 from ._registry import DEFAULT_FOV_RANGE_DEG
 
 FOV_DEG_TOLERANCE = 0.03
@@ -60,6 +61,8 @@ class SolveRequest:
         Pixel aspects to search; None: the camera's.
     fit_aspect : bool
         The final fit frees the pixel aspect.
+    parity : {"normal", "mirrored", "either"}
+        Which image parities to search (:mod:`._parity`); ``camera`` is never ``mirrored``.
     """
 
     x: NDArray[np.float64]
@@ -73,6 +76,7 @@ class SolveRequest:
     prior_sigma_deg: float = 1.0
     aspect_range: tuple[float, float] | None = None
     fit_aspect: bool = False
+    parity: Parity = "normal"
 
     @property
     def epoch_jyear(self) -> float:
@@ -196,11 +200,13 @@ def _check_size(width, height) -> None:
 
 
 def build_request(x, y, *, width, height, fov_deg, fov_range_deg, camera, flux, epoch: Epoch,
-                  pixel_aspect=None) -> SolveRequest:
+                  pixel_aspect=None, parity=None, default_parity: Parity = "normal") -> SolveRequest:
     """Check a solve's arguments (as :func:`startrack.solve_stars` documents them) and build
-    the request; raises InvalidInputError naming the argument that is wrong."""
+    the request; raises InvalidInputError naming the argument that is wrong. ``parity`` None
+    takes the camera's, else ``default_parity`` (:func:`.parity.check_parity`)."""
     if camera is not None and not isinstance(camera, Camera):
         raise InvalidInputError(f"camera must be a startrack.Camera, got {type(camera).__name__}")
+    parity, camera = check_parity(parity, camera, default_parity)
     if camera is not None:
         width, height = camera.width, camera.height
     _check_size(width, height)
@@ -216,4 +222,4 @@ def build_request(x, y, *, width, height, fov_deg, fov_range_deg, camera, flux, 
     nominal, focal_range, fov_range = _focal_setup(width, height, fov_deg, fov_range_deg, camera, start)
     fit_aspect = camera is None and aspect is None
     return SolveRequest(xs, ys, rows, nominal, focal_range, fov_range, epoch, aspect_range=aspect_range,
-                        fit_aspect=fit_aspect)
+                        fit_aspect=fit_aspect, parity=parity)

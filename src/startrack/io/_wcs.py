@@ -7,7 +7,9 @@ until the lens distorts it, so (FITS WCS Paper II; Shupe et al. 2005 for SIP):
   :mod:`startrack.conventions`), ``CRVAL`` = RA, Dec of the optical axis;
 - ``CD`` maps the *undistorted* pixel offsets (u', v') = (fx a, fy b), with (a, b) the pinhole
   coordinates, to the standard coordinates (xi east, eta north) in degrees: its columns are the
-  camera's x and y axes at the tangent point, projected on east and north, divided by fx and fy;
+  camera's x and y axes at the tangent point, projected on east and north, divided by fx and fy
+  (-fx for a ``mirrored`` camera, whose pixel x runs against its x axis: the sign of the CD's
+  determinant, positive for a camera's own image with row 0 at the top, is then negative);
 - SIP ``A, B`` give ``u' - u`` as polynomials in the measured offsets (u, v) = pixel - CRPIX
   (lens undistortion), and ``AP, BP`` the inverse ``u - u'`` (the distortion). The Brown-Conrady
   distortion is a polynomial in (a, b) of degree 7 at most, so AP/BP reproduce it exactly at
@@ -98,7 +100,7 @@ def fit_sip(camera: Camera, max_residual_px: float = 0.01, order: int | None = N
     x, y = _grid(camera)
     v = camera.pixel_to_vector(x, y)
     u, w = x - camera.cx, y - camera.cy
-    up, wp = camera.fx * v[:, 0] / v[:, 2], camera.fy * v[:, 1] / v[:, 2]
+    up, wp = camera.x_sign * camera.fx * v[:, 0] / v[:, 2], camera.fy * v[:, 1] / v[:, 2]
     scale = 0.5 * max(camera.width, camera.height)
     orders = [order] if order is not None else range(2, MAX_SIP_ORDER + 1)
     for n in orders:
@@ -126,8 +128,9 @@ def _cd_matrix(rot_cam_from_icrs: Rotation, camera: Camera, ra: float, dec: floa
     east = np.array([-np.sin(ra), np.cos(ra), 0.0])
     north = np.array([-np.sin(dec) * np.cos(ra), -np.sin(dec) * np.sin(ra), np.cos(dec)])
     e_cam, n_cam = rot_cam_from_icrs.apply(east), rot_cam_from_icrs.apply(north)
-    return np.degrees(np.array([[e_cam[0] / camera.fx, e_cam[1] / camera.fy],
-                                [n_cam[0] / camera.fx, n_cam[1] / camera.fy]]))
+    fx = camera.x_sign * camera.fx  # a mirrored image's x runs against the camera's x axis
+    return np.degrees(np.array([[e_cam[0] / fx, e_cam[1] / camera.fy],
+                                [n_cam[0] / fx, n_cam[1] / camera.fy]]))
 
 
 def wcs_header(rot_cam_from_icrs: Rotation, camera: Camera, *, date_obs: str | None = None,

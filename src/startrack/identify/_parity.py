@@ -1,0 +1,81 @@
+"""Image parity: whether an image shows the sky as seen, or its mirror image.
+
+A camera looking at the sky makes an image that no rotation turns into its mirror image, so a
+lost-in-space match of the one fails on the other: the four stars of a pattern keep their edge
+ratios, but no attitude fits them (:mod:`._quad_matcher`). Mirror images are common among photos:
+a telescope's star diagonal flips the field, and so do cameras and programs that flip their
+output. astrometry.net tries both parities by default; so does :func:`startrack.solve_image`.
+
+A mirror image is solved as the image of its left-right flip (column x to x' = width - 1 - x,
+:func:`mirror_x`) by a plain camera whose principal point is flipped with it
+(:func:`plain_mirror`). The solution describes the image as given with the same attitude and a
+camera whose :attr:`startrack.camera.Camera.mirrored` is set (pixel x = cx - fx a): the camera
+frame stays right-handed and the attitude a rotation. The "quads" matcher searches both parities
+in one pass, taking turns batch by batch (:func:`.quad_matcher.match_lost_in_space`), so a mirror
+image costs about one more look-up per batch rather than a failed search first.
+
+Parities (``parity``)
+    "normal" -- the image is not mirrored (the default of :func:`startrack.solve_stars`: a star
+    tracker knows its optics); "mirrored" -- it is; "either" -- search both (the default of
+    :func:`startrack.solve_image`). A camera whose ``mirrored`` is set fixes "mirrored".
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Literal, get_args
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..camera import Camera
+from ..errors import InvalidInputError
+
+Parity = Literal["normal", "mirrored", "either"]
+"""The image parities a solve can be asked for (module docstring)."""
+
+PARITIES: tuple[Parity, ...] = get_args(Parity)
+"""The names of :data:`Parity`, in its order (what an unknown ``parity`` is told to be)."""
+
+
+def check_parity(parity: object, camera: Camera | None, default: Parity) -> tuple[Parity, Camera | None]:
+    """The parity to search and the camera as the matchers take it (never ``mirrored``).
+
+    Parameters
+    ----------
+    parity : {"normal", "mirrored", "either"} or None
+        None: the camera's when one is given, else ``default``.
+    camera : Camera or None
+    default : Parity
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown parity, or one that contradicts a mirrored camera.
+    """
+    if parity is not None and parity not in PARITIES:
+        raise InvalidInputError(f"parity must be one of {', '.join(map(repr, PARITIES))} or None, got {parity!r}")
+    if camera is not None and camera.mirrored:
+        if parity not in (None, "mirrored"):
+            raise InvalidInputError(f"the camera is mirrored (camera.mirrored is True) but parity is {parity!r}; "
+                                    "give parity='mirrored' or None")
+        return "mirrored", replace(camera, mirrored=False)
+    if parity is None:
+        return ("normal" if camera is not None else default), camera
+    return parity, camera
+
+
+def searched_mirrors(parity: Parity) -> tuple[bool, ...]:
+    """Which hypotheses a search tries, in order: False for the image as given, True for its mirror."""
+    return {"normal": (False,), "mirrored": (True,), "either": (False, True)}[parity]
+
+
+def mirror_x(x: NDArray[np.float64], width: int) -> NDArray[np.float64]:
+    """Columns (N,) of the left-right flip of an image ``width`` pixels wide: width - 1 - x."""
+    return (width - 1) - np.asarray(x, dtype=np.float64)
+
+
+def plain_mirror(camera: Camera) -> Camera:
+    """The plain (not ``mirrored``) camera of the left-right flip of ``camera``'s image: the
+    principal point flipped (:func:`mirror_x`), everything else kept."""
+    return replace(camera, cx=(camera.width - 1) - camera.cx)
