@@ -27,6 +27,7 @@ output (table, the default)
   RA, Dec      boresight in ICRS, deg
   roll         deg, the startrack.frames definition (equal to tetra3 / cedar-solve roll)
   FOV          horizontal field of view, deg, and the focal length, px
+  parity       (only for a mirror image of the sky: a star diagonal, a flipped file) mirrored
   stars        stars matched (of those detected, for an image)
   residual     rms angle between matched stars and the catalog after the fit, arcsec
   1-sigma      attitude uncertainty across the boresight and about it (roll), arcsec
@@ -39,7 +40,8 @@ output (table, the default)
 output (--json)
   One object. Always: status ("ok", "too_few_stars", "no_match", "timeout"), reason (empty
   when solved), solve_time_s, and for an image n_detections. When solved also: ra_deg,
-  dec_deg, roll_deg, fov_deg, qx, qy, qz, qw, focal_px, sigma_cross_boresight_arcsec,
+  dec_deg, roll_deg, fov_deg, qx, qy, qz, qw, focal_px, mirrored (true for a mirror image:
+  its camera's pixel x runs against the camera frame's x axis), sigma_cross_boresight_arcsec,
   sigma_roll_arcsec, residual_rms_arcsec, false_match_prob, and matches: a list of
   {index, hip, residual_arcsec[, x, y]} (index into the detections or star list; x, y in
   0-based pixels). Values that are undefined are null. With a ground site (solve --site or
