@@ -234,8 +234,8 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
         Detection settings (default: :func:`startrack.detect.detect`'s).
     parity : {"normal", "mirrored", "either"}, optional
         As in :func:`solve_stars`, but the default is "either" (a photo may be a mirror image:
-        a star diagonal, a flipped file), or the camera's when one is given; with the default
-        method. The streak solve of a smeared frame takes the image as given.
+        a star diagonal, a flipped file), or the camera's when one is given, or "normal" with a
+        method other than "quads". The streak solve of a smeared frame takes the image as given.
 
     Returns
     -------

@@ -11,8 +11,8 @@ A mirror image is solved as the image of its left-right flip (column x to x' = w
 (:func:`plain_mirror`). The solution describes the image as given with the same attitude and a
 camera whose :attr:`startrack.camera.Camera.mirrored` is set (pixel x = cx - fx a): the camera
 frame stays right-handed and the attitude a rotation. The "quads" matcher searches both parities
-in one pass, taking turns batch by batch (:func:`.quad_matcher.match_lost_in_space`), so a mirror
-image costs about one more look-up per batch rather than a failed search first.
+in one pass, taking turns one look-up step at a time (:func:`.quad_matcher.match_lost_in_space`),
+so a mirror image costs about one more look-up per step rather than a failed search first.
 
 Parities (``parity``)
     "normal" -- the image is not mirrored (the default of :func:`startrack.solve_stars`: a star

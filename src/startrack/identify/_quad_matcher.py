@@ -17,8 +17,8 @@ The default matcher. Steps (after tetra3's pattern hashing, with a sorted key in
 6. (In :mod:`startrack.solve`) refine attitude and focal length on all matched stars (:mod:`._refine`).
 
 A mirror image has the same edge ratios but no rotation fits it, so step 4 rejects it; with
-``mirrored`` (True, False) the search also runs on the image's left-right flip, batch by batch
-beside the image as given (:mod:`._parity`).
+``mirrored=(False, True)`` the search also runs on the image's left-right flip, taking turns with
+the image as given one look-up step at a time (:mod:`._parity`).
 """
 
 from __future__ import annotations
@@ -341,23 +341,22 @@ def _searches(x: NDArray, y: NDArray, camera: Camera, focal_range_px, db: Patter
                     ASPECT_TOLERANCE, True) for a in aspect_trials(aspect_range)]
 
 
-def _taking_turns(searches: list[_Search], flipped: list[bool], quads: NDArray, start: int,
+def _taking_turns(searches: list[tuple[_Search, bool]], quads: NDArray, start: int,
                   deadline: float) -> Iterator[tuple[Candidate | None, bool]]:
     """The steps (:meth:`_Search.batch_steps`) of every search on one batch, one step of each in
-    turn until all are done, each with its search's ``flipped``: an aspect or a parity that
-    does not fit a frame and makes many candidates cannot hold the others back for long."""
-    turns = [(search.batch_steps(quads, start, deadline), flip) for search, flip in zip(searches, flipped, strict=True)]
+    turn until all are done, each with its search's flag (True: the mirror image): an aspect or
+    a parity that does not fit a frame and makes many candidates cannot hold the others back
+    for long. (Before the mirror images, the searches of several aspects took turns batch by
+    batch.)"""
+    turns = [(search.batch_steps(quads, start, deadline), flip) for search, flip in searches]
     while turns:
         for turn in list(turns):
-            step = next(turn[0], _DONE)
-            if step is _DONE:
+            try:
+                step = next(turn[0])
+            except StopIteration:
                 turns.remove(turn)
-            else:
-                yield step, turn[1]  # type: ignore[misc]
-
-
-_DONE = object()
-"""What :func:`_taking_turns` reads off a search whose batch is done."""
+                continue
+            yield step, turn[1]
 
 
 def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatabase,
@@ -398,18 +397,17 @@ def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatab
         return MatchOutcome(Status.TOO_FEW_STARS,
                             f"lost-in-space identification needs at least 4 stars, got {len(x)}", None, 0)
     x, y, trials = np.asarray(x, float), np.asarray(y, float), [0]
-    searches = [search for flip in mirrored
+    searches = [(search, flip) for flip in mirrored
                 for search in _searches(mirror_x(x, camera.width) if flip else x, y,
                                         plain_mirror(camera) if flip else camera, focal_range_px, db, options,
                                         trials, aspect_range, fit_aspect)]
-    flipped = [flip for flip in mirrored for _ in range(len(searches) // len(mirrored))]
     warm_up(db)  # compiling is not searching: before the clock starts
-    _index_levels(db, searches)  # nor is indexing the levels' verification stars (once per process)
+    _index_levels(db, [search for search, _ in searches])  # nor is indexing the levels' verification stars
     deadline = time.perf_counter() + options.timeout_s
-    n_stars = searches[0].pattern_index.size
+    n_stars = searches[0][0].pattern_index.size
     for start, first_new in pattern_pools(n_stars, options.pattern_stars, options.max_pattern_stars):
         for quads in pattern_batches(min(options.pattern_stars, n_stars - start), first_new):
-            for found, flip in _taking_turns(searches, flipped, quads, start, deadline):
+            for found, flip in _taking_turns(searches, quads, start, deadline):
                 if found is not None:
                     return MatchOutcome(Status.OK, "", replace(found, mirrored=flip), trials[0])
                 if time.perf_counter() > deadline:

@@ -33,6 +33,7 @@ if TYPE_CHECKING:
     from ..camera import Camera
     from ._candidate import MatchOutcome
     from ._field_stars import FieldStars
+    from ._parity import Parity
 
 DEFAULT_FOV_RANGE_DEG: tuple[float, float] = (3.0, 100.0)
 """Searched when no field of view is given: telescopes' finder fields, star trackers, camera
@@ -83,7 +84,7 @@ class MatchRequest(Protocol):
     @property
     def fit_aspect(self) -> bool: ...
     @property
-    def parity(self) -> str: ...
+    def parity(self) -> Parity: ...
 
 
 Matcher = Callable[[MatcherOptionsBase | None], "MatchOutcome"]
@@ -135,7 +136,7 @@ def _quads(request: MatchRequest) -> tuple[Matcher, FieldStars]:
         return match_lost_in_space(request.x, request.y, request.camera, db, request.focal_range,
                                    _own(options, "quads", MatcherOptions),
                                    aspect_range=request.aspect_range, fit_aspect=request.fit_aspect,
-                                   mirrored=searched_mirrors(request.parity))  # type: ignore[arg-type]
+                                   mirrored=searched_mirrors(request.parity))
 
     return run, field_stars(db.settings.max_mag, request.epoch_jyear)
 
