@@ -58,10 +58,10 @@ COLUMNS = ("set", "record", "lens", "atmosphere", "against", "total_arcsec", "po
 
 
 def pinhole(camera: Camera) -> Camera:
-    """The camera without its distortion (same focal lengths and principal point)."""
+    """The camera without its distortion (same focal lengths, principal point and parity)."""
     return Camera(width=camera.width, height=camera.height, fx=camera.fx, fy=camera.fy, cx=camera.cx,
                   cy=camera.cy, name=f"{camera.name or 'camera'} (pinhole)", source=camera.source,
-                  pixel_pitch_um=camera.pixel_pitch_um)
+                  pixel_pitch_um=camera.pixel_pitch_um, mirrored=camera.mirrored)
 
 
 def lens_model(record: ImageRecord, override: Camera | None) -> Camera:
