@@ -18,11 +18,12 @@ from numpy.typing import NDArray
 
 from ..errors import ImageReadError, InvalidInputError
 from ._channels import channel_index, to_single_channel
+from ._heif import is_heif
 from ._limits import check_image_size, resolve_max_pixels
 from ._raster import identify_format, read_raster
 from ._targets import note_input
 
-SUPPORTED_FORMATS = ("FITS", "PNG", "JPEG", "TIFF")
+SUPPORTED_FORMATS = ("FITS", "PNG", "JPEG", "TIFF", "HEIF")
 _SIGNATURES = {
     b"SIMPLE  =": "FITS",
     b"\x1f\x8b": "FITS",  # gzip-compressed FITS (astropy decompresses it)
@@ -143,6 +144,8 @@ def _sniff(path: Path) -> str:
     for signature, name in _SIGNATURES.items():
         if head.startswith(signature):
             return name
+    if is_heif(head):
+        return "HEIF"
     other = identify_format(path)
     if other is not None:
         raise ImageReadError(
@@ -157,7 +160,8 @@ def _sniff(path: Path) -> str:
 RAW_SUFFIXES = frozenset({".dng", ".cr2", ".cr3", ".nef", ".arw", ".raf", ".orf", ".rw2", ".pef", ".srw"})
 """Camera RAW file names, decoded through rawpy by :func:`startrack.io._raw.read_raw` (Bayer cells
 reduced to one value each: half the resolution, see that module)."""
-IMAGE_SUFFIXES = frozenset({".fits", ".fit", ".fts", ".png", ".jpg", ".jpeg", ".tif", ".tiff"}) | RAW_SUFFIXES
+IMAGE_SUFFIXES = frozenset({".fits", ".fit", ".fts", ".png", ".jpg", ".jpeg", ".tif", ".tiff", ".heic", ".heif"}) \
+    | RAW_SUFFIXES
 """File names that folders of images are searched for (the reader then checks the content)."""
 
 
@@ -175,10 +179,10 @@ def read_image(
     Parameters
     ----------
     source : str, Path or ndarray
-        A FITS, PNG, JPEG or TIFF file (8 or 16 bit, grey or colour; float FITS / TIFF), a camera
-        RAW file (:data:`RAW_SUFFIXES`, through rawpy, at half resolution), or an
-        array of shape (H, W) or (H, W, C) with C = 1 (grey), 2 (grey + alpha), 3 (RGB) or
-        4 (RGBA).
+        A FITS, PNG, JPEG or TIFF file (8 or 16 bit, grey or colour; float FITS / TIFF), a HEIC /
+        HEIF photo (through pillow-heif, :mod:`startrack.io._heif`), a camera RAW file
+        (:data:`RAW_SUFFIXES`, through rawpy, at half resolution), or an array of shape (H, W)
+        or (H, W, C) with C = 1 (grey), 2 (grey + alpha), 3 (RGB) or 4 (RGBA).
     channel : {None, "r", "g", "b", 0, 1, 2}
         Colour rule: None sums R + G + B in a wider type (uint8 -> uint16, uint16 -> uint32,
         floats in their own precision); otherwise that plane is kept in its native dtype.
@@ -224,6 +228,10 @@ def read_image(
         from ._fitsfile import read_fits  # astropy.io.fits: loaded only for FITS files
 
         data, header, bit_depth = read_fits(path, max_pixels)
+    elif kind == "HEIF":
+        from ._heif import read_heif  # pillow-heif (the "heif" extra): loaded only for HEIF files
+
+        data, header, bit_depth = read_heif(path, max_pixels)
     else:
         data, header, bit_depth = read_raster(path, max_pixels, kind=kind)
     colour = data.ndim == 3

@@ -106,13 +106,35 @@ def _header(image: PILImage.Image) -> dict[str, Any]:
             plain = _plain(value)
             if plain is not None:
                 header[key] = plain
+    return {**header, **_exif_fields(image.getexif)}
+
+
+def exif_header(raw: bytes | None) -> dict[str, Any]:
+    """The EXIF fields of a raw EXIF block (``Exif\\0\\0`` and a TIFF structure, as HEIF files
+    carry it), named as :func:`_header` names them; empty when there is none or it cannot be
+    parsed."""
+    if not raw:
+        return {}
+
+    def load() -> PILImage.Exif:
+        exif = PILImage.Exif()
+        exif.load(raw)
+        return exif
+
+    return _exif_fields(load)
+
+
+def _exif_fields(get_exif) -> dict[str, Any]:
+    """The base and Exif IFD fields of the ``PIL.Image.Exif`` that ``get_exif()`` returns, as
+    plain values by their EXIF names; EXIF that Pillow cannot parse is left out, not an error."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
-            exif = image.getexif()
+            exif = get_exif()
             ifds = (exif, exif.get_ifd(_EXIF_IFD))
         except (OSError, SyntaxError, ValueError, KeyError, TypeError, struct.error):
-            return header
+            return {}
+    header: dict[str, Any] = {}
     for tags in ifds:
         for tag, value in tags.items():
             plain = _plain(value)
