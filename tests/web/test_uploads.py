@@ -18,6 +18,7 @@ from startrack.web._uploads import check_size, display_label, image_size, raw_su
     (b"\x89PNG\r\n\x1a\n\x00", "x.jpg", "png"), (b"\xff\xd8\xff\xe0", "x.png", "jpeg"),
     (b"II*\x00\x08\x00", "x.tif", "tiff"), (b"MM\x00*\x00", "x", "tiff"), (b"II*\x00\x08\x00", "x.NEF", "raw"),
     (b"IIRO\x08\x00", "x.jpg", "raw"), (b"\x00\x00\x00\x18ftypcrx \x00", "x", "raw"),
+    (b"\x00\x00\x00\x1cftypheic\x00\x00\x00\x00", "x.jpg", "heif"), (b"\x00\x00\x00\x18ftypmif1\x00", "x", "heif"),
 ])
 def test_the_type_comes_from_the_bytes(head, label, kind):
     assert sniff(head, label) == kind
@@ -78,3 +79,11 @@ def test_a_simulated_frame_reads_its_size(tmp_path):
     path = tmp_path / "sim.fits"
     render(validate_simulation({"width": 160, "height": 120, "fov_deg": 8.0, "seed": 3}), path)
     assert image_size(path, "fits", "sim.fits") == (160, 120)
+
+
+def test_heif_size_comes_from_its_boxes(tmp_path):
+    pillow_heif = pytest.importorskip("pillow_heif")
+    path = tmp_path / "phone.heic"
+    rgb = np.zeros((48, 72, 3), np.uint8)
+    pillow_heif.from_bytes(mode="RGB", size=(72, 48), data=rgb.tobytes()).save(path, quality=50)
+    assert image_size(path, sniff(path.read_bytes()[:32], "phone.heic"), "phone.heic") == (72, 48)

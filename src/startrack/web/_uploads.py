@@ -34,6 +34,7 @@ from starlette.formparsers import MultiPartException, MultiPartParser
 from starlette.requests import Request
 
 from ..io import RAW_SUFFIXES
+from ..io._heif import is_heif
 from ._config import MAX_SIDE_PX, MIN_SIDE_PX
 from ._refusals import Refusal, bad_request
 
@@ -44,7 +45,7 @@ SIGNATURES: tuple[tuple[bytes, str], ...] = (
 )
 """Leading bytes of each accepted format (RAW: Olympus ORF, Panasonic RW2, Fuji RAF; CR3 is an
 ISO media file, ``ftypcrx`` at offset 4; DNG, NEF, CR2, ARW, PEF and SRW are TIFF containers)."""
-EXTENSIONS = {"fits": ".fits", "png": ".png", "jpeg": ".jpg", "tiff": ".tif"}
+EXTENSIONS = {"fits": ".fits", "png": ".png", "jpeg": ".jpg", "tiff": ".tif", "heif": ".heic"}
 RAW_SIGNATURE_SUFFIXES = ((b"IIRO", ".orf"), (b"IIRS", ".orf"), (b"MMOR", ".orf"), (b"IIU\x00", ".rw2"),
                           (b"FUJIFILMCCD-RAW", ".raf"))
 FITS_BLOCK = 2880
@@ -117,16 +118,18 @@ def display_label(filename: str | None) -> str:
 
 
 def sniff(head: bytes, label: str) -> str:
-    """"fits", "png", "jpeg", "tiff" or "raw" from the first bytes; 415 otherwise."""
+    """"fits", "png", "jpeg", "tiff", "heif" or "raw" from the first bytes; 415 otherwise."""
     if head[4:12] == b"ftypcrx ":
         return "raw"
+    if is_heif(head):
+        return "heif"
     for signature, kind in SIGNATURES:
         if head.startswith(signature):
             if kind == "tiff" and Path(label).suffix.lower() in RAW_SUFFIXES:
                 return "raw"
             return kind
     shown = head[:12]
-    raise Refusal(415, f"unsupported file type: {label!r} is not FITS, PNG, JPEG, TIFF or camera RAW "
+    raise Refusal(415, f"unsupported file type: {label!r} is not FITS, PNG, JPEG, TIFF, HEIC or camera RAW "
                        f"(it starts with {shown!r})", "file")
 
 
@@ -182,6 +185,8 @@ def image_size(path: Path, kind: str, label: str) -> tuple[int, int]:
             return _fits_size(path)
         if kind == "raw":
             return _raw_size(path)
+        if kind == "heif":
+            return _heif_size(path)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", PILImage.DecompressionBombWarning)
             with PILImage.open(path) as image:  # lazy: reads the header, decodes nothing
@@ -196,6 +201,15 @@ def image_size(path: Path, kind: str, label: str) -> tuple[int, int]:
     except Exception as exc:  # any reader's complaint about a header means "not an image we read"
         raise Refusal(415, f"{label!r} has the signature of {kind.upper()} but its header cannot be read: "
                            f"{' '.join(str(exc).split())[:200]}", "file") from None
+
+
+def _heif_size(path: Path) -> tuple[int, int]:
+    """Width and height of a HEIF file's primary image from its boxes (pillow-heif decodes nothing
+    until the pixels are asked for)."""
+    import pillow_heif  # the "heif" extra; its absence is a header that cannot be read (415)
+
+    width, height = pillow_heif.open_heif(path).size
+    return int(width), int(height)
 
 
 def _fits_size(path: Path) -> tuple[int, int]:
