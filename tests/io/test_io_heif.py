@@ -10,8 +10,7 @@ from scipy.spatial.transform import Rotation
 
 from startrack.camera import Camera
 from startrack.errors import ImageReadError
-from startrack.io import read_image
-from startrack.io._image import IMAGE_SUFFIXES
+from startrack.io import IMAGE_SUFFIXES, read_image
 from startrack.simulate import get_sensor_preset, simulate_frame
 from startrack.solve import solve_image
 
