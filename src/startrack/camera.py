@@ -70,7 +70,7 @@ class Camera:
         Pixel pitch, for radiometry and reporting.
     mirrored : bool
         The image is a mirror image of the sky (a star diagonal, a flipped file): pixel x runs
-        against the camera frame's x axis, x = cx - fx a (``DESIGN.md``, pixels and frames). The
+        against the camera frame's x axis, x = cx - fx a (``docs/conventions.md``, mirror images). The
         camera frame stays right-handed, so an attitude stays a rotation; :meth:`mirror_image`
         gives the camera of the same image flipped left to right.
     """
@@ -301,7 +301,7 @@ class Camera:
         y = np.asarray(y, dtype=float)
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
             raise InvalidInputError("pixel coordinates must be finite numbers (got NaN or inf)")
-        ad = self.x_sign * (x - self.cx) / self.fx
+        ad = (x - self.cx) / (self.x_sign * self.fx)
         bd = (y - self.cy) / self.fy
         a, b = self._undistort(ad, bd) if self.has_distortion else (ad, bd)
         v = np.stack([a, b, np.ones_like(a)], axis=-1)

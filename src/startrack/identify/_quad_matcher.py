@@ -409,7 +409,7 @@ def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatab
         for quads in pattern_batches(min(options.pattern_stars, n_stars - start), first_new):
             for found, flip in _taking_turns(searches, quads, start, deadline):
                 if found is not None:
-                    return MatchOutcome(Status.OK, "", replace(found, mirrored=flip), trials[0])
+                    return MatchOutcome(Status.OK, "", replace(found, mirrored=True) if flip else found, trials[0])
                 if time.perf_counter() > deadline:
                     return MatchOutcome(Status.TIMEOUT, f"no match within the {options.timeout_s:g} s time limit",
                                         None, trials[0])
