@@ -22,6 +22,7 @@ from startrack.frames import angle_between, radec_to_vector
 from startrack.identify import MatcherOptions, check_parity
 from startrack.io import write_png
 from startrack.io._wcs import wcs_header
+from startrack.simulate import get_sensor_preset, simulate_frame
 from startrack.solve import solve_image, solve_stars
 from startrack.units import ARCSEC, DEG
 
@@ -138,3 +139,17 @@ def test_cli_reports_a_mirror_image(flipped, tmp_path):
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
         code = main(["solve", str(path), "--parity", "flipped"])
     assert code == 2 and "invalid choice: 'flipped'" in err.getvalue() and "Traceback" not in err.getvalue()
+
+
+def test_a_flipped_wide_distorted_frame_solves_with_its_lens():
+    """A 50 deg frame with barrel distortion (k1 -0.03), flipped: the mirrored solution maps the
+    centre and the corners where the true mirrored camera does, within 0.5 px."""
+    camera, truth = Camera.from_fov(1640, 1232, 50.0, k1=-0.03), Rotation.random(random_state=1)
+    sim = simulate_frame(camera, truth, max_mag=6.5, sensor=get_sensor_preset("generic-cmos"), rng=1)
+    solution = solve_image(np.ascontiguousarray(sim.image[:, ::-1]))
+    assert solution.solved and solution.camera.mirrored, solution.reason
+    x, y = np.array([819.5, 0.0, 1639.0, 0.0, 1639.0]), np.array([615.5, 0.0, 1231.0, 1231.0, 0.0])
+    true_sky = truth.inv().apply(camera.mirror_image().pixel_to_vector(x, y))
+    solved_sky = solution.rot_cam_from_icrs.inv().apply(solution.camera.pixel_to_vector(x, y))
+    pixel_rad = np.radians(50.0) / 1640
+    assert np.all(angle_between(true_sky, solved_sky) < 0.5 * pixel_rad)
