@@ -78,6 +78,18 @@ def test_the_solution_on_disk_rebuilds_the_analysis_record(auto_job):
     assert extra["epoch_jyear"] == 2000.0
 
 
+def test_a_mirror_image_is_solved_and_said_to_be(server, real_images, tmp_path):
+    from PIL import Image
+
+    grey = np.asarray(Image.open(real_images["crappy.jpg"]).convert("L"))
+    flipped = tmp_path / "crappy-flipped.png"
+    write_png(flipped, np.ascontiguousarray(grey[:, ::-1]))
+    result = read_json(run_job(server, flipped) / "result.json")
+    assert result["status"] == "ok" and result["mirrored"] is True
+    unflipped = read_json(run_job(server, real_images["crappy.jpg"]) / "result.json")
+    assert unflipped["status"] == "ok" and unflipped["mirrored"] is False
+
+
 def test_a_ground_photo_has_the_altitude_and_azimuth_astropy_gives(server, real_images):
     when, site = "2021-02-01T04:00:00", get_site("logan-ut")
     folder = run_job(server, real_images["roof.jpg"], {"site": "logan-ut", "time": when})

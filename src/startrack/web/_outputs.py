@@ -68,7 +68,7 @@ def result_dict(solution: AttitudeSolution, times_s: dict[str, float], extra: di
                            "n_matched": len(solution.matches) if solution.solved else 0,
                            "epoch_jyear": num(solution.epoch_jyear), "epoch_source": solution.epoch_source}
     keys = ("ra_deg", "dec_deg", "roll_deg", "fov_deg", "qx", "qy", "qz", "qw", "false_match_prob",
-            "residual_arcsec", "sigma_cross_boresight_arcsec", "sigma_roll_arcsec", "focal_px")
+            "residual_arcsec", "sigma_cross_boresight_arcsec", "sigma_roll_arcsec", "focal_px", "mirrored")
     out.update(dict.fromkeys(keys))
     if solution.solved:
         qx, qy, qz, qw = require(solution.quaternion_xyzw, "a solved frame's quaternion")
@@ -77,7 +77,8 @@ def result_dict(solution: AttitudeSolution, times_s: dict[str, float], extra: di
                    false_match_prob=num(solution.false_match_prob),
                    residual_arcsec=num(np.sqrt(np.mean(solution.residuals_arcsec**2))),
                    sigma_cross_boresight_arcsec=num(solution.sigma_cross_boresight_arcsec),
-                   sigma_roll_arcsec=num(solution.sigma_roll_arcsec), focal_px=num(_camera(solution).fx))
+                   sigma_roll_arcsec=num(solution.sigma_roll_arcsec), focal_px=num(_camera(solution).fx),
+                   mirrored=bool(_camera(solution).mirrored))
     out["times_s"] = {k: round(v, 6) for k, v in times_s.items()}
     out.update(extra)
     return out
