@@ -106,6 +106,14 @@ def test_a_flipped_photo_solves_as_a_mirror_image(flipped, truth_table):
     assert np.median(angle_between(sky, solution.matches.cat_vectors)) < float(row["pixscale_arcsec"]) * ARCSEC
 
 
+def test_the_mirrored_camera_of_a_solution_solves_its_image_again(flipped):
+    first = solve_image(flipped)
+    again = solve_image(flipped, camera=first.camera)  # a mirrored camera fixes the parity
+    assert again.solved and again.camera.mirrored, again.reason
+    turn = np.degrees((again.rot_cam_from_icrs * first.rot_cam_from_icrs.inv()).magnitude()) * 3600.0
+    assert turn < 0.5 * first.camera.pixel_scale_arcsec  # arcsec: half a pixel
+
+
 def test_a_flipped_photo_is_not_solved_as_given_and_the_time_limit_holds(flipped):
     start = time.perf_counter()
     solution = solve_image(flipped, parity="normal", options=MatcherOptions(timeout_s=1.0))

@@ -4,8 +4,8 @@ lost-in-space matcher (see :mod:`._verify` for the false-match probability).
 The candidate is tested at the tight match radius. If it falls short, its matches at a loose
 radius (``LOOSE_RADIUS_FACTOR`` times wider), when they are more than chance would give a wrong
 candidate, are used to refit the attitude (and the focal length when it is free), and it is
-tested again at the tight radius, counting only the stars the fit
-did not use beyond those it had already matched (:meth:`Confirmer.confirm`): a pattern fitted
+tested again at the tight radius, counting only the stars the fit did not use beyond those it
+had already matched (:meth:`Confirmer.confirm`): a pattern fitted
 on a few close stars can be off by more than the tight radius at the far side of the image. For a lens that is
 not calibrated the refit also takes the radial distortion k1 (and, when the pixel aspect is
 searched, the aspect), and the loose pass is made twice: a wide lens bends the far side of the
@@ -33,9 +33,6 @@ LOOSE_RADIUS_FACTOR = 2.5
 MIN_EXTRA_MATCHES = 2
 """A candidate needs at least this many stars beyond its pattern at the loose radius."""
 
-LOOSE_ROUNDS_DISTORTED = 2
-"""Loose passes for a lens whose distortion is fitted (one otherwise)."""
-
 MAX_LOOSE_CHANCE = 0.1
 """... and that many are refitted only when a wrong candidate would match at least as many at the
 loose radius by chance with at most this probability (the binomial tail of :mod:`._verify`,
@@ -45,6 +42,9 @@ candidate still has to pass the tight test after it). On 100 lists of each condi
 59 of the 73 candidates that reached a refit and were refused after it are turned away here; the
 8 that the refit confirmed had chances of at most 0.013 (2 loose matches of 14, a pattern 0.8 deg
 off)."""
+
+LOOSE_ROUNDS_DISTORTED = 2
+"""Loose passes for a lens whose distortion is fitted (one otherwise)."""
 
 MIN_EXTRA_FOR_LENS = 6
 """The loose refit frees k1 and the pixel aspect only with at least this many stars beyond the

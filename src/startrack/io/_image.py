@@ -160,8 +160,8 @@ def _sniff(path: Path) -> str:
 RAW_SUFFIXES = frozenset({".dng", ".cr2", ".cr3", ".nef", ".arw", ".raf", ".orf", ".rw2", ".pef", ".srw"})
 """Camera RAW file names, decoded through rawpy by :func:`startrack.io._raw.read_raw` (Bayer cells
 reduced to one value each: half the resolution, see that module)."""
-IMAGE_SUFFIXES = frozenset({".fits", ".fit", ".fts", ".png", ".jpg", ".jpeg", ".tif", ".tiff", ".heic", ".heif"}) \
-    | RAW_SUFFIXES
+IMAGE_SUFFIXES = frozenset({".fits", ".fit", ".fts", ".png", ".jpg", ".jpeg", ".tif", ".tiff", ".heic", ".heif",
+                            *RAW_SUFFIXES})
 """File names that folders of images are searched for (the reader then checks the content)."""
 
 
