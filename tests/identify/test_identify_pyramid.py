@@ -2,6 +2,7 @@
 
 import itertools
 import math
+import time
 
 import numpy as np
 import pytest
@@ -72,3 +73,27 @@ def test_pyramid_refuses_mirrors_false_stars_and_unknown_fovs():
         solve_stars(x, y, width=1024, height=1024, fov_range_deg=(5, 35), method="pyramid")
     with pytest.raises(InvalidInputError, match="method"):
         solve_stars(x, y, camera=CAMERA, method="triangles?")
+
+
+def test_the_time_limit_holds_inside_a_triad_with_many_candidates(monkeypatch):
+    """10,000 candidate triangles of 1 ms each for the first triad: the 0.2 s limit ends the
+    search, not the end of the triad's candidates (10 s)."""
+    from types import SimpleNamespace
+
+    from startrack.identify import _pyramid as pyramid
+
+    def many(vec, pdb, tolerance):
+        return (np.array([0, 1, 2]) for _ in range(10_000))
+
+    def slow_refusal(self, *args, **kwargs):
+        time.sleep(0.001)
+
+    monkeypatch.setattr(pyramid, "candidate_triangles", many)
+    monkeypatch.setattr(pyramid.Confirmer, "confirm", slow_refusal)
+    vectors = np.eye(3)
+    pdb = SimpleNamespace(tree=None, vectors=vectors, catalog_rows=np.arange(3))
+    x, y = np.array([100.0, 500.0, 900.0, 300.0]), np.array([100.0, 800.0, 200.0, 600.0])
+    start = time.perf_counter()
+    outcome = pyramid.match_pyramid(x, y, CAMERA, pdb, options=PyramidOptions(timeout_s=0.2))
+    assert outcome.status is Status.TIMEOUT
+    assert time.perf_counter() - start < 3.0  # s: the limit, not the triad's 10 s

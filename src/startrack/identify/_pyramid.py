@@ -128,6 +128,8 @@ def match_pyramid(x: NDArray, y: NDArray, camera: Camera, pdb: PairDatabase, *, 
             found = confirmer.confirm(stars, rot, camera, img, trials)
             if found is not None:
                 return MatchOutcome(Status.OK, "", found, trials)
+            if time.perf_counter() > deadline:  # a triad of a dense field can have thousands
+                break
         if time.perf_counter() > deadline:
             return MatchOutcome(Status.TIMEOUT, f"no match within the {options.timeout_s:g} s time limit", None, trials)
     return MatchOutcome(Status.NO_MATCH, f"no triangle of the {min(len(x), options.stars)} brightest stars matched "
