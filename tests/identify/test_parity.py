@@ -161,3 +161,28 @@ def test_a_flipped_wide_distorted_frame_solves_with_its_lens():
     solved_sky = solution.rot_cam_from_icrs.inv().apply(solution.camera.pixel_to_vector(x, y))
     pixel_rad = np.radians(50.0) / 1640
     assert np.all(angle_between(true_sky, solved_sky) < 0.5 * pixel_rad)
+
+
+def test_the_compiled_helpers_take_a_mirrored_camera():
+    """pixel_vectors, the matches, the pose fit and the deleted residuals of a mirrored camera on
+    the flipped columns are those of the plain camera on the columns as given."""
+    from startrack.identify import _refine as refine
+
+    rng = np.random.default_rng(6)
+    x, y = rng.uniform(0, 799, 25), rng.uniform(0, 599, 25)
+    rot = Rotation.random(random_state=6)
+    ref = rot.inv().apply(CAMERA.pixel_to_vector(x, y))
+    mirror, xm = CAMERA.mirror_image(), 799 - x
+    np.testing.assert_allclose(refine.pixel_vectors(mirror, xm, y), refine.pixel_vectors(CAMERA, x, y), atol=1e-12)
+    for match in (refine.match_predicted, refine.predicted_pairs):
+        plain, flipped = match(ref, rot.as_matrix(), CAMERA, x, y, 2.0), match(ref, rot.as_matrix(), mirror, xm, y, 2.0)
+        for a, b in zip(plain, flipped, strict=True):
+            np.testing.assert_allclose(a, b, atol=1e-9)  # indices, and squared distances in px^2
+    start = (Rotation.from_rotvec([1e-4, -2e-4, 3e-4]) * rot).as_matrix()
+    matrix, camera, residual = refine.fit_pose(start, mirror.with_focal(905.0), ref, xm, y, fit_focal=True)
+    assert camera.mirrored and camera.fx == pytest.approx(900.0, rel=1e-6)
+    assert np.degrees(Rotation.from_matrix(matrix @ rot.as_matrix().T).magnitude()) < 1e-6  # deg
+    assert residual.max() < 1e-6  # px
+    np.testing.assert_allclose(refine.leave_one_out_residuals(rot.as_matrix(), mirror, ref, xm, y, fit_focal=True),
+                               refine.leave_one_out_residuals(rot.as_matrix(), CAMERA, ref, x, y, fit_focal=True),
+                               atol=1e-9)  # px

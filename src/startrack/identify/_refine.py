@@ -137,6 +137,8 @@ def fit_pose(matrix_cam_from_icrs: NDArray, camera: Camera, ref_icrs: NDArray, x
     matrix, camera, residual_px
         The refined attitude matrix (3, 3) and camera and each star's pixel residual distance, shape (K,).
     """
+    mirrored = camera.mirrored
+    camera, x = unmirrored(camera, x)
     free = _usable_flags(len(x), fit_focal, fit_aspect, fit_k1, fit_k2)
     corner = 0.5 * math.hypot(camera.width, camera.height)
     matrix, fx, fy, k1, k2, residual = _kernel().fit(
@@ -146,7 +148,16 @@ def fit_pose(matrix_cam_from_icrs: NDArray, camera: Camera, ref_icrs: NDArray, x
         camera = camera.with_distortion(k1=k1, k2=k2)
     if free[0] or free[1]:
         camera = camera.with_focal(fx, fy)
-    return matrix, camera, residual
+    return matrix, camera.mirror_image() if mirrored else camera, residual
+
+
+def unmirrored(camera: Camera, x: NDArray) -> tuple[Camera, NDArray]:
+    """The camera and the columns ``x`` (N,) as the compiled helpers here take them: unchanged for
+    a plain camera; for a ``mirrored`` one, its mirror image (plain) and the flipped columns, the
+    same stars seen the same way (:mod:`._parity`)."""
+    if not camera.mirrored:
+        return camera, x
+    return camera.mirror_image(), (camera.width - 1) - np.asarray(x, dtype=np.float64)
 
 
 def refine_pointing(rot_cam_from_icrs: Rotation, camera: Camera, ref_icrs: NDArray, x: NDArray,
@@ -172,6 +183,7 @@ def leave_one_out_residuals(matrix_cam_from_icrs: NDArray, camera: Camera, ref_i
     inf; all do when J^T J is singular. The parameters are those :func:`fit_pose` fits with
     the same flags (focal length, pixel aspect).
     """
+    camera, x = unmirrored(camera, x)
     free = _usable_flags(len(x), fit_focal, fit_aspect, False, False)
     focal = np.array([[camera.fx], [camera.fy]])
     cam_vec = _plain(matrix_cam_from_icrs) @ _plain(ref_icrs).T
@@ -219,6 +231,7 @@ def match_predicted(ref_icrs: NDArray, matrix_cam_from_icrs: NDArray, camera: Ca
     image_index, catalog_index : ndarray, shape (K,) each
         Indices into ``x`` and into ``ref_icrs``, closest pair first.
     """
+    camera, x = unmirrored(camera, x)
     return _match_kernel().rematch_pairs(_plain(ref_icrs), _plain(matrix_cam_from_icrs), float(camera.fx),
                                    float(camera.fy), float(camera.cx), float(camera.cy), _distortion(camera),
                                    float(camera.width), float(camera.height), _plain(x), _plain(y), float(radius_px))
@@ -231,6 +244,7 @@ def predicted_pairs(ref_icrs: NDArray, matrix_cam_from_icrs: NDArray, camera: Ca
     of catalog stars predicted inside the image (one compiled call,
     :func:`.match_kernel.predicted_pairs`): the pairs of a match within a radius r up to
     ``radius_px`` are those with a squared distance of at most r * r, in the same order."""
+    camera, x = unmirrored(camera, x)
     return _match_kernel().predicted_pairs(_plain(ref_icrs), _plain(matrix_cam_from_icrs), float(camera.fx),
                                            float(camera.fy), float(camera.cx), float(camera.cy), _distortion(camera),
                                            float(camera.width), float(camera.height), _plain(x), _plain(y),
@@ -241,6 +255,7 @@ def pixel_vectors(camera: Camera, x: NDArray, y: NDArray) -> NDArray[np.float64]
     coordinates ``x``, ``y`` (N,) in one compiled call (:func:`.match_kernel.pixel_vectors`; the
     same Newton iterations and tolerance, point by point): unit camera vectors (N, 3), NaN where
     the lens model cannot be inverted."""
+    camera, x = unmirrored(camera, x)
     return _match_kernel().pixel_vectors(_plain(x), _plain(y), float(camera.fx), float(camera.fy), float(camera.cx),
                                    float(camera.cy), _distortion(camera), UNDISTORT_TOL_PX / max(camera.fx, camera.fy),
                                    UNDISTORT_MAX_ITER)
