@@ -186,3 +186,14 @@ def test_the_compiled_helpers_take_a_mirrored_camera():
     np.testing.assert_allclose(refine.leave_one_out_residuals(rot.as_matrix(), mirror, ref, xm, y, fit_focal=True),
                                refine.leave_one_out_residuals(rot.as_matrix(), CAMERA, ref, x, y, fit_focal=True),
                                atol=1e-9)  # px
+
+
+def test_the_tracking_projection_takes_a_mirrored_camera():
+    from startrack.track._windows import project
+
+    mirror = Camera(800, 600, 900.0).mirror_image()
+    vectors = np.array([[0.1, -0.2, 0.05], [0.05, 0.1, -0.1], [1.0, 1.0, 1.0]])  # columns (3, K)
+    x, y = project(mirror, vectors)
+    mx, my = mirror.vector_to_pixel(vectors.T)
+    np.testing.assert_allclose(x, mx, atol=1e-9)  # px
+    np.testing.assert_allclose(y, my, atol=1e-9)  # px

@@ -82,7 +82,8 @@ def project(camera: Camera, vectors: NDArray) -> tuple[NDArray[np.float64], NDAr
     if camera.has_distortion or not np.all(vectors[2] > 0.0):
         return camera.vector_to_pixel(vectors.T)
     inv_z = 1.0 / vectors[2]
-    return camera.cx + camera.fx * (vectors[0] * inv_z), camera.cy + camera.fy * (vectors[1] * inv_z)
+    fx = camera.x_sign * camera.fx  # a mirrored camera's x runs against its x axis
+    return camera.cx + fx * (vectors[0] * inv_z), camera.cy + camera.fy * (vectors[1] * inv_z)
 
 
 class WindowMatcher:
