@@ -35,7 +35,6 @@ from .identify import (
     check_fov_deg,
     check_options,
     epoch_jyear,
-    mirror_x,
     pixel_vectors,
     prepare_matcher,
     resolve_epoch,
@@ -61,12 +60,11 @@ def _solution(problem: SolveRequest, stars: FieldStars, cand: Candidate, t0: flo
     covariance (Huffman 2006 §6.1.3), residuals and RA / Dec / roll, in one compiled call
     (:func:`.identify.refine.solution_terms`; the solvers and the covariance are in
     :mod:`startrack.attitude`). The attitude is a rotation matrix inside; the one Rotation is the
-    solution's. A candidate found in the image's mirror (:mod:`.identify._parity`) is fitted there,
-    and the solution's camera is the ``mirrored`` camera of the image as given."""
-    x = mirror_x(problem.x, cand.camera.width) if cand.mirrored else problem.x
-    fit = settle_matches(x, problem.y, stars, cand, problem.focal_range, fit_aspect=problem.fit_aspect)
+    solution's. A mirror image's candidate has a ``mirrored`` camera (:mod:`.identify._parity`),
+    which the fit and the solution keep."""
+    fit = settle_matches(problem.x, problem.y, stars, cand, problem.focal_range, fit_aspect=problem.fit_aspect)
     camera, img, rows, ref, res_px = fit.camera, fit.image_index, fit.catalog_rows, fit.ref_icrs, fit.residual_px
-    observed = pixel_vectors(camera, x[img], problem.y[img])
+    observed = pixel_vectors(camera, problem.x[img], problem.y[img])
     usable = np.isfinite(observed).all(axis=1)  # a star where a fitted wide lens cannot be inverted: left out
     if not usable.all():
         img, rows, ref, res_px, observed = img[usable], rows[usable], ref[usable], res_px[usable], observed[usable]
@@ -78,8 +76,7 @@ def _solution(problem: SolveRequest, stars: FieldStars, cand: Candidate, t0: flo
     return AttitudeSolution(
         status=Status.OK, rot_cam_from_icrs=Rotation.from_quat(quat), covariance_rad2=covariance,
         ra_deg=math.degrees(ra), dec_deg=math.degrees(dec), roll_deg=math.degrees(roll),
-        fov_deg=camera.fov_deg, camera=camera.mirror_image() if cand.mirrored else camera, matches=matches,
-        residuals_arcsec=residual_rad / ARCSEC,
+        fov_deg=camera.fov_deg, camera=camera, matches=matches, residuals_arcsec=residual_rad / ARCSEC,
         false_match_prob=cand.false_match_prob, solve_time_s=time.perf_counter() - t0,
         epoch_jyear=problem.epoch.jyear, epoch_source=problem.epoch.source)
 

@@ -44,7 +44,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._options_base import MatcherOptionsBase
     from ._overlay import OverlayOptions, match_overlay
     from ._pair_database import PairDatabase, PairSettings, load_pair_database
-    from ._parity import PARITIES, Parity, check_parity, mirror_x, plain_mirror, searched_mirrors
+    from ._parity import PARITIES, Parity, check_parity, searched_mirrors, unmirrored
     from ._pyramid import PyramidOptions, candidate_triangles, match_pyramid, pyramid_triads
     from ._quad_matcher import MatcherOptions, match_lost_in_space
     from ._refine import pixel_vectors, refine_pointing, solution_terms

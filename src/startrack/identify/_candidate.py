@@ -15,16 +15,14 @@ from ..results import Status
 @dataclass(frozen=True)
 class Candidate:
     """A verified identification: attitude, camera, and the matched image stars with the
-    catalog rows (of :func:`startrack.catalog.load_catalog`) they were matched to. ``mirrored``:
-    found in the left-right flip of the image (:mod:`._parity`); the attitude and the (plain)
-    camera are then those of the flipped image."""
+    catalog rows (of :func:`startrack.catalog.load_catalog`) they were matched to (the camera is
+    ``mirrored`` for a mirror image of the sky, :mod:`._parity`)."""
 
     rot_cam_from_icrs: Rotation
     camera: Camera
     image_index: NDArray[np.int64]
     catalog_rows: NDArray[np.int64]
     false_match_prob: float
-    mirrored: bool = False
 
 
 @dataclass(frozen=True)

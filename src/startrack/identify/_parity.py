@@ -6,11 +6,11 @@ ratios, but no attitude fits them (:mod:`._quad_matcher`). Mirror images are com
 a telescope's star diagonal flips the field, and so do cameras and programs that flip their
 output. astrometry.net tries both parities by default; so does :func:`startrack.solve_image`.
 
-A mirror image is solved as the image of its left-right flip (column x to x' = width - 1 - x,
-:func:`mirror_x`) by a plain camera whose principal point is flipped with it
-(:func:`plain_mirror`). The solution describes the image as given with the same attitude and a
-camera whose :attr:`startrack.camera.Camera.mirrored` is set (pixel x = cx - fx a): the camera
-frame stays right-handed and the attitude a rotation. The "quads" matcher searches both parities
+A mirror image has a camera whose :attr:`startrack.camera.Camera.mirrored` is set (pixel x =
+cx - fx a): the camera frame stays right-handed and the attitude a rotation. The compiled search,
+fit and match helpers take plain cameras; they see a mirrored camera's stars through its mirror
+image, on the flipped columns x' = width - 1 - x (:func:`unmirrored`), the same stars seen the same
+way. The "quads" matcher searches both parities
 in one pass, taking turns one look-up step at a time (:func:`.quad_matcher.match_lost_in_space`),
 so a mirror image costs about one more look-up per step rather than a failed search first.
 
@@ -70,12 +70,10 @@ def searched_mirrors(parity: Parity) -> tuple[bool, ...]:
     return {"normal": (False,), "mirrored": (True,), "either": (False, True)}[parity]
 
 
-def mirror_x(x: NDArray[np.float64], width: int) -> NDArray[np.float64]:
-    """Columns (N,) of the left-right flip of an image ``width`` pixels wide: width - 1 - x."""
-    return (width - 1) - np.asarray(x, dtype=np.float64)
-
-
-def plain_mirror(camera: Camera) -> Camera:
-    """The plain (not ``mirrored``) camera of the left-right flip of ``camera``'s image: the
-    principal point flipped (:func:`mirror_x`), everything else kept."""
-    return replace(camera, cx=(camera.width - 1) - camera.cx)
+def unmirrored(camera: Camera, x: NDArray) -> tuple[Camera, NDArray]:
+    """The camera and the columns ``x`` (N,) as the plain compiled helpers take them: unchanged
+    for a plain camera; for a ``mirrored`` one, its mirror image (a plain camera, the principal
+    point flipped) and the flipped columns ``width - 1 - x``: the same stars seen the same way."""
+    if not camera.mirrored:
+        return camera, x
+    return camera.mirror_image(), (camera.width - 1) - np.asarray(x, dtype=np.float64)

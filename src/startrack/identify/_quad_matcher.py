@@ -40,7 +40,7 @@ from ._candidate import Candidate, MatchOutcome
 from ._confirm import Confirmer, StarSet, match_radius_px
 from ._database import PatternDatabase
 from ._options_base import MatcherOptionsBase
-from ._parity import mirror_x, plain_mirror
+from ._parity import unmirrored
 from ._quad_search import Fits, SearchSetup, focal_grid, search_batch, warm_up
 from ._refine import pixel_vectors
 from ._verify import SkyBands
@@ -333,12 +333,21 @@ def aspect_trials(aspect_range: tuple[float, float]) -> NDArray[np.float64]:
 
 
 def _searches(x: NDArray, y: NDArray, camera: Camera, focal_range_px, db: PatternDatabase, options: MatcherOptions,
-              trials: list[int], aspect_range: tuple[float, float] | None, fit_aspect: bool) -> list[_Search]:
-    """The searches of one image hypothesis: one, or one per pixel aspect of ``aspect_range``."""
-    if aspect_range is None:
-        return [_Search(x, y, camera, focal_range_px, db, options, trials, fit_aspect=fit_aspect)]
-    return [_Search(x, y, camera.with_focal(camera.fx, camera.fx / a), focal_range_px, db, options, trials,
-                    ASPECT_TOLERANCE, True) for a in aspect_trials(aspect_range)]
+              trials: list[int], aspect_range: tuple[float, float] | None, fit_aspect: bool,
+              mirrored: tuple[bool, ...]) -> list[tuple[_Search, bool]]:
+    """The searches of a solve with their hypothesis (True: a mirror image, searched through the
+    plain camera on the flipped columns, :func:`._parity.unmirrored`): for each of ``mirrored``,
+    one, or one per pixel aspect of ``aspect_range``."""
+    out = []
+    for flip in mirrored:
+        seen_camera, seen_x = unmirrored(replace(camera, mirrored=True), x) if flip else (camera, x)
+        if aspect_range is None:
+            out.append((_Search(seen_x, y, seen_camera, focal_range_px, db, options, trials, fit_aspect=fit_aspect),
+                        flip))
+            continue
+        out += [(_Search(seen_x, y, seen_camera.with_focal(seen_camera.fx, seen_camera.fx / a), focal_range_px, db,
+                         options, trials, ASPECT_TOLERANCE, True), flip) for a in aspect_trials(aspect_range)]
+    return out
 
 
 def _taking_turns(searches: list[tuple[_Search, bool]], quads: NDArray, start: int,
@@ -383,8 +392,8 @@ def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatab
         The camera's pixel aspect is a guess: the confirmation refits it (always when a range
         is searched).
     mirrored : tuple of bool
-        The hypotheses to search, taking turns on each batch: False the image as given, True its
-        left-right flip (:mod:`._parity`; the candidate then says ``mirrored``).
+        The hypotheses to search, taking turns step by step: False the image as given, True a
+        mirror image of the sky (:mod:`._parity`; the candidate's camera is then ``mirrored``).
 
     Returns
     -------
@@ -397,10 +406,7 @@ def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatab
         return MatchOutcome(Status.TOO_FEW_STARS,
                             f"lost-in-space identification needs at least 4 stars, got {len(x)}", None, 0)
     x, y, trials = np.asarray(x, float), np.asarray(y, float), [0]
-    searches = [(search, flip) for flip in mirrored
-                for search in _searches(mirror_x(x, camera.width) if flip else x, y,
-                                        plain_mirror(camera) if flip else camera, focal_range_px, db, options,
-                                        trials, aspect_range, fit_aspect)]
+    searches = _searches(x, y, camera, focal_range_px, db, options, trials, aspect_range, fit_aspect, mirrored)
     warm_up(db)  # compiling is not searching: before the clock starts
     _index_levels(db, [search for search, _ in searches])  # nor is indexing the levels' verification stars
     deadline = time.perf_counter() + options.timeout_s
@@ -409,7 +415,9 @@ def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatab
         for quads in pattern_batches(min(options.pattern_stars, n_stars - start), first_new):
             for found, flip in _taking_turns(searches, quads, start, deadline):
                 if found is not None:
-                    return MatchOutcome(Status.OK, "", replace(found, mirrored=True) if flip else found, trials[0])
+                    if flip:  # found in the flipped columns: the camera of the image as given is mirrored
+                        found = replace(found, camera=found.camera.mirror_image())
+                    return MatchOutcome(Status.OK, "", found, trials[0])
                 if time.perf_counter() > deadline:
                     return MatchOutcome(Status.TIMEOUT, f"no match within the {options.timeout_s:g} s time limit",
                                         None, trials[0])

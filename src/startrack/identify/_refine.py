@@ -24,6 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..camera import UNDISTORT_MAX_ITER, UNDISTORT_TOL_PX, Camera
+from ._parity import unmirrored
 
 _MAX_ITER = 6
 _CONVERGED_PX = 1e-4
@@ -149,15 +150,6 @@ def fit_pose(matrix_cam_from_icrs: NDArray, camera: Camera, ref_icrs: NDArray, x
     if free[0] or free[1]:
         camera = camera.with_focal(fx, fy)
     return matrix, camera.mirror_image() if mirrored else camera, residual
-
-
-def unmirrored(camera: Camera, x: NDArray) -> tuple[Camera, NDArray]:
-    """The camera and the columns ``x`` (N,) as the compiled helpers here take them: unchanged for
-    a plain camera; for a ``mirrored`` one, its mirror image (plain) and the flipped columns, the
-    same stars seen the same way (:mod:`._parity`)."""
-    if not camera.mirrored:
-        return camera, x
-    return camera.mirror_image(), (camera.width - 1) - np.asarray(x, dtype=np.float64)
 
 
 def refine_pointing(rot_cam_from_icrs: Rotation, camera: Camera, ref_icrs: NDArray, x: NDArray,
