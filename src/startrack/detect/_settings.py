@@ -144,18 +144,15 @@ class DetectionSettings:
 
     def _check_numbers(self) -> None:
         """The numeric settings are in their ranges (InvalidInputError naming the first that is not)."""
-        check_positive(self, ("sigma", "grow_sigma", "denoise_sigma_px",
-                                     "diffusion_kappa_sigma", "max_sigma", "pixel_sigma",
-                                     "smear_tolerance_px", "smear_angle_deg"))
-        check_positive(self, ("fine_sigma", "max_elongation", "max_peak_fraction", "max_clutter",
-                                     "psf_sigma_px", "gain_e_per_adu", "max_axis_difference_px"),
-                              optional=True)
-        check_int(self, ("binning", "kernel_px", "tile_px", "min_area_px", "jump_px",
-                                "target_stars", "diffusion_iterations"), minimum=1)
+        check_positive(self, ("sigma", "grow_sigma", "denoise_sigma_px", "diffusion_kappa_sigma", "max_sigma",
+                              "pixel_sigma", "smear_tolerance_px", "smear_angle_deg"))
+        check_positive(self, ("fine_sigma", "max_elongation", "max_peak_fraction", "max_clutter", "psf_sigma_px",
+                              "gain_e_per_adu", "max_axis_difference_px"), optional=True)
+        check_int(self, ("binning", "kernel_px", "tile_px", "min_area_px", "jump_px", "target_stars",
+                         "diffusion_iterations"), minimum=1)
         check_int(self, ("prefilter_count",), minimum=1)
         check_int(self, ("max_block_px",), minimum=1024)
-        check_int(self, ("max_area_px", "max_stars", "window_half_px"), minimum=1,
-                         optional=True)
+        check_int(self, ("max_area_px", "max_stars", "window_half_px"), minimum=1, optional=True)
         check_non_negative(self, ("min_peak_snr", "min_flatness", "min_packing"))
         if not isinstance(self.mag_zero_point, int | float) or not np.isfinite(self.mag_zero_point):
             raise InvalidInputError(f"mag_zero_point must be a finite number, got "
