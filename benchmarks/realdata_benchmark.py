@@ -103,10 +103,13 @@ def _truth_rows() -> list[dict[str, str]]:
         return list(csv.DictReader(fh))
 
 
-def real_row(row: dict[str, str], fov_range_deg: tuple[float, float] | None, flip: bool = False) -> dict:
+def real_row(row: dict[str, str], fov_range_deg: tuple[float, float] | None, flip: bool = False,
+             guided: bool = False) -> dict:
     """Solve one real image (no hint, or the given range) and compare with astrometry.net; with
     ``flip``, the image flipped left to right (a mirror image of the sky: its roll is not
-    compared, its solution should say ``mirrored``)."""
+    compared, its solution should say ``mirrored``); with ``guided``, the solve measures the
+    catalog stars it predicts too (``solve_image(guided=True)``): "detected" then counts the
+    detector's and those stars together."""
     image = read_image(REALDATA / row["set"] / row["file"])
     ref = reference(row["file"])
     if flip:
@@ -114,7 +117,7 @@ def real_row(row: dict[str, str], fov_range_deg: tuple[float, float] | None, fli
         image = replace(image, data=np.ascontiguousarray(image.data[:, ::-1]))
         ref = replace(ref, x=(width - 1) - ref.x, hip_x=(width - 1) - ref.hip_x)
     detect_s = _detect_s(image.data)
-    solution = solve_image(image, fov_range_deg=fov_range_deg)
+    solution = solve_image(image, fov_range_deg=fov_range_deg, guided=guided)
     found = solution.detections
     out = {"file": row["file"], "solved": solution.solved, "status": solution.status.value,
            "mirrored": bool(solution.solved and solution.camera.mirrored),
@@ -305,6 +308,8 @@ def main(argv: list[str] | None = None) -> int:
             print_real([real_row(r, (5.0, 35.0)) for r in rows], "FOV range 5-35 deg (the earlier default)")
             print_real([real_row(r, None, flip=True) for r in rows],
                        "flipped left to right (mirror images), no hint", flipped=True)
+            print_real([real_row(r, None, guided=True) for r in rows],
+                       "no hint, with the stars the solution predicts measured (guided=True)")
     if not args.no_sim:
         print_sim([sim_camera_run(spec, args.frames, args.seed) for spec in SIM_CAMERAS])
     if args.lens_term:

@@ -161,6 +161,10 @@ class AttitudeSolution:
         Where that epoch came from: "given", an image header card ("CATEPOCH", "DATE-OBS",
         "MJD-OBS", "DateTimeOriginal") or "default" (J2000.0, nothing said when); empty when not
         recorded. See :mod:`startrack.identify._image_epoch`.
+    guided_stars : int
+        How many of the matched stars were measured where the solution predicted them, after
+        identification (``solve_image(guided=True)``, :mod:`startrack.identify._guided`): the
+        last rows of ``detections`` and of ``matches``. 0 otherwise.
     """
 
     status: Status
@@ -179,6 +183,7 @@ class AttitudeSolution:
     detections: Detections | None = None
     epoch_jyear: float = float("nan")
     epoch_source: str = ""
+    guided_stars: int = 0
 
     @property
     def solved(self) -> bool:

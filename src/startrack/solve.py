@@ -212,7 +212,7 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
                 epoch: Time | float | None = None, channel: str | int | None = None,
                 detector=None, method: MethodName = "quads", options: MatcherOptionsBase | None = None,
                 pixel_aspect: float | tuple[float, float] | None = None,
-                parity: Parity | None = None) -> AttitudeSolution:
+                parity: Parity | None = None, guided: bool = False) -> AttitudeSolution:
     """Lost-in-space attitude of an image: read, detect, solve.
 
     Parameters
@@ -233,6 +233,11 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
         As in :func:`solve_stars`, but the default is "either" (a photo may be a mirror image:
         a star diagonal, a flipped file), or the camera's when one is given, or "normal" with a
         method other than "quads". The streak solve of a smeared frame takes the image as given.
+    guided : bool
+        Once solved, also measure the catalog stars the solution predicts where the detector found
+        none, accept those that stand above the image's own sky (0.1 wrong acceptances expected
+        per image), and refit the attitude on all matched stars (:mod:`startrack.identify._guided`;
+        ``guided_stars`` says how many were added). Not for a frame solved from its streaks.
 
     Returns
     -------
@@ -255,6 +260,8 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
 
     if detector is not None and not isinstance(detector, StarDetector):
         raise InvalidInputError(f"detector must be a startrack.detect.StarDetector, got {type(detector).__name__}")
+    if not isinstance(guided, bool | np.bool_):
+        raise InvalidInputError(f"guided must be True or False, got {guided!r}")
     method = check_options(method, options)
     img = image if isinstance(image, Image) else read_image(image, channel=channel)
     when = resolve_epoch(epoch, img.header)
@@ -282,4 +289,15 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
     if not solution.solved and smeared_image.SOME_ELONGATION <= elongation < smeared_image.SMEARED_ELONGATION \
             and (streaked := smeared()).solved:
         return smeared_image.image_solution(streaked, found, detect_s, when.source)
-    return replace(solution, solve_time_s=detect_s + solution.solve_time_s, detections=found)
+    solution = replace(solution, solve_time_s=detect_s + solution.solve_time_s, detections=found)
+    return _with_guided(img.data, solution, detector) if guided and solution.solved else solution
+
+
+def _with_guided(data: NDArray, solution: AttitudeSolution, detector) -> AttitudeSolution:
+    """The solution refitted with the stars measured where it predicts them (:mod:`.identify._guided`),
+    their time added to ``solve_time_s``."""
+    from .identify import guided_stars, with_guided_stars
+
+    t0 = time.perf_counter()
+    refitted = with_guided_stars(solution, guided_stars(data, solution, detector=detector))
+    return replace(refitted, solve_time_s=solution.solve_time_s + time.perf_counter() - t0)

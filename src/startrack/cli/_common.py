@@ -28,7 +28,8 @@ output (table, the default)
   roll         deg, the startrack.frames definition (equal to tetra3 / cedar-solve roll)
   FOV          horizontal field of view, deg, and the focal length, px
   parity       (only for a mirror image of the sky: a star diagonal, a flipped file) mirrored
-  stars        stars matched (of those detected, for an image)
+  stars        stars matched (of those detected, for an image; with --guided, how many of them
+               were measured where the solution predicts them)
   residual     rms angle between matched stars and the catalog after the fit, arcsec
   1-sigma      attitude uncertainty across the boresight and about it (roll), arcsec
   false match  upper bound on the probability that the identification is wrong
@@ -42,7 +43,9 @@ output (--json)
   when solved), solve_time_s, and for an image n_detections. When solved also: ra_deg,
   dec_deg, roll_deg, fov_deg, qx, qy, qz, qw, focal_px, mirrored (true for a mirror image:
   its camera's pixel x runs against the camera frame's x axis), sigma_cross_boresight_arcsec,
-  sigma_roll_arcsec, residual_rms_arcsec, false_match_prob, and matches: a list of
+  sigma_roll_arcsec, residual_rms_arcsec, false_match_prob, guided_stars (how many of the
+  matches were measured where the solution predicts them: solve --guided; they are the last
+  matches and detections), and matches: a list of
   {index, hip, residual_arcsec[, x, y]} (index into the detections or star list; x, y in
   0-based pixels). Values that are undefined are null. With a ground site (solve --site or
   --latitude-deg / --longitude-deg) also: time_utc, site, latitude_deg, longitude_deg,
@@ -207,7 +210,7 @@ def solution_table(solution: AttitudeSolution, detections: Detections | None = N
         ("roll", f"{solution.roll_deg:.4f} deg"),
         ("FOV", f"{solution.fov_deg:.4f} deg horizontal (focal length {camera.fx:.1f} px)"),
         *([("parity", "mirrored: the image is a mirror image of the sky")] if camera.mirrored else []),
-        ("stars", f"{len(solution.matches)} matched{n_det}"),
+        ("stars", f"{len(solution.matches)} matched{n_det}" + _guided_note(solution)),
         ("residual", f"{rms:.2f} arcsec rms"),
         ("1-sigma", f"{solution.sigma_cross_boresight_arcsec:.2f} arcsec cross-boresight, "
                     f"{solution.sigma_roll_arcsec:.2f} arcsec roll"),
@@ -215,6 +218,13 @@ def solution_table(solution: AttitudeSolution, detections: Detections | None = N
         ("time", f"{solution.solve_time_s * 1e3:.1f} ms"),
         ("qx qy qz qw", " ".join(f"{v:+.9f}" for v in require(solution.quaternion_xyzw, "the quaternion"))),
     ])
+
+
+def _guided_note(solution: AttitudeSolution) -> str:
+    """What the stars row says of the stars measured where the solution predicts them."""
+    if not solution.guided_stars:
+        return ""
+    return f" ({solution.guided_stars} of them measured where the solution predicts them)"
 
 
 def _table(lines: list[tuple[str, str]]) -> str:

@@ -49,6 +49,10 @@ def _parser() -> argparse.ArgumentParser:
     add_epoch_option(parser)
     add_aspect_option(parser)
     add_parity_option(parser, "either")
+    parser.add_argument("--guided", action="store_true",
+                        help="once solved, also measure the catalog stars the solution predicts where nothing was "
+                             "detected, keep those that stand above the image's own sky (0.1 wrong ones expected "
+                             "per image) and refit the attitude on them too")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--wcs", metavar="OUT",
                         help="when solved, write the image's FITS WCS (TAN-SIP, FITS 1-based pixels) to OUT "
@@ -85,7 +89,7 @@ def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
     apply_max_pixels_option(args)
     solver_options = {**fov_kwargs(args), "epoch": solver_epoch(args), "method": args.method,
-                      "pixel_aspect": aspect_option(args), "parity": args.parity}
+                      "pixel_aspect": aspect_option(args), "parity": args.parity, "guided": args.guided}
     fov_options = {key: solver_options[key] for key in ("fov_deg", "fov_range_deg", "camera")}
     if is_batch(args.image, args.csv):
         return _batch(args, solver_options, fov_options)

@@ -29,6 +29,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     )
     from ._field_stars import FieldStars, field_stars
     from ._final_fit import settle_matches
+    from ._guided import GuidedStars, guided_stars, with_guided_stars
     from ._image_epoch import DEFAULT_EPOCH_JYEAR, epoch_from_header, epoch_jyear, parse_utc, resolve_epoch
     from ._kvector import KVector
     from ._match_groups import (
