@@ -10,7 +10,9 @@ and among them the ones our solution matched to a catalog star, and the time (de
 identification, ``solve_time_s``) and, apart, that of the detection alone (a separate run of
 the default detector on the same image). Then the same images flipped left to right, as a
 star diagonal or a flipped file gives them: they should solve as mirror images (status "ok
-mirrored"; the centre is compared, the roll of a mirrored camera is not).
+mirrored"; the centre is compared, the roll of a mirrored camera is not). Last, the images as
+given with ``guided=True`` (the catalog stars the solution predicts measured too,
+``startrack.identify._guided``): "detected" then counts the detector's stars and those.
 
 Part 2, simulated frames (``startrack.simulate.simulate_frame``, the generic CMOS sensor, noise
 on) of cameras nobody calibrated, at random attitudes, solved by ``solve_image`` with no hint:
