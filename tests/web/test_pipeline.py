@@ -90,6 +90,24 @@ def test_a_mirror_image_is_solved_and_said_to_be(server, real_images, tmp_path):
     assert unflipped["status"] == "ok" and unflipped["mirrored"] is False
 
 
+def test_the_guided_option_adds_the_stars_the_solution_predicts(server, real_images):
+    """roof.jpg: the guided pass measures 3 catalog stars where nothing was detected
+    (docs/identification.md); the result counts them, the page says so and the record keeps them."""
+    folder = run_job(server, real_images["roof.jpg"], {"guided": True})
+    result = read_json(folder / "result.json")
+    plain = read_json(run_job(server, real_images["roof.jpg"]) / "result.json")
+    assert result["status"] == plain["status"] == "ok" and plain["guided_stars"] == 0
+    assert result["guided_stars"] >= 2 and result["n_matched"] == plain["n_matched"] + result["guided_stars"]
+    assert result["n_detected"] == plain["n_detected"] + result["guided_stars"]
+    assert load_solution(folder / "record.npz")[0].guided_stars == result["guided_stars"]
+    with open(folder / "detections.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["guided"] for r in rows].count("true") == result["guided_stars"]
+    assert all(r["hip"] and not r["mag"] for r in rows if r["guided"] == "true")
+    page = server.client.get(f"/jobs/{folder.name}").text
+    assert f"{result['guided_stars']} of them measured where the solution predicts them" in page
+
+
 def test_a_ground_photo_has_the_altitude_and_azimuth_astropy_gives(server, real_images):
     when, site = "2021-02-01T04:00:00", get_site("logan-ut")
     folder = run_job(server, real_images["roof.jpg"], {"site": "logan-ut", "time": when})

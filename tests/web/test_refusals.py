@@ -122,6 +122,7 @@ def test_422_for_absurd_dimensions_read_from_the_header(server, content, name, s
     ({"latitude_deg": 40}, "options.longitude_deg"),
     ({"latitude_deg": 95, "longitude_deg": 0}, "options.latitude_deg"),
     ({"lens_correction": "yes"}, "options.lens_correction"),
+    ({"guided": 1}, "options.guided"),
     ({"method": "guess"}, "options.method"),
     ({"method": "pyramid"}, "options.method"),
     ({"detection_preset": "magic"}, "options.detection_preset"),

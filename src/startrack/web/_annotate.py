@@ -5,7 +5,8 @@ API of matplotlib (a :class:`~matplotlib.figure.Figure`, no pyplot state):
 
 - detections kept: grey circles; refused: crosses coloured by the filter that refused them
   (:mod:`._rejects`);
-- matched stars: green circles labelled with the HIP number and the catalog V magnitude;
+- matched stars: green circles labelled with the HIP number and the catalog V magnitude; those
+  measured where the solution predicts them (the ``guided`` option): cyan diamonds as well;
 - residual vectors: from each matched spot to where the fitted attitude puts its catalog star,
   magnified (the factor is in the legend) so that the median vector is about 4 % of the width;
 - an RA / Dec grid (dotted, labelled in degrees) and a compass (north and east at the image
@@ -60,6 +61,7 @@ def write_annotated(path: Path, image: NDArray, solution: AttitudeSolution, dete
     if solution.solved:
         _draw_grid(ax, solution)
         _draw_matches(ax, solution, detections)
+        _draw_guided(ax, solution, detections)
         _draw_compass(ax, solution, width, height)
     ax.set_xlim(-0.5, width - 0.5)
     ax.set_ylim(height - 0.5, -0.5)
@@ -109,6 +111,14 @@ def _draw_matches(ax, solution: AttitudeSolution, det: Detections) -> None:
     gain = residual_gain(np.hypot(dx, dy), det.width or int(ax.get_xlim()[1]))
     ax.quiver(x, y, dx * gain, dy * gain, angles="xy", scale_units="xy", scale=1.0, color="yellow", width=0.003,
               label=f"residual x {gain:g}")
+
+
+def _draw_guided(ax, solution: AttitudeSolution, det: Detections) -> None:
+    """The stars measured where the solution predicts them (its detections' last rows)."""
+    n = solution.guided_stars
+    if n:
+        ax.scatter(det.x[-n:], det.y[-n:], s=60, marker="D", facecolors="none", edgecolors="cyan", linewidths=0.9,
+                   label=f"measured where predicted ({n})")
 
 
 def residual_gain(lengths_px: NDArray, width_px: int) -> float:

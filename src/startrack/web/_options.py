@@ -21,6 +21,9 @@
                          (default: true for the "auto" preset, else false)
 ``time_limit_s``         a shorter time limit for this job, s (the server's ``--time-limit-s``
                          is the longest)
+``guided``               once solved, also measure the catalog stars the solution predicts where
+                         nothing was detected and refit on them (default false;
+                         :mod:`startrack.identify._guided`)
 =======================  ======================================================================
 
 :func:`validate_options` returns the normalised options (plain JSON, kept in ``job.json`` and in
@@ -52,7 +55,7 @@ DETECTOR_KEYS = tuple(f.name for f in dataclasses.fields(StarDetector) if f.name
 METHODS = tuple(name for name in MATCHERS if name != "overlay")
 KEYS = ("fov_deg", "fov_range_deg", "camera", "epoch", "time", "utc_offset_hours", "site", "latitude_deg",
         "longitude_deg", "height_m", "lens_correction", "atmosphere_correction", "method", "channel",
-        "detection_preset", "detection", "fit_camera", "time_limit_s")
+        "detection_preset", "detection", "fit_camera", "time_limit_s", "guided")
 MAX_OPTIONS_BYTES = 16_384
 
 
@@ -96,6 +99,7 @@ def validate_options(options: Any, cameras_dir: Path) -> dict[str, Any]:
     out["detection"] = _detection(options.get("detection"), out["detection_preset"])
     out["fit_camera"] = _bool(options, "fit_camera", out["detection_preset"] == "auto")
     out["time_limit_s"] = _number(options, "time_limit_s", 0.1, 86400.0)
+    out["guided"] = _bool(options, "guided", False)
     if out["method"] != "quads" and out["fov_deg"] is None and out["camera"] is None:
         raise OptionError("options.method", f"{out['method']!r} needs fov_deg or camera; only 'quads' searches "
                                             "a range of fields of view")

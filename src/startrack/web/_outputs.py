@@ -66,7 +66,8 @@ def result_dict(solution: AttitudeSolution, times_s: dict[str, float], extra: di
     out: dict[str, Any] = {"status": solution.status.value, "reason": solution.reason,
                            "failure": failure_words(solution, n_det), "n_detected": n_det,
                            "n_matched": len(solution.matches) if solution.solved else 0,
-                           "epoch_jyear": num(solution.epoch_jyear), "epoch_source": solution.epoch_source}
+                           "epoch_jyear": num(solution.epoch_jyear), "epoch_source": solution.epoch_source,
+                           "guided_stars": int(solution.guided_stars)}
     keys = ("ra_deg", "dec_deg", "roll_deg", "fov_deg", "qx", "qy", "qz", "qw", "false_match_prob",
             "residual_arcsec", "sigma_cross_boresight_arcsec", "sigma_roll_arcsec", "focal_px", "mirrored")
     out.update(dict.fromkeys(keys))
@@ -119,10 +120,13 @@ def detections_table(details: DetectionDetails, solution: AttitudeSolution) -> d
     cols: dict[str, list] = {"index": list(range(len(det)))}
     for key in ("x", "y", "flux", "sigma_px", "area_px", "peak", "elongation"):
         cols[key] = getattr(det, key).tolist()
-    same = len(details) == len(det)  # the solve's detections are the detect stage's (deterministic)
+    guided = solution.guided_stars  # the last rows: measured where the solution predicts them
+    blind = len(det) - guided
+    same = len(details) == blind  # the solve's detections are the detect stage's (deterministic)
     for key in ("mag", "peak_snr", "psf_sigma_px"):
-        cols[key] = getattr(details, key).tolist() if same else [None] * len(det)
+        cols[key] = (getattr(details, key).tolist() if same else [None] * blind) + [None] * guided
     cols["hip"] = [int(h) if h >= 0 else None for h in hip]
+    cols["guided"] = [False] * blind + [True] * guided
     return cols
 
 

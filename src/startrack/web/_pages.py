@@ -89,8 +89,9 @@ def form_options(fields: dict[str, list[str]]) -> dict[str, Any]:
         out[key] = _number(fields, key)
     out["lens_correction"] = "lens_correction" in fields
     out["atmosphere_correction"] = "atmosphere_correction" in fields
-    if "fit_camera" in fields:
-        out["fit_camera"] = True
+    for key in ("fit_camera", "guided"):
+        if key in fields:
+            out[key] = True
     detection = {"sigma": _number(fields, "sigma"), "min_area_px": _number(fields, "min_area_px", int)}
     out["detection"] = {k: v for k, v in detection.items() if v is not None}
     return {k: v for k, v in out.items() if v is not None}

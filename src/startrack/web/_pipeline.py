@@ -94,7 +94,7 @@ def run_solve_job(folder: Path) -> None:
     epoch = opts["epoch"] if opts["epoch"] is not None else (None if opts["time"] is None else when)
     fov = _fov_kwargs(opts, image)
     with job.stage("identify"):
-        solution = _identify(image, detector, fov, epoch, opts["method"])
+        solution = _identify(image, detector, fov, epoch, opts)
     epoch = solution.epoch_jyear if math.isfinite(solution.epoch_jyear) else DEFAULT_EPOCH_JYEAR
     with job.stage("attitude"):
         solution, extra = _attitude(solution, image, detector, fov, when, site, opts)
@@ -158,9 +158,11 @@ def _fov_kwargs(opts: dict[str, Any], image: Image) -> dict[str, Any]:
     return {"fov_deg": opts["fov_deg"], "fov_range_deg": fov_range, "camera": camera}
 
 
-def _identify(image: Image, detector: StarDetector, fov: dict[str, Any], epoch, method: str) -> AttitudeSolution:
+def _identify(image: Image, detector: StarDetector, fov: dict[str, Any], epoch, opts: dict[str, Any]
+              ) -> AttitudeSolution:
     """:func:`startrack.solve_image` of the job (epoch None: from the header, else J2000.0)."""
-    return solve_image(image, detector=detector, epoch=epoch, method=check_method(method), **fov)
+    return solve_image(image, detector=detector, epoch=epoch, method=check_method(opts["method"]),
+                       guided=opts.get("guided", False), **fov)
 
 
 def _attitude(solution: AttitudeSolution, image: Image, detector: StarDetector, fov: dict[str, Any],
@@ -174,7 +176,8 @@ def _attitude(solution: AttitudeSolution, image: Image, detector: StarDetector, 
         elif opts["atmosphere_correction"]:
             from ..calibrate import solve_ground_photo
 
-            ground = solve_ground_photo(image, site, time=when, detector=detector, method=opts["method"], **fov)
+            ground = solve_ground_photo(image, site, time=when, detector=detector, method=opts["method"],
+                                        guided=opts.get("guided", False), **fov)
             if ground.solution.solved:
                 solution = replace(ground.solution, solve_time_s=solution.solve_time_s)
                 extra.update(altitude_deg=num(ground.altitude_deg), azimuth_deg=num(ground.azimuth_deg))
@@ -217,7 +220,7 @@ def _refine(solution, image, detector, fov, epoch, when, site, opts):
     if not cal.status:
         return solution, _attitude(solution, image, detector, fov, when, site, opts)[1], info, fov
     new_fov = {"fov_deg": None, "fov_range_deg": None, "camera": cal.camera}
-    again = _identify(image, detector, new_fov, epoch, opts["method"])
+    again = _identify(image, detector, new_fov, epoch, opts)
     info.update(matches_after=len(again.matches) if again.solved else 0, fov_deg=num(cal.camera.fov_deg),
                 k1=num(cal.camera.k1), k2=num(cal.camera.k2))
     if not (again.solved and len(again.matches) >= len(solution.matches)):
@@ -232,7 +235,8 @@ def _write_files(job: _Job, image: Image, solution, details, rejects, detector, 
     """Every result file but result.json; returns the result object."""
     folder = job.folder
     truth_xy = _truth_xy(folder / job.meta["input"])
-    write_annotated(folder / "annotated.png", image.data, solution, details.detections, rejects, truth_xy)
+    shown = details.detections if solution.detections is None else solution.detections  # + guided stars
+    write_annotated(folder / "annotated.png", image.data, solution, shown, rejects, truth_xy)
     result = result_dict(solution, job.times, {**extra, "n_rejected": len(rejects["x"]), "auto": auto,
                                                 "camera_fit": camera_fit, "detection_preset":
                                                 job.options["detection_preset"]})
