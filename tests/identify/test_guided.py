@@ -176,3 +176,18 @@ def test_cli_guided(tmp_path):
     code_plain, plain = _cli("solve", path, "--fov-deg", 15, "--json")
     assert code == code_plain == 0 and guided > 0 and json.loads(plain)["guided_stars"] == 0
     assert len(json.loads(text)["matches"]) == len(json.loads(plain)["matches"]) + guided
+
+
+def test_a_mirror_image_is_measured_through_its_mirrored_camera(realdata_dir):
+    """roof.jpg flipped left to right solves as a mirror image; the guided pass predicts through
+    the mirrored camera and finds as many of astrometry.net's stars (flipped) as on the photo."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+    from detect_realdata import load_image, reference, score
+
+    image = load_image("roof.jpg")
+    width = image.shape[1]
+    solution = startrack.solve_image(np.ascontiguousarray(image[:, ::-1]), guided=True)
+    assert solution.camera.mirrored and solution.guided_stars > 0
+    det = solution.detections
+    assert score((width - 1) - det.x, det.y, reference("roof.jpg")).found >= 29
+    assert np.sqrt(np.mean(solution.residuals_arcsec**2)) < 40.0  # arcsec; the unflipped fit's is 26
