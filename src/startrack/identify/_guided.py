@@ -55,6 +55,10 @@ DEFAULT_FALSE_ALARMS = 0.1
 MAG_MARGIN = 1.0
 """Stars are tested down to the faintest matched star's V magnitude plus this."""
 
+CONE_MARGIN = 1.05
+"""Stars are predicted within this times half the frame's diagonal field of view of the boresight
+(no farther: a fitted lens polynomial can fold stars far outside the frame back into it)."""
+
 SEARCH_SIGMAS = 3.0
 SEARCH_PX_RANGE = (1.0, 3.0)
 """Search radius about a prediction: 3 times the fit's rms residual, within 1-3 px."""
@@ -115,6 +119,12 @@ class GuidedStars:
 
     def __len__(self) -> int:
         return len(self.detections)
+
+    def take(self, index) -> GuidedStars:
+        """A subset (or reordering) of the stars, by index array or boolean mask."""
+        return replace(self, detections=self.detections.take(index), catalog_rows=self.catalog_rows[index],
+                       predicted_x=self.predicted_x[index], predicted_y=self.predicted_y[index],
+                       significance=self.significance[index])
 
 
 def guided_stars(image: NDArray, solution: AttitudeSolution, detections: Detections | None = None, *,
@@ -198,7 +208,7 @@ def _checked(image: NDArray, solution: AttitudeSolution, detections: Detections 
 
 def _rms_residual_px(solution: AttitudeSolution, camera: Camera) -> float:
     """The fit's rms residual in pixels (its residuals are arcsec)."""
-    rms_rad = math.radians(float(np.sqrt(np.mean(np.square(solution.residuals_arcsec)))) / 3600.0)
+    rms_rad = float(np.sqrt(np.mean(np.square(solution.residuals_arcsec)))) * ARCSEC
     return rms_rad * math.sqrt(camera.fx * camera.fy)
 
 
@@ -213,14 +223,15 @@ def _predicted(solution: AttitudeSolution, camera: Camera) -> tuple[NDArray[np.i
     epoch = solution.epoch_jyear if math.isfinite(solution.epoch_jyear) else DEFAULT_EPOCH_JYEAR
     stars = field_stars(float(np.nanmax(matched_mag)) + MAG_MARGIN, epoch)
     matrix = require(solution.rot_cam_from_icrs, "the solution's attitude").as_matrix()
-    near = np.sort(stars.near(matrix[2], 0.525 * math.radians(camera.fov_diagonal_deg)))  # brightest first
+    cone_rad = CONE_MARGIN * math.radians(camera.fov_diagonal_deg) / 2.0
+    near = np.sort(stars.near(matrix[2], cone_rad))  # brightest first
     px, py = camera.vector_to_pixel(stars.vectors[near] @ matrix.T)
     inside = np.flatnonzero(np.isfinite(px) & np.isfinite(py) & camera.in_image(px, py, margin_px=1.0))
     return stars.rows[near[inside]], px[inside], py[inside]
 
 
 def _to_test(solution: AttitudeSolution, rows: NDArray, px: NDArray, py: NDArray,
-                   found: Detections) -> NDArray[np.bool_]:
+             found: Detections) -> NDArray[np.bool_]:
     """Shape (K,): which predicted stars to test: not matched, and no detection within
     :data:`DETECTED_PX`."""
     catalog_hip = load_catalog().hip
@@ -297,18 +308,20 @@ def with_guided_stars(solution: AttitudeSolution, guided: GuidedStars, detection
         The detections ``solution.matches.det_index`` indexes (default ``solution.detections``).
     """
     found = require(solution.detections if detections is None else detections, "the solution's detections")
+    camera = require(solution.camera, "the solution's camera")
+    extra = pixel_vectors(camera, guided.detections.x, guided.detections.y)
+    guided = guided.take(np.isfinite(extra).all(axis=1))  # where a fitted wide lens cannot be inverted: left out
     if len(guided) == 0:
         return replace(solution, detections=found)
-    camera = require(solution.camera, "the solution's camera")
     epoch = solution.epoch_jyear if math.isfinite(solution.epoch_jyear) else DEFAULT_EPOCH_JYEAR
     catalog = load_catalog()
     det = _appended(found, guided)
     index = np.concatenate([solution.matches.det_index, len(found) + np.arange(len(guided))])
     reference = np.concatenate([solution.matches.cat_vectors, catalog.take(guided.catalog_rows).vectors(epoch)])
     observed = pixel_vectors(camera, det.x[index], det.y[index])
-    usable = np.isfinite(observed).all(axis=1)
-    index, reference, observed = index[usable], reference[usable], observed[usable]
+    usable = np.isfinite(observed).all(axis=1)  # all of a solve's; the guided ones are checked above
     hip = np.concatenate([solution.matches.hip, catalog.hip[guided.catalog_rows]])[usable]
+    index, reference, observed = index[usable], reference[usable], observed[usable]
     quat, _, residual_rad, covariance, (ra, dec, roll) = solution_terms(observed, reference, 1.0)
     sigma_rad = max(math.sqrt(float(np.mean(residual_rad**2))), MIN_SIGMA_PX / math.sqrt(camera.fx * camera.fy))
     covariance = covariance * sigma_rad**2  # the QUEST covariance is sigma^2 times that of sigma = 1
