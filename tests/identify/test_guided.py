@@ -17,13 +17,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.ndimage import maximum_filter
 
 import startrack
 from startrack.cli import main
 from startrack.detect import StarDetector
 from startrack.errors import InvalidInputError
 from startrack.identify import GuidedStars, guided_stars, with_guided_stars
-from startrack.identify._guided import _threshold
+from startrack.identify._guided import _disk_maximum, _threshold
 from startrack.io import write_fits
 from startrack.simulate import get_sensor_preset, random_attitude, simulate_frame
 from startrack.units import ARCSEC, PIXEL
@@ -111,6 +112,18 @@ def test_nothing_to_test_on_a_noise_free_frame():
     guided = guided_stars(sim.image, solution)
     assert isinstance(guided, GuidedStars) and len(guided) == 0
     assert with_guided_stars(solution, guided).guided_stars == 0
+
+
+@pytest.mark.parametrize("radius_px", [1.0, 1.06, 1.5, 1.94, 2.5, 3.0])
+def test_disk_maximum_is_scipys_with_a_disk_footprint(radius_px):
+    values = np.random.default_rng(0).normal(size=(97, 131)).astype(np.float32)
+    values[3, 5] = values[0, 0] = np.nan
+    r = int(radius_px)
+    offsets = np.arange(-r, r + 1)
+    disk = offsets[:, None] ** 2 + offsets[None, :] ** 2 <= radius_px**2
+    expected = maximum_filter(np.where(np.isnan(values), -np.inf, values), footprint=disk, mode="constant",
+                              cval=-np.inf)
+    np.testing.assert_array_equal(_disk_maximum(values, radius_px), expected)
 
 
 def test_threshold_is_an_order_statistic_or_refuses():

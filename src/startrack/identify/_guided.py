@@ -33,7 +33,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.ndimage import maximum_filter
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
@@ -243,12 +242,31 @@ def _to_test(solution: AttitudeSolution, rows: NDArray, px: NDArray, py: NDArray
 
 
 def _disk_maximum(snr: NDArray, radius_px: float) -> NDArray[np.float32]:
-    """Shape (H, W): the largest value of ``snr`` within ``radius_px`` of each pixel (NaN as -inf)."""
-    r = int(math.floor(radius_px))
-    offsets = np.arange(-r, r + 1)
-    disk = offsets[:, None] ** 2 + offsets[None, :] ** 2 <= radius_px**2
+    """Shape (H, W): the largest value of ``snr`` within ``radius_px`` of each pixel (NaN as -inf).
+
+    The disk of offsets (dx, dy) with dx^2 + dy^2 <= r^2 is the union, over k = 0 .. floor(r), of
+    the rectangles |dy| <= k, |dx| <= floor(sqrt(r^2 - k^2)); each rectangle's maximum is two
+    one-dimensional running maxima (:func:`_running_max`), much cheaper than the disk footprint's."""
     values = np.where(np.isnan(snr), -np.inf, snr).astype(np.float32)
-    return maximum_filter(values, footprint=disk, mode="constant", cval=-np.inf)
+    out = np.full_like(values, -np.inf)
+    for k in range(int(math.floor(radius_px)) + 1):
+        half_x = int(math.floor(math.sqrt(radius_px**2 - k**2)))
+        np.maximum(out, _running_max(_running_max(values, k, axis=0), half_x, axis=1), out=out)
+    return out
+
+
+def _running_max(values: NDArray, half: int, axis: int) -> NDArray:
+    """The largest of each value and its ``half`` neighbours on either side along ``axis`` (-inf
+    beyond the edges), by shifted maxima: a few whole-array passes for the 1-3 px of a search
+    radius, where scipy's running maximum walks the columns one by one."""
+    out = values.copy()
+    for shift in range(1, half + 1):
+        ahead = [slice(None)] * values.ndim
+        behind = [slice(None)] * values.ndim
+        ahead[axis], behind[axis] = slice(shift, None), slice(None, -shift)
+        np.maximum(out[tuple(ahead)], values[tuple(behind)], out=out[tuple(ahead)])
+        np.maximum(out[tuple(behind)], values[tuple(ahead)], out=out[tuple(behind)])
+    return out
 
 
 def _sky_values(peak: NDArray, x: NDArray, y: NDArray) -> NDArray[np.float32]:
@@ -257,8 +275,10 @@ def _sky_values(peak: NDArray, x: NDArray, y: NDArray) -> NDArray[np.float32]:
     h, w = peak.shape
     occupied = np.zeros((h, w), dtype=bool)
     inside = (x > -0.5) & (y > -0.5) & (x < w - 0.5) & (y < h - 0.5)
-    occupied[np.rint(y[inside]).astype(np.int64), np.rint(x[inside]).astype(np.int64)] = True
-    occupied = maximum_filter(occupied, size=2 * int(SKY_CLEARANCE_PX) + 1, mode="constant", cval=False)
+    clear = int(SKY_CLEARANCE_PX)
+    for i, j in zip(np.rint(y[inside]).astype(np.int64).tolist(), np.rint(x[inside]).astype(np.int64).tolist(),
+                    strict=True):  # a few hundred squares: cheaper than filtering the whole frame
+        occupied[max(i - clear, 0): i + clear + 1, max(j - clear, 0): j + clear + 1] = True
     step = max(1, math.ceil(math.sqrt(h * w / MAX_SKY_SAMPLES)))
     values = peak[::step, ::step][~occupied[::step, ::step]]
     return values[np.isfinite(values)]
