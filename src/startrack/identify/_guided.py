@@ -21,8 +21,9 @@ are then centroided in a window about the prediction (:meth:`StarDetector.measur
 kept when the centroid lies within the search radius of it.
 
 The stars tested are the catalog stars inside the frame down to the faintest matched star's V
-plus :data:`MAG_MARGIN`, not already matched nor within :data:`DETECTED_PX` of a detection (a
-star the detector found, or a blend with one).
+plus :data:`MAG_MARGIN` (and no fainter than the pattern database's catalog, V 9.5 by default),
+not already matched nor within :data:`DETECTED_PX` of a detection (a star the detector found, or
+a blend with one).
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from ..catalog import load_catalog
 from ..errors import InvalidInputError, check_instance, is_real_number, require
 from ..results import AttitudeSolution, Detections, StarMatches
 from ..units import ARCSEC
+from ._database import DatabaseSettings
 from ._field_stars import field_stars
 from ._image_epoch import DEFAULT_EPOCH_JYEAR
 from ._refine import pixel_vectors, solution_terms
@@ -220,10 +222,11 @@ def _predicted(solution: AttitudeSolution, camera: Camera) -> tuple[NDArray[np.i
     if not np.isfinite(matched_mag).any():
         return np.zeros(0, np.int64), np.zeros(0), np.zeros(0)
     epoch = solution.epoch_jyear if math.isfinite(solution.epoch_jyear) else DEFAULT_EPOCH_JYEAR
-    stars = field_stars(float(np.nanmax(matched_mag)) + MAG_MARGIN, epoch)
+    stars = field_stars(DatabaseSettings().max_mag, epoch)  # the solver's own set (loaded, cached once)
     matrix = require(solution.rot_cam_from_icrs, "the solution's attitude").as_matrix()
     cone_rad = CONE_MARGIN * math.radians(camera.fov_diagonal_deg) / 2.0
     near = np.sort(stars.near(matrix[2], cone_rad))  # brightest first
+    near = near[catalog.v_mag[stars.rows[near]] <= float(np.nanmax(matched_mag)) + MAG_MARGIN]
     px, py = camera.vector_to_pixel(stars.vectors[near] @ matrix.T)
     inside = np.flatnonzero(np.isfinite(px) & np.isfinite(py) & camera.in_image(px, py, margin_px=1.0))
     return stars.rows[near[inside]], px[inside], py[inside]
