@@ -31,6 +31,26 @@ HERE = Path(__file__).resolve().parent
 STARTRACK = Path(sys.executable).with_name("startrack")
 
 
+COMMANDS = (
+    ("a header claiming 100,000 x 100,000 px", "solve claims.fits"),
+    ("a 1.5 MB gzip FITS of a 20,000 x 20,000 float64 image", "solve bomb.fits.gz"),
+    ("a sparse 3 GiB file", "solve sparse.bin"),
+    ("pixel values near 1e300", "solve huge_values.fits"),
+    ("the output over the input", "solve frame.fits --wcs frame.fits"),
+    ("a track output over an input frame", "track seq --fov-deg 15 --out seq/frame_00000.fits"),
+    ("a billion-pixel simulation", "simulate --width 1000000000 --out big.fits"),
+    ("a 1e6 px PSF", "simulate --psf-sigma-px 1e6 --out wide.fits"),
+    ("a star-list field of 200,000 characters", "solve-stars long_field.csv --width 512 --height 512"),
+    ("a time that is not a time", "solve frame.fits --time garbage"),
+    ("a NaN magnitude limit", "availability --fov-deg 15 --max-mag nan"),
+    ("an infinite frame interval", "track seq --fov-deg 15 --frame-interval-s inf"),
+    ("a negative field of view", "solve frame.fits --fov-deg -5"),
+    ("a pixel limit the image exceeds", "solve frame.fits --max-pixels 1000"),
+)
+"""(case, the command's arguments) of the cases that only run the command, in the folder of
+:func:`cli_cases`'s inputs."""
+
+
 def _fits_header_only(width: int, height: int, bitpix: int) -> bytes:
     cards = [f"SIMPLE  = {'T':>20}", f"BITPIX  = {bitpix:>20}", f"NAXIS   = {2:>20}",
              f"NAXIS1  = {width:>20}", f"NAXIS2  = {height:>20}", "END"]
@@ -99,34 +119,10 @@ def cli_cases(tmp: Path) -> list[tuple[str, str, tuple[str, str]]]:
     for k in range(2):
         (seq / f"frame_0000{k}.fits").write_bytes(frame.read_bytes())
     (seq / "frame_00002.fits").write_bytes(b"garbage")
-    return [
-        ("a header claiming 100,000 x 100,000 px", "solve claims.fits", _cli(tmp, "solve", "claims.fits")),
-        ("a 1.5 MB gzip FITS of a 20,000 x 20,000 float64 image", "solve bomb.fits.gz",
-         _cli(tmp, "solve", "bomb.fits.gz")),
-        ("a sparse 3 GiB file", "solve sparse.bin", _cli(tmp, "solve", "sparse.bin")),
-        ("pixel values near 1e300", "solve huge_values.fits", _cli(tmp, "solve", "huge_values.fits")),
-        ("the output over the input", "solve frame.fits --wcs frame.fits",
-         _cli(tmp, "solve", "frame.fits", "--wcs", "frame.fits")),
-        ("a track output over an input frame", "track seq --fov-deg 15 --out seq/frame_00000.fits",
-         _cli(tmp, "track", "seq", "--fov-deg", "15", "--out", "seq/frame_00000.fits")),
+    plain = [(case, command, _cli(tmp, *command.split())) for case, command in COMMANDS]
+    return plain + [
         ("a garbage frame in a sequence", "track seq --fov-deg 15 --out track.csv", _track_past_garbage(tmp)),
         ("a FIFO as the output (a reader on it)", "solve frame.fits --wcs pipe", _through_fifo(tmp)),
-        ("a billion-pixel simulation", "simulate --width 1000000000 --out big.fits",
-         _cli(tmp, "simulate", "--width", "1000000000", "--out", "big.fits")),
-        ("a 1e6 px PSF", "simulate --psf-sigma-px 1e6 --out wide.fits",
-         _cli(tmp, "simulate", "--psf-sigma-px", "1e6", "--out", "wide.fits")),
-        ("a star-list field of 200,000 characters", "solve-stars long_field.csv --width 512 --height 512",
-         _cli(tmp, "solve-stars", "long_field.csv", "--width", "512", "--height", "512")),
-        ("a time that is not a time", "solve frame.fits --time garbage",
-         _cli(tmp, "solve", "frame.fits", "--time", "garbage")),
-        ("a NaN magnitude limit", "availability --fov-deg 15 --max-mag nan",
-         _cli(tmp, "availability", "--fov-deg", "15", "--max-mag", "nan")),
-        ("an infinite frame interval", "track seq --fov-deg 15 --frame-interval-s inf",
-         _cli(tmp, "track", "seq", "--fov-deg", "15", "--frame-interval-s", "inf")),
-        ("a negative field of view", "solve frame.fits --fov-deg -5",
-         _cli(tmp, "solve", "frame.fits", "--fov-deg", "-5")),
-        ("a pixel limit the image exceeds", "solve frame.fits --max-pixels 1000",
-         _cli(tmp, "solve", "frame.fits", "--max-pixels", "1000")),
     ]
 
 
