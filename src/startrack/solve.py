@@ -242,8 +242,9 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
     Returns
     -------
     AttitudeSolution
-        With ``detections`` (the stars found, brightest first; ``matches.det_index`` indexes
-        them). A smeared frame (its brightest spots elongated, :mod:`startrack._smeared_image`'s
+        With ``detections`` (the stars found, brightest first, then the ``guided_stars`` measured
+        where the solution predicts them; ``matches.det_index`` indexes them). A smeared frame
+        (its brightest spots elongated, :mod:`startrack._smeared_image`'s
         ``SMEARED_ELONGATION``; or a failed point solve of somewhat elongated spots) is solved from
         its streaks without being asked: the result is then a
         :class:`startrack.rate._streak_solve.StreakSolution` (``mode`` "streak", the attitude at
