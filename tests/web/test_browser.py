@@ -96,6 +96,18 @@ def test_upload_a_real_image_watch_it_solve_and_download_its_wcs(page, real_imag
     assert error < 2 * float(row["pixscale_arcsec"]) * ARCSEC
 
 
+def test_the_guided_checkbox_measures_the_predicted_stars(page, real_images):
+    """roof.jpg with "measure the fainter catalog stars where the solution predicts them" ticked:
+    the result says how many of its matches were measured so (3: docs/identification.md)."""
+    page.goto("/")
+    page.set_input_files("#file-input", str(real_images["roof.jpg"]))
+    page.check("#upload-form input[name=guided]")
+    page.click("#upload-button")
+    page.wait_for_url(JOB_URL)
+    page.wait_for_selector("#job-state.state-done")
+    assert re.search(r"; \d+ of them measured where the solution predicts them", page.inner_text("#guided"))
+
+
 def test_run_an_analysis_over_two_images(page, real_images):
     page.goto("/")
     page.set_input_files("#file-input", [str(real_images["roof.jpg"]), str(real_images["tree.jpg"])])
