@@ -97,6 +97,25 @@ def test_refit_keeps_the_matches_consistent_and_the_attitude(frames):
     assert np.all(np.linalg.eigvalsh(refit.covariance_rad2) > 0)
 
 
+def _boresight_error(truth, rotation) -> float:
+    """Angle (rad) between the true and the solved boresight."""
+    b_true, b_solved = truth.inv().apply([0.0, 0.0, 1.0]), rotation.inv().apply([0.0, 0.0, 1.0])
+    return float(np.arctan2(np.linalg.norm(np.cross(b_true, b_solved)), b_true @ b_solved))
+
+
+def test_the_weighted_refit_brings_the_boresight_closer(frames):
+    """Over the eight frames, the refit on the matched and the guided stars (each weighted by its
+    centroid's sigma, at least the solve's own scatter) puts the boresight closer to the truth:
+    measured 0.73 -> 0.64 arcsec rms (equal weights gave 0.68)."""
+    blind, guided = [], []
+    for sim, solution in frames:
+        refit = with_guided_stars(solution, guided_stars(sim.image, solution, detector=STRICT))
+        blind.append(_boresight_error(sim.truth.rot_cam_from_icrs, solution.rot_cam_from_icrs))
+        guided.append(_boresight_error(sim.truth.rot_cam_from_icrs, refit.rot_cam_from_icrs))
+    assert np.sqrt(np.mean(np.square(guided))) < np.sqrt(np.mean(np.square(blind)))
+    assert np.sqrt(np.mean(np.square(guided))) < 1.0 * ARCSEC
+
+
 def test_solve_image_guided(frames):
     sim, solution = frames[1]
     guided = startrack.solve_image(sim.image, detector=STRICT, fov_deg=15.0, guided=True)

@@ -37,15 +37,17 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
+from ..attitude import solve_wahba
 from ..camera import Camera
 from ..catalog import load_catalog
 from ..errors import InvalidInputError, check_instance, is_real_number, require
+from ..frames import angle_between, radec_roll_from_rotation
 from ..results import AttitudeSolution, Detections, StarMatches
 from ..units import ARCSEC
 from ._database import DatabaseSettings
 from ._field_stars import field_stars
 from ._image_epoch import DEFAULT_EPOCH_JYEAR
-from ._refine import pixel_vectors, solution_terms
+from ._refine import pixel_vectors
 
 if TYPE_CHECKING:
     from ..detect import WindowDetections
@@ -76,8 +78,8 @@ MAX_SKY_SAMPLES = 1_000_000
 WINDOW_MARGIN_PX = 2
 """The centroid window reaches this far past the search radius."""
 
-MIN_SIGMA_PX = 0.05
-"""Floor of the per-star direction error of the covariance (px), as the lost-in-space solution's."""
+MIN_SIGMA_PX = 0.01
+"""Floor of a star's centroid error in the weighted refit (px)."""
 
 WINDOW_SIGMA = 1.5
 """Detection threshold inside the centroid windows (noise units of the window's ring)."""
@@ -318,8 +320,8 @@ def with_guided_stars(solution: AttitudeSolution, guided: GuidedStars, detection
 
     The guided stars become the last ``len(guided)`` rows of the solution's ``detections``
     (``point_quality`` NaN: not measured) and of its ``matches``; the attitude is the Wahba
-    optimum of all of them on the solution's camera, with the QUEST covariance at their rms
-    residual (as :func:`startrack.solve_stars`'s); ``guided_stars`` counts them.
+    optimum of all of them on the solution's camera, each star weighted by its centroid's
+    ``sigma_px`` (:func:`_weighted_fit`), with the QUEST covariance; ``guided_stars`` counts them.
 
     Parameters
     ----------
@@ -345,14 +347,39 @@ def with_guided_stars(solution: AttitudeSolution, guided: GuidedStars, detection
     usable = np.isfinite(observed).all(axis=1)  # all of a solve's; the guided ones are checked above
     hip = np.concatenate([solution.matches.hip, catalog.hip[guided.catalog_rows]])[usable]
     index, reference, observed = index[usable], reference[usable], observed[usable]
-    quat, _, residual_rad, covariance, (ra, dec, roll) = solution_terms(observed, reference, 1.0)
-    sigma_rad = max(math.sqrt(float(np.mean(residual_rad**2))), MIN_SIGMA_PX / math.sqrt(camera.fx * camera.fy))
-    covariance = covariance * sigma_rad**2  # the QUEST covariance is sigma^2 times that of sigma = 1
+    floor_px = _rms_residual_px(solution, camera)
+    rotation, covariance, residual_rad = _weighted_fit(observed, reference,
+                                                       _sigma_rad(det.sigma_px[index], camera, floor_px))
+    ra, dec, roll = radec_roll_from_rotation(rotation)
     matches = StarMatches(status=solution.matches.status, det_index=index.astype(np.int64), hip=hip.astype(np.int64),
                           cat_vectors=reference, false_match_prob=solution.matches.false_match_prob)
-    return replace(solution, rot_cam_from_icrs=Rotation.from_quat(quat), covariance_rad2=covariance,
+    return replace(solution, rot_cam_from_icrs=rotation, covariance_rad2=covariance,
                    ra_deg=math.degrees(ra), dec_deg=math.degrees(dec), roll_deg=math.degrees(roll), matches=matches,
                    residuals_arcsec=residual_rad / ARCSEC, detections=det, guided_stars=len(guided))
+
+
+def _sigma_rad(sigma_px: NDArray, camera: Camera, floor_px: float) -> NDArray[np.float64]:
+    """Each star's direction error (rad): its centroid's ``sigma_px``, but at least ``floor_px``
+    (the solve's own rms residual: what its stars scatter by, whatever their centroids claim) and
+    :data:`MIN_SIGMA_PX`; a centroider's unknown sigma counts as the floor."""
+    sigma = np.nan_to_num(np.asarray(sigma_px, dtype=np.float64), nan=0.0, posinf=0.0)
+    return np.maximum(sigma, max(floor_px, MIN_SIGMA_PX)) / math.sqrt(camera.fx * camera.fy)
+
+
+def _weighted_fit(observed: NDArray, reference: NDArray, sigma_rad: NDArray
+                  ) -> tuple[Rotation, NDArray[np.float64], NDArray[np.float64]]:
+    """The Wahba optimum with weights 1 / sigma^2 (q-method) and its QUEST covariance, scaled by
+    the fit's Birge ratio when its residuals exceed the sigmas (chi-square over 2N - 3 degrees of
+    freedom: two per direction, three for the attitude), and the residuals (rad).
+
+    Faint stars centroid several times worse than bright ones: weighted equally, as the
+    lost-in-space fit weights its (brighter) matches, the guided stars made the attitude worse
+    on simulated frames (``tests/identify/test_guided.py``)."""
+    result = solve_wahba(observed, reference, sigma_rad=sigma_rad, method="qmethod")
+    rotation = require(result.rotation, "the fit of a solved frame's stars")
+    residual_rad = angle_between(rotation.apply(reference), observed)
+    birge = float(np.sum((residual_rad / sigma_rad) ** 2)) / max(2 * len(observed) - 3, 1)
+    return rotation, require(result.covariance_rad2, "the fit's covariance") * max(birge, 1.0), residual_rad
 
 
 def _appended(found: Detections, guided: GuidedStars) -> Detections:
