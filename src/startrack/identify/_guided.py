@@ -374,7 +374,7 @@ def _weighted_fit(observed: NDArray, reference: NDArray, sigma_rad: NDArray
 
     Faint stars centroid several times worse than bright ones: weighted equally, as the
     lost-in-space fit weights its (brighter) matches, the guided stars made the attitude worse
-    on simulated frames (``tests/identify/test_guided.py``)."""
+    on simulated frames (``docs/identification.md``)."""
     result = solve_wahba(observed, reference, sigma_rad=sigma_rad, method="qmethod")
     rotation = require(result.rotation, "the fit of a solved frame's stars")
     residual_rad = angle_between(rotation.apply(reference), observed)
