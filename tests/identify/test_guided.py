@@ -58,13 +58,14 @@ def test_guided_pass_finds_the_stars_the_strict_detector_left(frames):
         truth, det = sim.truth, solution.detections
         guided = guided_stars(sim.image, solution, detector=STRICT)
         inside = CAMERA.in_image(truth.x, truth.y, margin_px=1.0)
-        left = inside & (np.hypot(truth.x[:, None] - det.x[None], truth.y[:, None] - det.y[None]).min(axis=1) > 3)
+        nearest_detection = np.hypot(truth.x[:, None] - det.x[None], truth.y[:, None] - det.y[None]).min(axis=1)
+        left = inside & (nearest_detection > 3 * PIXEL)
         gx, gy = guided.detections.x, guided.detections.y
-        hit = np.hypot(truth.x[left, None] - gx[None], truth.y[left, None] - gy[None]).min(axis=1) < 1.0 \
+        hit = np.hypot(truth.x[left, None] - gx[None], truth.y[left, None] - gy[None]).min(axis=1) < PIXEL \
             if gx.size else np.zeros(int(left.sum()), bool)
         missing, found = missing + int(left.sum()), found + int(hit.sum())
         d = _nearest_truth_px(truth, gx, gy)
-        errors.extend(d[d < 1.0])
+        errors.extend(d[d < PIXEL])
     assert missing > 50  # the strict detector leaves enough to test
     assert found >= 0.9 * missing
     assert np.sqrt(np.mean(np.square(errors))) < 0.15 * PIXEL  # as good as the detector's own centroids
@@ -77,7 +78,7 @@ def test_wrong_acceptances_stay_near_the_level(frames):
     wrong = 0
     for sim, solution in frames:
         guided = guided_stars(sim.image, solution, detector=STRICT)
-        wrong += int(np.sum(_nearest_truth_px(sim.truth, guided.detections.x, guided.detections.y) > 1.0))
+        wrong += int(np.sum(_nearest_truth_px(sim.truth, guided.detections.x, guided.detections.y) > PIXEL))
     assert wrong <= 3
 
 
@@ -222,4 +223,4 @@ def test_a_mirror_image_is_measured_through_its_mirrored_camera(realdata_dir):
     assert solution.camera.mirrored and solution.guided_stars > 0
     det = solution.detections
     assert score((width - 1) - det.x, det.y, reference("roof.jpg")).found >= 29
-    assert np.sqrt(np.mean(solution.residuals_arcsec**2)) < 40.0  # arcsec; the unflipped fit's is 26
+    assert np.sqrt(np.mean(solution.residuals_arcsec**2)) * ARCSEC < 40 * ARCSEC  # the unflipped fit's: 26"
