@@ -61,9 +61,8 @@ def image_smear_px(data: NDArray) -> float:
 
     A smear found that way is measured again at full resolution (:func:`full_resolution_length_px`)
     and the smaller taken: on a dense or small frame the candidates' bins merge most neighbouring
-    stars (a still 512 x 512 px frame of 180 stars at 15 deg measured 28.5 px, and its 2.4 px
-    smeared twin 16.4 px; at full resolution 1.6 and 2.4 px), so the Tracker tried a streak solve
-    of the first frame of such a sequence (1.4 s) before the point solve that found it."""
+    stars, and a still frame then seemed smeared, sending the Tracker's first frame to a streak
+    solve before the point solve that found it (``tests/rate/test_rate_image_smear.py``)."""
     from ._streak_find import find_streak_candidates
 
     found = find_streak_candidates(data)

@@ -53,8 +53,9 @@ def write_annotated(path: Path, image: NDArray, solution: AttitudeSolution, dete
     ax = fig.add_axes((0.7 / (w_in + 0.9), 0.5 / (h_in + 0.8), w_in / (w_in + 0.9), h_in / (h_in + 0.8)))
     ax.imshow(display_stretch(image), cmap="gray", origin="upper", extent=(-0.5, width - 0.5, height - 0.5, -0.5),
               interpolation="nearest" if long_side <= DPI * LONG_SIDE_IN else "antialiased")
-    ax.scatter(detections.x, detections.y, s=70, facecolors="none", edgecolors="0.7", linewidths=0.7,
-               label=f"kept ({len(detections)})")
+    kept = len(detections) - solution.guided_stars  # the guided stars, last, were not detected
+    ax.scatter(detections.x[:kept], detections.y[:kept], s=70, facecolors="none", edgecolors="0.7", linewidths=0.7,
+               label=f"kept ({kept})")
     _draw_rejects(ax, rejects)
     if truth_xy is not None:
         ax.scatter(*truth_xy, s=30, marker="+", color="red", linewidths=0.8, label="truth")
