@@ -37,11 +37,11 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
-from ..attitude import solve_wahba
+from ..attitude import angle_residuals, solve_wahba
 from ..camera import Camera
 from ..catalog import load_catalog
 from ..errors import InvalidInputError, check_instance, is_real_number, require
-from ..frames import angle_between, radec_roll_from_rotation
+from ..frames import radec_roll_from_rotation
 from ..results import AttitudeSolution, Detections, StarMatches
 from ..units import ARCSEC
 from ._database import DatabaseSettings
@@ -164,11 +164,12 @@ def guided_stars(image: NDArray, solution: AttitudeSolution, detections: Detecti
     snr = _significance(image, detector)
     if snr is None:
         return GuidedStars()
-    rows, px, py = _predicted(solution, camera)
+    matched = np.searchsorted(load_catalog().hip, solution.matches.hip)  # catalog rows (it is sorted by HIP)
+    rows, px, py = _predicted(solution, camera, matched)
     search = float(np.clip(SEARCH_SIGMAS * _rms_residual_px(solution, camera), *SEARCH_PX_RANGE))
     peak = _disk_maximum(snr, search)
     sky = _sky_values(peak, np.concatenate([px, found.x]), np.concatenate([py, found.y]))
-    test = _to_test(solution, rows, px, py, found)
+    test = _to_test(rows, px, py, matched, found)
     tested = int(test.sum())
     threshold = _threshold(sky, false_alarms, tested) if tested else math.inf
     stat = peak[np.rint(py).astype(np.int64), np.rint(px).astype(np.int64)].astype(np.float64)
@@ -211,16 +212,16 @@ def _checked(image: NDArray, solution: AttitudeSolution, detections: Detections 
 
 def _rms_residual_px(solution: AttitudeSolution, camera: Camera) -> float:
     """The fit's rms residual in pixels (its residuals are arcsec)."""
-    rms_rad = float(np.sqrt(np.mean(np.square(solution.residuals_arcsec)))) * ARCSEC
-    return rms_rad * math.sqrt(camera.fx * camera.fy)
+    return float(np.sqrt(np.mean(np.square(solution.residuals_arcsec)))) / camera.pixel_scale_arcsec
 
 
-def _predicted(solution: AttitudeSolution, camera: Camera) -> tuple[NDArray[np.int64], NDArray, NDArray]:
+def _predicted(solution: AttitudeSolution, camera: Camera, matched: NDArray[np.int64]
+               ) -> tuple[NDArray[np.int64], NDArray, NDArray]:
     """Catalog rows (brightest first) and pixel positions (x, y) of the stars down to the
-    faintest matched star's V plus :data:`MAG_MARGIN` that the solution puts inside the frame,
-    at least a pixel from its edge."""
+    faintest matched star's (``matched``: catalog rows) V plus :data:`MAG_MARGIN` that the
+    solution puts inside the frame, at least a pixel from its edge."""
     catalog = load_catalog()
-    matched_mag = catalog.v_mag[np.isin(catalog.hip, solution.matches.hip)]
+    matched_mag = catalog.v_mag[matched]
     if not np.isfinite(matched_mag).any():
         return np.zeros(0, np.int64), np.zeros(0), np.zeros(0)
     epoch = solution.epoch_jyear if math.isfinite(solution.epoch_jyear) else DEFAULT_EPOCH_JYEAR
@@ -234,12 +235,10 @@ def _predicted(solution: AttitudeSolution, camera: Camera) -> tuple[NDArray[np.i
     return stars.rows[near[inside]], px[inside], py[inside]
 
 
-def _to_test(solution: AttitudeSolution, rows: NDArray, px: NDArray, py: NDArray,
-             found: Detections) -> NDArray[np.bool_]:
-    """Shape (K,): which predicted stars to test: not matched, and no detection within
-    :data:`DETECTED_PX`."""
-    catalog_hip = load_catalog().hip
-    test = ~np.isin(catalog_hip[rows], solution.matches.hip)
+def _to_test(rows: NDArray, px: NDArray, py: NDArray, matched: NDArray, found: Detections) -> NDArray[np.bool_]:
+    """Shape (K,): which predicted stars (catalog ``rows`` at px, py) to test: not among the
+    ``matched`` rows, and no detection within :data:`DETECTED_PX`."""
+    test = ~np.isin(rows, matched)
     if len(found) and rows.size:
         distance, _ = cKDTree(np.column_stack([found.x, found.y])).query(np.column_stack([px, py]))
         test &= distance > DETECTED_PX
@@ -377,7 +376,7 @@ def _weighted_fit(observed: NDArray, reference: NDArray, sigma_rad: NDArray
     on simulated frames (``docs/identification.md``)."""
     result = solve_wahba(observed, reference, sigma_rad=sigma_rad, method="qmethod")
     rotation = require(result.rotation, "the fit of a solved frame's stars")
-    residual_rad = angle_between(rotation.apply(reference), observed)
+    residual_rad = angle_residuals(rotation, observed, reference)
     birge = float(np.sum((residual_rad / sigma_rad) ** 2)) / max(2 * len(observed) - 3, 1)
     return rotation, require(result.covariance_rad2, "the fit's covariance") * max(birge, 1.0), residual_rad
 
