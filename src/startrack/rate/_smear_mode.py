@@ -59,10 +59,13 @@ def image_smear_px(data: NDArray) -> float:
     brightest stars' wide wings measure longer, never shorter), the point-star length
     (:data:`POINT_MOMENT_BINS`) taken out in quadrature. 0 when the frame has no candidate.
 
-    A smear found that way is measured again at full resolution (:func:`full_resolution_length_px`)
-    and the smaller taken: on a dense or small frame the candidates' bins merge most neighbouring
-    stars, and a still frame then seemed smeared, sending the Tracker's first frame to a streak
-    solve before the point solve that found it (``tests/rate/test_rate_image_smear.py``)."""
+    A smear found that way is measured again at full resolution (the median length of the
+    brightest spots, :func:`startrack.rate._streak_detect.median_length_px`, as
+    :func:`startrack.rate.choose_mode` measures it) and the smaller taken: on a dense or small
+    frame the candidates' bins merge most neighbouring stars, and a still frame then seemed
+    smeared, sending the Tracker's first frame to a streak solve before the point solve that
+    found it (``tests/rate/test_rate_image_smear.py``)."""
+    from ._streak_detect import median_length_px
     from ._streak_find import find_streak_candidates
 
     found = find_streak_candidates(data)
@@ -70,17 +73,8 @@ def image_smear_px(data: NDArray) -> float:
         return 0.0
     quartile = float(np.percentile(found.length_px[:SMEAR_CANDIDATES], 25))
     binned = math.sqrt(max(quartile**2 - (POINT_MOMENT_BINS * found.bin_px) ** 2, 0.0))
-    return min(binned, full_resolution_length_px(data)) if binned > 0 else 0.0
-
-
-def full_resolution_length_px(data: NDArray) -> float:
-    """The median moment length (px) of the :data:`SMEAR_CANDIDATES` brightest spots of a frame
-    labelled at full resolution (:func:`startrack.rate._streak_detect.find_streaks`, as
-    :func:`startrack.rate.choose_mode`); inf when it finds none (nothing to contradict)."""
-    from ._streak_detect import find_streaks
-
-    regions = find_streaks(np.asarray(data, dtype=float)).regions[:SMEAR_CANDIDATES]
-    return float(np.median([r.length_moments_px for r in regions])) if regions else math.inf
+    full = median_length_px(data, SMEAR_CANDIDATES)  # NaN when nothing is found: nothing to contradict
+    return binned if binned == 0 or np.isnan(full) else min(binned, full)
 
 
 PREDICTION_RATE_UNCERTAINTY = 0.3

@@ -175,6 +175,13 @@ def find_streaks(
     return StreakField(regions, background, noise, labels)
 
 
+def median_length_px(image: ArrayLike, brightest: int = 20) -> float:
+    """The median ``length_moments_px`` of the ``brightest`` spots :func:`find_streaks` labels in
+    ``image`` (H, W), px: a point star's size, or a streak's length; NaN when it finds none."""
+    regions = find_streaks(np.asarray(image, dtype=float)).regions[:brightest]
+    return float(np.median([r.length_moments_px for r in regions])) if regions else float("nan")
+
+
 def line_filtered(image: NDArray[np.float64], length_px: float, sigma_px: float = 1.0,
                   orientations: int | None = None) -> NDArray[np.float64]:
     """Largest response (H, W) of unit-sum blurred-segment kernels over orientations in [0, pi)."""

@@ -44,7 +44,7 @@ from ._from_attitudes import rate_between
 from ._grouping import CentreOfRotation, centre_of_rotation, group_endpoints
 from ._rso import RsoIndicators, rso_indicators
 from ._segment_fit import BAND_PX, fit_segment
-from ._streak_detect import StreakRegion, find_streaks
+from ._streak_detect import StreakRegion, find_streaks, median_length_px
 from ._trust import MAX_RELATIVE_UNCERTAINTY, consensus_tolerance_px, consistency, rate_covariance
 
 MIN_STREAK_FRACTION = 0.10
@@ -437,10 +437,10 @@ def choose_mode(image: ArrayLike, *, min_streak_fraction: float = MIN_STREAK_FRA
                 brightest: int = 20) -> ModeDecision:
     """Point-star or streak processing for an image, from the median length of its brightest blobs."""
     img = np.asarray(image, dtype=float)
-    regions = find_streaks(img).regions[:brightest]
-    if not regions:
+    length_px = median_length_px(img, brightest)
+    if np.isnan(length_px):
         return ModeDecision("point", 0.0, "no stars found")
-    fraction = float(np.median([r.length_moments_px for r in regions])) / img.shape[1]
+    fraction = length_px / img.shape[1]
     if fraction >= min_streak_fraction:
         return ModeDecision("streak", fraction, f"median streak {100 * fraction:.1f} % of the width")
     return ModeDecision("point", fraction,
