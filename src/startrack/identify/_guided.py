@@ -192,7 +192,7 @@ def _significance(image: NDArray, detector) -> NDArray[np.float32] | None:
 
 
 def _checked(image: NDArray, solution: AttitudeSolution, detections: Detections | None,
-             false_alarms: float):
+             false_alarms: float) -> tuple[Detections, Camera]:
     """The detections and the camera of a valid call (:func:`guided_stars`)."""
     check_instance(solution, AttitudeSolution, "solution")
     if not solution.solved or solution.camera is None or solution.rot_cam_from_icrs is None:
