@@ -15,7 +15,6 @@ The inverse (pixel -> vector) is solved by Newton's method to 1e-6 px.
 
 from __future__ import annotations
 
-import copy
 import math
 import numbers
 from dataclasses import dataclass
@@ -169,9 +168,8 @@ class Camera:
     def _updated(self, **fields: float) -> Camera:
         """A copy with some already-checked fields changed (cheaper than ``dataclasses.replace``,
         which re-runs every check; refinement loops call this many times)."""
-        new = copy.copy(self)
-        for key, value in fields.items():
-            object.__setattr__(new, key, value)
+        new = object.__new__(type(self))  # a Camera holds only its fields (no cached values): copy them
+        new.__dict__.update(self.__dict__, **fields)
         return new
 
     # --- derived quantities -----------------------------------------------------------------

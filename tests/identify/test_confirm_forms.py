@@ -23,7 +23,7 @@ def test_bound_from_counts_equals_bound_from_distances(seed):
 def test_attitude_forms_give_one_matrix():
     rot = Rotation.random(random_state=3)
     for given in (rot, rot.as_quat(), rot.as_matrix()):
-        matrix, _ = _attitude(given)
+        matrix = _attitude(given)
         np.testing.assert_allclose(matrix, rot.as_matrix(), atol=1e-14)  # dimensionless matrix entries
     with pytest.raises(ValueError, match="quaternion"):
         _attitude(np.zeros(3))

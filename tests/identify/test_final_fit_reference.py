@@ -137,7 +137,7 @@ def test_settled_fit_equals_the_numpy_path(fov_deg, hint, monkeypatch):
                           epoch=conditions.epoch_jyear, **kwargs)
         assert sol.status is Status.OK
         first = sol.matches.det_index[:8]  # a candidate of eight right stars, at the solution's pose
-        cand = Candidate(sol.rot_cam_from_icrs, sol.camera, first, _rows(sol.matches.hip[:8]), 1e-9)
+        cand = Candidate(sol.rot_cam_from_icrs.as_matrix(), sol.camera, first, _rows(sol.matches.hip[:8]), 1e-9)
         stars = field_stars(9.5, conditions.epoch_jyear)
         focal = (0.97 * sol.camera.fx, 1.03 * sol.camera.fx)
         compiled = final_fit.settle_matches(image.x, image.y, stars, cand, focal)

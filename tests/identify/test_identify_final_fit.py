@@ -64,7 +64,7 @@ def _settled_wrong_candidate(fov_deg, index, img, wrong):
     camera = conditions.camera
     rot, camera, _ = refine_pointing(stars.rot_cam_from_icrs, camera, catalog_stars.vectors_of(rows),
                                      stars.x[img], stars.y[img], fit_focal=True)  # the fit bends to the wrong star
-    cand = Candidate(rot, camera, np.array(img), rows, 1e-8)
+    cand = Candidate(rot.as_matrix(), camera, np.array(img), rows, 1e-8)
     focal_range = (conditions.camera.fx / 1.03, conditions.camera.fx * 1.03)
     fit = final_fit.settle_matches(stars.x, stars.y, catalog_stars, cand, focal_range)
     return stars, fit, load_catalog().hip[fit.catalog_rows]

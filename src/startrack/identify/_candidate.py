@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
@@ -16,13 +17,23 @@ from ..results import Status
 class Candidate:
     """A verified identification: attitude, camera, and the matched image stars with the
     catalog rows (of :func:`startrack.catalog.load_catalog`) they were matched to (the camera is
-    ``mirrored`` for a mirror image of the sky, :mod:`._parity`)."""
+    ``mirrored`` for a mirror image of the sky, :mod:`._parity`).
 
-    rot_cam_from_icrs: Rotation
+    The attitude is kept as the rotation matrix (3, 3) taking ICRS vectors to camera vectors, the
+    type every stage after the matcher works in; :attr:`rot_cam_from_icrs` makes the Rotation
+    only when asked (a solve never asks: building a Rotation from a matrix costs more than most
+    stages of a solve, ``benchmarks/lis_benchmark.py --stages``)."""
+
+    matrix_cam_from_icrs: NDArray[np.float64]
     camera: Camera
     image_index: NDArray[np.int64]
     catalog_rows: NDArray[np.int64]
     false_match_prob: float
+
+    @cached_property
+    def rot_cam_from_icrs(self) -> Rotation:
+        """The attitude as a Rotation (camera from ICRS)."""
+        return Rotation.from_matrix(self.matrix_cam_from_icrs)
 
 
 @dataclass(frozen=True)

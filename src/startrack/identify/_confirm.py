@@ -101,7 +101,7 @@ class Confirmer:
                 n_trials: int, pool_end: int = 0) -> Candidate | None:
         """A verified :class:`Candidate`, or None (see the module docstring). ``rot``: the candidate
         attitude (camera from ICRS), a Rotation, a unit scalar-last quaternion (4,) or a rotation
-        matrix (3, 3); the Rotation of the last two is made only for a verified candidate.
+        matrix (3, 3); the candidate keeps it as a matrix.
         ``pool_end``: one past the faintest star rank the patterns are drawn from; the test covers
         :attr:`verify_stars` stars, more when the pool reaches deeper (half as many again beyond it).
 
@@ -110,7 +110,7 @@ class Confirmer:
         refit and those the refit newly brings in, not the ones it pulled in (a refit with a free
         focal length can pull a wrong candidate's chance loose matches under the tight radius:
         one false match in about 300 wide-field solves before this rule)."""
-        matrix, given = _attitude(rot)
+        matrix = _attitude(rot)
         n = min(len(self.x), max(self.verify_stars, pool_end + self.verify_stars // 2))
         xs, ys = self.x[:n], self.y[:n]
         reach_px = LOOSE_RADIUS_FACTOR * self.radius_px
@@ -119,7 +119,7 @@ class Confirmer:
         fitted = np.zeros(0, np.int64)
         for _ in range(LOOSE_ROUNDS_DISTORTED if self.fit_distortion else 1):
             if prob <= self.max_false_match_prob:
-                return field.candidate(given, tight, prob)
+                return field.candidate(tight, prob)
             img_i, cat_j, _ = field.matches(reach_px)
             extra = np.count_nonzero(_not_in(img_i, pattern_img))
             if not _worth_refit(field, int(extra), len(pattern_img), reach_px):
@@ -129,9 +129,9 @@ class Confirmer:
             refit, camera, _ = fit_pose(field.matrix, field.camera, field.vectors[cat_j], xs[img_i], ys[img_i],
                                         fit_focal=self.fit_focal, fit_k1=self.fit_distortion and lens,
                                         fit_aspect=self.fit_aspect and lens)
-            given, field = None, _Field(stars, refit, camera, xs, ys, reach_px)
+            field = _Field(stars, refit, camera, xs, ys, reach_px)
             prob, tight = self._verify(field, pattern_img, n_trials, fitted)
-        return field.candidate(None, tight, prob) if prob <= self.max_false_match_prob else None
+        return field.candidate(tight, prob) if prob <= self.max_false_match_prob else None
 
     def _verify(self, field: _Field, pattern_img: NDArray, n_trials: int,
                 fitted: NDArray) -> tuple[float, NDArray[np.int64]]:
@@ -198,33 +198,28 @@ class _Field:
                 self._pairs = predicted_pairs(self.vectors, self.matrix, self.camera, self.xs, self.ys, self.reach_px)
         return self._pairs
 
-    def candidate(self, given: Rotation | NDArray | None, image_index: NDArray, prob: float) -> Candidate:
-        """The verified candidate of these matches at the tight radius (``given``: the attitude as
-        the caller gave it, a Rotation or a quaternion (4,), when it was not refitted; else None and
-        the Rotation is made from the matrix)."""
-        if isinstance(given, Rotation):
-            rot = given
-        else:
-            rot = Rotation.from_matrix(self.matrix) if given is None else Rotation.from_quat(given)
+    def candidate(self, image_index: NDArray, prob: float) -> Candidate:
+        """The verified candidate of these matches at the tight radius, with this field's attitude
+        matrix and camera."""
         rows = self.stars.catalog_rows[self.index[self.tight_catalog]]
-        return Candidate(rot, self.camera, image_index, rows, prob)
+        return Candidate(self.matrix, self.camera, image_index, rows, prob)
 
 
-def _attitude(rot: Rotation | NDArray) -> tuple[NDArray[np.float64], Rotation | NDArray | None]:
-    """(rotation matrix (3, 3), what :meth:`_Field.candidate` makes the Rotation from) of an attitude
-    given as a Rotation, a unit scalar-last quaternion (4,) or a matrix (3, 3)."""
+def _attitude(rot: Rotation | NDArray) -> NDArray[np.float64]:
+    """The rotation matrix (3, 3) of an attitude given as a Rotation, a unit scalar-last
+    quaternion (4,) or a matrix (3, 3)."""
     if isinstance(rot, Rotation):
-        return rot.as_matrix(), rot
+        return rot.as_matrix()
     values = np.asarray(rot, dtype=np.float64)
     if values.shape == (3, 3):
-        return values, None
+        return values
     if values.shape != (4,):
         raise ValueError(f"rot must be a Rotation, a quaternion (4,) or a rotation matrix (3, 3), "
                          f"got shape {values.shape}")
     x, y, z, w = values.tolist()
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]), values
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
 def _worth_refit(field: _Field, extra: int, n_pattern: int, reach_px: float) -> bool:

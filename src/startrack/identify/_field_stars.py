@@ -38,7 +38,7 @@ class FieldStars:
         """ICRS unit vectors (K, 3) of catalog rows at :attr:`epoch_jyear` (any magnitude)."""
         index = self.index_of_row[catalog_rows]
         if np.all(index >= 0):
-            return self.vectors[index]
+            return np.take(self.vectors, index, axis=0)  # fancy indexing of (S, 3) costs several times more
         return load_catalog().take(catalog_rows).vectors(self.epoch_jyear)
 
     def near(self, boresight: NDArray, radius_rad: float) -> NDArray[np.int64]:

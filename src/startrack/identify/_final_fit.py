@@ -216,7 +216,7 @@ class _Catalog:
             near = bands_of(field.stars, field.stars.vectors).brightest_in_cone(*args)
         else:
             near = stars_in_cone(field.stars.vectors, *args)
-        return cls(matrix, camera, field.stars.rows[near], field.stars.vectors[near])
+        return cls(matrix, camera, field.stars.rows[near], _rows_of(field.stars.vectors, near))
 
     @classmethod
     def around_stars(cls, field: _Field, matrix: NDArray, camera: Camera) -> _Catalog:
@@ -232,7 +232,7 @@ class _Catalog:
         if field.depth is not None:
             near = near[:np.searchsorted(near, field.depth)]  # indices are brightness ranks
         near = near[field.stars.brighter_neighbour_rad[near] >= BLEND_PX / camera.fx]
-        return cls(matrix, camera, field.stars.rows[near], field.stars.vectors[near])
+        return cls(matrix, camera, field.stars.rows[near], _rows_of(field.stars.vectors, near))
 
     def serves(self, matrix: NDArray, camera: Camera) -> bool:
         """Whether no image point moves more than the margin between the chosen pose and this one."""
@@ -287,7 +287,13 @@ def rematch(field: _Field, catalog: _Catalog, matrix_cam_from_icrs: NDArray,
         inside = np.flatnonzero(camera.in_image(px, py))
         img_i, cat_i = match_nearest(field.x, field.y, px[inside], py[inside], REMATCH_RADIUS_PX)
         near_i = inside[cat_i]
-    return img_i, catalog.rows[near_i], catalog.vectors[near_i]
+    return img_i, catalog.rows[near_i], _rows_of(catalog.vectors, near_i)
+
+
+def _rows_of(vectors: NDArray, index: NDArray) -> NDArray:
+    """``vectors[index]`` for vectors (S, 3) and indices (K,): ``np.take`` along axis 0, several
+    times cheaper than fancy indexing for the thousands of stars of a cone."""
+    return np.take(vectors, index, axis=0)
 
 
 def _turn_rad(matrix_a: NDArray, matrix_b: NDArray) -> float:
@@ -401,7 +407,7 @@ def settle_matches(x: NDArray, y: NDArray, stars: FieldStars, cand: Candidate,
                       and (focal_range[1] > focal_range[0] * (1 + K1_FOCAL_SPAN) or cand.camera.k1 != 0))
     field = _Field(x, y, stars, fit_focal, fit_aspect and fit_focal, wide, wide,
                    depth_limit(len(x), cand.camera, len(stars.rows)))
-    matrix, camera, img, rows = cand.rot_cam_from_icrs.as_matrix(), cand.camera, cand.image_index, cand.catalog_rows
+    matrix, camera, img, rows = cand.matrix_cam_from_icrs, cand.camera, cand.image_index, cand.catalog_rows
     ref = stars.vectors_of(rows)
     if wide:
         matrix, camera, (img, rows, ref) = _scan_k1(field, matrix, camera, img, ref)
