@@ -35,6 +35,7 @@ from typing import Literal, get_args
 import numpy as np
 from numpy.typing import NDArray
 
+from ._compiled import region_kernels
 from ._label import Regions
 
 PIXEL_VARIANCE = 1.0 / 12.0
@@ -110,23 +111,17 @@ def measure_spots(regions: Regions, signal: NDArray[np.float64]) -> SpotMeasurem
     SpotMeasurements
     """
     x, y = regions.x.astype(np.float64), regions.y.astype(np.float64)
-    w = np.maximum(signal, 0.0)
-    total = regions.sum(w)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        xc = regions.sum(w * x) / total
-        yc = regions.sum(w * y) / total
-        dx, dy = x - xc[regions.index], y - yc[regions.index]
-        cxx = regions.sum(w * dx * dx) / total + PIXEL_VARIANCE
-        cyy = regions.sum(w * dy * dy) / total + PIXEL_VARIANCE
-        cxy = regions.sum(w * dx * dy) / total
-    positive = w > 0
-    spread = regions.sum(np.where(positive, dx * dx + dy * dy, 0.0))
-    top = regions.argmax(signal)
+    signal = np.ascontiguousarray(signal, dtype=np.float64)
+    loops = region_kernels()
+    m = loops.weighted_moments(regions.starts, x, y, np.maximum(signal, 0.0))
+    sums, top = loops.signal_sums(regions.starts, signal)
+    cxx, cyy, cxy = m[:, 3] + PIXEL_VARIANCE, m[:, 4] + PIXEL_VARIANCE, m[:, 5]
+    area, peak = regions.counts, signal[top]
     return SpotMeasurements(
-        x=xc, y=yc, flux=regions.sum(signal), weight=total, peak=signal[top],
-        peak_x=regions.x[top], peak_y=regions.y[top], area_px=regions.counts,
-        elongation=axis_ratio(cxx, cyy, cxy), flatness=_flatness(regions, signal, signal[top]),
-        spread_px2=spread, size_px=np.sqrt(np.maximum(0.5 * (cxx + cyy) - PIXEL_VARIANCE, 0.0)),
+        x=m[:, 1], y=m[:, 2], flux=sums[:, 0], weight=m[:, 0], peak=peak,
+        peak_x=regions.x[top], peak_y=regions.y[top], area_px=area,
+        elongation=axis_ratio(cxx, cyy, cxy), flatness=_flatness(sums, area, peak),
+        spread_px2=m[:, 6], size_px=np.sqrt(np.maximum(0.5 * (cxx + cyy) - PIXEL_VARIANCE, 0.0)),
     )
 
 
@@ -138,11 +133,11 @@ def axis_ratio(cxx: NDArray, cyy: NDArray, cxy: NDArray) -> NDArray[np.float64]:
         return np.sqrt((mean + half_diff) / np.maximum(mean - half_diff, 1e-12))
 
 
-def _flatness(regions: Regions, signal: NDArray, peak: NDArray) -> NDArray[np.float64]:
-    """std of the spot's background-subtracted values divided by its peak (Fowler 2013 FF / 100)."""
-    n = regions.counts
-    mean = regions.sum(signal) / n
-    var = np.maximum(regions.sum(signal * signal) / n - mean**2, 0.0)
+def _flatness(sums: NDArray, n: NDArray, peak: NDArray) -> NDArray[np.float64]:
+    """std of the spot's background-subtracted values divided by its peak (Fowler 2013 FF / 100),
+    from the sums of the values and of their squares (N, 2) over the ``n`` (N,) pixels."""
+    mean = sums[:, 0] / n
+    var = np.maximum(sums[:, 1] / n - mean**2, 0.0)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.sqrt(var) / peak
 

@@ -35,10 +35,9 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.special import erf
 
 from ._compiled import window_kernels
-from ._windows import Centroids, Windows, fast_median, separable_moments
+from ._windows import Centroids, Windows, fast_median
 
 TOLERANCE_PX = 1e-3
 MAX_ITERATIONS = 20
@@ -90,7 +89,7 @@ def windowed_centroid(windows: Windows, level: NDArray, noise: NDArray, x_start:
     signal[~valid] = 0.0
     axes = _Axes.of(windows, sw)
     cx, cy, total = _iterate(axes, signal, np.array(x_start, dtype=float), np.array(y_start, dtype=float))
-    sigma = _sigma(axes.at(cx, cy), signal, valid, sw * sw, psf_sigma_px, noise, gain_e_per_adu)
+    sigma = _sigma(axes, signal, valid, cx, cy, psf_sigma_px, noise, gain_e_per_adu)
     half = windows.half
     inside = (np.abs(cx - (windows.x0 + half)) <= half) & (np.abs(cy - (windows.y0 + half)) <= half)
     ok = inside & (total > 0) & np.isfinite(sigma)
@@ -98,34 +97,20 @@ def windowed_centroid(windows: Windows, level: NDArray, noise: NDArray, x_start:
 
 
 @dataclass(frozen=True)
-class _Centred:
-    """Per-axis offsets of N windows' pixels from centres (cx, cy) and their Gaussian weights,
-    shape (N, S) each."""
-
-    dx: NDArray
-    dy: NDArray
-    wx: NDArray
-    wy: NDArray
-
-
-@dataclass(frozen=True)
 class _Axes:
-    """Per-axis pixel coordinates of N windows, shape (N, S) each, and the Gaussian weight's
-    ``-1 / (2 s_w^2)``, shape (N, 1)."""
+    """The first column and row of N windows and their Gaussian weight's ``-1 / (2 s_w^2)``, shape
+    (N,) float64 each, as the compiled loops take them; ``sw2`` the window variance s_w^2, px^2."""
 
-    px: NDArray
-    py: NDArray
+    x0: NDArray
+    y0: NDArray
     inv: NDArray
+    sw2: NDArray
 
     @classmethod
     def of(cls, windows: Windows, sw: NDArray) -> _Axes:
-        k = np.arange(windows.values.shape[1], dtype=np.float64)
-        return cls(windows.x0[:, None] + k, windows.y0[:, None] + k, (-0.5 / (sw * sw))[:, None])
-
-    def at(self, cx: NDArray, cy: NDArray) -> _Centred:
-        """Offsets and Gaussian weights about the centres (cx, cy), shape (N,) each."""
-        dx, dy = self.px - cx[:, None], self.py - cy[:, None]
-        return _Centred(dx, dy, np.exp(dx * dx * self.inv), np.exp(dy * dy * self.inv))
+        sw2 = sw * sw
+        return cls(np.asarray(windows.x0, dtype=np.float64), np.asarray(windows.y0, dtype=np.float64),
+                   -0.5 / sw2, sw2)
 
 
 def _iterate(axes: _Axes, signal: NDArray, cx: NDArray, cy: NDArray) -> tuple[NDArray, NDArray, NDArray]:
@@ -134,64 +119,44 @@ def _iterate(axes: _Axes, signal: NDArray, cx: NDArray, cy: NDArray) -> tuple[ND
     takes the separable weighted moments of the signal (one compiled loop,
     :func:`.window_kernels.windowed_iterate`)."""
     total = window_kernels().windowed_iterate(
-        np.ascontiguousarray(signal, dtype=np.float64), np.ascontiguousarray(axes.px[:, 0]),
-        np.ascontiguousarray(axes.py[:, 0]),
-        np.ascontiguousarray(axes.inv[:, 0]), cx, cy, MAX_ITERATIONS, TOLERANCE_PX, MAX_STEP_PX)
+        np.ascontiguousarray(signal, dtype=np.float64), axes.x0, axes.y0, axes.inv, cx, cy,
+        MAX_ITERATIONS, TOLERANCE_PX, MAX_STEP_PX)
     return cx, cy, total
 
 
-def _sigma(at: _Centred, signal: NDArray, valid: NDArray, sw2: NDArray, psf_sigma_px: NDArray | None,
+def _sigma(axes: _Axes, signal: NDArray, valid: NDArray, cx: NDArray, cy: NDArray, psf_sigma_px: NDArray | None,
            noise: NDArray, gain_e_per_adu: float | None) -> NDArray[np.float64]:
-    """Linearised 1-sigma error per axis (module docstring), the mean of the x and y terms.
+    """Linearised 1-sigma error per axis (module docstring), the mean of the x and y terms, about
+    the centres (cx, cy).
 
     The numerator takes the larger of the noise model's value and its empirical value from the
     residuals ``S - A w`` (A fitted by least squares): when the gain is unknown the model has
     only the background noise, and the residuals add the bright stars' shot noise. The sums
-    over ``w^2 r^2`` are the separable moments of the squared axis weights.
+    over ``w^2 r^2`` are the separable moments of the squared axis weights. One compiled loop
+    over the windows (:func:`.window_kernels.windowed_sigma`).
     """
-    if sw2.size == 0:
+    if axes.sw2.size == 0:
         return np.zeros(0)
-    m = separable_moments(signal, at.wx, at.dx, at.wy, at.dy)  # signal is 0 on invalid pixels
+    signal = np.ascontiguousarray(signal, dtype=np.float64)
+    kernels = window_kernels()
     if psf_sigma_px is None:  # one width for the frame: a single star's estimate is noisy
-        sp2 = np.full(sw2.shape, fast_median(_psf_variance(m, sw2)))
+        m = kernels.windowed_moments(signal, axes.x0, axes.y0, axes.inv, cx, cy)
+        sp2 = np.full(axes.sw2.shape, fast_median(_psf_variance(m, axes.sw2)))
     else:
-        sp2 = np.broadcast_to(np.asarray(psf_sigma_px, float) ** 2, sw2.shape)
-    d = m[:, 0, 0] * sw2 / (sp2 + 1.0 / 12 + sw2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        shape = _pixel_gaussian(at, np.sqrt(sp2)) * valid
-        residual = _residual(signal, shape, valid)
-        var = pixel_variance(signal, noise, gain_e_per_adu) * valid
-        lever = separable_moments(np.stack([var, residual * residual]), at.wx**2, at.dx, at.wy**2, at.dy)
-        num = 0.5 * np.maximum(*(lever[:, :, 0, 2] + lever[:, :, 2, 0]))
-        return np.where(d > 0, np.sqrt(num) / d, np.nan)
-
-
-def _residual(signal: NDArray, shape: NDArray, valid: NDArray) -> NDArray:
-    """``signal - (A shape + B)`` with A, B fitted by linear least squares per window
-    (``signal`` and ``shape`` are 0 on invalid pixels)."""
-    n, sx, sy, sxx, sxy = np.stack([valid, shape, signal, shape * shape, shape * signal]).sum(axis=(2, 3))
-    det = n * sxx - sx * sx
-    a = (n * sxy - sx * sy) / det
-    b = (sy - a * sx) / n
-    return (signal - a[:, None, None] * shape - b[:, None, None]) * valid
-
-
-def _pixel_gaussian(at: _Centred, s: NDArray) -> NDArray:
-    """Pixel-integrated unit Gaussian of width ``s`` (N,) centred on the axes' centre, (N, S, S):
-    per axis, the differences of erf at the S + 1 pixel edges (both axes in one erf call)."""
-    d = np.stack([at.dy, at.dx])  # (2, N, S)
-    edges = np.concatenate([d - 0.5, d[:, :, -1:] + 0.5], axis=2) * (1.0 / (np.sqrt(2.0) * s))[:, None]
-    share = 0.5 * np.diff(erf(edges), axis=2)
-    return share[0][:, :, None] * share[1][:, None, :]
+        sp2 = np.ascontiguousarray(np.broadcast_to(np.asarray(psf_sigma_px, float) ** 2, axes.sw2.shape))
+    noise = np.ascontiguousarray(np.broadcast_to(np.asarray(noise, dtype=np.float64), axes.sw2.shape))
+    return kernels.windowed_sigma(signal, np.ascontiguousarray(valid), axes.x0, axes.y0, axes.inv, cx, cy, axes.sw2,
+                                  sp2, noise, float(gain_e_per_adu or 0.0))
 
 
 def _psf_variance(m: NDArray, sw2: NDArray) -> NDArray:
-    """PSF variance s_p^2 from the windowed second moment (moments ``m`` of the signal, (N, 3, 3)):
+    """PSF variance s_p^2 from the windowed second moment (moments ``m`` of the signal, (N, 5) in
+    the order of :func:`.window_kernels.windowed_moments`):
     a pixel-integrated Gaussian is close to a Gaussian of variance s_e^2 = s_p^2 + 1/12, and its
     moment under the Gaussian weight is v = s_e^2 s_w^2 / (s_e^2 + s_w^2). Clipped to
     [s_w^2 / 4, 4 s_w^2]."""
     with np.errstate(invalid="ignore", divide="ignore"):
-        v = 0.5 * (m[:, 0, 2] + m[:, 2, 0]) / m[:, 0, 0]
+        v = 0.5 * (m[:, 3] + m[:, 4]) / m[:, 0]
         sp2 = v * sw2 / (sw2 - v) - 1.0 / 12
     sp2 = np.where(np.isfinite(sp2) & (v < sw2), sp2, 4.0 * sw2)
     return np.clip(sp2, 0.25 * sw2, 4.0 * sw2)

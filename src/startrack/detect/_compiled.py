@@ -1,5 +1,5 @@
 """The detector's compiled loops (:mod:`._frame_kernels`, :mod:`._window_kernels`,
-:mod:`._robust_kernels`, numba),
+:mod:`._region_kernels`, :mod:`._robust_kernels`, numba),
 loaded on first use.
 
 Importing :mod:`startrack.cache` points numba's disk cache at startrack's cache folder before
@@ -51,6 +51,15 @@ def window_kernels() -> ModuleType:
     """The module of the windowed centroider's compiled loops, :mod:`._window_kernels`."""
     _numba_ready()
     from . import _window_kernels as module
+
+    return module
+
+
+@functools.cache
+def region_kernels() -> ModuleType:
+    """The module of the per-region loops over pixel lists, :mod:`._region_kernels`."""
+    _numba_ready()
+    from . import _region_kernels as module
 
     return module
 

@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._centroid import axis_ratio
+from ._compiled import region_kernels
 from ._label import Regions
 from ._windows import fast_median, fast_quantile
 
@@ -67,17 +68,13 @@ def core_shape(regions: Regions, signal: NDArray, peak: NDArray
     peak : ndarray, shape (N,)
         Each spot's largest signal.
     """
-    core = (signal >= 0.5 * peak[regions.index]).astype(np.float64)
-    area = regions.sum(core)
-    x, y = regions.x.astype(np.float64), regions.y.astype(np.float64)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mx, my = regions.sum(core * x) / area, regions.sum(core * y) / area
-        dx, dy = x - mx[regions.index], y - my[regions.index]
-        cxx = regions.sum(core * dx * dx) / area + 1.0 / 12.0
-        cyy = regions.sum(core * dy * dy) / area + 1.0 / 12.0
-        cxy = regions.sum(core * dx * dy) / area
-    elongation = np.where(area >= MIN_SHAPE_PIXELS, axis_ratio(cxx, cyy, cxy), 1.0)
-    return np.sqrt(area / HALF_MAX_AREA), elongation
+    with np.errstate(invalid="ignore"):
+        core = (signal >= 0.5 * peak[regions.index]).astype(np.float64)
+        m = region_kernels().weighted_moments(regions.starts, regions.x.astype(np.float64),
+                                              regions.y.astype(np.float64), core)
+        area = m[:, 0]
+        elongation = axis_ratio(m[:, 3] + 1.0 / 12.0, m[:, 4] + 1.0 / 12.0, m[:, 5])
+    return np.sqrt(area / HALF_MAX_AREA), np.where(area >= MIN_SHAPE_PIXELS, elongation, 1.0)
 
 
 def saturated_spots(regions: Regions, raw: NDArray, data: NDArray) -> NDArray[np.bool_]:

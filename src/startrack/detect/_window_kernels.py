@@ -11,6 +11,8 @@ the last bit, which moves a centroid by far less than 1e-10 px. Loaded on first 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -98,3 +100,102 @@ def _clipped(step, max_step):
     if not np.isfinite(step):
         return 0.0
     return min(max(step, -max_step), max_step)
+
+
+@njit(cache=True, error_model="numpy")
+def windowed_moments(signal, x0, y0, inv, cx, cy):
+    """The moments (:func:`_moments`) of each window about the centres (cx, cy) under the
+    Gaussian weights of :func:`windowed_iterate`'s arguments: (N, 5) float64."""
+    n, s = signal.shape[0], signal.shape[1]
+    out = np.empty((n, 5))
+    axes = np.empty((4, s))
+    for w in range(n):
+        _weights(x0[w], cx[w], inv[w], axes[0], axes[1])
+        _weights(y0[w], cy[w], inv[w], axes[2], axes[3])
+        _moments(signal[w], axes, out[w])
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def windowed_sigma(signal, valid, x0, y0, inv, cx, cy, sw2, sp2, noise, gain):
+    """The linearised 1-sigma error of :func:`.centroid_windowed._sigma` for each window, px.
+
+    ``signal`` (N, S, S) float64 (0 on invalid pixels), ``valid`` (N, S, S) bool; ``x0``, ``y0``,
+    ``inv``, ``cx``, ``cy`` as :func:`windowed_iterate`'s (the converged centres); ``sw2``, ``sp2``
+    (N,) the window's and the PSF's variance, px^2; ``noise`` (N,) the pixel noise; ``gain``
+    electrons per image unit, or 0 when unknown (no shot-noise term). Returns (N,) float64, NaN
+    where the weighted sum is not positive."""
+    n, s = signal.shape[0], signal.shape[1]
+    out = np.empty(n)
+    axes, squared = np.empty((4, s)), np.empty((4, s))
+    share, edges = np.empty((2, s)), np.empty(s + 1)
+    shape, stack = np.empty((s, s)), np.empty((2, s, s))
+    m, lever = np.empty(5), np.empty(5)
+    for w in range(n):
+        _weights(x0[w], cx[w], inv[w], axes[0], axes[1])
+        _weights(y0[w], cy[w], inv[w], axes[2], axes[3])
+        _moments(signal[w], axes, m)
+        d = m[0] * sw2[w] / (sp2[w] + 1.0 / 12 + sw2[w])
+        scale = 1.0 / (np.sqrt(2.0) * np.sqrt(sp2[w]))
+        _pixel_share(axes[3], scale, edges, share[0])
+        _pixel_share(axes[1], scale, edges, share[1])
+        _fitted_shape(signal[w], valid[w], share, shape)
+        _variance_and_residual(signal[w], valid[w], shape, noise[w], gain, stack)
+        for k in range(4):
+            squared[k] = axes[k] * axes[k] if k % 2 == 0 else axes[k]
+        _moments(stack[0], squared, m)
+        _moments(stack[1], squared, lever)
+        model, empirical = m[3] + m[4], lever[3] + lever[4]
+        num = 0.5 * (model if (model > empirical or np.isnan(model)) else empirical)  # np.maximum's NaN
+        out[w] = np.sqrt(num) / d if d > 0 else np.nan
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def _pixel_share(offset, scale, edges, share):
+    """The share of a unit Gaussian (``scale`` = 1 / (sqrt(2) s)) falling on each pixel whose
+    centre is at ``offset`` (S,) from the Gaussian's: half the erf differences at the S + 1 pixel
+    edges, written into ``share`` (S,)."""
+    s = offset.size
+    for k in range(s):
+        edges[k] = (offset[k] - 0.5) * scale
+    edges[s] = (offset[s - 1] + 0.5) * scale
+    for k in range(s):
+        share[k] = 0.5 * (math.erf(edges[k + 1]) - math.erf(edges[k]))
+
+
+@njit(cache=True, error_model="numpy")
+def _fitted_shape(signal, valid, share, shape):
+    """The pixel-integrated Gaussian ``share[0][j] share[1][i]`` on the valid pixels (0 elsewhere),
+    written into ``shape`` (S, S)."""
+    for j in range(shape.shape[0]):
+        for i in range(shape.shape[1]):
+            shape[j, i] = share[0, j] * share[1, i] if valid[j, i] else 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _variance_and_residual(signal, valid, shape, noise, gain, stack):
+    """``stack[0]``: each valid pixel's variance (``noise^2``, plus ``max(signal, 0) / gain``
+    when ``gain`` > 0); ``stack[1]``: the squared residual of the least-squares fit
+    ``signal ~ A shape + B`` over the valid pixels; both 0 on invalid pixels."""
+    count = sx = sy = sxx = sxy = 0.0
+    for j in range(shape.shape[0]):
+        for i in range(shape.shape[1]):
+            if valid[j, i]:
+                g, v = shape[j, i], signal[j, i]
+                count += 1.0
+                sx += g
+                sy += v
+                sxx += g * g
+                sxy += g * v
+    a = (count * sxy - sx * sy) / (count * sxx - sx * sx)
+    b = (sy - a * sx) / count
+    for j in range(shape.shape[0]):
+        for i in range(shape.shape[1]):
+            if valid[j, i]:
+                v = signal[j, i]
+                r = v - a * shape[j, i] - b
+                stack[0, j, i] = noise * noise + (max(v, 0.0) / gain if gain > 0 else 0.0)
+                stack[1, j, i] = r * r
+            else:
+                stack[0, j, i] = stack[1, j, i] = 0.0

@@ -1,0 +1,76 @@
+"""The compiled loops over the pixel lists of :class:`.label.Regions` (numba): per-region
+weighted moments and signal sums, each region's pixels in two short passes.
+
+They give the values of the ``np.add.reduceat`` expressions of :func:`.centroid.measure_spots`
+and :func:`.point_source.core_shape` that they replace, summed pixel after pixel (numpy sums a
+long region pairwise, so the two may differ in the last bits). Loaded on first use through
+:func:`.compiled.region_kernels`; cached on disk (``cache=True``); numpy's error model (0 / 0 is
+NaN, as in numpy).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+MOMENTS = 7
+"""Columns of :func:`weighted_moments`: sum of weights, mean x, mean y, the weighted central
+moments xx, yy and xy (each over the sum of weights), and the spread of the positive-weight
+pixels."""
+
+
+@njit(cache=True, error_model="numpy")
+def weighted_moments(starts, x, y, w):
+    """Weighted moments of N regions.
+
+    ``starts`` (N,) int64, the regions' first pixels in ``x``, ``y``, ``w`` (M,) float64: pixel
+    column, row and weight. Returns (N, :data:`MOMENTS`) float64: per region ``W = sum w``, the
+    means ``mx = sum w x / W``, ``my``, then ``sum w dx dx / W``, ``sum w dy dy / W``,
+    ``sum w dx dy / W`` (dx = x - mx, dy = y - my) and ``sum dx dx + dy dy`` over the pixels
+    with ``w > 0``."""
+    n = starts.size
+    out = np.empty((n, MOMENTS))
+    for r in range(n):
+        lo, hi = starts[r], starts[r + 1] if r + 1 < n else x.size
+        total = sx = sy = 0.0
+        for p in range(lo, hi):
+            total += w[p]
+            sx += w[p] * x[p]
+            sy += w[p] * y[p]
+        mx, my = sx / total, sy / total
+        cxx = cyy = cxy = spread = 0.0
+        for p in range(lo, hi):
+            dx, dy = x[p] - mx, y[p] - my
+            cxx += w[p] * dx * dx
+            cyy += w[p] * dy * dy
+            cxy += w[p] * dx * dy
+            if w[p] > 0:
+                spread += dx * dx + dy * dy
+        out[r, 0], out[r, 1], out[r, 2] = total, mx, my
+        out[r, 3], out[r, 4], out[r, 5], out[r, 6] = cxx / total, cyy / total, cxy / total, spread
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def signal_sums(starts, signal):
+    """Sum and sum of squares of ``signal`` (M,) float64 over N regions (``starts`` as in
+    :func:`weighted_moments`), (N, 2) float64, and the position of each region's largest value,
+    (N,) int64: the last of equal largest values, or the last NaN when the region has one
+    (``np.maximum.reduceat``'s largest, as :meth:`.label.Regions.argmax`)."""
+    n = starts.size
+    sums = np.empty((n, 2))
+    top = np.empty(n, np.int64)
+    for r in range(n):
+        lo, hi = starts[r], starts[r + 1] if r + 1 < n else signal.size
+        total = squares = 0.0
+        best, where, has_nan = -np.inf, lo, False
+        for p in range(lo, hi):
+            v = signal[p]
+            total += v
+            squares += v * v
+            if np.isnan(v):
+                where, has_nan = p, True
+            elif not has_nan and v >= best:
+                best, where = v, p
+        sums[r, 0], sums[r, 1], top[r] = total, squares, where
+    return sums, top

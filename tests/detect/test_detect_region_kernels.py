@@ -1,0 +1,82 @@
+"""The per-region compiled loops (:mod:`startrack.detect._region_kernels`) behind
+``measure_spots`` and ``core_shape``, against the ``np.add.reduceat`` computations they replace."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from startrack.detect._centroid import PIXEL_VARIANCE, axis_ratio, measure_spots
+from startrack.detect._label import Regions, regions_from_index
+from startrack.detect._point_source import HALF_MAX_AREA, MIN_SHAPE_PIXELS, core_shape
+
+
+def _regions(n: int, seed: int) -> tuple[Regions, np.ndarray]:
+    """n blobs of 1-40 pixels with Gaussian signal plus noise (one all negative, one with zeros
+    only, one with a NaN, one with tied peaks)."""
+    rng = np.random.default_rng(seed)
+    size = rng.integers(1, 40, n)
+    index = np.repeat(np.arange(n), size)
+    x = rng.integers(0, 9, index.size) + 20 * index
+    y = rng.integers(0, 9, index.size)
+    signal = 100.0 * np.exp(-((x - 20 * index - 4.0) ** 2 + (y - 4.0) ** 2) / 6.0) + rng.normal(0, 5, index.size)
+    regions = regions_from_index(index, y, x, n)
+    signal = signal[np.argsort(index, kind="stable")]
+    s = regions.starts
+    signal[s[0]: s[1]] = -np.abs(signal[s[0]: s[1]])
+    signal[s[1]: s[2]] = 0.0
+    signal[s[2]] = np.nan
+    signal[s[3]: s[4]] = 7.0
+    return regions, signal
+
+
+def _numpy_spots(regions: Regions, signal: np.ndarray) -> dict:
+    x, y = regions.x.astype(np.float64), regions.y.astype(np.float64)
+    w = np.maximum(signal, 0.0)
+    total = regions.sum(w)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        xc, yc = regions.sum(w * x) / total, regions.sum(w * y) / total
+        dx, dy = x - xc[regions.index], y - yc[regions.index]
+        cxx = regions.sum(w * dx * dx) / total + PIXEL_VARIANCE
+        cyy = regions.sum(w * dy * dy) / total + PIXEL_VARIANCE
+        cxy = regions.sum(w * dx * dy) / total
+        top = regions.argmax(signal)
+        n = regions.counts
+        mean = regions.sum(signal) / n
+        flatness = np.sqrt(np.maximum(regions.sum(signal * signal) / n - mean**2, 0.0)) / signal[top]
+    return dict(x=xc, y=yc, weight=total, flux=regions.sum(signal), peak=signal[top], peak_x=regions.x[top],
+                peak_y=regions.y[top], elongation=axis_ratio(cxx, cyy, cxy), flatness=flatness,
+                spread_px2=regions.sum(np.where(w > 0, dx * dx + dy * dy, 0.0)))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_spot_measurements_are_the_reduceat_values(seed):
+    regions, signal = _regions(60, seed)
+    got = measure_spots(regions, signal)
+    for name, expected in _numpy_spots(regions, signal).items():
+        np.testing.assert_allclose(getattr(got, name), expected, rtol=1e-12, atol=1e-9, err_msg=name)  # px, units
+    assert np.isnan(got.x[1]) and np.isnan(got.peak[2]) and got.peak_x[3] == regions.x[regions.starts[4] - 1]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_core_shape_is_the_reduceat_value(seed):
+    regions, signal = _regions(60, seed)
+    peak = np.nan_to_num(regions.max(np.nan_to_num(signal)))
+    core = (np.nan_to_num(signal, nan=-np.inf) >= 0.5 * peak[regions.index]).astype(np.float64)
+    area = regions.sum(core)
+    x, y = regions.x.astype(np.float64), regions.y.astype(np.float64)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mx, my = regions.sum(core * x) / area, regions.sum(core * y) / area
+        dx, dy = x - mx[regions.index], y - my[regions.index]
+        ratio = axis_ratio(regions.sum(core * dx * dx) / area + 1 / 12, regions.sum(core * dy * dy) / area + 1 / 12,
+                           regions.sum(core * dx * dy) / area)
+    size, elongation = core_shape(regions, signal, peak)
+    np.testing.assert_allclose(size, np.sqrt(area / HALF_MAX_AREA), rtol=1e-12)  # px
+    np.testing.assert_allclose(elongation, np.where(area >= MIN_SHAPE_PIXELS, ratio, 1.0), rtol=1e-12)
+    assert (elongation > 1.0).any()
+
+
+def test_no_regions():
+    regions = Regions(*(np.zeros(0, np.int64),) * 4)
+    assert measure_spots(regions, np.zeros(0)).x.size == 0
+    assert core_shape(regions, np.zeros(0), np.zeros(0))[0].size == 0
