@@ -126,6 +126,33 @@ def test_significance_is_level_and_noise_interpolated():
                                (image - flat.level) / flat.noise, rtol=1e-5, atol=1e-5)
 
 
+@pytest.mark.parametrize("shape", [(96, 160), (20, 160), (20, 20)])
+def test_grids_at_points_are_the_bilinear_interpolation(shape):
+    """Level (extended linearly beyond the outer tile centres), noise and clutter (held) at points
+    inside and outside the frame, against numpy's interpolation with the same axis weights; one
+    tile along an axis takes that tile's value."""
+    rng = np.random.default_rng(3)
+    yy, xx = np.mgrid[0: shape[0], 0: shape[1]]
+    image = (50.0 + 0.05 * xx + 0.02 * yy + rng.normal(0, 2.0 + xx / 40.0, yy.shape)).astype(np.float32)
+    tiles = background.tiled_background(image, 16, scale=2.0, offset=0.5).tiles
+    x, y = rng.uniform(-30, 2 * shape[1] + 30, 200), rng.uniform(-30, 2 * shape[0] + 30, 200)
+
+    def numpy_bilinear(grid, extrapolate):
+        y0, y1, ty = background._axis_weights(tiles.centres_y, y, True)
+        x0, x1, tx = background._axis_weights(tiles.centres_x, x, True)
+        if not extrapolate:
+            ty, tx = np.clip(ty, 0.0, 1.0), np.clip(tx, 0.0, 1.0)
+        top = grid[y0, x0] * (1 - tx) + grid[y0, x1] * tx
+        return top * (1 - ty) + (grid[y1, x0] * (1 - tx) + grid[y1, x1] * tx) * ty
+
+    got = tiles.at_points(x, y, slice(0, 3))
+    for k, (grid, extrapolate) in enumerate([(tiles.level, True), (tiles.noise, False), (tiles.clutter, False)]):
+        np.testing.assert_array_equal(got[k], numpy_bilinear(grid, extrapolate))
+    assert tiles.noise.min() <= got[1].min() and got[1].max() <= tiles.noise.max()  # held
+    if tiles.level.size > 1:
+        assert got[0].min() < tiles.level.min() or got[0].max() > tiles.level.max()  # extended
+
+
 def test_work_arrays_start_apart_from_the_frame_rows():
     frame = np.zeros((8, 1024), np.float32)
     for array in (smooth.scratch_row(1024, frame), smooth.empty_apart((8, 1024), frame)):

@@ -17,6 +17,7 @@ about 1 on sky with or without stars, several times more on lit leaves or roof t
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -67,9 +68,29 @@ class TileGrid:
         (:func:`_grid_map`)."""
         return _grid_map(grid, self.centres_y, self.centres_x, ys, xs, extrapolate)
 
-    def weights(self, x: NDArray, y: NDArray) -> tuple[tuple, tuple]:
-        """The axis weights of points (x, y) (:func:`_point_weights`), rows then columns."""
-        return _point_weights(self.centres_y, y), _point_weights(self.centres_x, x)
+    def at_points(self, x: NDArray, y: NDArray, which: slice) -> NDArray[np.float64]:
+        """The grids ``(level, noise, clutter)[which]`` at the points (x, y) (arrays of one shape),
+        bilinearly interpolated (the level extended linearly beyond the outer centres, the others
+        held, :func:`_axis_weights`): float64 (K, *x.shape). One compiled loop
+        (:func:`.frame_kernels.grid_at_points`)."""
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        grids, extrapolate, first, spacing = self._stacked
+        out = kernels().grid_at_points(grids[which], extrapolate[which], first, spacing, y.ravel(), x.ravel())
+        return out.reshape((out.shape[0], *x.shape))
+
+    @functools.cached_property
+    def _stacked(self) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """The three grids as one float64 array (3, ny, nx), which of them are extrapolated, and
+        the first tile centre and the centre spacing (rows, columns), px."""
+        grids = np.ascontiguousarray(np.stack([self.level, self.noise, self.clutter]), dtype=np.float64)
+        first = np.array([self.centres_y[0], self.centres_x[0]], dtype=np.float64)
+        spacing = np.array([_spacing(self.centres_y), _spacing(self.centres_x)])
+        return grids, np.array([True, False, False]), first, spacing
+
+
+def _spacing(centres: NDArray) -> float:
+    """The spacing of equally spaced ``centres`` (1 for a single centre, where it is not used)."""
+    return float(centres[1] - centres[0]) if centres.size > 1 else 1.0
 
 
 @dataclass(frozen=True)
@@ -115,44 +136,26 @@ class BackgroundModel:
 
     def at(self, x: NDArray, y: NDArray) -> tuple[NDArray, NDArray]:
         """Level and noise at points (x, y) (arrays of one shape), bilinearly interpolated."""
-        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
         tiles = self.tiles
         if tiles is None:
-            return np.full(x.shape, self.level), np.full(x.shape, self.noise)
-        wy, wx = tiles.weights(x, y)
-        return _bilinear(tiles.level, wy, wx, True), _bilinear(tiles.noise, wy, wx, False)
+            shape = np.shape(x)
+            return np.full(shape, self.level), np.full(shape, self.noise)
+        level, noise = tiles.at_points(x, y, slice(0, 2))
+        return level, noise
 
     def level_at(self, x: NDArray, y: NDArray) -> NDArray:
         """The level alone at points (x, y) (see :meth:`at`)."""
-        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
         tiles = self.tiles
         if tiles is None:
-            return np.full(x.shape, self.level)
-        return _bilinear(tiles.level, *tiles.weights(x, y), True)
+            return np.full(np.shape(x), self.level)
+        return tiles.at_points(x, y, slice(0, 1))[0]
 
     def clutter_at(self, x: NDArray, y: NDArray) -> NDArray:
         """Clutter ratio at points (x, y): 1 on clean sky, larger on structure."""
-        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
         tiles = self.tiles
         if tiles is None:
-            return np.ones(x.shape)
-        return _bilinear(tiles.clutter, *tiles.weights(x, y), False)
-
-
-def _point_weights(centres: NDArray, coords: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-    """:func:`_axis_weights` with extrapolation (the held weights are these clipped to [0, 1])."""
-    return _axis_weights(centres, coords, True)
-
-
-def _bilinear(grid: NDArray, wy: tuple, wx: tuple, extrapolate: bool) -> NDArray:
-    """Bilinear interpolation of ``grid`` with the axis weights of :func:`_point_weights`; held
-    constant beyond the outer centres unless ``extrapolate`` (:func:`_axis_weights`)."""
-    (y0, y1, ty), (x0, x1, tx) = wy, wx
-    if not extrapolate:
-        ty, tx = np.minimum(np.maximum(ty, 0.0), 1.0), np.minimum(np.maximum(tx, 0.0), 1.0)
-    top = grid[y0, x0] * (1 - tx) + grid[y0, x1] * tx
-    bottom = grid[y1, x0] * (1 - tx) + grid[y1, x1] * tx
-    return top * (1 - ty) + bottom * ty
+            return np.ones(np.shape(x))
+        return tiles.at_points(x, y, slice(2, 3))[0]
 
 
 def _axis_weights(centres: NDArray, coords: NDArray, extrapolate: bool

@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._compiled import window_kernels
-from ._windows import Centroids, Windows, fast_median
+from ._windows import Centroids, Windows
 
 TOLERANCE_PX = 1e-3
 MAX_ITERATIONS = 20
@@ -137,26 +137,9 @@ def _sigma(axes: _Axes, signal: NDArray, valid: NDArray, cx: NDArray, cy: NDArra
     """
     if axes.sw2.size == 0:
         return np.zeros(0)
-    signal = np.ascontiguousarray(signal, dtype=np.float64)
-    kernels = window_kernels()
-    if psf_sigma_px is None:  # one width for the frame: a single star's estimate is noisy
-        m = kernels.windowed_moments(signal, axes.x0, axes.y0, axes.inv, cx, cy)
-        sp2 = np.full(axes.sw2.shape, fast_median(_psf_variance(m, axes.sw2)))
-    else:
-        sp2 = np.ascontiguousarray(np.broadcast_to(np.asarray(psf_sigma_px, float) ** 2, axes.sw2.shape))
+    sp2 = np.zeros(0) if psf_sigma_px is None else \
+        np.ascontiguousarray(np.broadcast_to(np.asarray(psf_sigma_px, float) ** 2, axes.sw2.shape))
     noise = np.ascontiguousarray(np.broadcast_to(np.asarray(noise, dtype=np.float64), axes.sw2.shape))
-    return kernels.windowed_sigma(signal, np.ascontiguousarray(valid), axes.x0, axes.y0, axes.inv, cx, cy, axes.sw2,
-                                  sp2, noise, float(gain_e_per_adu or 0.0))
-
-
-def _psf_variance(m: NDArray, sw2: NDArray) -> NDArray:
-    """PSF variance s_p^2 from the windowed second moment (moments ``m`` of the signal, (N, 5) in
-    the order of :func:`.window_kernels.windowed_moments`):
-    a pixel-integrated Gaussian is close to a Gaussian of variance s_e^2 = s_p^2 + 1/12, and its
-    moment under the Gaussian weight is v = s_e^2 s_w^2 / (s_e^2 + s_w^2). Clipped to
-    [s_w^2 / 4, 4 s_w^2]."""
-    with np.errstate(invalid="ignore", divide="ignore"):
-        v = 0.5 * (m[:, 3] + m[:, 4]) / m[:, 0]
-        sp2 = v * sw2 / (sw2 - v) - 1.0 / 12
-    sp2 = np.where(np.isfinite(sp2) & (v < sw2), sp2, 4.0 * sw2)
-    return np.clip(sp2, 0.25 * sw2, 4.0 * sw2)
+    return window_kernels().windowed_sigma(np.ascontiguousarray(signal, dtype=np.float64), np.ascontiguousarray(valid),
+                                           axes.x0, axes.y0, axes.inv, cx, cy, axes.sw2, sp2, noise,
+                                           float(gain_e_per_adu or 0.0))

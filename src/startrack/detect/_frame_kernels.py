@@ -128,6 +128,42 @@ def grid_map(grid, y0, y1, wy, x0, x1, wx):
 
 
 @njit(cache=True, error_model="numpy")
+def grid_at_points(grids, extrapolate, first, spacing, y, x):
+    """The float64 ``grids`` (K, ny, nx), values at equally spaced centres (``first`` and
+    ``spacing`` (2,): rows then columns), interpolated bilinearly at the N points (``y``, ``x``)
+    (N,) float64: (K, N) float64, the upper grid value times the weight plus the lower one times
+    one minus it, along x, then along y. Beyond the outer centres grid k is extended linearly
+    (the weight clipped to [-0.75, 1.75], :func:`.background._axis_weights`) where
+    ``extrapolate[k]``, else held constant (the weight clipped to [0, 1])."""
+    k_grids, ny, nx = grids.shape
+    out = np.empty((k_grids, y.size))
+    for p in range(y.size):
+        y0, ty = _point_weight(y[p], first[0], spacing[0], ny)
+        x0, tx = _point_weight(x[p], first[1], spacing[1], nx)
+        y1, x1 = min(y0 + 1, ny - 1), min(x0 + 1, nx - 1)
+        for k in range(k_grids):
+            wy, wx = ty, tx
+            if not extrapolate[k]:
+                wy, wx = min(max(wy, 0.0), 1.0), min(max(wx, 0.0), 1.0)
+            g = grids[k]
+            top = g[y0, x0] * (1 - wx) + g[y0, x1] * wx
+            bottom = g[y1, x0] * (1 - wx) + g[y1, x1] * wx
+            out[k, p] = top * (1 - wy) + bottom * wy
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def _point_weight(coord, first, spacing, n):
+    """Lower centre index and upper weight (clipped to [-0.75, 1.75]) of ``coord`` between ``n``
+    centres ``first + spacing * i`` (index 0 and weight 0 when ``n`` is 1)."""
+    if n == 1:
+        return 0, 0.0
+    pos = (coord - first) / spacing
+    i0 = min(max(int(np.floor(pos)), 0), n - 2)
+    return i0, min(max(pos - i0, -0.75), 1.75)
+
+
+@njit(cache=True, error_model="numpy")
 def gather_tiles(image, rows, cols, out):
     """The samples ``image[rows] x [cols]`` of an ny x nx grid of tiles into ``out`` (ny, nx, S)
     (of the image's type), tile by tile in raster order. ``rows`` (ny * nr,) and ``cols``

@@ -103,51 +103,59 @@ def _clipped(step, max_step):
 
 
 @njit(cache=True, error_model="numpy")
-def windowed_moments(signal, x0, y0, inv, cx, cy):
-    """The moments (:func:`_moments`) of each window about the centres (cx, cy) under the
-    Gaussian weights of :func:`windowed_iterate`'s arguments: (N, 5) float64."""
-    n, s = signal.shape[0], signal.shape[1]
-    out = np.empty((n, 5))
-    axes = np.empty((4, s))
-    for w in range(n):
-        _weights(x0[w], cx[w], inv[w], axes[0], axes[1])
-        _weights(y0[w], cy[w], inv[w], axes[2], axes[3])
-        _moments(signal[w], axes, out[w])
-    return out
-
-
-@njit(cache=True, error_model="numpy")
 def windowed_sigma(signal, valid, x0, y0, inv, cx, cy, sw2, sp2, noise, gain):
     """The linearised 1-sigma error of :func:`.centroid_windowed._sigma` for each window, px.
 
     ``signal`` (N, S, S) float64 (0 on invalid pixels), ``valid`` (N, S, S) bool; ``x0``, ``y0``,
-    ``inv``, ``cx``, ``cy`` as :func:`windowed_iterate`'s (the converged centres); ``sw2``, ``sp2``
-    (N,) the window's and the PSF's variance, px^2; ``noise`` (N,) the pixel noise; ``gain``
+    ``inv``, ``cx``, ``cy`` as :func:`windowed_iterate`'s (the converged centres); ``sw2`` (N,)
+    the window's variance, px^2; ``sp2`` (N,) the PSF's variance, or an empty array for the
+    median over the windows of :func:`_psf_variance`; ``noise`` (N,) the pixel noise; ``gain``
     electrons per image unit, or 0 when unknown (no shot-noise term). Returns (N,) float64, NaN
     where the weighted sum is not positive."""
     n, s = signal.shape[0], signal.shape[1]
     out = np.empty(n)
-    axes, squared = np.empty((4, s)), np.empty((4, s))
+    axes, squared = np.empty((n, 4, s)), np.empty((4, s))
     share, edges = np.empty((2, s)), np.empty(s + 1)
     shape, stack = np.empty((s, s)), np.empty((2, s, s))
-    m, lever = np.empty(5), np.empty(5)
+    m, lever = np.empty((n, 5)), np.empty(5)
     for w in range(n):
-        _weights(x0[w], cx[w], inv[w], axes[0], axes[1])
-        _weights(y0[w], cy[w], inv[w], axes[2], axes[3])
-        _moments(signal[w], axes, m)
-        d = m[0] * sw2[w] / (sp2[w] + 1.0 / 12 + sw2[w])
+        _weights(x0[w], cx[w], inv[w], axes[w, 0], axes[w, 1])
+        _weights(y0[w], cy[w], inv[w], axes[w, 2], axes[w, 3])
+        _moments(signal[w], axes[w], m[w])
+    if sp2.size == 0 and n > 0:  # one width for the frame: a single star's estimate is noisy
+        sp2 = np.full(n, np.median(_psf_variance(m, sw2)))
+    for w in range(n):
+        d = m[w, 0] * sw2[w] / (sp2[w] + 1.0 / 12 + sw2[w])
         scale = 1.0 / (np.sqrt(2.0) * np.sqrt(sp2[w]))
-        _pixel_share(axes[3], scale, edges, share[0])
-        _pixel_share(axes[1], scale, edges, share[1])
-        _fitted_shape(signal[w], valid[w], share, shape)
+        _pixel_share(axes[w, 3], scale, edges, share[0])
+        _pixel_share(axes[w, 1], scale, edges, share[1])
+        _fitted_shape(valid[w], share, shape)
         _variance_and_residual(signal[w], valid[w], shape, noise[w], gain, stack)
         for k in range(4):
-            squared[k] = axes[k] * axes[k] if k % 2 == 0 else axes[k]
-        _moments(stack[0], squared, m)
+            squared[k] = axes[w, k] * axes[w, k] if k % 2 == 0 else axes[w, k]
+        _moments(stack[0], squared, lever)
+        model = lever[3] + lever[4]
         _moments(stack[1], squared, lever)
-        model, empirical = m[3] + m[4], lever[3] + lever[4]
+        empirical = lever[3] + lever[4]
         num = 0.5 * (model if (model > empirical or np.isnan(model)) else empirical)  # np.maximum's NaN
         out[w] = np.sqrt(num) / d if d > 0 else np.nan
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def _psf_variance(m, sw2):
+    """PSF variance s_p^2 (N,) from the windowed second moments ``m`` (N, 5) (:func:`_moments`)
+    and window variances ``sw2`` (N,): a pixel-integrated Gaussian is close to a Gaussian of
+    variance s_e^2 = s_p^2 + 1/12, and its moment under the Gaussian weight is
+    v = s_e^2 s_w^2 / (s_e^2 + s_w^2). Clipped to [s_w^2 / 4, 4 s_w^2] (4 s_w^2 where v is not
+    below s_w^2 or not finite)."""
+    out = np.empty(sw2.size)
+    for w in range(sw2.size):
+        v = 0.5 * (m[w, 3] + m[w, 4]) / m[w, 0]
+        value = v * sw2[w] / (sw2[w] - v) - 1.0 / 12
+        if not (np.isfinite(value) and v < sw2[w]):
+            value = 4.0 * sw2[w]
+        out[w] = min(max(value, 0.25 * sw2[w]), 4.0 * sw2[w])
     return out
 
 
@@ -165,7 +173,7 @@ def _pixel_share(offset, scale, edges, share):
 
 
 @njit(cache=True, error_model="numpy")
-def _fitted_shape(signal, valid, share, shape):
+def _fitted_shape(valid, share, shape):
     """The pixel-integrated Gaussian ``share[0][j] share[1][i]`` on the valid pixels (0 elsewhere),
     written into ``shape`` (S, S)."""
     for j in range(shape.shape[0]):
