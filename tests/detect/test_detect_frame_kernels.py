@@ -62,7 +62,8 @@ def test_residual_samples_are_the_samples_less_the_interpolated_level(step):
     grid = rng.normal(100.0, 3.0, (4, 5)).astype(np.float32)
     centres_y, centres_x = rows.reshape(4, -1).mean(axis=1), cols.reshape(5, -1).mean(axis=1)
     level_map = np.empty((rows.size, cols.size), np.float32)
-    stack = background._gather(image, rows, cols, (4, 5), (grid, centres_y, centres_x), level_map)
+    weights = background.residual_weights(centres_y, centres_x, rows, cols)
+    stack = background._gather(image, rows, cols, (4, 5), (grid, weights), level_map)
     expected_level = background._grid_map(grid, centres_y, centres_x, rows, cols, True)
     np.testing.assert_array_equal(level_map, expected_level)
     residual = image[np.ix_(rows, cols)] - expected_level

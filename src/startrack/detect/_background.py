@@ -234,18 +234,16 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
         ``level`` is the median of the tile levels, ``noise`` the lower quartile of the tile
         noises (:data:`CLEAN_SKY_QUANTILE`).
     """
-    rows, cols = _tile_rows_cols(image.shape, tile)
-    ny, nx = max(1, image.shape[0] // tile), max(1, image.shape[1] // tile)
-    centres_y = rows.reshape(ny, -1).mean(axis=1)  # the mean sampled row of each tile
-    centres_x = cols.reshape(nx, -1).mean(axis=1)
-    q_lo, median, q_hi = _stack_quantiles(_gather(image, rows, cols, (ny, nx)), (GAUSS_LO, 0.5, GAUSS_HI))
+    layout = _tile_layout(image.shape, tile)
+    rows, cols, centres_y, centres_x = layout.rows, layout.cols, layout.centres_y, layout.centres_x
+    q_lo, median = _stack_quantiles(_gather(image, rows, cols, layout.grid), (GAUSS_LO, 0.5))
     if not np.isfinite(median).any():
         return global_background(image)
     level, lower = _median3(median, linear=True), _median3(median - q_lo)
     # noise from the residual, so that a gradient across a tile does not count as noise
     keep_map = rows.size == image.shape[0] and cols.size == image.shape[1]
     level_map = np.empty((rows.size, cols.size), np.float32)
-    residual = _gather(image, rows, cols, (ny, nx), (level, centres_y, centres_x), level_map)
+    residual = _gather(image, rows, cols, layout.grid, (level, layout.weights), level_map)
     q_lo, q_mid, q_hi = _stack_quantiles(residual, (GAUSS_LO, 0.5, GAUSS_HI))
     noise = _median3(0.5 * (q_hi - q_lo) * (upper_tail_factor(q_lo, q_mid, q_hi) if skewed else 1.0))
     noise_global = _grid_quantile(noise, CLEAN_SKY_QUANTILE)
@@ -338,26 +336,63 @@ def _tile_rows_cols(shape: tuple[int, int], tile: int) -> tuple[NDArray, NDArray
     return rows, cols
 
 
+AxisWeights = tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]
+"""Rows' and columns' interpolation weights (y0, y1, wy, x0, x1, wx), the weights float32
+(:func:`residual_weights`)."""
+
+
+@dataclass(frozen=True)
+class _TileLayout:
+    """Where a tiled model of an image of one shape samples it (:func:`_tile_rows_cols`): the
+    sampled rows and columns, the tile grid (ny, nx), the tile centres (the mean sampled row and
+    column of each tile) and the samples' interpolation weights between them. Shared between
+    calls (:func:`_tile_layout` caches it): not to be written to (the compiled loops take
+    writeable arrays, so they are not flagged read-only)."""
+
+    rows: NDArray
+    cols: NDArray
+    grid: tuple[int, int]
+    centres_y: NDArray
+    centres_x: NDArray
+    weights: AxisWeights
+
+
+@functools.lru_cache(maxsize=16)
+def _tile_layout(shape: tuple[int, int], tile: int) -> _TileLayout:
+    """The :class:`_TileLayout` of ``tile`` x ``tile`` tiles on an image of ``shape`` (the same
+    for every frame of a camera, so computed once)."""
+    rows, cols = _tile_rows_cols(shape, tile)
+    ny, nx = max(1, shape[0] // tile), max(1, shape[1] // tile)
+    centres_y, centres_x = rows.reshape(ny, -1).mean(axis=1), cols.reshape(nx, -1).mean(axis=1)
+    return _TileLayout(rows, cols, (ny, nx), centres_y, centres_x, residual_weights(centres_y, centres_x, rows, cols))
+
+
+def residual_weights(centres_y: NDArray, centres_x: NDArray, rows: NDArray, cols: NDArray) -> AxisWeights:
+    """The interpolation weights (extrapolated beyond the outer centres, :func:`_axis_weights`)
+    of the sampled ``rows`` and ``cols`` between tile centres, weights as float32."""
+    y0, y1, wy = _axis_weights(centres_y, rows.astype(float), True)
+    x0, x1, wx = _axis_weights(centres_x, cols.astype(float), True)
+    return y0, y1, wy.astype(np.float32), x0, x1, wx.astype(np.float32)
+
+
 def _gather(image: NDArray, rows: NDArray, cols: NDArray, grid: tuple[int, int],
-            level: tuple[NDArray, NDArray, NDArray] | None = None,
+            level: tuple[NDArray, AxisWeights] | None = None,
             level_map: NDArray[np.float32] | None = None) -> NDArray:
     """The samples ``image[rows] x [cols]`` (:func:`_tile_rows_cols`) tile by tile, shape
-    (ny, nx, n_rows * n_cols), in the image's type; with ``level`` (a level grid and its tile
-    centres in the image's pixels), their residuals from the level interpolated bilinearly
-    (extrapolated beyond the outer centres, :func:`_axis_weights`), which is also written to
-    ``level_map`` (shape (len(rows), len(cols)), allocated when None) -- one compiled pass
-    (:func:`.frame_kernels.gather_tiles`, :func:`.frame_kernels.gather_residuals`)."""
+    (ny, nx, n_rows * n_cols), in the image's type; with ``level`` (a level grid and the samples'
+    weights between its tile centres, :func:`residual_weights`), their residuals from the level
+    interpolated bilinearly (extrapolated beyond the outer centres, :func:`_axis_weights`), which
+    is also written to ``level_map`` (shape (len(rows), len(cols)), allocated when None) -- one
+    compiled pass (:func:`.frame_kernels.gather_tiles`, :func:`.frame_kernels.gather_residuals`)."""
     ny, nx = grid
     size = (rows.size // ny) * (cols.size // nx)
     if level is None:
         return kernels().gather_tiles(image, rows, cols, np.empty((ny, nx, size), image.dtype))
-    values, centres_y, centres_x = level
-    y0, y1, wy = _axis_weights(centres_y, rows.astype(float), True)
-    x0, x1, wx = _axis_weights(centres_x, cols.astype(float), True)
+    values, (y0, y1, wy, x0, x1, wx) = level
     out = np.empty((ny, nx, size), np.result_type(image.dtype, np.float32))
     level_map = np.empty((rows.size, cols.size), np.float32) if level_map is None else level_map
-    return kernels().gather_residuals(image, rows, cols, values.astype(np.float32), y0, y1, wy.astype(np.float32),
-                                      x0, x1, wx.astype(np.float32), out, level_map)
+    return kernels().gather_residuals(image, rows, cols, values.astype(np.float32), y0, y1, wy, x0, x1, wx, out,
+                                      level_map)
 
 
 def _tile_samples(image: NDArray, tile: int) -> tuple[NDArray, NDArray, NDArray]:
