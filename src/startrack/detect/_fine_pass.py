@@ -32,6 +32,8 @@ and, to join the binned pass's:
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -40,6 +42,7 @@ from ._deblend import split_regions
 from ._filters import peak_away_from_edge
 from ._label import Regions, label_regions, regions_from_index
 from ._smooth import detection_image, smooth
+from ._threshold import significance
 from ._windows import extract_windows
 
 GROW_STEPS = 2
@@ -120,28 +123,40 @@ def fine_significance(data: NDArray, invalid: NDArray[np.bool_] | None, kernel: 
     """The full-resolution pass's significance image, shape (H, W): the ``kernel``-smoothed
     plane's local contrast (:func:`local_contrast`) over its tiled noise, in noise units; None
     when the image has no noise (a constant plane). Arguments as :func:`fine_regions`'s."""
-    det = local_contrast(detection_image(data, 1, kernel, kernel_px, invalid))
+    det = local_contrast(detection_image(data, 1, kernel, kernel_px, invalid), may_hold_nan=invalid is not None)
     model = tiled_background(det, tile_px, skewed=skewed)
     if model.noise <= 0:
         return None
-    h, w = det.shape  # the local contrast has one level over the frame (its median, below 0 for
-    # skewed noise): only the noise is mapped
-    noise = np.asarray(model.noise_map(np.arange(h), np.arange(w)), dtype=np.float32)
-    return np.asarray((det - np.float32(model.level)) / noise, dtype=np.float32)
+    # the local contrast has one level over the frame (its median, below 0 for skewed noise): the
+    # tiles' level grid is replaced by that constant, and only the noise is interpolated
+    tiles = model.tiles
+    if tiles is not None:
+        tiles = replace(tiles, level=np.full_like(tiles.level, np.float32(model.level)))
+    return significance(det, replace(model, tiles=tiles, level_map=None))
 
 
-def local_contrast(image: NDArray[np.float32]) -> NDArray[np.float32]:
+def local_contrast(image: NDArray[np.float32], may_hold_nan: bool = True) -> NDArray[np.float32]:
     """``image`` less its mean over :data:`LOCAL_BOX_PX`-pixel boxes (a difference of kernels):
     what a gradient, the edge of a roof or a tree, or the low-frequency part of a JPEG's noise
     adds to the neighbourhood of a sharp star goes; NaN pixels stay NaN (the box mean is taken
-    over the valid pixels)."""
+    over the valid pixels). ``may_hold_nan`` False: the caller knows every pixel is finite (no
+    scan for NaN)."""
+    if not may_hold_nan:
+        return _less_box_mean(image)
     valid = np.isfinite(image)
     if valid.all():
-        return image - smooth(image, "box", LOCAL_BOX_PX)
+        return _less_box_mean(image)
     total = smooth(np.where(valid, image, 0.0).astype(np.float32), "box", LOCAL_BOX_PX)
     weight = smooth(valid.astype(np.float32), "box", LOCAL_BOX_PX)
     with np.errstate(invalid="ignore", divide="ignore"):
         return image - total / weight
+
+
+def _less_box_mean(image: NDArray[np.float32]) -> NDArray[np.float32]:
+    """``image - smooth(image, "box", LOCAL_BOX_PX)``, the difference written over the smoothed
+    array (no second frame-sized temporary)."""
+    box = smooth(image, "box", LOCAL_BOX_PX)
+    return np.subtract(image, box, out=box)
 
 
 def add_new_regions(base: Regions, extra: Regions, values: NDArray, unsplit: NDArray[np.bool_],
