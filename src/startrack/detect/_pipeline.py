@@ -7,6 +7,7 @@ grouping -> deblend, edge -> spot measurements and filters -> centroid -> Detect
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,7 +42,7 @@ from ._fine_pass import (
 from ._label import Regions, label_regions
 from ._magnitude import instrument_magnitude
 from ._merge import brightest_first
-from ._point_source import core_shape, point_quality, saturated_spots
+from ._point_source import core_shape, frame_top, point_quality, saturated_spots
 from ._prefilters import packing, prefilter
 from ._prepare import PreparedImage, prepare_image
 from ._region_grow import grow_regions
@@ -111,6 +112,12 @@ class Frame:
     noise_px: float
     binning: int
     x_offset: int
+
+    @functools.cached_property
+    def top(self) -> float:
+        """The prepared plane's largest value (:func:`.point_source.frame_top`): the level of a
+        saturated (clipped) star's core."""
+        return frame_top(self.prepared.data)
 
 
 def detect_frame(cfg: DetectionSettings, image: NDArray, dark: NDArray | None) -> DetectionDetails:
@@ -219,7 +226,7 @@ def with_fine_pass(cfg: DetectionSettings, frame: Frame, kept: MeasuredRegions, 
     fine = fine_regions(data, frame.prepared.invalid, cfg.kernel, cfg.kernel_px, cfg.tile_px, fine_sigma,
                         cfg.grow_sigma, 1 if cfg.reject_edge else 0, cfg.deblend, frame.skewed, snr=snr)
     base = kept.spots
-    unsplit = saturated_spots(regions, kept.raw, data) | (not cfg.deblend)
+    unsplit = saturated_spots(regions, kept.raw, frame.top) | (not cfg.deblend)
     unsplit |= ring_noise_ratio(data, base.x, base.y, frame.noise_px, BLEND_RING_PX) > MAX_BLEND_RING_NOISE
     extra = filter_spots(cfg, frame, measure_regions(frame, fine))
     spots = extra.spots
@@ -228,7 +235,7 @@ def with_fine_pass(cfg: DetectionSettings, frame: Frame, kept: MeasuredRegions, 
     taken[found.y, found.x] = True
     # a saturated star the binned pass left out was cut by the border or rejected for its shape;
     # an extended spot is structure, not the sharp star this pass is for
-    quiet &= ~touches(extra.regions, taken) & ~saturated_spots(extra.regions, extra.raw, data)
+    quiet &= ~touches(extra.regions, taken) & ~saturated_spots(extra.regions, extra.raw, frame.top)
     quiet &= point_like(frame, kept, extra)
     return measure_regions(frame, add_new_regions(regions, extra.regions, data, unsplit, quiet))
 
@@ -356,7 +363,7 @@ def pack(cfg: DetectionSettings, frame: Frame, inputs: CentroidInputs, k_sigma: 
         x=x + frame.x_offset, y=y, flux=flux, sigma_px=sigma, area_px=spots.area_px.astype(np.int64),
         peak=spots.peak, elongation=spots.elongation, background=frame.model.level,
         noise=frame.noise_px, width=full_width, height=frame.prepared.data.shape[0],
-        point_quality=point_quality_of(inputs, peak_snr))
+        point_quality=point_quality_of(inputs, peak_snr, frame.top))
     details = DetectionDetails(
         detections=detections, mag=instrument_magnitude(flux, cfg.mag_zero_point),
         peak_snr=peak_snr, major_px=shape.major_px, minor_px=shape.minor_px,
@@ -364,12 +371,12 @@ def pack(cfg: DetectionSettings, frame: Frame, inputs: CentroidInputs, k_sigma: 
     return brightest_first(details, cfg.max_stars)
 
 
-def point_quality_of(inputs: CentroidInputs, peak_snr: NDArray) -> NDArray[np.float64]:
+def point_quality_of(inputs: CentroidInputs, peak_snr: NDArray, top: float) -> NDArray[np.float64]:
     """Point-source quality of the spots (:mod:`._point_source`); spots clipped at the frame's
-    largest value (at least two pixels) are saturated."""
+    largest value ``top`` (at least two pixels) are saturated."""
     regions, raw = inputs.regions, inputs.raw
     size, elongation = core_shape(regions, raw - inputs.level[regions.index], inputs.spots.peak)
-    return point_quality(size, elongation, peak_snr, saturated_spots(regions, raw, inputs.data))
+    return point_quality(size, elongation, peak_snr, saturated_spots(regions, raw, top))
 
 
 def empty_details(frame: Frame, full_width: int, cfg: DetectionSettings,

@@ -77,20 +77,26 @@ def core_shape(regions: Regions, signal: NDArray, peak: NDArray
     return np.sqrt(area / HALF_MAX_AREA), np.where(area >= MIN_SHAPE_PIXELS, elongation, 1.0)
 
 
-def saturated_spots(regions: Regions, raw: NDArray, data: NDArray) -> NDArray[np.bool_]:
+def saturated_spots(regions: Regions, raw: NDArray, top: float) -> NDArray[np.bool_]:
     """Spots with at least two pixels at the frame's largest value (clipped cores), shape (N,).
 
     Parameters
     ----------
     regions : Regions
     raw : ndarray, shape (M,)
-        Value of every region pixel in ``data`` (NaN where missing).
-    data : ndarray, shape (H, W)
-        The frame.
+        Value of every region pixel in the frame (NaN where missing).
+    top : float
+        The frame's largest value (:func:`frame_top`).
     """
-    top = float(np.nanmax(data)) if data.size else np.inf
     with np.errstate(invalid="ignore"):
         return regions.sum((raw >= top).astype(np.float64)) >= 2
+
+
+def frame_top(data: NDArray) -> float:
+    """The largest value of the frame ``data`` (H, W), NaN left out (inf when empty)."""
+    if not data.size:
+        return np.inf
+    return float(data.max() if data.dtype.kind in "biu" else np.nanmax(data))
 
 
 def point_quality(size: NDArray, elongation: NDArray, peak_snr: NDArray,
@@ -107,7 +113,7 @@ def point_quality(size: NDArray, elongation: NDArray, peak_snr: NDArray,
 def _references(size: NDArray, elongation: NDArray, peak_snr: NDArray) -> tuple[float, float]:
     """The frame's star size and elongation from its significant, measurable spots."""
     ok = np.isfinite(size) & np.isfinite(elongation) & (size > 0)
-    strong = ok & (np.nan_to_num(peak_snr) >= MIN_REFERENCE_SNR)
+    strong = ok & (peak_snr >= MIN_REFERENCE_SNR)  # NaN is not
     use = strong if strong.sum() >= MIN_REFERENCE_SPOTS else ok
     if not use.any():
         return 1.0, 1.0
