@@ -83,8 +83,10 @@ def peak_fraction(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y
     xs = np.clip(peak_x[:, None] + NEIGHBOURS_3X3[:, 1], 0, w - 1)
     window = signal_image[ys, xs].astype(np.float64) - level[:, None]
     peak = signal_image[peak_y, peak_x] - level
+    # NaN (missing) neighbours count as 0; an integer frame has none (np.nansum's copy skipped)
+    total = window.sum(axis=1) if signal_image.dtype.kind in "biu" else np.nansum(window, axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
-        return peak / np.nansum(window, axis=1)  # NaN (missing) neighbours count as 0
+        return peak / total
 
 
 def hot_pixel_ok(fraction: NDArray, max_peak_fraction: float | None) -> NDArray[np.bool_]:

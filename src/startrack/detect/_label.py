@@ -74,7 +74,10 @@ class Regions:
         return np.maximum.reduceat(np.where(top, np.arange(values.size), -1), self.starts)
 
     def select(self, keep: NDArray[np.bool_]) -> Regions:
-        """The regions where ``keep`` (shape (N,)) is True, renumbered 0 .. K-1."""
+        """The regions where ``keep`` (shape (N,)) is True, renumbered 0 .. K-1 (``self`` when it
+        keeps them all: a Regions is not changed after it is made)."""
+        if keep.all():
+            return self
         pixel_keep = keep[self.index]
         new_number = np.cumsum(keep) - 1
         index = new_number[self.index[pixel_keep]]

@@ -96,7 +96,10 @@ class MeasuredRegions:
         return len(self.regions)
 
     def take(self, keep: NDArray[np.bool_]) -> MeasuredRegions:
-        """The regions where ``keep`` (shape (N,)) is True, renumbered as :meth:`Regions.select`."""
+        """The regions where ``keep`` (shape (N,)) is True, renumbered as :meth:`Regions.select`
+        (``self`` when it keeps them all)."""
+        if keep.all():
+            return self
         pixels = keep[self.regions.index]
         return MeasuredRegions(self.regions.select(keep), self.raw[pixels], self.signal[pixels],
                                take_spots(self.spots, keep), self.peak_level[keep], self.local_noise[keep])
