@@ -80,3 +80,26 @@ def test_no_regions():
     regions = Regions(*(np.zeros(0, np.int64),) * 4)
     assert measure_spots(regions, np.zeros(0)).x.size == 0
     assert core_shape(regions, np.zeros(0), np.zeros(0))[0].size == 0
+
+
+def test_local_peaks_are_numpys_neighbour_comparison():
+    """Peaks against the clipped-index numpy comparison: plateaus (>=), the border (a pixel is its
+    own neighbour there), NaN (never a peak, and no peak beside one) and a threshold that float32
+    cannot hold (compared in the image's type)."""
+    from startrack.detect._deblend import local_peaks
+
+    rng = np.random.default_rng(4)
+    snr = np.round(rng.normal(5.0, 2.0, (40, 50)), 1).astype(np.float32)  # ties
+    snr[7, 9] = np.nan
+    mask = rng.uniform(size=snr.shape) < 0.5
+    yy, xx = np.nonzero(mask)
+    regions = regions_from_index(np.zeros(yy.size, np.int64), yy, xx, 1)
+    offsets = np.array([(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx])
+    ny = np.clip(regions.y[:, None] + offsets[:, 0], 0, 39)
+    nx = np.clip(regions.x[:, None] + offsets[:, 1], 0, 49)
+    value = snr[regions.y, regions.x]
+    threshold = 5.1  # not a float32 value
+    expected = (value > np.float32(threshold)) & np.all(value[:, None] >= snr[ny, nx], axis=1)
+    got = local_peaks(regions, snr, threshold)
+    np.testing.assert_array_equal(got, expected)
+    assert 5 < got.sum() < got.size

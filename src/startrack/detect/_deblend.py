@@ -20,9 +20,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ._compiled import region_kernels
 from ._label import Regions, regions_from_index
 
-NEIGHBOUR_OFFSETS = np.array([(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx])
 DEFAULT_VALLEY = 0.7
 """A second peak counts as a star when the saddle towards a brighter one is below 70 % of it."""
 
@@ -31,13 +31,10 @@ MAX_PEAKS = 32
 
 
 def local_peaks(regions: Regions, snr: NDArray, min_sigma: float) -> NDArray[np.bool_]:
-    """True for region pixels that are local maxima of ``snr`` (8 neighbours, >=) above
-    ``min_sigma``; shape (M,)."""
-    h, w = snr.shape
-    value = snr[regions.y, regions.x]
-    ny = np.clip(regions.y[:, None] + NEIGHBOUR_OFFSETS[:, 0], 0, h - 1)
-    nx = np.clip(regions.x[:, None] + NEIGHBOUR_OFFSETS[:, 1], 0, w - 1)
-    return (value > min_sigma) & np.all(value[:, None] >= snr[ny, nx], axis=1)
+    """True for region pixels that are local maxima of ``snr`` (8 neighbours, >=, indices
+    clamped to the image) above ``min_sigma`` (compared in ``snr``'s type); shape (M,). One
+    compiled loop (:func:`.region_kernels.local_peaks`)."""
+    return region_kernels().local_peaks(regions.y, regions.x, snr, snr.dtype.type(min_sigma))
 
 
 def _dips_below(snr: NDArray, a: NDArray, b: NDArray, level: float) -> bool:

@@ -74,3 +74,22 @@ def signal_sums(starts, signal):
                 best, where = v, p
         sums[r, 0], sums[r, 1], top[r] = total, squares, where
     return sums, top
+
+
+@njit(cache=True, error_model="numpy")
+def local_peaks(y, x, snr, min_sigma):
+    """Which pixels (``y``, ``x``) (M,) int64 of the image ``snr`` (h, w) are above ``min_sigma``
+    (of ``snr``'s type) and at least as high as each of their 8 neighbours (indices clamped to
+    the image): (M,) bool, :func:`.deblend.local_peaks`."""
+    h, w = snr.shape
+    out = np.empty(y.size, np.bool_)
+    for p in range(y.size):
+        v = snr[y[p], x[p]]
+        peak = v > min_sigma
+        for dy in range(-1, 2):
+            row = min(max(y[p] + dy, 0), h - 1)
+            for dx in range(-1, 2):
+                if peak and (dy != 0 or dx != 0):
+                    peak = v >= snr[row, min(max(x[p] + dx, 0), w - 1)]  # False against NaN
+        out[p] = peak
+    return out
