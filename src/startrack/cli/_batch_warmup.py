@@ -25,9 +25,11 @@ from ..camera import Camera
 from ..warm_up import solve_catalog_stars
 from ._process_gc import collection_paused, no_collection_at_exit
 
-COMPILE_ESTIMATE_S = 30
+COMPILE_ESTIMATE_S = 60
 """What compiling every kernel takes on the 2-core reference machine, for the message: 22-44 s
-measured by ``benchmarks/startup_benchmark.py --cold`` with the machine shared (load 3-4)."""
+measured by ``benchmarks/startup_benchmark.py --cold`` with the machine shared (load 3-4) before
+the detector's per-region and uncertainty loops were compiled, 59 s on 2026-12-06 after (the
+same machine then ran the earlier code's compile in 48 s)."""
 
 
 class _CompileNotice:
