@@ -1,9 +1,12 @@
 """The compiled loops over the pixel lists of :class:`.label.Regions` (numba): per-region
-weighted moments and signal sums, each region's pixels in two short passes.
+weighted moments and signal sums (each region's pixels in two short passes), and the local peaks
+of the deblender.
 
-They give the values of the ``np.add.reduceat`` expressions of :func:`.centroid.measure_spots`
-and :func:`.point_source.core_shape` that they replace, summed pixel after pixel (numpy sums a
-long region pairwise, so the two may differ in the last bits). Loaded on first use through
+They give the values of the numpy expressions of :func:`.centroid.measure_spots`,
+:func:`.point_source.core_shape` and :func:`.deblend.local_peaks` that they replace, sums taken
+pixel after pixel (numpy's ``np.add.reduceat`` sums a long region pairwise, so the two may
+differ in the last bits; ``tests/detect/test_detect_region_kernels.py`` keeps the numpy versions
+as the reference). Loaded on first use through
 :func:`.compiled.region_kernels`; cached on disk (``cache=True``); numpy's error model (0 / 0 is
 NaN, as in numpy).
 """

@@ -1,10 +1,12 @@
 """The compiled loops of the windowed centroider (numba): the fixed-point iteration of
-:mod:`._centroid_windowed` over a stack of windows.
+:mod:`._centroid_windowed` over a stack of windows, and its linearised uncertainty.
 
 Each loop gives the numbers of the numpy expressions it replaces, operation for operation (the
 separable moments summed along x first, then along y, as :func:`.frame_kernels.separable_moments`
-does), so a centroid does not depend on which one ran; numba's ``exp`` may differ from numpy's in
-the last bit, which moves a centroid by far less than 1e-10 px. Loaded on first use through
+does), so a centroid does not depend on which one ran; numba's ``exp`` and ``erf`` may differ
+from numpy's and scipy's in the last bit, which moves a centroid by far less than 1e-10 px (and
+its uncertainty by a relative 1e-15; ``tests/detect/test_detect_window_kernels.py`` keeps the
+numpy versions as the reference). Loaded on first use through
 :func:`.compiled.window_kernels` (importing startrack does not import numba); cached on disk
 (``cache=True``); numpy's error model (a division by zero gives inf or NaN, as in numpy).
 """
