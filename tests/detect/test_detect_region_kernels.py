@@ -103,3 +103,20 @@ def test_local_peaks_are_numpys_neighbour_comparison():
     got = local_peaks(regions, snr, threshold)
     np.testing.assert_array_equal(got, expected)
     assert 5 < got.sum() < got.size
+
+
+@pytest.mark.parametrize("with_nan", [False, True])
+def test_psf_width_estimate_is_the_median_formula(with_nan):
+    """The windowed centroider's PSF width from the brighter half of the spots, as np.median
+    gives it (a NaN flux makes numpy's median NaN: no spot counts as bright, the width is 1 px)."""
+    from startrack.detect._centroiders import MIN_PSF_SIGMA_PX, SIZE_TO_SIGMA, estimate_psf_sigma
+
+    regions, signal = _regions(60, 5)
+    spots = measure_spots(regions, np.nan_to_num(signal))
+    if with_nan:
+        spots = type(spots)(**{**spots.__dict__, "flux": np.where(np.arange(60) == 7, np.nan, spots.flux)})
+    bright = spots.size_px[spots.flux >= np.median(spots.flux)]
+    bright = bright[np.isfinite(bright)]
+    expected = max(MIN_PSF_SIGMA_PX, SIZE_TO_SIGMA * float(np.median(bright)) if bright.size else 1.0)
+    assert estimate_psf_sigma(spots) == expected
+    assert (bright.size == 0) == with_nan
