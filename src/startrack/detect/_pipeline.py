@@ -50,6 +50,7 @@ from ._settings import DetectionSettings
 from ._shape import smear_ok, spot_shape
 from ._smooth import detection_image
 from ._threshold import significance
+from ._windows import fast_median
 
 EDGE_MARGIN_PX = 2
 """A spot whose peak is closer than this to the border (full-resolution px) is cut off."""
@@ -265,7 +266,7 @@ def stars_are_sharp(frame: Frame, kept: MeasuredRegions) -> bool:
     peak = regions.max(signal)
     size, _ = core_shape(regions, signal, peak)
     significant = np.isfinite(size) & (peak >= SHARP_MIN_SNR * frame.noise_px)
-    return significant.sum() < 3 or float(np.median(size[significant])) < SHARP_CORE_PX
+    return significant.sum() < 3 or float(fast_median(size[significant])) < SHARP_CORE_PX  # finite sizes
 
 
 def dynamic_sigma(peak_snr: NDArray, cfg: DetectionSettings) -> float:
