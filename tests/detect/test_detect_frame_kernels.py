@@ -179,3 +179,17 @@ def test_argmax_takes_the_last_of_equal_values_and_nan():
                       starts=np.array([0, 3, 5]))
     values = np.array([2.0, 5.0, 5.0, np.nan, 1.0, -1.0])
     np.testing.assert_array_equal(regions.argmax(values), [2, 3, 5])
+
+
+@pytest.mark.parametrize("step", [1, 3, 6])
+def test_strided_level_map_is_the_grid_map(step):
+    """The pixel-noise sample's level (cached axis weights) is the tile grid's map on its rows and columns."""
+    rng = np.random.default_rng(9)
+    yy, xx = np.mgrid[0:90, 0:150]
+    image = (50.0 + 0.05 * xx + 0.02 * yy + rng.normal(0, 2.0, yy.shape)).astype(np.float32)
+    tiles = background.tiled_background(image, 16, scale=2.0, offset=0.5).tiles
+    shape = (len(range(0, 180, step)), len(range(0, 300, step)))
+    expected = tiles.map(tiles.level, step * np.arange(shape[0]), step * np.arange(shape[1]), True)
+    for _ in range(2):  # the second time from the cache
+        got = background._strided_map(tiles.level, tiles.centres_y, tiles.centres_x, shape, step)
+        np.testing.assert_array_equal(got, expected)

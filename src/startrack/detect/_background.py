@@ -186,6 +186,24 @@ def _grid_map(grid: NDArray, centres_y: NDArray, centres_x: NDArray, ys: NDArray
     return kernels().grid_map(grid.astype(np.float32), y0, y1, wy.astype(np.float32), x0, x1, wx.astype(np.float32))
 
 
+def _strided_map(grid: NDArray, centres_y: NDArray, centres_x: NDArray, shape: tuple[int, int],
+                 step: int) -> NDArray[np.float32]:
+    """:func:`_grid_map` of ``grid`` (extrapolated) on the rows and columns ``step * arange(n)``
+    of a strided sample of ``shape`` (n_rows, n_cols), the axis weights cached
+    (:func:`_strided_weights`: the same for every frame of a camera)."""
+    y0, y1, wy = _strided_weights(tuple(centres_y.tolist()), shape[0], step)
+    x0, x1, wx = _strided_weights(tuple(centres_x.tolist()), shape[1], step)
+    return kernels().grid_map(grid.astype(np.float32), y0, y1, wy, x0, x1, wx)
+
+
+@functools.lru_cache(maxsize=16)
+def _strided_weights(centres: tuple[float, ...], n: int, step: int) -> tuple[NDArray, NDArray, NDArray]:
+    """:func:`_axis_weights` (extrapolated) of the coordinates ``step * arange(n)`` between
+    ``centres``, the weights float32. Shared between calls: not to be written to."""
+    i0, i1, weight = _axis_weights(np.array(centres), step * np.arange(n, dtype=float), True)
+    return i0, i1, weight.astype(np.float32)
+
+
 def global_background(image: NDArray) -> BackgroundModel:
     """A constant background model from a subsample of the whole image.
 
@@ -466,12 +484,13 @@ def pixel_noise(image: NDArray, model: BackgroundModel) -> float:
     tiles = model.tiles
     level: NDArray | float = model.level
     if tiles is not None:
-        level = tiles.map(tiles.level, step * np.arange(sample.shape[0]), step * np.arange(sample.shape[1]), True)
+        level = _strided_map(tiles.level, tiles.centres_y, tiles.centres_x, sample.shape, step)
     finite = np.ravel if np.issubdtype(sample.dtype, np.integer) else _finite  # integers are finite (so is the level)
     sample = sample.astype(np.float64)
     q = quantization_step(finite(sample))
-    if q > 0:
-        level = q * np.round(np.asarray(level, dtype=np.float64) / q)
+    if q > 0:  # np.rint is np.round's value at 0 decimals; a step of 1 needs no scaling
+        level = np.asarray(level, dtype=np.float64)
+        level = np.rint(level) if q == 1 else q * np.rint(level / q)
     residual = finite(sample - level)
     return clipped_level_noise(residual, q, upper_half=True)[1] if residual.size else 0.0
 
