@@ -191,16 +191,22 @@ def _strided_map(grid: NDArray, centres_y: NDArray, centres_x: NDArray, shape: t
     """:func:`_grid_map` of ``grid`` (extrapolated) on the rows and columns ``step * arange(n)``
     of a strided sample of ``shape`` (n_rows, n_cols), the axis weights cached
     (:func:`_strided_weights`: the same for every frame of a camera)."""
-    y0, y1, wy = _strided_weights(tuple(centres_y.tolist()), shape[0], step)
-    x0, x1, wx = _strided_weights(tuple(centres_x.tolist()), shape[1], step)
+    y0, y1, wy = strided_weights(centres_y, shape[0], step)
+    x0, x1, wx = strided_weights(centres_x, shape[1], step)
     return kernels().grid_map(grid.astype(np.float32), y0, y1, wy, x0, x1, wx)
 
 
-@functools.lru_cache(maxsize=16)
-def _strided_weights(centres: tuple[float, ...], n: int, step: int) -> tuple[NDArray, NDArray, NDArray]:
-    """:func:`_axis_weights` (extrapolated) of the coordinates ``step * arange(n)`` between
-    ``centres``, the weights float32. Shared between calls: not to be written to."""
-    i0, i1, weight = _axis_weights(np.array(centres), step * np.arange(n, dtype=float), True)
+def strided_weights(centres: NDArray, n: int, step: int, offset: float = 0.0) -> tuple[NDArray, NDArray, NDArray]:
+    """:func:`_axis_weights` (extrapolated) of the coordinates ``offset + step * arange(n)``
+    between ``centres``, the weights float32; cached (the same for every frame of a camera), so
+    the arrays are shared between calls and not to be written to."""
+    return _strided_weights(tuple(centres.tolist()), n, step, offset)
+
+
+@functools.lru_cache(maxsize=32)
+def _strided_weights(centres: tuple[float, ...], n: int, step: int, offset: float) -> tuple[NDArray, NDArray, NDArray]:
+    """:func:`strided_weights` of hashable arguments."""
+    i0, i1, weight = _axis_weights(np.array(centres), offset + step * np.arange(n, dtype=float), True)
     return i0, i1, weight.astype(np.float32)
 
 

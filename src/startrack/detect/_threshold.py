@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ._background import BackgroundModel, _axis_weights
+from ._background import BackgroundModel, strided_weights
 from ._compiled import kernels
 from ._smooth import empty_apart
 
@@ -35,8 +35,7 @@ def significance(image: NDArray[np.float32], model: BackgroundModel, binning: in
     ndarray of float32, shape (h, w)
     """
     h, w = image.shape
-    centre = (binning - 1) / 2
-    ys, xs = centre + binning * np.arange(h), centre + binning * np.arange(w)
+    centre = (binning - 1) / 2  # of the image's pixel (i, j) in full-resolution pixels: centre + binning * (i, j)
     image = np.asarray(image, dtype=np.float32)
     tiles = model.tiles
     if tiles is None:
@@ -45,14 +44,14 @@ def significance(image: NDArray[np.float32], model: BackgroundModel, binning: in
         cols_i, cols_f = np.zeros(w, np.int64), np.zeros(w, np.float32)
         return kernels().significance(image, level, inverse, rows_i, rows_i, rows_f, cols_i, cols_i, cols_f, 0,
                                       empty_apart(image.shape, image))
-    y0, y1, wy = _axis_weights(tiles.centres_y, ys, True)
-    x0, x1, wx = _axis_weights(tiles.centres_x, xs, True)
+    y0, y1, wy = strided_weights(tiles.centres_y, h, binning, centre)
+    x0, x1, wx = strided_weights(tiles.centres_x, w, binning, centre)
     level_map = model.level_map
     mapped = level_map is not None and level_map.shape == image.shape
     level = level_map if level_map is not None and mapped else tiles.level.astype(np.float32)
     out = empty_apart(image.shape, image, level)
-    return kernels().significance(image, level, tiles.noise.astype(np.float32), y0, y1, wy.astype(np.float32),
-                                  x0, x1, wx.astype(np.float32), 1 if mapped else 2, out)
+    return kernels().significance(image, level, tiles.noise.astype(np.float32), y0, y1, wy, x0, x1, wx,
+                                  1 if mapped else 2, out)
 
 
 def threshold_mask(snr: NDArray, k_sigma: float) -> NDArray[np.bool_]:
