@@ -120,3 +120,25 @@ def test_psf_width_estimate_is_the_median_formula(with_nan):
     expected = max(MIN_PSF_SIGMA_PX, SIZE_TO_SIGMA * float(np.median(bright)) if bright.size else 1.0)
     assert estimate_psf_sigma(spots) == expected
     assert (bright.size == 0) == with_nan
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_spot_axes_are_the_reduceat_values(seed):
+    """Jacobs 1995 axes against the numpy computation (unweighted moments, extents along and
+    across the long axis); directions compared modulo 180 deg."""
+    from startrack.detect._shape import spot_shape
+
+    regions, _ = _regions(60, seed)
+    x, y = regions.x.astype(np.float64), regions.y.astype(np.float64)
+    n = regions.counts
+    x0, y0 = regions.sum(x) / n, regions.sum(y) / n
+    dx, dy = x - x0[regions.index], y - y0[regions.index]
+    angle = 0.5 * np.arctan2(2.0 * regions.sum(dx * dy), regions.sum(dx * dx) - regions.sum(dy * dy))
+    c, s = np.cos(angle)[regions.index], np.sin(angle)[regions.index]
+    along, across = dx * c + dy * s, -dx * s + dy * c
+    got = spot_shape(regions)
+    np.testing.assert_allclose(got.major_px, regions.max(along) - regions.min(along) + 1.0, rtol=0, atol=1e-9)  # px
+    np.testing.assert_allclose(got.minor_px, regions.max(across) - regions.min(across) + 1.0, rtol=0, atol=1e-9)  # px
+    turn = (got.angle_deg - np.degrees(angle) + 90.0) % 180.0 - 90.0
+    np.testing.assert_allclose(turn, 0.0, atol=1e-9)  # deg
+    assert ((got.angle_deg > -90.0) & (got.angle_deg <= 90.0)).all() and (got.major_px > got.minor_px).any()

@@ -96,3 +96,42 @@ def local_peaks(y, x, snr, min_sigma):
                     peak = v >= snr[row, min(max(x[p] + dx, 0), w - 1)]  # False against NaN
         out[p] = peak
     return out
+
+
+@njit(cache=True, error_model="numpy")
+def spot_axes(starts, x, y):
+    """Jacobs 1995 axes of N regions (``starts`` as in :func:`weighted_moments`; ``x``, ``y`` (M,)
+    float64 pixel columns and rows), :func:`.shape.spot_shape`: (N, 3) float64, the extent along
+    and across the direction of the unweighted second moments (plus one pixel) and that
+    direction, radians in [-pi/2, pi/2]."""
+    n = starts.size
+    out = np.empty((n, 3))
+    for r in range(n):
+        lo, hi = starts[r], starts[r + 1] if r + 1 < n else x.size
+        sx = sy = 0.0
+        for p in range(lo, hi):
+            sx += x[p]
+            sy += y[p]
+        x0, y0 = sx / (hi - lo), sy / (hi - lo)
+        m20 = m02 = m11 = 0.0
+        for p in range(lo, hi):
+            dx, dy = x[p] - x0, y[p] - y0
+            m20 += dx * dx
+            m02 += dy * dy
+            m11 += dx * dy
+        angle = 0.5 * np.arctan2(2.0 * m11, m20 - m02)
+        c, s = np.cos(angle), np.sin(angle)
+        a_lo = a_hi = b_lo = b_hi = 0.0
+        for p in range(lo, hi):
+            dx, dy = x[p] - x0, y[p] - y0
+            along, across = dx * c + dy * s, -dx * s + dy * c
+            if p == lo or along < a_lo:
+                a_lo = along
+            if p == lo or along > a_hi:
+                a_hi = along
+            if p == lo or across < b_lo:
+                b_lo = across
+            if p == lo or across > b_hi:
+                b_hi = across
+        out[r, 0], out[r, 1], out[r, 2] = a_hi - a_lo + 1.0, b_hi - b_lo + 1.0, angle
+    return out
