@@ -311,6 +311,23 @@ def test_the_search_order_puts_point_sources_first_and_drops_repeats():
     np.testing.assert_array_equal(search_order(found), [0, 3, 4, 1])
 
 
+def test_the_search_order_keeps_each_positions_first_occurrence():
+    """Against np.unique's first occurrences, on lists with many repeated positions, some of them
+    repeated between a point source and an extended spot."""
+    from startrack.results import Detections
+    from startrack.solve import search_order
+
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        n = int(rng.integers(1, 60))
+        pos = rng.integers(0, 8, (n, 2)).astype(float) * 1.5
+        found = Detections(x=pos[:, 0], y=pos[:, 1], flux=np.sort(rng.uniform(1, 9, n))[::-1],
+                           point_quality=rng.choice([0.1, 1.0], n))
+        index = np.argsort(~found.is_point_source, kind="stable")
+        _, first = np.unique(np.column_stack([found.x[index], found.y[index]]), axis=0, return_index=True)
+        np.testing.assert_array_equal(search_order(found), index[np.sort(first)])
+
+
 def _cli(*argv) -> tuple[int, str, str]:
     import contextlib
     import io

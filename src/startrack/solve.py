@@ -202,9 +202,12 @@ def search_order(found) -> np.ndarray:
     or elongated last), each group brightest first, and a spot at exactly the position of an
     earlier one left out (it would only repeat it)."""
     index = np.argsort(~found.is_point_source, kind="stable")
-    xy = np.column_stack([found.x[index], found.y[index]])
-    _, first = np.unique(xy, axis=0, return_index=True)
-    return index[np.sort(first)]
+    x, y = found.x[index], found.y[index]
+    by_position = np.lexsort((y, x))  # stable: a repeated position's first occurrence comes first
+    again = (x[by_position[1:]] == x[by_position[:-1]]) & (y[by_position[1:]] == y[by_position[:-1]])
+    keep = np.ones(index.size, dtype=bool)
+    keep[by_position[1:][again]] = False
+    return index[keep]
 
 
 def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | None = None,
