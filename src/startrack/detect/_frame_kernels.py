@@ -144,7 +144,7 @@ def grid_at_points(grids, extrapolate, first, spacing, y, x):
         for k in range(k_grids):
             wy, wx = ty, tx
             if not extrapolate[k]:
-                wy, wx = min(max(wy, 0.0), 1.0), min(max(wx, 0.0), 1.0)
+                wy, wx = _clip(wy, 0.0, 1.0), _clip(wx, 0.0, 1.0)
             g = grids[k]
             top = g[y0, x0] * (1 - wx) + g[y0, x1] * wx
             bottom = g[y1, x0] * (1 - wx) + g[y1, x1] * wx
@@ -155,12 +155,26 @@ def grid_at_points(grids, extrapolate, first, spacing, y, x):
 @njit(cache=True, error_model="numpy")
 def _point_weight(coord, first, spacing, n):
     """Lower centre index and upper weight (clipped to [-0.75, 1.75]) of ``coord`` between ``n``
-    centres ``first + spacing * i`` (index 0 and weight 0 when ``n`` is 1)."""
+    centres ``first + spacing * i`` (index 0 and weight 0 when ``n`` is 1; a NaN coordinate gets
+    index 0 and a NaN weight, as numpy's clipped indices do)."""
     if n == 1:
         return 0, 0.0
     pos = (coord - first) / spacing
-    i0 = min(max(int(np.floor(pos)), 0), n - 2)
-    return i0, min(max(pos - i0, -0.75), 1.75)
+    if not pos >= 0.0:  # before the first centre, or NaN
+        i0 = 0
+    elif pos >= n - 2:
+        i0 = n - 2
+    else:
+        i0 = int(np.floor(pos))
+    return i0, _clip(pos - i0, -0.75, 1.75)
+
+
+@njit(cache=True, error_model="numpy")
+def _clip(value, low, high):
+    """``value`` clipped to [low, high], NaN kept (as ``np.minimum(np.maximum(...))``)."""
+    if value < low:
+        return low
+    return high if value > high else value
 
 
 @njit(cache=True, error_model="numpy")
