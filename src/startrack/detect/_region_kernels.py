@@ -34,24 +34,30 @@ def weighted_moments(starts, x, y, w):
     n = starts.size
     out = np.empty((n, MOMENTS))
     for r in range(n):
-        lo, hi = starts[r], starts[r + 1] if r + 1 < n else x.size
-        total = sx = sy = 0.0
-        for p in range(lo, hi):
-            total += w[p]
-            sx += w[p] * x[p]
-            sy += w[p] * y[p]
-        mx, my = sx / total, sy / total
-        cxx = cyy = cxy = spread = 0.0
-        for p in range(lo, hi):
-            dx, dy = x[p] - mx, y[p] - my
-            cxx += w[p] * dx * dx
-            cyy += w[p] * dy * dy
-            cxy += w[p] * dx * dy
-            if w[p] > 0:
-                spread += dx * dx + dy * dy
-        out[r, 0], out[r, 1], out[r, 2] = total, mx, my
-        out[r, 3], out[r, 4], out[r, 5], out[r, 6] = cxx / total, cyy / total, cxy / total, spread
+        _region_moments(x, y, w, starts[r], starts[r + 1] if r + 1 < n else x.size, out[r])
     return out
+
+
+@njit(cache=True, error_model="numpy")
+def _region_moments(x, y, w, lo, hi, out):
+    """:func:`weighted_moments` of the one region of pixels ``lo`` .. ``hi`` - 1, written into
+    ``out`` (:data:`MOMENTS`,)."""
+    total = sx = sy = 0.0
+    for p in range(lo, hi):
+        total += w[p]
+        sx += w[p] * x[p]
+        sy += w[p] * y[p]
+    mx, my = sx / total, sy / total
+    cxx = cyy = cxy = spread = 0.0
+    for p in range(lo, hi):
+        dx, dy = x[p] - mx, y[p] - my
+        cxx += w[p] * dx * dx
+        cyy += w[p] * dy * dy
+        cxy += w[p] * dx * dy
+        if w[p] > 0:
+            spread += dx * dx + dy * dy
+    out[0], out[1], out[2] = total, mx, my
+    out[3], out[4], out[5], out[6] = cxx / total, cyy / total, cxy / total, spread
 
 
 @njit(cache=True, error_model="numpy")
@@ -106,20 +112,12 @@ def spot_axes(starts, x, y):
     direction, radians in [-pi/2, pi/2]."""
     n = starts.size
     out = np.empty((n, 3))
+    ones, m = np.ones(x.size), np.empty(MOMENTS)
     for r in range(n):
         lo, hi = starts[r], starts[r + 1] if r + 1 < n else x.size
-        sx = sy = 0.0
-        for p in range(lo, hi):
-            sx += x[p]
-            sy += y[p]
-        x0, y0 = sx / (hi - lo), sy / (hi - lo)
-        m20 = m02 = m11 = 0.0
-        for p in range(lo, hi):
-            dx, dy = x[p] - x0, y[p] - y0
-            m20 += dx * dx
-            m02 += dy * dy
-            m11 += dx * dy
-        angle = 0.5 * np.arctan2(2.0 * m11, m20 - m02)
+        _region_moments(x, y, ones, lo, hi, m)  # unweighted: the moments over the count
+        x0, y0 = m[1], m[2]
+        angle = 0.5 * np.arctan2(2.0 * m[5], m[3] - m[4])
         c, s = np.cos(angle), np.sin(angle)
         a_lo = a_hi = b_lo = b_hi = 0.0
         for p in range(lo, hi):
