@@ -181,16 +181,22 @@ def _grid_map(grid: NDArray, centres_y: NDArray, centres_x: NDArray, ys: NDArray
     """Bilinear interpolation of ``grid`` (values at centres_y x centres_x) on the grid of rows
     ``ys`` x columns ``xs`` (beyond the outer centres: see :func:`_axis_weights`); float32
     array of shape (len(ys), len(xs)), along x first (:func:`.frame_kernels.grid_map`)."""
-    y0, y1, wy = _axis_weights(centres_y, np.asarray(ys, dtype=float), extrapolate)
-    x0, x1, wx = _axis_weights(centres_x, np.asarray(xs, dtype=float), extrapolate)
-    return kernels().grid_map(grid.astype(np.float32), y0, y1, wy.astype(np.float32), x0, x1, wx.astype(np.float32))
+    y0, y1, wy = _axis_weights32(centres_y, np.asarray(ys, dtype=float), extrapolate)
+    x0, x1, wx = _axis_weights32(centres_x, np.asarray(xs, dtype=float), extrapolate)
+    return kernels().grid_map(grid.astype(np.float32), y0, y1, wy, x0, x1, wx)
+
+
+def _axis_weights32(centres: NDArray, coords: NDArray, extrapolate: bool = True) -> tuple[NDArray, NDArray, NDArray]:
+    """:func:`_axis_weights` with the weights as float32, as the compiled loops take them."""
+    i0, i1, weight = _axis_weights(centres, coords, extrapolate)
+    return i0, i1, weight.astype(np.float32)
 
 
 def _strided_map(grid: NDArray, centres_y: NDArray, centres_x: NDArray, shape: tuple[int, int],
                  step: int) -> NDArray[np.float32]:
     """:func:`_grid_map` of ``grid`` (extrapolated) on the rows and columns ``step * arange(n)``
     of a strided sample of ``shape`` (n_rows, n_cols), the axis weights cached
-    (:func:`_strided_weights`: the same for every frame of a camera)."""
+    (:func:`strided_weights`: the same for every frame of a camera)."""
     y0, y1, wy = strided_weights(centres_y, shape[0], step)
     x0, x1, wx = strided_weights(centres_x, shape[1], step)
     return kernels().grid_map(grid.astype(np.float32), y0, y1, wy, x0, x1, wx)
@@ -206,8 +212,7 @@ def strided_weights(centres: NDArray, n: int, step: int, offset: float = 0.0) ->
 @functools.lru_cache(maxsize=32)
 def _strided_weights(centres: tuple[float, ...], n: int, step: int, offset: float) -> tuple[NDArray, NDArray, NDArray]:
     """:func:`strided_weights` of hashable arguments."""
-    i0, i1, weight = _axis_weights(np.array(centres), offset + step * np.arange(n, dtype=float), True)
-    return i0, i1, weight.astype(np.float32)
+    return _axis_weights32(np.array(centres), offset + step * np.arange(n, dtype=float))
 
 
 def global_background(image: NDArray) -> BackgroundModel:
@@ -394,9 +399,7 @@ def _tile_layout(shape: tuple[int, int], tile: int) -> _TileLayout:
 def residual_weights(centres_y: NDArray, centres_x: NDArray, rows: NDArray, cols: NDArray) -> AxisWeights:
     """The interpolation weights (extrapolated beyond the outer centres, :func:`_axis_weights`)
     of the sampled ``rows`` and ``cols`` between tile centres, weights as float32."""
-    y0, y1, wy = _axis_weights(centres_y, rows.astype(float), True)
-    x0, x1, wx = _axis_weights(centres_x, cols.astype(float), True)
-    return y0, y1, wy.astype(np.float32), x0, x1, wx.astype(np.float32)
+    return (*_axis_weights32(centres_y, rows.astype(float)), *_axis_weights32(centres_x, cols.astype(float)))
 
 
 def _gather(image: NDArray, rows: NDArray, cols: NDArray, grid: tuple[int, int],
