@@ -1,5 +1,7 @@
 """The per-region compiled loops (:mod:`startrack.detect._region_kernels`) behind
-``measure_spots`` and ``core_shape``, against the ``np.add.reduceat`` computations they replace."""
+``measure_spots``, ``core_shape``, ``spot_shape`` and the deblender's local peaks, against the
+numpy computations (``np.add.reduceat`` and neighbour comparisons) they replace; and the windowed
+centroider's PSF width, which reads those measurements."""
 
 from __future__ import annotations
 
@@ -54,7 +56,8 @@ def test_spot_measurements_are_the_reduceat_values(seed):
     regions, signal = _regions(60, seed)
     got = measure_spots(regions, signal)
     for name, expected in _numpy_spots(regions, signal).items():
-        np.testing.assert_allclose(getattr(got, name), expected, rtol=1e-12, atol=1e-9, err_msg=name)  # px, units
+        # px for positions and spreads, image units for fluxes, ratios for the rest
+        np.testing.assert_allclose(getattr(got, name), expected, rtol=1e-12, atol=1e-9, err_msg=name)
     assert np.isnan(got.x[1]) and np.isnan(got.peak[2]) and got.peak_x[3] == regions.x[regions.starts[4] - 1]
 
 
@@ -72,7 +75,7 @@ def test_core_shape_is_the_reduceat_value(seed):
                            regions.sum(core * dx * dy) / area)
     size, elongation = core_shape(regions, signal, peak)
     np.testing.assert_allclose(size, np.sqrt(area / HALF_MAX_AREA), rtol=1e-12)  # px
-    np.testing.assert_allclose(elongation, np.where(area >= MIN_SHAPE_PIXELS, ratio, 1.0), rtol=1e-12)
+    np.testing.assert_allclose(elongation, np.where(area >= MIN_SHAPE_PIXELS, ratio, 1.0), rtol=1e-12)  # ratio
     assert (elongation > 1.0).any()
 
 
