@@ -11,6 +11,7 @@ from startrack.detect import _background as background
 from startrack.detect import _label as label
 from startrack.detect import _smooth as smooth
 from startrack.detect import _threshold as threshold
+from startrack.detect import _tile_geometry as tile_geometry
 from startrack.detect import _windows as windows
 from startrack.detect._label import Regions
 
@@ -62,9 +63,9 @@ def test_residual_samples_are_the_samples_less_the_interpolated_level(step):
     grid = rng.normal(100.0, 3.0, (4, 5)).astype(np.float32)
     centres_y, centres_x = rows.reshape(4, -1).mean(axis=1), cols.reshape(5, -1).mean(axis=1)
     level_map = np.empty((rows.size, cols.size), np.float32)
-    weights = background.residual_weights(centres_y, centres_x, rows, cols)
+    weights = tile_geometry.residual_weights(centres_y, centres_x, rows, cols)
     stack = background._gather(image, rows, cols, (4, 5), (grid, weights), level_map)
-    expected_level = background._grid_map(grid, centres_y, centres_x, rows, cols, True)
+    expected_level = tile_geometry.grid_map(grid, centres_y, centres_x, rows, cols, True)
     np.testing.assert_array_equal(level_map, expected_level)
     residual = image[np.ix_(rows, cols)] - expected_level
     tiles = residual.reshape(4, rows.size // 4, 5, cols.size // 5).transpose(0, 2, 1, 3).reshape(4, 5, -1)
@@ -140,8 +141,8 @@ def test_grids_at_points_are_the_bilinear_interpolation(shape):
     x[:3], y[3:5] = np.nan, np.nan  # NaN in, NaN out where the axis has two tiles or more
 
     def numpy_bilinear(grid, extrapolate):
-        y0, y1, ty = background._axis_weights(tiles.centres_y, y, True)
-        x0, x1, tx = background._axis_weights(tiles.centres_x, x, True)
+        y0, y1, ty = tile_geometry.axis_weights(tiles.centres_y, y, True)
+        x0, x1, tx = tile_geometry.axis_weights(tiles.centres_x, x, True)
         if not extrapolate:
             ty, tx = np.clip(ty, 0.0, 1.0), np.clip(tx, 0.0, 1.0)
         top = grid[y0, x0] * (1 - tx) + grid[y0, x1] * tx
@@ -193,5 +194,5 @@ def test_strided_level_map_is_the_grid_map(step):
     shape = (len(range(0, 180, step)), len(range(0, 300, step)))
     expected = tiles.map(tiles.level, step * np.arange(shape[0]), step * np.arange(shape[1]), True)
     for _ in range(2):  # the second time from the cache
-        got = background._strided_map(tiles.level, tiles.centres_y, tiles.centres_x, shape, step)
+        got = tile_geometry.strided_map(tiles.level, tiles.centres_y, tiles.centres_x, shape, step)
         np.testing.assert_array_equal(got, expected)

@@ -13,6 +13,8 @@ upwards, gets its noise scaled to the width of the upper half (:func:`upper_tail
 the side a threshold cuts. A third grid, the *clutter* ratio, compares each tile's
 lower-half width (median - 15.87 % quantile, which stars cannot raise) with the clean sky's:
 about 1 on sky with or without stars, several times more on lit leaves or roof texture.
+Where the tiles sample the image and how their grids are interpolated is
+:mod:`._tile_geometry`'s.
 """
 
 from __future__ import annotations
@@ -26,10 +28,8 @@ from scipy import ndimage
 
 from ._compiled import kernels
 from ._robust import GAUSS_HI, GAUSS_LO, clipped_level_noise, quantization_step, strided_sample
+from ._tile_geometry import AxisWeights, grid_map, spacing, strided_map, tile_layout, tile_rows_cols
 from ._windows import fast_median, fast_quantile
-
-TILE_SAMPLES = 256
-"""Pixels per tile used for the tile statistics (a strided subsample)."""
 
 CLEAN_SKY_QUANTILE = 0.25
 """The global noise of a tiled model is this quantile of the tile noises: the clean sky even
@@ -65,13 +65,13 @@ class TileGrid:
 
     def map(self, grid: NDArray, ys: NDArray, xs: NDArray, extrapolate: bool) -> NDArray[np.float32]:
         """``grid`` (one of these grids) on the grid of rows ``ys`` x columns ``xs``
-        (:func:`_grid_map`)."""
-        return _grid_map(grid, self.centres_y, self.centres_x, ys, xs, extrapolate)
+        (:func:`.tile_geometry.grid_map`)."""
+        return grid_map(grid, self.centres_y, self.centres_x, ys, xs, extrapolate)
 
     def at_points(self, x: NDArray, y: NDArray, which: slice) -> NDArray[np.float64]:
         """The grids ``(level, noise, clutter)[which]`` at the points (x, y) (arrays of one shape),
         bilinearly interpolated (the level extended linearly beyond the outer centres, the others
-        held, :func:`_axis_weights`): float64 (K, *x.shape). One compiled loop
+        held, :func:`.tile_geometry.axis_weights`): float64 (K, *x.shape). One compiled loop
         (:func:`.frame_kernels.grid_at_points`)."""
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
         grids, extrapolate, first, spacing = self._stacked
@@ -84,13 +84,8 @@ class TileGrid:
         the first tile centre and the centre spacing (rows, columns), px."""
         grids = np.ascontiguousarray(np.stack([self.level, self.noise, self.clutter]), dtype=np.float64)
         first = np.array([self.centres_y[0], self.centres_x[0]], dtype=np.float64)
-        spacing = np.array([_spacing(self.centres_y), _spacing(self.centres_x)])
-        return grids, np.array([True, False, False]), first, spacing
-
-
-def _spacing(centres: NDArray) -> float:
-    """The spacing of equally spaced ``centres`` (1 for a single centre, where it is not used)."""
-    return float(centres[1] - centres[0]) if centres.size > 1 else 1.0
+        steps = np.array([spacing(self.centres_y), spacing(self.centres_x)])
+        return grids, np.array([True, False, False]), first, steps
 
 
 @dataclass(frozen=True)
@@ -158,63 +153,6 @@ class BackgroundModel:
         return tiles.at_points(x, y, slice(2, 3))[0]
 
 
-def _axis_weights(centres: NDArray, coords: NDArray, extrapolate: bool
-                  ) -> tuple[NDArray, NDArray, NDArray]:
-    """Lower index, upper index and upper weight of linear interpolation along one axis.
-
-    ``centres`` are equally spaced. Beyond the outer centres (the outer half tile) the value
-    is held constant, or, with ``extrapolate``, the line through the two outer centres is
-    extended (the weight clipped to [-0.75, 1.75]) so that a gradient is followed to the edge.
-    """
-    n = centres.size
-    if n == 1:
-        zero = np.zeros(coords.shape, dtype=np.int64)
-        return zero, zero, np.zeros(coords.shape)
-    pos = (coords - centres[0]) / (centres[1] - centres[0])
-    i0 = np.minimum(np.maximum(np.floor(pos).astype(np.int64), 0), n - 2)
-    low, high = (-0.75, 1.75) if extrapolate else (0.0, 1.0)
-    return i0, i0 + 1, np.minimum(np.maximum(pos - i0, low), high)
-
-
-def _grid_map(grid: NDArray, centres_y: NDArray, centres_x: NDArray, ys: NDArray, xs: NDArray,
-              extrapolate: bool) -> NDArray[np.float32]:
-    """Bilinear interpolation of ``grid`` (values at centres_y x centres_x) on the grid of rows
-    ``ys`` x columns ``xs`` (beyond the outer centres: see :func:`_axis_weights`); float32
-    array of shape (len(ys), len(xs)), along x first (:func:`.frame_kernels.grid_map`)."""
-    y0, y1, wy = _axis_weights32(centres_y, np.asarray(ys, dtype=float), extrapolate)
-    x0, x1, wx = _axis_weights32(centres_x, np.asarray(xs, dtype=float), extrapolate)
-    return kernels().grid_map(grid.astype(np.float32), y0, y1, wy, x0, x1, wx)
-
-
-def _axis_weights32(centres: NDArray, coords: NDArray, extrapolate: bool = True) -> tuple[NDArray, NDArray, NDArray]:
-    """:func:`_axis_weights` with the weights as float32, as the compiled loops take them."""
-    i0, i1, weight = _axis_weights(centres, coords, extrapolate)
-    return i0, i1, weight.astype(np.float32)
-
-
-def _strided_map(grid: NDArray, centres_y: NDArray, centres_x: NDArray, shape: tuple[int, int],
-                 step: int) -> NDArray[np.float32]:
-    """:func:`_grid_map` of ``grid`` (extrapolated) on the rows and columns ``step * arange(n)``
-    of a strided sample of ``shape`` (n_rows, n_cols), the axis weights cached
-    (:func:`strided_weights`: the same for every frame of a camera)."""
-    y0, y1, wy = strided_weights(centres_y, shape[0], step)
-    x0, x1, wx = strided_weights(centres_x, shape[1], step)
-    return kernels().grid_map(grid.astype(np.float32), y0, y1, wy, x0, x1, wx)
-
-
-def strided_weights(centres: NDArray, n: int, step: int, offset: float = 0.0) -> tuple[NDArray, NDArray, NDArray]:
-    """:func:`_axis_weights` (extrapolated) of the coordinates ``offset + step * arange(n)``
-    between ``centres``, the weights float32; cached (the same for every frame of a camera), so
-    the arrays are shared between calls and not to be written to."""
-    return _strided_weights(tuple(centres.tolist()), n, step, offset)
-
-
-@functools.lru_cache(maxsize=32)
-def _strided_weights(centres: tuple[float, ...], n: int, step: int, offset: float) -> tuple[NDArray, NDArray, NDArray]:
-    """:func:`strided_weights` of hashable arguments."""
-    return _axis_weights32(np.array(centres), offset + step * np.arange(n, dtype=float))
-
-
 def global_background(image: NDArray) -> BackgroundModel:
     """A constant background model from a subsample of the whole image.
 
@@ -263,7 +201,7 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
         ``level`` is the median of the tile levels, ``noise`` the lower quartile of the tile
         noises (:data:`CLEAN_SKY_QUANTILE`).
     """
-    layout = _tile_layout(image.shape, tile)
+    layout = tile_layout(image.shape, tile)
     rows, cols, centres_y, centres_x = layout.rows, layout.cols, layout.centres_y, layout.centres_x
     q_lo, median = _stack_quantiles(_gather(image, rows, cols, layout.grid), (GAUSS_LO, 0.5))
     if not np.isfinite(median).any():
@@ -349,68 +287,16 @@ def _pad_one(grid: NDArray, linear: bool) -> NDArray:
     return out
 
 
-def _tile_rows_cols(shape: tuple[int, int], tile: int) -> tuple[NDArray, NDArray]:
-    """The rows and columns of a regular subsample of every tile, about :data:`TILE_SAMPLES`
-    pixels each, tile after tile: shapes (ny * n_rows,), (nx * n_cols,) of int64.
-
-    The grid has max(1, H // tile) x max(1, W // tile) equal tiles; the last H % tile rows and
-    W % tile columns are left out.
-    """
-    h, w = shape
-    ny, nx = max(1, h // tile), max(1, w // tile)
-    tile_h, tile_w = h // ny, w // nx
-    step = max(1, int(np.sqrt(tile_h * tile_w / TILE_SAMPLES)))
-    rows = (np.arange(ny)[:, None] * tile_h + np.arange(0, tile_h, step)).ravel()
-    cols = (np.arange(nx)[:, None] * tile_w + np.arange(0, tile_w, step)).ravel()
-    return rows, cols
-
-
-AxisWeights = tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]
-"""Rows' and columns' interpolation weights (y0, y1, wy, x0, x1, wx), the weights float32
-(:func:`residual_weights`)."""
-
-
-@dataclass(frozen=True)
-class _TileLayout:
-    """Where a tiled model of an image of one shape samples it (:func:`_tile_rows_cols`): the
-    sampled rows and columns, the tile grid (ny, nx), the tile centres (the mean sampled row and
-    column of each tile) and the samples' interpolation weights between them. Shared between
-    calls (:func:`_tile_layout` caches it): not to be written to (the compiled loops take
-    writeable arrays, so they are not flagged read-only)."""
-
-    rows: NDArray
-    cols: NDArray
-    grid: tuple[int, int]
-    centres_y: NDArray
-    centres_x: NDArray
-    weights: AxisWeights
-
-
-@functools.lru_cache(maxsize=16)
-def _tile_layout(shape: tuple[int, int], tile: int) -> _TileLayout:
-    """The :class:`_TileLayout` of ``tile`` x ``tile`` tiles on an image of ``shape`` (the same
-    for every frame of a camera, so computed once)."""
-    rows, cols = _tile_rows_cols(shape, tile)
-    ny, nx = max(1, shape[0] // tile), max(1, shape[1] // tile)
-    centres_y, centres_x = rows.reshape(ny, -1).mean(axis=1), cols.reshape(nx, -1).mean(axis=1)
-    return _TileLayout(rows, cols, (ny, nx), centres_y, centres_x, residual_weights(centres_y, centres_x, rows, cols))
-
-
-def residual_weights(centres_y: NDArray, centres_x: NDArray, rows: NDArray, cols: NDArray) -> AxisWeights:
-    """The interpolation weights (extrapolated beyond the outer centres, :func:`_axis_weights`)
-    of the sampled ``rows`` and ``cols`` between tile centres, weights as float32."""
-    return (*_axis_weights32(centres_y, rows.astype(float)), *_axis_weights32(centres_x, cols.astype(float)))
-
-
 def _gather(image: NDArray, rows: NDArray, cols: NDArray, grid: tuple[int, int],
             level: tuple[NDArray, AxisWeights] | None = None,
             level_map: NDArray[np.float32] | None = None) -> NDArray:
-    """The samples ``image[rows] x [cols]`` (:func:`_tile_rows_cols`) tile by tile, shape
-    (ny, nx, n_rows * n_cols), in the image's type; with ``level`` (a level grid and the samples'
-    weights between its tile centres, :func:`residual_weights`), their residuals from the level
-    interpolated bilinearly (extrapolated beyond the outer centres, :func:`_axis_weights`), which
-    is also written to ``level_map`` (shape (len(rows), len(cols)), allocated when None) -- one
-    compiled pass (:func:`.frame_kernels.gather_tiles`, :func:`.frame_kernels.gather_residuals`)."""
+    """The samples ``image[rows] x [cols]`` (:func:`.tile_geometry.tile_rows_cols`) tile by tile,
+    shape (ny, nx, n_rows * n_cols), in the image's type; with ``level`` (a level grid and the
+    samples' weights between its tile centres, :func:`.tile_geometry.residual_weights`), their
+    residuals from the level interpolated bilinearly (extrapolated beyond the outer centres,
+    :func:`.tile_geometry.axis_weights`), which is also written to ``level_map`` (shape
+    (len(rows), len(cols)), allocated when None) -- one compiled pass
+    (:func:`.frame_kernels.gather_tiles`, :func:`.frame_kernels.gather_residuals`)."""
     ny, nx = grid
     size = (rows.size // ny) * (cols.size // nx)
     if level is None:
@@ -423,9 +309,9 @@ def _gather(image: NDArray, rows: NDArray, cols: NDArray, grid: tuple[int, int],
 
 
 def _tile_samples(image: NDArray, tile: int) -> tuple[NDArray, NDArray, NDArray]:
-    """The subsample of every tile (:func:`_tile_rows_cols`) as one array (ny * n_rows,
+    """The subsample of every tile (:func:`.tile_geometry.tile_rows_cols`) as one array (ny * n_rows,
     nx * n_cols) (a view when it is every pixel), and its row and column indices in ``image``."""
-    rows, cols = _tile_rows_cols(image.shape, tile)
+    rows, cols = tile_rows_cols(image.shape, tile)
     if rows.size > 1 and cols.size > 1 and rows[1] - rows[0] == 1 and cols[1] - cols[0] == 1:
         return image[: rows.size, : cols.size], rows, cols
     return image[np.ix_(rows, cols)], rows, cols
@@ -493,7 +379,7 @@ def pixel_noise(image: NDArray, model: BackgroundModel) -> float:
     tiles = model.tiles
     level: NDArray | float = model.level
     if tiles is not None:
-        level = _strided_map(tiles.level, tiles.centres_y, tiles.centres_x, sample.shape, step)
+        level = strided_map(tiles.level, tiles.centres_y, tiles.centres_x, sample.shape, step)
     finite = np.ravel if np.issubdtype(sample.dtype, np.integer) else _finite  # integers are finite (so is the level)
     sample = sample.astype(np.float64)
     q = quantization_step(finite(sample))

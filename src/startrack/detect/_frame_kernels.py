@@ -106,7 +106,7 @@ def _clamped_sum(row, weights, j):
 def _along_x(grid, x0, x1, wx, clip):
     """The float32 ``grid`` (ny, nx) interpolated along x at every column: (ny, len(x0)),
     ``grid[:, x0] + wx * (grid[:, x1] - grid[:, x0])`` (float32 weights ``wx``, clipped to
-    [0, 1] with ``clip``) -- the first half of :func:`.background._grid_map`."""
+    [0, 1] with ``clip``) -- the first half of :func:`.tile_geometry.grid_map`."""
     out = np.empty((grid.shape[0], x0.size), np.float32)
     for g in range(grid.shape[0]):
         for c in range(x0.size):
@@ -119,7 +119,7 @@ def _along_x(grid, x0, x1, wx, clip):
 def grid_map(grid, y0, y1, wy, x0, x1, wx):
     """The float32 ``grid`` interpolated bilinearly on the rows and columns given by ``y0, y1,
     wy`` (n_rows,) and ``x0, x1, wx`` (n_cols,) (float32 weights, used as they are): float32
-    (n_rows, n_cols), as :func:`.background._grid_map` did with numpy (along x first)."""
+    (n_rows, n_cols), as :func:`.tile_geometry.grid_map` did with numpy (along x first)."""
     along_x = _along_x(grid, x0, x1, wx, False)
     out = np.empty((y0.size, x0.size), np.float32)
     for i in range(y0.size):
@@ -133,7 +133,7 @@ def grid_at_points(grids, extrapolate, first, spacing, y, x):
     ``spacing`` (2,): rows then columns), interpolated bilinearly at the N points (``y``, ``x``)
     (N,) float64: (K, N) float64, the upper grid value times the weight plus the lower one times
     one minus it, along x, then along y. Beyond the outer centres grid k is extended linearly
-    (the weight clipped to [-0.75, 1.75], :func:`.background._axis_weights`) where
+    (the weight clipped to [-0.75, 1.75], :func:`.tile_geometry.axis_weights`) where
     ``extrapolate[k]``, else held constant (the weight clipped to [0, 1])."""
     k_grids, ny, nx = grids.shape
     out = np.empty((k_grids, y.size))
@@ -203,7 +203,7 @@ def gather_tiles(image, rows, cols, out):
 def gather_residuals(image, rows, cols, grid, y0, y1, wy, x0, x1, wx, out, level_out):
     """As :func:`gather_tiles`, the samples less the level of the float32 ``grid`` interpolated
     bilinearly at each (``y0, y1, wy`` per entry of ``rows``, ``x0, x1, wx`` per entry of
-    ``cols``, float32 weights; the order of :func:`.background._grid_map`'s float32 arrays);
+    ``cols``, float32 weights; the order of :func:`.tile_geometry.grid_map`'s float32 arrays);
     that level is written to ``level_out`` (len(rows), len(cols)). Row by row of samples, with
     plain indices (slices of the rows in the inner loops took two thirds of its time)."""
     ny, nx = out.shape[0], out.shape[1]
@@ -265,7 +265,7 @@ def significance(image, level, noise, y0, y1, wy, x0, x1, wx, mode, out):
     1: ``level`` is the level at every pixel (h, w) and ``noise`` a grid; 2: both are grids. A
     grid is interpolated bilinearly (``y0, y1, wy`` per row, ``x0, x1, wx`` per column, float32;
     the noise's weights clipped to [0, 1], the level's as given), in the order of
-    :func:`.background._grid_map`'s float32 arrays. Written to float32 ``out`` (h, w)."""
+    :func:`.tile_geometry.grid_map`'s float32 arrays. Written to float32 ``out`` (h, w)."""
     h, w = image.shape
     if mode == 0:
         for i in range(h):
@@ -287,7 +287,7 @@ def significance(image, level, noise, y0, y1, wy, x0, x1, wx, mode, out):
 @njit(cache=True, error_model="numpy")
 def _along_y(rows, y0, y1, weight, out):
     """Row ``out`` (n,) = ``low + (high - low) * weight`` between rows ``y0`` and ``y1`` of the
-    :func:`_along_x` grid ``rows`` -- the second half of :func:`.background._grid_map`."""
+    :func:`_along_x` grid ``rows`` -- the second half of :func:`.tile_geometry.grid_map`."""
     low, high = rows[y0], rows[y1]
     for c in range(out.size):
         out[c] = (high[c] - low[c]) * weight + low[c]

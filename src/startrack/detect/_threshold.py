@@ -11,9 +11,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ._background import BackgroundModel, strided_weights
+from ._background import BackgroundModel
 from ._compiled import kernels
 from ._smooth import empty_apart
+from ._tile_geometry import strided_weights
 
 
 def significance(image: NDArray[np.float32], model: BackgroundModel, binning: int = 1
