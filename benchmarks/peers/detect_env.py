@@ -35,16 +35,17 @@ def ensure_detect_env(*, force: bool = False) -> Path:
     return DETECT_PEERS.ensure(force=force)
 
 
-def run_peers(frames_npz: Path, out_npz: Path, *, repeats: int = 5,
+def run_peers(frames_npz: Path, out_npz: Path, *, repeats: int = 5, clock: str = "wall",
               python: Path | None = None) -> dict[str, np.ndarray]:
     """Run SEP and DAOStarFinder on every frame of ``frames_npz`` (see ``detect_runner.py``).
 
     Returns the runner's arrays: per method ``<method>_x``, ``<method>_y``, ``<method>_flux``,
     ``<method>_frame`` (frame index of each detection) and ``<method>_time_s`` (median time per
-    frame over ``repeats`` runs).
+    frame over ``repeats`` runs, by the wall clock or with ``clock="cpu"`` the process's CPU time).
     """
     python = ensure_detect_env() if python is None else python
-    cmd = [str(python), str(RUNNER), str(frames_npz), str(out_npz), "--repeats", str(repeats)]
+    cmd = [str(python), str(RUNNER), str(frames_npz), str(out_npz), "--repeats", str(repeats),
+           "--clock", clock]
     subprocess.run(cmd, check=True)
     with np.load(out_npz, allow_pickle=False) as npz:
         return {name: npz[name] for name in npz.files}
