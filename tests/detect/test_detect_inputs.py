@@ -51,6 +51,18 @@ def test_every_dtype_finds_the_stars(field, dtype):
     assert (det.width, det.height) == (SHAPE[1], SHAPE[0])
 
 
+@pytest.mark.parametrize("dtype", [">u2", ">i2", ">i4", ">f4", ">f8"])
+def test_big_endian_arrays_give_the_native_detections(field, dtype):
+    """astropy.io.fits.getdata returns big-endian arrays; the compiled passes take native ones."""
+    image = np.rint(field[0]).astype(np.dtype(dtype).newbyteorder("="))
+    native, swapped = detect(image), detect(image.astype(dtype))
+    assert len(native) == len(field[1])
+    np.testing.assert_array_equal(swapped.x, native.x)  # the same pixels: the same numbers, exactly
+    np.testing.assert_array_equal(swapped.y, native.y)
+    windows = StarDetector().measure_windows(image.astype(dtype), native.x, native.y)
+    assert len(windows.detections) == len(native)
+
+
 def test_result_arrays_have_documented_types(field):
     det = detect(field[0])
     assert det.area_px.dtype == np.int64

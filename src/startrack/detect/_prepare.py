@@ -40,7 +40,8 @@ def prepare_image(image: NDArray, channel: str | int | None = None) -> PreparedI
     Parameters
     ----------
     image : array_like, shape (H, W) or (H, W, C)
-        uint8, uint16, any integer, bool, float32 or float64. Colour images are reduced by
+        uint8, uint16, any integer, bool, float32 or float64, in either byte order (the
+        big-endian arrays of FITS files are converted). Colour images are reduced by
         :func:`startrack.detect._channels.to_single_channel` (R + G + B by default).
     channel : {None, "r", "g", "b", 0, 1, 2}
         Plane of a colour image to use instead of R + G + B (by name or index).
@@ -55,6 +56,8 @@ def prepare_image(image: NDArray, channel: str | int | None = None) -> PreparedI
         Not 2-D / 3-D, a side shorter than 2 px, empty, not numeric, or no finite pixel.
     """
     array = np.asarray(image)
+    if not array.dtype.isnative:  # big-endian data (astropy.io.fits.getdata's): in native order
+        array = array.astype(array.dtype.newbyteorder("="))
     if array.dtype == np.bool_:
         array = array.astype(np.uint8)
     if not (np.issubdtype(array.dtype, np.integer) or np.issubdtype(array.dtype, np.floating)):
