@@ -19,6 +19,7 @@ from startrack.simulate import (
     SkyBackground,
     random_attitude,
     render_stars,
+    simulate_frame,
     zodiacal_mag_arcsec2,
 )
 from startrack.simulate._background import S10_MAG_ARCSEC2, ecliptic_latitude
@@ -129,3 +130,18 @@ def test_sky_background_electrons_follow_the_surface_brightness(plain_sensor):
     assert bg.electrons(camera, plain_sensor) == pytest.approx(expected, rel=1e-12)
     sloped = SkyBackground(mag_arcsec2=None, stray_e_s_px=10.0, stray_gradient=0.5).electrons(camera, plain_sensor)
     assert sloped[50, 99] > sloped[50, 0] and sloped.mean() == pytest.approx(10.0, rel=1e-3)
+
+
+def test_steep_diagonal_stray_light_stops_at_zero(plain_sensor):
+    """A gradient of 0.9 along 45 deg would be negative in the far corner (the corners lie
+    sqrt(2) half-sides from the centre); the light is zero there, and the frame renders."""
+    camera = Camera.from_fov(100, 100, 5.0)
+    light = SkyBackground(mag_arcsec2=None, stray_e_s_px=10.0, stray_gradient=0.9,
+                          stray_direction_deg=45.0).electrons(camera, plain_sensor)
+    per_exposure = 10.0 * plain_sensor.exposure_s  # electrons per pixel at the centre
+    assert light.min() == 0.0 and light[0, 0] == 0.0
+    assert light[99, 99] == pytest.approx(per_exposure * (1 + 0.9 * np.hypot(49.5, 49.5) / 50), rel=1e-12)
+    frame = simulate_frame(camera, random_attitude(rng=1), sensor=plain_sensor, rng=1,
+                           sky_background=SkyBackground(stray_e_s_px=2000.0, stray_gradient=0.8,
+                                                        stray_direction_deg=45.0))
+    assert np.isfinite(frame.image).all()

@@ -68,7 +68,9 @@ class SkyBackground:
         Stray light, electrons per second per pixel at the image centre (>= 0).
     stray_gradient : float
         Fractional change of the stray light from the image centre to the edge along
-        ``stray_direction_deg`` (|g| <= 1).
+        ``stray_direction_deg`` (|g| <= 1): half the longer side away from the centre. Along a
+        diagonal the corners lie farther than that; where a steep gradient would take the light
+        below zero there, it is zero.
     stray_direction_deg : float
         Direction of the gradient in the image, degrees from +x towards +y.
     """
@@ -113,4 +115,4 @@ class SkyBackground:
         ys, xs = np.mgrid[0:camera.height, 0:camera.width].astype(float)
         along = (xs - camera.cx) * math.cos(angle) + (ys - camera.cy) * math.sin(angle)
         half = 0.5 * max(camera.width, camera.height)
-        return 1.0 + self.stray_gradient * along / half
+        return np.maximum(1.0 + self.stray_gradient * along / half, 0.0)  # no negative light
