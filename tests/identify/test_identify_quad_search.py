@@ -40,7 +40,7 @@ def _seen(db, row: int, mirror: bool = False):
 
 
 def _setup(grid, focal_px, fit_focal):
-    return SearchSetup(grid, focal_px, SIZE_PX, 0.5, 0.0015, 0.1, fit_focal)
+    return SearchSetup(grid, focal_px, SIZE_PX, SIZE_PX, 0.5, 0.0015, 0.1, fit_focal)
 
 
 def _row_in_level0(db, k: int) -> int:

@@ -281,9 +281,9 @@ def _fit_order(u, w, quad, order, scale, cat_vec, stars, obs):
 
 
 @njit(cache=True)
-def search(u, w, quads, grid, focal_nominal, short_px, sigma_px, step, max_tolerance, fit_focal, distortion,
-           shape_floor, level_fovs, level_ratio, region_fraction, keys, cell_starts, pattern_ratios, pattern_largest,
-           pattern_stars, vectors, first):
+def search(u, w, quads, grid, focal_nominal, short_px, square_px, sigma_px, step, max_tolerance, fit_focal,
+           distortion, shape_floor, level_fovs, level_ratio, region_fraction, keys, cell_starts, pattern_ratios,
+           pattern_largest, pattern_stars, vectors, first):
     """The compiled loop of :func:`.quad_search.search_batch` (steps 1-4 of the module docstring),
     from pattern ``first`` up to and including the first pattern that yields a candidate; also
     returns the index of the pattern after the last one searched. ``distortion`` bounds |k1| of
@@ -315,7 +315,7 @@ def search(u, w, quads, grid, focal_nominal, short_px, sigma_px, step, max_toler
             if worst_tol > max_tolerance:
                 continue
             fov_lo = 2.0 * math.atan(short_px * scale / (2.0 * focal_nominal))
-            fov_hi = 2.0 * math.atan(short_px * scale_hi / (2.0 * focal_nominal))
+            fov_hi = 2.0 * math.atan(square_px * scale_hi / (2.0 * focal_nominal))
             stretch = min(0.5, shape_floor + 3.0 * distortion * r2_hi)  # the lens may lengthen the largest edge
             rows, n_rows = _matching_rows(keys, cell_starts, pattern_ratios, pattern_largest, level_fovs, level_ratio,
                                           region_fraction, ratios, tol, largest, trial_focal, fov_lo, fov_hi,

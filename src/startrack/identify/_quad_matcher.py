@@ -215,7 +215,8 @@ class _Search:
         grid = focal_grid((camera.fx / focal_range[1], camera.fx / focal_range[0]), options.focal_step)
         tall = camera.fx / camera.fy  # a y pixel spans this many x pixels' angle
         distortion = 0.0 if calibrated else options.max_distortion
-        self.setup = SearchSetup(grid, camera.fx, min(camera.width, camera.height * tall),
+        short, long = sorted((camera.width, camera.height * tall))
+        self.setup = SearchSetup(grid, camera.fx, short, math.sqrt(short * long),
                                  options.centroid_sigma_px * max(1.0, tall), options.focal_step, MAX_RATIO_TOLERANCE,
                                  fit_focal, distortion, shape_floor)
         self.confirmer = Confirmer(x, y, match_radius_px(camera, options.match_radius_px), options.verify_stars,
@@ -252,11 +253,12 @@ class _Search:
 
     def reachable_levels(self) -> NDArray[np.int64]:
         """The database levels a look-up of this search can return candidates from: those whose
-        field of view lies within the level ratio of the short-side fields of view of the focal
-        grid (the test of :func:`.quad_kernel._level_fits`, over the whole grid)."""
+        field of view lies within the level ratio of the fields of view of the focal grid, from
+        the short side's at the grid's smallest scale to the area's square's at its largest (the
+        test of :func:`.quad_kernel._level_fits`, over the whole grid)."""
         s, scales = self.setup, self.setup.grid
-        fov_lo, fov_hi = (2.0 * math.atan(s.short_px * scale / (2.0 * s.focal_nominal))
-                          for scale in (float(scales.min()), float(scales.max())))
+        fov_lo, fov_hi = (2.0 * math.atan(side * scale / (2.0 * s.focal_nominal))
+                          for side, scale in ((s.short_px, float(scales.min())), (s.square_px, float(scales.max()))))
         ratio = self.db.settings.level_ratio
         return np.flatnonzero((self.db.level_fov_rad >= fov_lo / ratio) & (self.db.level_fov_rad <= fov_hi * ratio))
 
@@ -296,7 +298,7 @@ def level_stars(db: PatternDatabase, level: int) -> StarSet:
 
 
 _INDEXED: set[tuple] = set()
-"""(id of the database, id of the focal grid, short side, nominal focal length) of the searches
+"""(id of the database, id of the focal grid, short side, area's square side, nominal focal length) of the searches
 whose levels :func:`_index_levels` has indexed (the grids are cached by :func:`.quad_search.focal_grid`)."""
 
 
@@ -305,7 +307,8 @@ def _index_levels(db: PatternDatabase, searches: list[_Search]) -> None:
     once per database and search geometry, so that no level is first indexed inside a solve's
     timed search; a check here costs a set look-up."""
     for search in searches:
-        key = (id(db), id(search.setup.grid), search.setup.short_px, search.setup.focal_nominal)
+        setup = search.setup
+        key = (id(db), id(setup.grid), setup.short_px, setup.square_px, setup.focal_nominal)
         if key not in _INDEXED:
             for level in search.reachable_levels().tolist():
                 level_stars(db, level)

@@ -87,7 +87,12 @@ class SearchSetup:
         The nominal focal length (pixels); a scale s stands for focal length focal_nominal / s.
     short_px : float
         Shorter image side in units of x pixels (the height times fx / fy when it is the
-        shorter): sets the field of view a level must suit.
+        shorter): sets the smallest field of view a level may suit.
+    square_px : float
+        Side of the square of the image's area, sqrt(short x long side), in units of x pixels:
+        sets the largest field of view a level may suit (the level's star density suits a
+        square field of that area; a wide image's patterns fit levels its short side does not
+        reach). Equal to ``short_px`` for a square image.
     sigma_px : float
         Assumed 1-sigma centroid error (pixels).
     focal_step : float
@@ -107,6 +112,7 @@ class SearchSetup:
     grid: NDArray[np.float64]
     focal_nominal: float
     short_px: float
+    square_px: float
     sigma_px: float
     focal_step: float
     max_tolerance: float
@@ -170,10 +176,10 @@ def search_batch(db: PatternDatabase, u: NDArray, w: NDArray, quads: NDArray, se
     quat, focal, stars, row, n_tried, next_pattern = search(
         np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(w, dtype=np.float64),
         np.ascontiguousarray(quads, dtype=np.int64), setup.grid, float(setup.focal_nominal),
-        float(setup.short_px), float(setup.sigma_px), float(setup.focal_step), float(setup.max_tolerance),
-        bool(setup.fit_focal), float(setup.distortion), float(setup.shape_floor), db.level_fov_rad,
-        float(s.level_ratio), float(s.region_fraction), db.keys,
-        db.cell_starts, db.pattern_ratios, db.pattern_largest, db.pattern_stars, db.vectors, int(first))
+        float(setup.short_px), float(setup.square_px), float(setup.sigma_px), float(setup.focal_step),
+        float(setup.max_tolerance), bool(setup.fit_focal), float(setup.distortion), float(setup.shape_floor),
+        db.level_fov_rad, float(s.level_ratio), float(s.region_fraction), db.keys, db.cell_starts,
+        db.pattern_ratios, db.pattern_largest, db.pattern_stars, db.vectors, int(first))
     return Fits(quat, focal, stars, row, int(n_tried), int(next_pattern))
 
 
@@ -188,6 +194,6 @@ def warm_up(db: PatternDatabase) -> None:
         return
     u = np.array([0.0, 0.01, 0.0, 0.01])
     w = np.array([0.0, 0.0, 0.01, 0.012])
-    setup = SearchSetup(focal_grid((1.0, 1.0), 0.0015), 1000.0, 1000, 0.5, 0.0015, 0.1, False)  # read-only, as in use
+    setup = SearchSetup(focal_grid((1.0, 1.0), 0.0015), 1000.0, 1000, 1000, 0.5, 0.0015, 0.1, False)  # as in use
     search_batch(db, u, w, np.array([[0, 1, 2, 3]]), setup)
     _WARM.add(types)
