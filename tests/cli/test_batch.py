@@ -7,12 +7,15 @@ from __future__ import annotations
 
 import csv
 import math
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 from test_cli import assert_misuse, assert_no_traceback, run, strict_json
 
-from startrack.cli._batch import IMAGE_SUFFIXES
+from startrack.cli._batch import IMAGE_SUFFIXES, _safe
 from startrack.cli._batch_detect import CSV_COLUMNS as DETECT_COLUMNS
 from startrack.cli._batch_solve import CSV_COLUMNS as SOLVE_COLUMNS
 
@@ -152,3 +155,57 @@ def test_csv_to_stdout_is_the_only_output(folder):
     rows = list(csv.DictReader(out.splitlines()))
     assert [Path(r["image"]).name for r in rows] == list(GOOD)
     assert all(r["status"] == "ok" for r in rows)
+
+
+def test_a_fault_on_one_image_is_its_error_line(tmp_path):
+    """Any exception one image raises (not only the expected input errors) becomes that image's
+    error record, named as a fault, so that the batch goes on."""
+    image = tmp_path / "a.png"
+    image.write_bytes(b"")
+
+    def faulty(path):
+        raise KeyError(279)
+
+    record = _safe(faulty, image)
+    assert record["status"] == "error"
+    assert "unexpected KeyError" in record["reason"] and "279" in record["reason"]
+
+
+def test_csv_escapes_a_file_name_that_is_not_utf8(folder, tmp_path):
+    """A file name whose bytes are not UTF-8 (held by Python as surrogates) is written to the CSV
+    with backslash escapes; before, it stopped the whole batch and no CSV was written."""
+    images = tmp_path / "names"
+    images.mkdir()
+    odd = images / os.fsdecode(b"bad\xff.jpg")
+    odd.symlink_to(folder / GOOD[0])
+    (images / GOOD[1]).symlink_to(folder / GOOD[1])
+    out_csv = tmp_path / "stars.csv"
+    code, out, err = run("detect", images, "--csv", out_csv, "--max-stars", 2)
+    assert code == 0, err
+    with open(out_csv, newline="", encoding="utf-8") as fh:
+        names = {Path(r["image"]).name for r in csv.DictReader(fh)}
+    assert names == {"bad\\udcff.jpg", GOOD[1]}
+
+
+def _first_line_then_close(*argv) -> tuple[int, str]:
+    """Run ``startrack ARGV`` in a new process, read its first output line and close the pipe
+    (as ``| head -1`` does); its exit status and that line."""
+    with subprocess.Popen([sys.executable, "-m", "startrack", *map(str, argv)], stdout=subprocess.PIPE,
+                          stderr=subprocess.DEVNULL, text=True) as proc:
+        first = proc.stdout.readline()
+        proc.stdout.close()
+        return proc.wait(timeout=300), first
+
+
+def test_closed_output_stops_quietly_but_a_csv_is_still_written(folder, tmp_path):
+    """``startrack detect A B --csv OUT | head -1``: OUT has every image's rows (before, the broken
+    pipe was blamed on OUT, and OUT was dropped); without --csv the command stops with 141."""
+    many = [folder / GOOD[i % 2] for i in range(6)]
+    out_csv = tmp_path / "stars.csv"
+    code, first = _first_line_then_close("detect", *many, "--csv", out_csv, "--max-stars", 1)
+    assert first.split()[:2] == ["image", "status"]
+    assert code == 0
+    with open(out_csv, newline="") as fh:
+        assert len(list(csv.DictReader(fh))) == len(many)  # one star from each
+    code, _ = _first_line_then_close("detect", *many, "--max-stars", 1)
+    assert code == 141

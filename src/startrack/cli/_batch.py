@@ -10,8 +10,14 @@ on standard error when it is a terminal, and a summary on standard error: how ma
 and each image that was not, with its status and reason.
 
 A file that cannot be read or used (missing, not an image, too large, an invalid image) is
-reported on its line with status ``error`` and the problem; the others go on. Misuse of the
-command (a bad option, a folder with no images) stops it before any image, exit status 2.
+reported on its line with status ``error`` and the problem; the others go on. So is any other
+exception one image raises (a fault of startrack's, named as such with its type), so that one
+file does not cost the rest of the batch. Misuse of the command (a bad option, a folder with no
+images) stops it before any image, exit status 2.
+
+When standard output closes early (``startrack solve FOLDER --csv out.csv | head -3``), the lines
+stop there; with ``--csv OUT`` the batch still goes on and writes OUT, without it the command
+stops quietly (exit status 141, as on SIGPIPE).
 """
 
 from __future__ import annotations
@@ -115,6 +121,9 @@ def _safe(process: Callable[[Path], Record], path: Path) -> Record:
         return error_record(path, memory_message(exc))
     except (StartrackError, ValueError, OSError) as exc:
         return error_record(path, one_line(exc))
+    except Exception as exc:  # noqa: BLE001  # a fault on one image must not cost the rest of the batch
+        return error_record(path, f"unexpected {type(exc).__name__} (a fault of startrack's, please report it): "
+                                  f"{one_line(exc)}")
 
 
 class _SafeProcess:
@@ -174,6 +183,25 @@ def _csv_writer(stack: ExitStack, spec: BatchSpec, csv_out: str | None, images: 
     return writer
 
 
+def _utf8_row(row: Record) -> Record:
+    """``row`` with every text value encodable as UTF-8: a file name the file system holds as
+    bytes that are not UTF-8 (decoded by Python as lone surrogates) is written with backslash
+    escapes (``bad\\udcff.png``) instead of stopping the CSV."""
+    return {key: value.encode("utf-8", "backslashreplace").decode("utf-8") if isinstance(value, str) else value
+            for key, value in row.items()}
+
+
+def _print_line(text: str) -> bool:
+    """Print ``text`` to standard output; False (and later output goes to the null device) when
+    its reader has gone (a broken pipe)."""
+    try:
+        print(text, flush=True)
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return False
+    return True
+
+
 def run_batch(spec: BatchSpec, paths: Sequence[str], *, as_json: bool = False, csv_out: str | None = None,
               jobs: int = 1) -> int:
     """Run ``spec`` on every image of ``paths`` (files and folders) and write the outputs.
@@ -195,14 +223,16 @@ def run_batch(spec: BatchSpec, paths: Sequence[str], *, as_json: bool = False, c
         writer = _csv_writer(stack, spec, csv_out, images)
         bar = _Bar(f"{spec.name}", len(images))
         if lines and not as_json:
-            print(spec.header.format(image="image".ljust(width)), flush=True)
+            lines = _print_line(spec.header.format(image="image".ljust(width)))
         bar(0)
         for done, record in enumerate(_records(spec, images, jobs, stack), 1):
             bar.clear()
             if lines:
-                print(json.dumps(record, allow_nan=False) if as_json else spec.line(record, width), flush=True)
+                lines = _print_line(json.dumps(record, allow_nan=False) if as_json else spec.line(record, width))
+            if not lines and writer is None:  # nothing left to write: stop, as on SIGPIPE
+                raise BrokenPipeError
             if writer is not None:
-                writer.writerows(spec.csv_rows(record))
+                writer.writerows(_utf8_row(row) for row in spec.csv_rows(record))
             records.append(record)
             bar(done)
     write_summary(spec, records, time.perf_counter() - start)
