@@ -151,7 +151,9 @@ def test_top_level_help_version_and_unknown_command():
 def test_argparse_errors_exit_2_with_the_usage_and_one_error_line():
     for argv, words in ((["solve"], "required"), (["solve-stars", "x.csv", "--width", "0", "--height", "5"],
                                                    "--width"),
-                        (["solve", "x.png", "--fov-deg", "10", "--camera", "sunsat"], "not allowed")):
+                        (["solve", "x.png", "--fov-deg", "10", "--camera", "sunsat"], "not allowed"),
+                        (["solve", "x.jpg", "--utc-offset-hours=30"], "from -14 to 14, got 30"),
+                        (["analyse", "x", "--utc-offset-hours", "nan"], "from -14 to 14, got nan")):
         code, out, err = run(*argv)
         assert_no_traceback(out, err)
         assert code == 2 and out == ""

@@ -151,13 +151,15 @@ def test_solve_refuses_to_write_the_wcs_over_its_image(tmp_path):
     (("simulate", "--width", 1_000_000_000, "--out", "x.fits"), "simulate", ("--width 1000000000", "--max-pixels")),
     (("simulate", "--psf-sigma-px", "1e6", "--out", "x.fits"), "simulate", ("--psf-sigma-px", "at most 20 px")),
     (("simulate", "--stray-e-s", "1e30", "--out", "x.fits"), "simulate", ("--stray-e-s", "valid: 0 to 1e+09")),
+    (("simulate", "--sky-mag-arcsec2=-11", "--out", "x.fits"), "simulate",
+     ("--sky-mag-arcsec2 -11", "at most 1e+09 e-", "mag per arcsec^2 or fainter")),
     (("simulate", "--rate-deg-s", "1e6", 0, 0, "--out", "x.fits"), "simulate", ("--rate-deg-s", "at most 10 deg")),
     (("simulate", "--exposure-s", "nan", "--out", "x.fits"), "simulate", ("--exposure-s", "finite")),
 ])
 def test_nonsense_is_refused_before_any_work(tmp_path, monkeypatch, argv, command, words):
     """Before: ``--time garbage`` without a site, ``--max-mag nan`` and ``--fov-deg inf`` were
     accepted; the simulator sizes ended in a MemoryError traceback (exit 1) or an error that named
-    no option ('radius_rad must be in [0, pi] radians')."""
+    no option ('radius_rad must be in [0, pi] radians'); a sky of -11 mag per arcsec^2 took 7 GB."""
     monkeypatch.chdir(tmp_path)
     assert_misuse(run(*argv), command, *words)
     assert list(tmp_path.iterdir()) == []

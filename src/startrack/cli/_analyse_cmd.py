@@ -25,7 +25,7 @@ from ..analysis.postprocess import (
     run_analysis,
 )
 from ..errors import InvalidInputError
-from ._common import add_fov_options, add_max_pixels_option, apply_max_pixels_option, fov_kwargs
+from ._common import add_fov_options, add_max_pixels_option, apply_max_pixels_option, fov_kwargs, utc_offset_hours
 from ._progress import ProgressBar, ensure_database_for
 
 EPILOG = """\
@@ -46,7 +46,7 @@ def _parser() -> argparse.ArgumentParser:
                         help="a parameter of the analysis (repeatable); lists as 3,4,5")
     add_fov_options(parser)
     parser.add_argument("--channel", choices=("r", "g", "b"), help="colour channel (default R + G + B)")
-    parser.add_argument("--utc-offset-hours", type=float,
+    parser.add_argument("--utc-offset-hours", type=utc_offset_hours,
                         help="offset of the cameras' EXIF clock from UTC, for image times without a zone")
     add_max_pixels_option(parser)
     return parser

@@ -285,6 +285,23 @@ def positive_count(text: str) -> int:
     return value
 
 
+MAX_UTC_OFFSET_HOURS = 14.0
+"""The largest offset of a clock from UTC, hours (the civil zones run from -12 to +14; the web
+tool's ``utc_offset_hours`` takes the same range)."""
+
+
+def utc_offset_hours(text: str) -> float:
+    """argparse type: an offset from UTC in hours, -14 to 14 (--utc-offset-hours)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected hours from UTC such as -6 or 5.5, got {text!r}") from None
+    if not abs(value) <= MAX_UTC_OFFSET_HOURS:
+        raise argparse.ArgumentTypeError(f"expected hours from UTC from -{MAX_UTC_OFFSET_HOURS:g} to "
+                                         f"{MAX_UTC_OFFSET_HOURS:g}, got {text}")
+    return value
+
+
 def positive_int(text: str) -> int:
     """argparse type: a whole number >= 1."""
     try:

@@ -8,7 +8,9 @@ terabytes (a PSF sigma of 1e6 px, stray light of 1e30 e-/s) or fail deep inside:
 * the Gaussian PSF sigma is at most :data:`MAX_PSF_SIGMA_PX`;
 * the camera turns at most :data:`MAX_TURN_PER_FRAME_DEG` during one frame (rate x (exposure +
   rows x line time));
-* stray light adds at most :data:`MAX_STRAY_E_PER_FRAME` electrons per pixel in one exposure.
+* stray light adds at most :data:`MAX_STRAY_E_PER_FRAME` electrons per pixel in one exposure,
+  and so does the sky of --sky-mag-arcsec2 (a surface brightness of -11 mag per arcsec^2 asked
+  for 3e12 e- per pixel and 7 GB of memory; -100 failed with a numpy error).
 """
 
 from __future__ import annotations
@@ -68,6 +70,23 @@ def _check_stray(args: argparse.Namespace, exposure_s: float) -> None:
                                 f"{exposure_s:g} s exposure; valid: 0 to {MAX_STRAY_E_PER_FRAME:.0e}")
 
 
+def _check_sky(args: argparse.Namespace) -> None:
+    mu = getattr(args, "sky_mag_arcsec2", None)
+    if mu is None:
+        return
+    if not math.isfinite(mu):
+        raise InvalidInputError(f"--sky-mag-arcsec2 must be a finite magnitude, got {mu:g}")
+    from ..simulate import SkyBackground
+
+    sensor = render_sensor(args)
+    electrons = SkyBackground(mag_arcsec2=mu).sky_electrons_px(scene_camera(args), sensor)
+    if electrons > MAX_STRAY_E_PER_FRAME:
+        brightest = mu + 2.5 * math.log10(electrons / MAX_STRAY_E_PER_FRAME)
+        raise InvalidInputError(f"--sky-mag-arcsec2 {mu:g} gives {electrons:.3g} e- per pixel in a "
+                                f"{sensor.exposure_s:g} s exposure; valid: at most {MAX_STRAY_E_PER_FRAME:.0e} e-, "
+                                f"a sky of {brightest:.1f} mag per arcsec^2 or fainter with this camera")
+
+
 def check_render_options(args: argparse.Namespace) -> None:
     """Refuse simulator options outside the limits of the module docstring.
 
@@ -84,3 +103,4 @@ def check_render_options(args: argparse.Namespace) -> None:
         return
     _check_motion(args, exposure_s, rows)
     _check_stray(args, exposure_s)
+    _check_sky(args)

@@ -31,6 +31,7 @@ from ._common import (
     apply_max_pixels_option,
     fov_kwargs,
     report,
+    utc_offset_hours,
 )
 from ._progress import ensure_database_for
 from ._solve_stars_cmd import add_aspect_option, add_parity_option, aspect_option, solver_epoch, time_option
@@ -68,7 +69,7 @@ def _parser() -> argparse.ArgumentParser:
     ground.add_argument("--time", metavar="UTC",
                         help="UTC time of the photo, ISO 8601 (default: from the EXIF / FITS header); also the "
                              "catalog epoch unless --epoch is given, with or without a site")
-    ground.add_argument("--utc-offset-hours", type=float, help="offset of a local EXIF time from UTC")
+    ground.add_argument("--utc-offset-hours", type=utc_offset_hours, help="offset of a local EXIF time from UTC")
     return parser
 
 
