@@ -202,6 +202,8 @@ def test_solve_fits_json_matches_the_truth_cards(sim):
     assert {"index", "hip", "residual_arcsec", "x", "y"} <= set(solution["matches"][0])
     assert solution["false_match_prob"] < 1e-6
     assert solution["fov_deg"] == pytest.approx(15.0, rel=0.01)
+    # the epoch the help promises: the simulator's CATEPOCH card (J2000.0)
+    assert (solution["epoch_jyear"], solution["epoch_source"]) == (2000.0, "CATEPOCH")
 
     header = read_image(sim["fits"]).header
     two_px = 2 * PIXEL / header["FOCALPX"]  # radians
@@ -221,7 +223,8 @@ def test_solve_png_and_tiff_table(sim, kind):
     assert code == 0, err
     table = parse_table(out)
     assert table["status"] == "solved"
-    assert {"RA, Dec", "roll", "FOV", "stars", "residual", "false match", "time", "qx qy qz qw"} <= set(table)
+    assert {"RA, Dec", "roll", "FOV", "stars", "residual", "false match", "epoch", "time", "qx qy qz qw"} <= set(table)
+    assert table["epoch"] == "J2000.00 (default)"  # PNG and TIFF carry no CATEPOCH card
     truth = json.loads(sim["truth"].read_text())
     quaternion = dict(zip(("qx", "qy", "qz", "qw"), map(float, table["qx qy qz qw"].split()), strict=True))
     two_px = 2 * PIXEL / truth["camera"]["fx"]

@@ -33,6 +33,9 @@ output (table, the default)
   residual     rms angle between matched stars and the catalog after the fit, arcsec
   1-sigma      attitude uncertainty across the boresight and about it (roll), arcsec
   false match  upper bound on the probability that the identification is wrong
+  epoch        the catalog epoch the stars were taken at (Julian year) and where it came
+               from: given (--epoch), a header card (CATEPOCH, DATE-OBS, MJD-OBS,
+               DateTimeOriginal) or default (J2000.0, nothing said when)
   time         solve time (detection and identification), ms
   qx qy qz qw  the quaternion of rot_cam_from_icrs, scalar last
   alt, az      (with a ground site) apparent altitude and azimuth of the boresight, deg
@@ -45,7 +48,8 @@ output (--json)
   its camera's pixel x runs against the camera frame's x axis), sigma_cross_boresight_arcsec,
   sigma_roll_arcsec, residual_rms_arcsec, false_match_prob, guided_stars (how many of the
   matches were measured where the solution predicts them: solve --guided; they are the last
-  matches and detections), and matches: a list of
+  matches and detections), epoch_jyear and epoch_source (as the table's epoch), and
+  matches: a list of
   {index, hip, residual_arcsec[, x, y]} (index into the detections or star list; x, y in
   0-based pixels). Values that are undefined are null. With a ground site (solve --site or
   --latitude-deg / --longitude-deg) also: time_utc, site, latitude_deg, longitude_deg,
@@ -215,6 +219,7 @@ def solution_table(solution: AttitudeSolution, detections: Detections | None = N
         ("1-sigma", f"{solution.sigma_cross_boresight_arcsec:.2f} arcsec cross-boresight, "
                     f"{solution.sigma_roll_arcsec:.2f} arcsec roll"),
         ("false match", f"{solution.false_match_prob:.1e} (upper bound)"),
+        *([("epoch", f"J{solution.epoch_jyear:.2f} ({solution.epoch_source})")] if solution.epoch_source else []),
         ("time", f"{solution.solve_time_s * 1e3:.1f} ms"),
         ("qx qy qz qw", " ".join(f"{v:+.9f}" for v in require(solution.quaternion_xyzw, "the quaternion"))),
     ])
