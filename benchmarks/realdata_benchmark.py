@@ -54,6 +54,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import math
 import os
 import sys
 import time
@@ -67,6 +68,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from detect_realdata import REALDATA, reference, score  # noqa: E402
 
 from startrack import Camera, solve_image  # noqa: E402
+from startrack.camera import radial_fold_r2  # noqa: E402
 from startrack.detect import StarDetector  # noqa: E402
 from startrack.frames import angle_between, radec_to_vector, random_rotations  # noqa: E402
 from startrack.identify import MatcherOptions  # noqa: E402
@@ -166,11 +168,10 @@ def print_real(rows: list[dict], label: str, flipped: bool = False) -> None:
 def fold_tan(camera: Camera) -> float:
     """tan of the off-axis angle where the camera's radial distortion stops growing with it (the
     smallest r = |(v_x, v_y)| / v_z with d(r (1 + k1 r^2 + k2 r^4 + k3 r^6)) / dr = 0), inf when it
-    never does. Beyond it the polynomial folds back: directions farther out land inside the
-    image again, and image points past its largest distorted radius map to no direction."""
-    roots = np.roots([7.0 * camera.k3, 5.0 * camera.k2, 3.0 * camera.k1, 1.0])  # in s = r^2
-    s = roots[(np.abs(roots.imag) < 1e-12) & (roots.real > 0)].real
-    return float(np.sqrt(s.min())) if s.size else np.inf
+    never does (:func:`startrack.camera.radial_fold_r2`). Beyond it the polynomial folds back:
+    ``Camera.vector_to_pixel`` gives NaN there, and image points past its largest distorted
+    radius map to no direction."""
+    return math.sqrt(radial_fold_r2(camera.k1, camera.k2, camera.k3))
 
 
 def error_points(camera: Camera) -> tuple[np.ndarray, np.ndarray]:

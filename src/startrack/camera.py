@@ -15,6 +15,7 @@ The inverse (pixel -> vector) is solved by Newton's method to 1e-6 px.
 
 from __future__ import annotations
 
+import functools
 import math
 import numbers
 from dataclasses import dataclass
@@ -238,8 +239,11 @@ class Camera:
         Returns
         -------
         x, y : ndarray, shape (...)
-            Pixel coordinates; NaN for directions at or behind the image plane (v_z <= 0).
-            Points outside the image are returned as they are; see :meth:`in_image`.
+            Pixel coordinates; NaN for directions at or behind the image plane (v_z <= 0), and
+            for directions beyond the radius where the radial distortion folds back
+            (:func:`radial_fold_r2`: past it the polynomial would put them back inside the
+            image, on top of the directions nearer the axis). Points outside the image are
+            returned as they are; see :meth:`in_image`.
         """
         v = np.asarray(vectors, dtype=float)
         if v.shape[-1:] != (3,):
@@ -254,8 +258,16 @@ class Camera:
                 a = np.where(front, v[..., 0] / np.where(front, vz, 1.0), np.nan)
                 b = np.where(front, v[..., 1] / np.where(front, vz, 1.0), np.nan)
         if self.has_distortion:
-            a, b = self._distort(a, b)
+            a, b = self._beyond_fold_as_nan(*self._distort(a, b), a * a + b * b)
         return self.cx + self.x_sign * self.fx * a, self.cy + self.fy * b
+
+    def _beyond_fold_as_nan(self, ad: NDArray, bd: NDArray, r2: NDArray) -> tuple[NDArray, NDArray]:
+        """The distorted (ad, bd), NaN where the pinhole radius squared ``r2`` lies beyond the fold."""
+        fold = radial_fold_r2(self.k1, self.k2, self.k3)
+        if not np.any(r2 >= fold):  # no fold, or every direction inside it
+            return ad, bd
+        beyond = r2 >= fold
+        return np.where(beyond, np.nan, ad), np.where(beyond, np.nan, bd)
 
     def project_with_jacobian(self, vectors: NDArray) -> tuple[NDArray, NDArray, NDArray]:
         """Pixel coordinates of camera-frame vectors (v_z > 0) and their derivatives.
@@ -342,6 +354,23 @@ _FLOAT_FIELDS = ("fx", "fy", "cx", "cy", "k1", "k2", "k3", "p1", "p2")
 
 _FIELD_MEANING = {"fx": "a focal length in pixels", "fy": "a focal length in pixels",
                   "cx": "a principal point column in pixels", "cy": "a principal point row in pixels"}
+
+
+@functools.lru_cache(maxsize=256)
+def radial_fold_r2(k1: float, k2: float, k3: float) -> float:
+    """The squared normalised pinhole radius s = r^2 where the radial distortion
+    r (1 + k1 r^2 + k2 r^4 + k3 r^6) stops growing with r (its derivative
+    1 + 3 k1 s + 5 k2 s^2 + 7 k3 s^3 first reaches zero); inf when it grows for every r.
+
+    Beyond that radius the model folds back: a direction farther from the axis lands nearer the
+    centre, on a pixel that also images a direction inside the fold. A barrel lens with
+    k1 = -0.1 folds at r = 1.83 (61 deg off axis), so a 90 deg camera would show stars from
+    61-90 deg off axis in its corners; :meth:`Camera.vector_to_pixel` gives NaN there instead.
+    """
+    roots = np.roots([7.0 * k3, 5.0 * k2, 3.0 * k1, 1.0])  # leading zero coefficients are dropped
+    real = roots.real[np.abs(roots.imag) <= 1e-9 * np.maximum(1.0, np.abs(roots))]
+    positive = real[real > 0]
+    return float(positive.min()) if positive.size else math.inf
 
 
 def _checked_number(key: str, value: object) -> float:
