@@ -51,14 +51,24 @@ class _CompileNotice:
     def started(self) -> None:
         if self.t0 is None:
             self.t0 = time.perf_counter()
-            sys.stderr.write(f"compiling startrack's solver kernels (one time after an install, about "
-                             f"{COMPILE_ESTIMATE_S} s) ...\n")
+            when = "one time after an install" if _keeps_compiled_code() else "every run: no cache folder to keep it"
+            sys.stderr.write(f"compiling startrack's solver kernels ({when}, about {COMPILE_ESTIMATE_S} s) ...\n")
             sys.stderr.flush()
 
     def finished(self) -> None:
         if self.t0 is not None:
-            sys.stderr.write(f"compiled in {time.perf_counter() - self.t0:.1f} s; cached for later runs\n")
+            kept = "cached for later runs" if _keeps_compiled_code() else "not cached (see the warning above)"
+            sys.stderr.write(f"compiled in {time.perf_counter() - self.t0:.1f} s; {kept}\n")
             sys.stderr.flush()
+
+
+def _keeps_compiled_code() -> bool:
+    """Whether this process's compiled code is kept for later runs (its cache folder, checked
+    once a process, can be written: :func:`startrack.numba_cache.configured_dir`)."""
+    from .. import numba_cache
+
+    numba_cache.configured_dir()
+    return numba_cache.keeps_compiled_code()
 
 
 def warm_up(fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,

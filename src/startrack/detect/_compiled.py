@@ -22,9 +22,9 @@ from numpy.typing import DTypeLike
 @functools.cache
 def _numba_ready() -> None:
     """Point numba's disk cache at startrack's folder and check its files (once a process)."""
-    from .. import cache, numba_cache  # noqa: F401 - cache configures numba's folder on import
+    from ..numba_cache import prepare
 
-    numba_cache.heal(numba_cache.configured_dir())
+    prepare()
 
 
 @functools.cache

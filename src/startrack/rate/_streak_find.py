@@ -40,7 +40,11 @@ COMPILED_DTYPES = tuple(np.dtype(t) for t in (np.uint8, np.uint16, np.uint32, np
 
 @functools.cache
 def kernel() -> ModuleType:
-    """The compiled functions, :mod:`._streak_kernel` (numba is imported on first use)."""
+    """The compiled functions, :mod:`._streak_kernel` (numba is imported on first use, its disk
+    cache pointed at startrack's folder first: :func:`startrack.numba_cache.prepare`)."""
+    from ..numba_cache import prepare
+
+    prepare()
     from . import _streak_kernel as streak_kernel
 
     return streak_kernel
