@@ -182,8 +182,9 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
     Raises
     ------
     InvalidInputError
-        For NaN, masked or out-of-frame coordinates, a bad image size, field of view, pixel
-        aspect, epoch, camera, options or prior.
+        For NaN, masked or out-of-frame coordinates, two stars at exactly the same position (a
+        list with a star twice; :func:`solve_image` drops such repeats itself), a bad image size,
+        field of view, pixel aspect, epoch, camera, options or prior.
     """
     method = check_options(method, options)
     sigma = _check_prior(prior_rot_cam_from_icrs, prior_sigma_deg)
