@@ -9,6 +9,7 @@ shared by the tests of this module.
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import csv
 import io
@@ -153,7 +154,8 @@ def test_argparse_errors_exit_2_with_the_usage_and_one_error_line():
                                                    "--width"),
                         (["solve", "x.png", "--fov-deg", "10", "--camera", "sunsat"], "not allowed"),
                         (["solve", "x.jpg", "--utc-offset-hours=30"], "from -14 to 14, got 30"),
-                        (["analyse", "x", "--utc-offset-hours", "nan"], "from -14 to 14, got nan")):
+                        (["analyse", "x", "--utc-offset-hours", "nan"], "from -14 to 14, got nan"),
+                        (["detect", "x.fits", "--max-stars", "0"], "expected a whole number >= 1, got 0")):
         code, out, err = run(*argv)
         assert_no_traceback(out, err)
         assert code == 2 and out == ""
@@ -477,3 +479,14 @@ def test_console_script_missing_file_prints_one_line_and_no_traceback(tmp_path):
     assert done.returncode == 2
     assert done.stdout == ""
     assert done.stderr.splitlines() == [f"startrack solve: error: {missing}: file does not exist"]
+
+
+def test_counts_take_whole_numbers_in_any_notation():
+    """--max-pixels 1e9 was refused while STARTRACK_MAX_PIXELS=1e9 was taken; and --max-stars 0
+    was told to give a whole number 'of pixels'."""
+    from startrack.cli._common import positive_count
+
+    assert positive_count("1e9") == positive_count("1_000_000_000") == 10**9
+    for text in ("1.5", "inf", "nan", "abc", "0", "-3"):
+        with pytest.raises(argparse.ArgumentTypeError):
+            positive_count(text)

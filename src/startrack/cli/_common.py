@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from typing import Any
 
@@ -280,11 +281,19 @@ def _finite_or_none(value: float) -> float | None:
 
 
 def positive_count(text: str) -> int:
-    """argparse type: a whole number >= 1 (underscores allowed: 400_000_000)."""
+    """argparse type: a whole number >= 1 (underscores allowed: 400_000_000; and a whole number in
+    floating-point notation, 1e9, as the STARTRACK_MAX_PIXELS variable takes it)."""
+    digits = text.replace("_", "")
     try:
-        value = int(text.replace("_", ""))
+        value = int(digits)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        try:
+            number = float(digits)
+        except ValueError:
+            number = math.nan
+        if not (math.isfinite(number) and number.is_integer()):
+            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        value = int(number)
     if value < 1:
         raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text}")
     return value

@@ -17,7 +17,7 @@ from ..errors import require
 from ..io import read_image
 from ._batch import BATCH_EPILOG, add_batch_options, is_batch
 from ._batch_warmup import warm_up_detection
-from ._common import add_max_pixels_option, apply_max_pixels_option, positive_int, print_json
+from ._common import add_max_pixels_option, apply_max_pixels_option, positive_count, print_json
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -32,7 +32,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--sigma", type=float, default=StarDetector.sigma,
                         help="detection threshold in noise units (default: %(default)s)")
     parser.add_argument("--dark", metavar="FILE", help="dark or median frame to subtract")
-    parser.add_argument("--max-stars", type=positive_int, metavar="N",
+    parser.add_argument("--max-stars", type=positive_count, metavar="N",
                         help="print only the N brightest")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     add_max_pixels_option(parser)
