@@ -49,7 +49,9 @@ def time_from_header(header: Mapping[str, Any], *, utc_offset_hours: float | Non
     Raises
     ------
     InvalidInputError
-        When no time can be read, or an EXIF time has no zone and ``utc_offset_hours`` is None.
+        When no time can be read (no card, or one that is not a date, such as the
+        ``0000:00:00 00:00:00`` of a camera whose clock was never set), or an EXIF time has no zone
+        and ``utc_offset_hours`` is None.
     """
     if "DATE-OBS" in header:
         start = _fits_time(header)
@@ -75,14 +77,19 @@ def _fits_time(header: Mapping[str, Any]) -> Time:
 
 
 def _exif_time(header: Mapping[str, Any], utc_offset_hours: float | None) -> Time:
-    text = str(header.get("DateTimeOriginal", header.get("DateTime")))
+    key = "DateTimeOriginal" if "DateTimeOriginal" in header else "DateTime"
+    text = str(header[key])
     m = _EXIF_TIME.match(text)
     if not m:
-        raise InvalidInputError(f"EXIF time {text!r} is not 'YYYY:MM:DD HH:MM:SS'")
+        raise InvalidInputError(f"EXIF {key} {text!r} is not 'YYYY:MM:DD HH:MM:SS'; give the time")
     y, mo, d, h, mi, s = m.groups()
     sub = str(header.get("SubsecTimeOriginal", "")).strip()
     frac = f".{sub}" if sub.isdigit() else ""
-    local = Time(f"{y}-{mo}-{d}T{h}:{mi}:{s}{frac}", format="isot", scale="utc")
+    try:
+        local = Time(f"{y}-{mo}-{d}T{h}:{mi}:{s}{frac}", format="isot", scale="utc")
+    except ValueError:  # ERFA's "bad month" etc.: cameras write 0000:00:00 00:00:00 when their clock was never set
+        raise InvalidInputError(f"EXIF {key} {text!r} is not a date (a camera clock never set?); "
+                                "give the time") from None
     offset = _exif_offset_hours(header.get("OffsetTimeOriginal"))
     if offset is None:
         offset = utc_offset_hours

@@ -20,6 +20,7 @@ import numpy as np
 from astropy.io import fits
 from numpy.typing import NDArray
 
+from ._fits_cards import header_text
 from ._limits import check_image_size
 
 BLOCK = 2880
@@ -81,7 +82,7 @@ def read_plain_fits(path: Path, max_pixels: int | None, max_blocks: int) -> tupl
     with warnings.catch_warnings():  # odd cards: astropy's own read (the other path) says what is wrong
         warnings.simplefilter("ignore")
         try:
-            header = fits.Header.fromstring(head.decode("ascii", errors="replace"))
+            header = fits.Header.fromstring(header_text(head))
         except (ValueError, TypeError):
             return None
     layout = _plain_layout(header)

@@ -23,29 +23,13 @@ from numpy.typing import NDArray
 
 from ..errors import ImageReadError, InvalidInputError
 from ._atomic import write_output
+from ._fits_cards import COMMENTARY, check_layout_cards, header_text, header_to_dict
 from ._fits_plain import read_plain_fits
 from ._limits import check_image_size
 
-_COMMENTARY = ("COMMENT", "HISTORY")
 _STRUCTURAL = ("SIMPLE", "XTENSION", "BITPIX", "NAXIS", "EXTEND", "BZERO", "BSCALE", "PCOUNT",
                "GCOUNT", "END")
 """Keywords astropy derives from the data; dropped from a user header before writing."""
-
-
-def header_to_dict(header: fits.Header) -> dict[str, Any]:
-    """FITS header cards as a dict: keyword -> value; COMMENT and HISTORY as lists of strings."""
-    out: dict[str, Any] = {}
-    for card in header.cards:
-        key = card.keyword
-        if not key:
-            continue
-        if key in _COMMENTARY:
-            out.setdefault(key, []).append(str(card.value))
-        elif isinstance(card.value, bool | int | float | str):
-            out[key] = card.value
-        else:  # astropy's Undefined (a keyword with no value)
-            out[key] = None
-    return out
 
 
 MAX_HEADER_BLOCKS = 2000
@@ -54,24 +38,44 @@ MAX_HEADER_BLOCKS = 2000
 _BLOCK = 2880
 
 
-def _check_header_length(path: Path) -> None:
-    """Refuse a primary header with no END card in its first :data:`MAX_HEADER_BLOCKS` blocks.
+def _primary_header(path: Path) -> bytes | None:
+    """The primary header's blocks up to the one holding END (decompressed, for gzip), or None
+    when the file ends before an END card (astropy then reports the truncation).
 
-    Reads the (decompressed, for gzip) file block by block, so a huge or endless header costs at
-    most that much; astropy then parses only a header that is known to end.
+    Reads block by block, so a huge or endless header costs at most :data:`MAX_HEADER_BLOCKS`
+    blocks, refused beyond that; astropy then parses only a header that is known to end.
     """
     with open(path, "rb") as raw:
         gzipped = raw.read(2) == b"\x1f\x8b"
+    head = bytearray()
     try:
         with (gzip.open(path, "rb") if gzipped else open(path, "rb")) as fh:
             for _ in range(MAX_HEADER_BLOCKS):
                 block = fh.read(_BLOCK)
-                if len(block) < _BLOCK or any(block[i:i + 8] == b"END     " for i in range(0, _BLOCK, 80)):
-                    return  # a short block: astropy reports the truncation
+                if len(block) < _BLOCK:
+                    return None
+                head += block
+                if any(block[i:i + 8] == b"END     " for i in range(0, _BLOCK, 80)):
+                    return bytes(head)
     except (OSError, EOFError, zlib.error) as exc:
         raise ImageReadError(f"{path}: not a readable FITS file ({exc})") from exc
     raise ImageReadError(f"{path}: FITS header has no END card in its first {MAX_HEADER_BLOCKS} blocks "
                          f"({MAX_HEADER_BLOCKS * _BLOCK // 1000:,} kB); not an image startrack reads")
+
+
+def _check_primary_header(path: Path) -> None:
+    """Refuse a primary header that ends too late or lays out its pixels wrongly
+    (:func:`._fits_cards.check_layout_cards`), before astropy or the direct reader reads it."""
+    head = _primary_header(path)
+    if head is None:
+        return
+    with warnings.catch_warnings():  # odd descriptive cards are left out of the header, not reported
+        warnings.simplefilter("ignore")
+        try:
+            header = fits.Header.fromstring(header_text(head))
+        except (ValueError, TypeError):
+            return  # astropy's own read says what is wrong
+    check_layout_cards(header, path)
 
 
 def _usable_shape(hdu) -> tuple[int, ...] | None:
@@ -93,6 +97,7 @@ def _image_hdu(hdus: fits.HDUList, path: Path, max_pixels: int | None) -> tuple[
     for hdu in hdus:
         if not getattr(hdu, "is_image", False):
             continue
+        check_layout_cards(hdu.header, path)
         shape = _usable_shape(hdu)
         shapes.append(tuple(getattr(hdu, "shape", ())))
         if shape is None:
@@ -126,7 +131,7 @@ def read_fits(path: Path, max_pixels: int | None = None) -> tuple[NDArray, dict[
         Native dtype in native byte order after BZERO / BSCALE, a copy independent of the file.
         A (3, H, W) colour cube is returned channels last.
     header : dict
-        The cards of that HDU (see :func:`header_to_dict`).
+        The cards of that HDU (see :func:`._fits_cards.header_to_dict`; unparsable ones left out).
     bit_depth : int
         ``abs(BITPIX)`` of that HDU.
 
@@ -135,7 +140,7 @@ def read_fits(path: Path, max_pixels: int | None = None) -> tuple[NDArray, dict[
     ImageReadError
         If the file is truncated, corrupt, too large or holds no image.
     """
-    _check_header_length(path)
+    _check_primary_header(path)
     plain = read_plain_fits(path, max_pixels, MAX_HEADER_BLOCKS)
     if plain is not None:
         return plain[0], header_to_dict(plain[1]), abs(int(plain[1]["BITPIX"]))
@@ -148,7 +153,8 @@ def read_fits(path: Path, max_pixels: int | None = None) -> tuple[NDArray, dict[
                 data = np.array(data, dtype=data.dtype.newbyteorder("="))
         except ImageReadError:
             raise
-        except (OSError, ValueError, TypeError, IndexError, EOFError, zlib.error) as exc:
+        except (OSError, ValueError, TypeError, IndexError, KeyError, EOFError, zlib.error, fits.VerifyError) as exc:
+            # KeyError: a missing NAXISn in an extension's header; VerifyError: a card astropy needs unparsable
             raise ImageReadError(f"{path}: not a readable FITS file ({exc})") from exc
     if any("truncated" in str(w.message) for w in caught):
         raise ImageReadError(f"{path}: FITS file is truncated (shorter than its header says)")
@@ -163,7 +169,7 @@ def _clean_header(header: Mapping[str, Any] | fits.Header | None) -> fits.Header
     if not isinstance(header, Mapping | fits.Header):
         raise InvalidInputError(f"header must be a dict of cards or an astropy Header, got {type(header).__name__}")
     if isinstance(header, fits.Header):
-        items = [(c.keyword, c.value if c.keyword in _COMMENTARY else (c.value, c.comment))
+        items = [(c.keyword, c.value if c.keyword in COMMENTARY else (c.value, c.comment))
                  for c in header.cards]
     else:
         items = list(header.items())
@@ -171,7 +177,7 @@ def _clean_header(header: Mapping[str, Any] | fits.Header | None) -> fits.Header
         key = str(key).upper()
         if key.rstrip("0123456789") in _STRUCTURAL or not key:
             continue
-        if key in _COMMENTARY:
+        if key in COMMENTARY:
             for text in value if isinstance(value, list | tuple) else [value]:
                 out.append((key, str(text)))
             continue

@@ -20,7 +20,8 @@ Pillow mode            array                   bit depth
 Pillow silently keeps only the high byte of 16-bit colour samples, so 16-bit colour TIFFs are
 decoded by :mod:`startrack.io._tiff` and 16-bit colour PNGs are refused. A truncated file raises
 :class:`~startrack.errors.ImageReadError` even if ``PIL.ImageFile.LOAD_TRUNCATED_IMAGES`` was
-set elsewhere. EXIF orientation is recorded in the header but never applied: the array keeps
+set elsewhere, and so does a PNG or JPEG whose structure is whole but whose pixel data stop early
+(:mod:`startrack.io._pixel_data`). EXIF orientation is recorded in the header but never applied: the array keeps
 the sensor's own row and column order.
 """
 
@@ -42,11 +43,13 @@ from PIL import Image as PILImage
 
 from ..errors import ImageReadError
 from ._limits import check_image_size
+from ._pixel_data import JpegLayout, jpeg_layout, png_missing_data, probe_stream
 from ._tiff import is_tiff16_colour, read_tiff16_colour
 
 SUPPORTED_PILLOW_FORMATS = ("PNG", "JPEG", "MPO", "TIFF")
 """Pillow format names read here (MPO is the multi-picture JPEG some cameras write)."""
 
+_JPEG_FORMATS = ("JPEG", "MPO")
 _UINT16_MODES = ("I;16", "I;16L", "I;16B", "I;16N")
 _TO_RGB_MODES = ("P", "PA", "CMYK", "YCbCr", "LAB", "HSV", "RGBX", "RGBa")
 _EXIF_IFD = 0x8769
@@ -189,20 +192,47 @@ def _check_png16_colour(head: bytes, path: Path) -> None:
         )
 
 
-def _decode(image: PILImage.Image, head: bytes, fh: BinaryIO, path: Path) -> tuple[NDArray, int]:
-    if isinstance(image, TiffImagePlugin.TiffImageFile) and is_tiff16_colour(image.tag_v2):
-        return read_tiff16_colour(path, fh, image.tag_v2), 16
+def _load(image: PILImage.Image, path: Path, name: str) -> None:
+    """Decode ``image``'s pixels (of a ``name`` file) strictly (:func:`_strict_pillow`)."""
     try:
         with _strict_pillow():
             image.load()
     except _DECODE_ERRORS as exc:
-        raise ImageReadError(
-            f"{path}: {image.format} file is truncated or corrupt ({exc})"
-        ) from exc
-    try:
-        return _to_array(image, _declared_bits(image, head))
-    except ImageReadError as exc:
-        raise ImageReadError(f"{path}: {exc}") from exc
+        raise ImageReadError(f"{path}: {name} file is truncated or corrupt ({exc})") from exc
+
+
+@contextmanager
+def _pixel_source(image: PILImage.Image, fh: BinaryIO, layout: JpegLayout | None, path: Path
+                  ) -> Iterator[PILImage.Image]:
+    """The image to decode: ``image``, or for a one-scan JPEG the file opened again from its
+    :func:`._pixel_data.probe_stream`, which fails as truncated when the scan ends early."""
+    if layout is None or not layout.single_scan:
+        yield image
+        return
+    with _open(probe_stream(fh, layout), path, strict_metadata=False) as probe:
+        yield probe
+
+
+def _missing_data(image: PILImage.Image, fh: BinaryIO, layout: JpegLayout | None) -> str | None:
+    """What a decoded PNG or JPEG lacks although its structure is whole (:mod:`._pixel_data`)."""
+    if image.format == "PNG":
+        return png_missing_data(fh)
+    return None if layout is None else layout.missing_scans()
+
+
+def _decode(image: PILImage.Image, head: bytes, fh: BinaryIO, path: Path) -> tuple[NDArray, int]:
+    if isinstance(image, TiffImagePlugin.TiffImageFile) and is_tiff16_colour(image.tag_v2):
+        return read_tiff16_colour(path, fh, image.tag_v2), 16
+    layout = jpeg_layout(fh) if image.format in _JPEG_FORMATS else None
+    with _pixel_source(image, fh, layout, path) as source:
+        _load(source, path, str(image.format))
+        missing = _missing_data(image, fh, layout)
+        if missing is not None:
+            raise ImageReadError(f"{path}: {image.format} file is truncated or corrupt ({missing})")
+        try:
+            return _to_array(source, _declared_bits(image, head))
+        except ImageReadError as exc:
+            raise ImageReadError(f"{path}: {exc}") from exc
 
 
 def identify_format(path: Path) -> str | None:

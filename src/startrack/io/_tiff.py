@@ -105,11 +105,37 @@ def is_tiff16_colour(tags: Mapping[int, Any]) -> bool:
     """True if Pillow's TIFF tags describe 16-bit samples with more than one sample per pixel."""
     bits = tags.get(258, (8,))
     bits = bits if isinstance(bits, tuple) else (bits,)
-    return int(tags.get(277, 1)) > 1 and max(bits) == 16
+    samples = tags.get(277, 1)  # not a number: not this layout (Pillow's own read then says what is wrong)
+    return isinstance(samples, int) and samples > 1 and bool(bits) and max(bits) == 16
 
 
-def _as_tuple(value: Any) -> tuple[int, ...]:
-    return tuple(value) if isinstance(value, tuple | list) else (int(value),)
+_TAG_NAMES = {256: "ImageWidth", 257: "ImageLength", 259: "Compression", 273: "StripOffsets", 277: "SamplesPerPixel",
+              279: "StripByteCounts", 284: "PlanarConfiguration", 317: "Predictor"}
+"""The tags the 16-bit colour reader reads (TIFF 6.0 names)."""
+
+
+def _tag_values(tags: Mapping[int, Any], tag: int, path: Path) -> tuple[int, ...]:
+    """The integer values of a required tag; an ImageReadError naming the tag when it is missing,
+    empty or not made of integers."""
+    value = tags.get(tag)
+    values = tuple(value) if isinstance(value, tuple | list) else (value,)
+    if value is None or not values or not all(isinstance(v, int) and not isinstance(v, bool) for v in values):
+        what = "has no" if value is None else f"has an invalid {_TAG_NAMES[tag]} ({value!r}) instead of a valid"
+        raise ImageReadError(f"{path}: corrupt or unsupported TIFF: its directory {what} {_TAG_NAMES[tag]} "
+                             f"(tag {tag}), which a 16-bit colour TIFF in strips needs")
+    return values
+
+
+def _tag_int(tags: Mapping[int, Any], tag: int, path: Path, default: int | None = None) -> int:
+    """The single value (>= 1) of a tag, ``default`` when it is absent and has one; else as
+    :func:`_tag_values`."""
+    if tag not in tags and default is not None:
+        return default
+    values = _tag_values(tags, tag, path)
+    if len(values) != 1 or values[0] < 1:
+        raise ImageReadError(f"{path}: corrupt or unsupported TIFF: {_TAG_NAMES[tag]} (tag {tag}) is {values}; "
+                             "it must be one integer >= 1")
+    return values[0]
 
 
 def _read_at(fh: BinaryIO, offset: int, count: int, size: int, path: Path) -> bytes:
@@ -134,16 +160,20 @@ def _inflate(chunk: bytes, limit: int, path: Path) -> bytes:
 
 def _strip_bytes(fh: BinaryIO, tags: Mapping[int, Any], expected: int, path: Path) -> bytes:
     """The concatenated, decompressed strips of a TIFF file's first image, at most ``expected`` bytes."""
-    compression = int(tags.get(259, 1))
+    compression = _tag_int(tags, 259, path, default=1)
     if compression != 1 and compression not in _DEFLATE:
         raise ImageReadError(
             f"{path}: 16-bit colour TIFF with compression {compression} is not supported "
             "(only uncompressed or Deflate keep all 16 bits here); save it uncompressed, as "
             "16-bit greyscale, or as FITS"
         )
+    offsets, counts = _tag_values(tags, 273, path), _tag_values(tags, 279, path)
+    if len(offsets) != len(counts):
+        raise ImageReadError(f"{path}: corrupt or unsupported TIFF: {len(offsets)} StripOffsets (tag 273) but "
+                             f"{len(counts)} StripByteCounts (tag 279); there must be one of each per strip")
     size = fh.seek(0, 2)
     chunks, total = [], 0
-    for offset, count in zip(_as_tuple(tags[273]), _as_tuple(tags[279]), strict=True):
+    for offset, count in zip(offsets, counts, strict=True):
         if total >= expected:
             break
         chunk = _read_at(fh, offset, count, size, path)
@@ -172,14 +202,15 @@ def read_tiff16_colour(path: Path, fh: BinaryIO, tags: Mapping[int, Any]) -> NDA
     Raises
     ------
     ImageReadError
-        For tiled or planar-separate layouts, compressions other than Deflate, or a truncated file.
+        For tiled or planar-separate layouts, compressions other than Deflate, a truncated file,
+        or a directory without the tags it needs (size, samples, strip offsets and byte counts).
     """
-    if 322 in tags or int(tags.get(284, 1)) != 1:
+    if 322 in tags or _tag_int(tags, 284, path, default=1) != 1:
         raise ImageReadError(
             f"{path}: 16-bit colour TIFF stored in tiles or separate planes is not supported; "
             "save it with contiguous strips, as 16-bit greyscale, or as FITS"
         )
-    width, height, spp = int(tags[256]), int(tags[257]), int(tags[277])
+    width, height, spp = (_tag_int(tags, tag, path) for tag in (256, 257, 277))
     expected = width * height * spp * 2
     data = _strip_bytes(fh, tags, expected, path)
     if len(data) < expected:
@@ -187,6 +218,6 @@ def read_tiff16_colour(path: Path, fh: BinaryIO, tags: Mapping[int, Any]) -> NDA
     fh.seek(0)
     dtype = np.dtype("<u2") if fh.read(2) == b"II" else np.dtype(">u2")
     array = np.frombuffer(data[:expected], dtype=dtype).reshape(height, width, spp)
-    if int(tags.get(317, 1)) == 2:  # horizontal differencing: undo by a wrapping running sum
+    if _tag_int(tags, 317, path, default=1) == 2:  # horizontal differencing: undo by a wrapping running sum
         array = np.cumsum(array.astype(np.uint16), axis=1, dtype=np.uint16)
     return array.astype(np.uint16)
