@@ -16,6 +16,13 @@ The default matcher. Steps (after tetra3's pattern hashing, with a sorted key in
    (:mod:`._confirm`, :mod:`._verify`); the first candidate below the threshold wins.
 6. (In :mod:`startrack.solve`) refine attitude and focal length on all matched stars (:mod:`._refine`).
 
+When no pattern verifies, steps 3-5 run once more with the window of levels one level wider each
+way (step 3 keeps the levels within the level ratio of the field of view, which suits a list
+with the stars of the field; a list of only its few brightest, six say, has patterns that the
+levels of the next wider field hold, and a field of view given exactly left those out: 15 of 20
+six-star lists solved with fov_deg given, 20 of 20 with nothing given). Only a failing search
+pays for it.
+
 A mirror image has the same edge ratios but no rotation fits it, so step 4 rejects it; with
 ``mirrored=(False, True)`` the search also runs on the image's left-right flip, taking turns with
 the image as given one look-up step at a time (:mod:`._parity`).
@@ -27,7 +34,7 @@ import functools
 import math
 import time
 import weakref
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -205,7 +212,7 @@ class _Search:
     candidates tried so far): the false-match bound multiplies by all of them."""
 
     def __init__(self, x, y, camera: Camera, focal_range, db: PatternDatabase, options: MatcherOptions,
-                 trials: list[int], shape_floor: float = 0.0, fit_aspect: bool = False):
+                 trials: list[int], shape_floor: float = 0.0, fit_aspect: bool = False, level_slack: float = 1.0):
         self.x, self.y, self.camera, self.db, self.options, self.trials = x, y, camera, db, options, trials
         vec = pixel_vectors(camera, x, y)
         self.u, self.w = vec[:, 0] / vec[:, 2], vec[:, 1] / vec[:, 2]
@@ -218,7 +225,7 @@ class _Search:
         short, long = sorted((camera.width, camera.height * tall))
         self.setup = SearchSetup(grid, camera.fx, short, math.sqrt(short * long),
                                  options.centroid_sigma_px * max(1.0, tall), options.focal_step, MAX_RATIO_TOLERANCE,
-                                 fit_focal, distortion, shape_floor)
+                                 fit_focal, distortion, shape_floor, level_slack)
         self.confirmer = Confirmer(x, y, match_radius_px(camera, options.match_radius_px), options.verify_stars,
                                    options.max_false_match_prob, fit_focal,
                                    fit_distortion=distortion > 0 and camera.fov_deg >= CONFIRM_K1_FOV_DEG,
@@ -259,7 +266,7 @@ class _Search:
         s, scales = self.setup, self.setup.grid
         fov_lo, fov_hi = (2.0 * math.atan(side * scale / (2.0 * s.focal_nominal))
                           for side, scale in ((s.short_px, float(scales.min())), (s.square_px, float(scales.max()))))
-        ratio = self.db.settings.level_ratio
+        ratio = self.db.settings.level_ratio * s.level_slack
         return np.flatnonzero((self.db.level_fov_rad >= fov_lo / ratio) & (self.db.level_fov_rad <= fov_hi * ratio))
 
 
@@ -298,7 +305,8 @@ def level_stars(db: PatternDatabase, level: int) -> StarSet:
 
 
 _INDEXED: set[tuple] = set()
-"""(id of the database, id of the focal grid, short side, area's square side, nominal focal length) of the searches
+"""(id of the database, id of the focal grid, short side, area's square side, nominal focal length, level slack) of
+the searches
 whose levels :func:`_index_levels` has indexed (the grids are cached by :func:`.quad_search.focal_grid`)."""
 
 
@@ -308,7 +316,7 @@ def _index_levels(db: PatternDatabase, searches: list[_Search]) -> None:
     timed search; a check here costs a set look-up."""
     for search in searches:
         setup = search.setup
-        key = (id(db), id(setup.grid), setup.short_px, setup.square_px, setup.focal_nominal)
+        key = (id(db), id(setup.grid), setup.short_px, setup.square_px, setup.focal_nominal, setup.level_slack)
         if key not in _INDEXED:
             for level in search.reachable_levels().tolist():
                 level_stars(db, level)
@@ -337,20 +345,32 @@ def aspect_trials(aspect_range: tuple[float, float]) -> NDArray[np.float64]:
 
 def _searches(x: NDArray, y: NDArray, camera: Camera, focal_range_px, db: PatternDatabase, options: MatcherOptions,
               trials: list[int], aspect_range: tuple[float, float] | None, fit_aspect: bool,
-              mirrored: tuple[bool, ...]) -> list[tuple[_Search, bool]]:
+              mirrored: tuple[bool, ...], level_slack: float = 1.0) -> list[tuple[_Search, bool]]:
     """The searches of a solve with their hypothesis (True: a mirror image, searched through the
     plain camera on the flipped columns, :func:`._parity.unmirrored`): for each of ``mirrored``,
-    one, or one per pixel aspect of ``aspect_range``."""
+    one, or one per pixel aspect of ``aspect_range``; their window of levels widened by
+    ``level_slack`` (:class:`.quad_search.SearchSetup`)."""
     out = []
     for flip in mirrored:
         seen_camera, seen_x = unmirrored(replace(camera, mirrored=True), x) if flip else (camera, x)
         if aspect_range is None:
-            out.append((_Search(seen_x, y, seen_camera, focal_range_px, db, options, trials, fit_aspect=fit_aspect),
-                        flip))
+            out.append((_Search(seen_x, y, seen_camera, focal_range_px, db, options, trials, fit_aspect=fit_aspect,
+                                level_slack=level_slack), flip))
             continue
         out += [(_Search(seen_x, y, seen_camera.with_focal(seen_camera.fx, seen_camera.fx / a), focal_range_px, db,
-                         options, trials, ASPECT_TOLERANCE, True), flip) for a in aspect_trials(aspect_range)]
+                         options, trials, ASPECT_TOLERANCE, True, level_slack), flip)
+                for a in aspect_trials(aspect_range)]
     return out
+
+
+def _wider(searches: list[tuple[_Search, bool]], make: Callable[[float], list[tuple[_Search, bool]]],
+           ratio: float) -> list[tuple[_Search, bool]] | None:
+    """The searches again with their window of levels one level wider each way
+    (``make(level_slack)``), or None when that reaches no level they did not search."""
+    wider = make(ratio)
+    more = any(np.setdiff1d(w.reachable_levels(), s.reachable_levels()).size
+               for (w, _), (s, _) in zip(wider, searches, strict=True))
+    return wider if more else None
 
 
 def _taking_turns(searches: list[tuple[_Search, bool]], quads: NDArray, start: int,
@@ -369,6 +389,24 @@ def _taking_turns(searches: list[tuple[_Search, bool]], quads: NDArray, start: i
                 turns.remove(turn)
                 continue
             yield step, turn[1]
+
+
+def _search_patterns(searches: list[tuple[_Search, bool]], n_stars: int, options: MatcherOptions, trials: list[int],
+                     deadline: float) -> MatchOutcome | None:
+    """Search the pattern pools and batches of the image's ``n_stars`` distinct stars, the
+    searches taking turns: the first candidate that verifies (OK), TIMEOUT past ``deadline``, or
+    None when every pattern was looked up without one."""
+    for start, first_new in pattern_pools(n_stars, options.pattern_stars, options.max_pattern_stars):
+        for quads in pattern_batches(min(options.pattern_stars, n_stars - start), first_new):
+            for found, flip in _taking_turns(searches, quads, start, deadline):
+                if found is not None:
+                    if flip:  # found in the flipped columns: the camera of the image as given is mirrored
+                        found = replace(found, camera=found.camera.mirror_image())
+                    return MatchOutcome(Status.OK, "", found, trials[0])
+                if time.perf_counter() > deadline:
+                    return MatchOutcome(Status.TIMEOUT, f"no match within the {options.timeout_s:g} s time limit",
+                                        None, trials[0])
+    return None
 
 
 def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatabase,
@@ -409,21 +447,24 @@ def match_lost_in_space(x: NDArray, y: NDArray, camera: Camera, db: PatternDatab
         return MatchOutcome(Status.TOO_FEW_STARS,
                             f"lost-in-space identification needs at least 4 stars, got {len(x)}", None, 0)
     x, y, trials = np.asarray(x, float), np.asarray(y, float), [0]
-    searches = _searches(x, y, camera, focal_range_px, db, options, trials, aspect_range, fit_aspect, mirrored)
+
+    def make(level_slack: float) -> list[tuple[_Search, bool]]:
+        return _searches(x, y, camera, focal_range_px, db, options, trials, aspect_range, fit_aspect, mirrored,
+                         level_slack)
+
+    searches = make(1.0)
     warm_up(db)  # compiling is not searching: before the clock starts
     _index_levels(db, [search for search, _ in searches])  # nor is indexing the levels' verification stars
     deadline = time.perf_counter() + options.timeout_s
     n_stars = searches[0][0].pattern_index.size
-    for start, first_new in pattern_pools(n_stars, options.pattern_stars, options.max_pattern_stars):
-        for quads in pattern_batches(min(options.pattern_stars, n_stars - start), first_new):
-            for found, flip in _taking_turns(searches, quads, start, deadline):
-                if found is not None:
-                    if flip:  # found in the flipped columns: the camera of the image as given is mirrored
-                        found = replace(found, camera=found.camera.mirror_image())
-                    return MatchOutcome(Status.OK, "", found, trials[0])
-                if time.perf_counter() > deadline:
-                    return MatchOutcome(Status.TIMEOUT, f"no match within the {options.timeout_s:g} s time limit",
-                                        None, trials[0])
+    outcome = _search_patterns(searches, n_stars, options, trials, deadline)
+    if outcome is None:  # a sparse list's patterns can lie in the levels next to the field's (module docstring)
+        wider = _wider(searches, make, db.settings.level_ratio)
+        if wider is not None:
+            _index_levels(db, [search for search, _ in wider])
+            outcome = _search_patterns(wider, n_stars, options, trials, deadline)
+    if outcome is not None:
+        return outcome
     return MatchOutcome(Status.NO_MATCH, f"no pattern of the {min(n_stars, options.max_pattern_stars)} brightest "
                         f"distinct stars matched the catalog with a false-match probability below "
                         f"{options.max_false_match_prob:g} ({trials[0]} candidates tried)", None, trials[0])

@@ -107,6 +107,10 @@ class SearchSetup:
     shape_floor : float
         Relative stretch of one edge against another allowed in every pattern (a pixel aspect
         searched in steps of twice this).
+    level_slack : float
+        The window of levels searched around the fields of view of the grid is the database's
+        level ratio times this, each way (1: as the database is built; the level ratio: one
+        level further, the second pass of :func:`.quad_matcher.match_lost_in_space`).
     """
 
     grid: NDArray[np.float64]
@@ -119,6 +123,7 @@ class SearchSetup:
     fit_focal: bool
     distortion: float = 0.0
     shape_floor: float = 0.0
+    level_slack: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -178,7 +183,7 @@ def search_batch(db: PatternDatabase, u: NDArray, w: NDArray, quads: NDArray, se
         np.ascontiguousarray(quads, dtype=np.int64), setup.grid, float(setup.focal_nominal),
         float(setup.short_px), float(setup.square_px), float(setup.sigma_px), float(setup.focal_step),
         float(setup.max_tolerance), bool(setup.fit_focal), float(setup.distortion), float(setup.shape_floor),
-        db.level_fov_rad, float(s.level_ratio), float(s.region_fraction), db.keys, db.cell_starts,
+        db.level_fov_rad, float(s.level_ratio * setup.level_slack), float(s.region_fraction), db.keys, db.cell_starts,
         db.pattern_ratios, db.pattern_largest, db.pattern_stars, db.vectors, int(first))
     return Fits(quat, focal, stars, row, int(n_tried), int(next_pattern))
 
