@@ -264,9 +264,11 @@ class Camera:
     def _beyond_fold_as_nan(self, ad: NDArray, bd: NDArray, r2: NDArray) -> tuple[NDArray, NDArray]:
         """The distorted (ad, bd), NaN where the pinhole radius squared ``r2`` lies beyond the fold."""
         fold = radial_fold_r2(self.k1, self.k2, self.k3)
-        if not np.any(r2 >= fold):  # no fold, or every direction inside it
+        if fold == math.inf:  # a lens that never folds (k1 >= 0, most fitted ones): no comparison
             return ad, bd
         beyond = r2 >= fold
+        if not beyond.any():
+            return ad, bd
         return np.where(beyond, np.nan, ad), np.where(beyond, np.nan, bd)
 
     def project_with_jacobian(self, vectors: NDArray) -> tuple[NDArray, NDArray, NDArray]:
