@@ -201,3 +201,84 @@ def test_the_jobs_folder_holds_only_server_made_names(server):
     assert names and all(re.fullmatch(r"[0-9a-f]{32}", n) for n in names)
     inputs = {q.name for p in jobs.iterdir() for q in p.iterdir() if q.name.startswith("input")}
     assert inputs <= {"input.jpg", "input.png", "input.fits", "input.tif"}
+
+
+BIG = "9" * 400
+"""A whole number far past the float range (json.loads reads it as an int of 400 digits)."""
+
+
+@pytest.mark.parametrize(("text", "field"), [
+    ('{"fov_deg": ' + BIG + "}", "options.fov_deg"),
+    ('{"fov_range_deg": [5, ' + BIG + "]}", "options.fov_range_deg"),
+    ('{"epoch": ' + BIG + "}", "options.epoch"),
+    ('{"time_limit_s": -' + BIG + "}", "options.time_limit_s"),
+])
+def test_422_for_a_whole_number_past_the_float_range(server, real_images, text, field):
+    """Before: 500 (OverflowError where the check compared the int with a float)."""
+    with open(real_images["roof.jpg"], "rb") as fh:
+        response = server.client.post("/api/jobs", files={"file": ("roof.jpg", fh)}, data={"options": text})
+    assert response.status_code == 422, response.text
+    assert response.json()["field"] == field
+    still_serving(server)
+
+
+@pytest.mark.parametrize(("scene", "field"), [('{"width": ' + BIG + "}", "simulate.width"),
+                                              ('{"seed": ' + BIG + "}", "simulate.seed"),
+                                              ('{"sensor": ["generic-cmos"]}', "simulate.sensor"),
+                                              ('{"sensor": {}}', "simulate.sensor")])
+def test_422_for_a_scene_parameter_of_the_wrong_kind(server, scene, field):
+    """Before: 500 (OverflowError; 'unhashable type' for a list or object as the sensor)."""
+    response = server.client.post("/api/jobs", files={"simulate": (None, scene)})
+    assert response.status_code == 422, response.text
+    assert response.json()["field"] == field
+    still_serving(server)
+
+
+@pytest.mark.parametrize("text", ['{"fov_deg": NaN}', '{"fov_deg": Infinity}', "[" * 8000 + "]" * 8000])
+def test_json_that_is_not_json_is_refused(server, real_images, text):
+    """NaN and Infinity are not JSON; 8000 nested lists (under the options field's 16 KB) ended
+    in a RecursionError and a 500."""
+    with open(real_images["roof.jpg"], "rb") as fh:
+        response = server.client.post("/api/jobs", files={"file": ("roof.jpg", fh)}, data={"options": text})
+    assert response.status_code == 422, response.text
+    assert response.json()["field"] == "options"
+    nested = server.client.post("/api/cameras", content=("[" * 30000 + "]" * 30000).encode(),
+                                headers={"Content-Type": "application/json"})
+    assert nested.status_code == 400 and "nested too deeply" in nested.json()["error"]
+    still_serving(server)
+
+
+@pytest.mark.parametrize(("body", "field"), [
+    ({"analysis": "histograms", "sets": [{"name": 5, "jobs": ["0" * 32]}]}, "sets[0].name"),
+    ({"analysis": "histograms", "sets": [{"jobs": ["0" * 32]}], "params": 5}, "params"),
+    ({"analysis": "histograms", "sets": [{"jobs": ["0" * 32]}], "params": [1]}, "params"),
+])
+def test_422_for_analysis_requests_of_the_wrong_shape(server, body, field):
+    """Before: 500 (a number as a set's name, params that are not an object)."""
+    response = server.client.post("/api/analyses", json=body)
+    assert response.status_code == 422, response.text
+    assert response.json()["field"] == field
+    still_serving(server)
+
+
+def test_media_types_match_in_any_case(server, real_images):
+    """Multipart/Form-Data and Application/JSON are the same media types (RFC 9110); before, 415."""
+    profile = {"name": "case-cam", "width": 507, "height": 507, "fx": 1000.0}
+    response = server.client.post("/api/cameras", content=json.dumps(profile).encode(),
+                                  headers={"Content-Type": "Application/JSON"})
+    assert response.status_code == 201, response.text
+    boundary = "B0UND"
+    body = (f"--{boundary}\r\nContent-Disposition: form-data; name=\"file\"; filename=\"roof.jpg\"\r\n\r\n").encode() \
+        + real_images["roof.jpg"].read_bytes() + f"\r\n--{boundary}--\r\n".encode()
+    response = server.client.post("/api/jobs", content=body,
+                                   headers={"Content-Type": f"Multipart/Form-Data; boundary={boundary}"})
+    assert response.status_code == 201, response.text
+    still_serving(server)
+
+
+def test_the_simulate_page_refuses_a_huge_whole_number(server):
+    """Before: 500 (the form's sim_width of 400 digits overflowed in the scene's checks)."""
+    response = server.client.post("/simulate", files={"sim_width": (None, BIG)})
+    assert response.status_code == 422 and "options.sim_width" in response.text
+    assert "at most 19 digits" in response.text
+    still_serving(server)

@@ -50,6 +50,9 @@ def validate_request(body: Any, jobs: JobStore, batches: BatchStore) -> dict[str
         n = f"{info.min_sets}" if info.min_sets == info.max_sets else f"{info.min_sets} to {info.max_sets}"
         got = len(sets) if isinstance(sets, list) else repr(sets)
         raise Refusal(422, f"{info.name} takes {n} result set(s), got {got}", "sets")
+    if not isinstance(body.get("params") or {}, dict):
+        raise Refusal(422, f"params must be a JSON object of {info.name}'s parameters, got {body['params']!r}",
+                      "params")
     try:
         params = check_params(info, body.get("params") or {})
     except InvalidInputError as exc:
@@ -70,6 +73,8 @@ def _set(index: int, entry: Any, jobs: JobStore, batches: BatchStore) -> dict[st
         batch = batches.get(entry["batch"])
         name, ids = batch["name"], batch["jobs"]
     else:
+        if not isinstance(entry.get("name", ""), str | None):
+            raise Refusal(422, f"name must be text, got {entry['name']!r}", f"{field}.name")
         ids, name = entry.get("jobs"), clean_name(entry.get("name")) or f"set {index + 1}"
         if not isinstance(ids, list) or not 1 <= len(ids) <= MAX_JOBS_PER_SET:
             raise Refusal(422, f"jobs must be a list of 1 to {MAX_JOBS_PER_SET} job ids", f"{field}.jobs")

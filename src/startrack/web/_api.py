@@ -21,7 +21,6 @@
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 from starlette.requests import Request
@@ -29,6 +28,7 @@ from starlette.responses import FileResponse, JSONResponse
 from starlette.routing import Route
 
 from .. import __version__
+from . import _json_text as json_text
 from ._options import OptionError, parse_options
 from ._refusals import Refusal
 from ._schema import openapi_document
@@ -61,7 +61,7 @@ def options_of(fields: dict[str, list[str]], service: Service) -> dict[str, Any]
 
 async def json_body(request: Request) -> Any:
     """The request's JSON body (415 unless JSON, 413 when too large, 400 when malformed)."""
-    if not request.headers.get("content-type", "").startswith("application/json"):
+    if not request.headers.get("content-type", "").lower().startswith("application/json"):  # media types: any case
         raise Refusal(415, "send a JSON body with Content-Type: application/json")
     body = b""
     async for chunk in request.stream():
@@ -69,7 +69,7 @@ async def json_body(request: Request) -> Any:
         if len(body) > MAX_JSON_BYTES:
             raise Refusal(413, f"the JSON body is larger than {MAX_JSON_BYTES} bytes")
     try:
-        return json.loads(body)
+        return json_text.loads(body)
     except ValueError as exc:
         raise Refusal(400, f"the body is not valid JSON ({exc})") from None
 
@@ -104,7 +104,7 @@ async def post_job(request: Request) -> JSONResponse:
 
 def _json_field(fields: dict[str, list[str]], name: str) -> Any:
     try:
-        return json.loads(fields[name][0])
+        return json_text.loads(fields[name][0])
     except ValueError as exc:
         raise Refusal(422, f"{name} is not valid JSON ({exc})", name) from None
 

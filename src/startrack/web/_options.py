@@ -48,6 +48,7 @@ from ..detect import StarDetector
 from ..errors import InvalidInputError
 from ..identify import MATCHERS
 from ..solve import check_fov_deg, epoch_jyear
+from . import _json_text as json_text
 from ._presets import PRESETS
 
 PROFILE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
@@ -74,7 +75,7 @@ def parse_options(text: str | None, cameras_dir: Path) -> dict[str, Any]:
     if len(text.encode()) > MAX_OPTIONS_BYTES:
         raise OptionError("options", f"must be at most {MAX_OPTIONS_BYTES} bytes of JSON")
     try:
-        value = json.loads(text)
+        value = json_text.loads(text)
     except ValueError as exc:
         raise OptionError("options", f"is not valid JSON ({exc})") from None
     return validate_options(value, cameras_dir)

@@ -32,6 +32,7 @@ from starlette.templating import Jinja2Templates
 from .. import __version__
 from ._api import service_of
 from ._jobs import ANALYSIS_STAGES, SOLVE_STAGES
+from ._json_text import MAX_INT_DIGITS
 from ._options import OptionError, validate_options
 from ._refusals import Refusal
 from ._schema import openapi_document
@@ -65,11 +66,14 @@ def _number(fields: dict[str, list[str]], key: str, kind: type = float) -> float
     text = _last(fields, key)
     if not text:
         return None
+    what = "a whole number" if kind is int else "a number"
     try:
-        return kind(text)
+        value = kind(text)
     except ValueError:
-        what = "a whole number" if kind is int else "a number"
         raise OptionError(f"options.{key}", f"must be {what}, got {text!r}") from None
+    if kind is int and len(str(abs(value))) > MAX_INT_DIGITS:  # as the API's JSON reads it (._json_text)
+        raise OptionError(f"options.{key}", f"must be {what} of at most {MAX_INT_DIGITS} digits, got {text[:24]!r}...")
+    return value
 
 
 def form_options(fields: dict[str, list[str]]) -> dict[str, Any]:

@@ -52,7 +52,7 @@ def validate_simulation(params: Any) -> dict[str, Any]:
     if (out["ra_deg"] is None) != (out["dec_deg"] is None):
         raise OptionError("simulate.dec_deg" if out["dec_deg"] is None else "simulate.ra_deg",
                           "give both ra_deg and dec_deg, or neither (a random attitude)")
-    if out["sensor"] not in SENSOR_PRESETS:
+    if not isinstance(out["sensor"], str) or out["sensor"] not in SENSOR_PRESETS:
         raise OptionError("simulate.sensor", f"must be one of {', '.join(sorted(SENSOR_PRESETS))}, "
                                              f"got {out['sensor']!r}")
     if out["seed"] is None:

@@ -86,7 +86,7 @@ async def read_form(request: Request, limit: int) -> tuple[dict[str, list[str]],
     """The fields and files of a ``multipart/form-data`` body, read with the size limit.
 
     Returns the text fields (name -> values) and the file parts (spooled to temporary files)."""
-    if not request.headers.get("content-type", "").startswith("multipart/form-data"):
+    if not request.headers.get("content-type", "").lower().startswith("multipart/form-data"):  # any case
         raise Refusal(415, "send the image as multipart/form-data with a 'file' part")
     length = request.headers.get("content-length")
     if length is not None and length.isdigit() and int(length) > limit:
