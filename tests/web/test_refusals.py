@@ -282,3 +282,12 @@ def test_the_simulate_page_refuses_a_huge_whole_number(server):
     assert response.status_code == 422 and "options.sim_width" in response.text
     assert "at most 19 digits" in response.text
     still_serving(server)
+
+
+def test_400_for_an_unknown_job_state_in_the_listing(server):
+    """Before: 200 with an empty list, as if no job were in that state."""
+    response = server.client.get("/api/jobs", params={"state": "bogus"})
+    assert response.status_code == 400 and response.json()["field"] == "state"
+    assert "queued, running, done, failed, cancelled" in response.json()["error"]
+    assert server.client.get("/api/jobs", params={"state": "done"}).status_code == 200
+    still_serving(server)

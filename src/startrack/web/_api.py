@@ -29,6 +29,7 @@ from starlette.routing import Route
 
 from .. import __version__
 from . import _json_text as json_text
+from ._jobs import STATES
 from ._options import OptionError, parse_options
 from ._refusals import Refusal
 from ._schema import openapi_document
@@ -112,6 +113,8 @@ def _json_field(fields: dict[str, list[str]], name: str) -> Any:
 async def list_jobs(request: Request) -> JSONResponse:
     service = service_of(request)
     wanted = request.query_params.get("state")
+    if wanted and wanted not in STATES:
+        raise Refusal(400, f"no job state {wanted!r}; valid states: {', '.join(STATES)}", "state")
     jobs = [service.job_summary(j) for j in reversed(service.jobs.ids())]
     if wanted:
         jobs = [j for j in jobs if j["state"] == wanted]
