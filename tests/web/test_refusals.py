@@ -291,3 +291,13 @@ def test_400_for_an_unknown_job_state_in_the_listing(server):
     assert "queued, running, done, failed, cancelled" in response.json()["error"]
     assert server.client.get("/api/jobs", params={"state": "done"}).status_code == 200
     still_serving(server)
+
+
+def test_415_at_upload_for_a_fits_bitpix_the_reader_refuses(server):
+    """Before: BITPIX = 17 was taken (201) and the job failed in the worker."""
+    header = fits.Header([("SIMPLE", True), ("BITPIX", 16), ("NAXIS", 2), ("NAXIS1", 64), ("NAXIS2", 64)])
+    content = header.tostring().encode("ascii").replace(b"BITPIX  =                   16",
+                                                        b"BITPIX  =                   17")
+    response = post_file(server, content + b"\x00" * 2880 * 3, "odd.fits")
+    assert response.status_code == 415 and "BITPIX = 17" in response.json()["error"]
+    still_serving(server)

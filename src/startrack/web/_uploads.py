@@ -34,6 +34,7 @@ from starlette.formparsers import MultiPartException, MultiPartParser
 from starlette.requests import Request
 
 from ..io import RAW_SUFFIXES, is_heif
+from ..io._fits_cards import BITPIX_VALUES
 from ._config import MAX_SIDE_PX, MIN_SIDE_PX
 from ._refusals import Refusal, bad_request
 
@@ -225,6 +226,8 @@ def _fits_size(path: Path) -> tuple[int, int]:
                 return int(cards["ZNAXIS1"]), int(cards["ZNAXIS2"])
             naxis = int(cards.get("NAXIS", 0))
             if naxis >= 2 and cards.get("XTENSION", "IMAGE") == "IMAGE":
+                if cards.get("BITPIX") not in BITPIX_VALUES:  # the reader refuses it: refuse it now, not in the worker
+                    raise ValueError(f"BITPIX = {cards.get('BITPIX')!r}; FITS allows 8, 16, 32, 64, -32, -64")
                 return int(cards["NAXIS1"]), int(cards["NAXIS2"])
             size = abs(int(cards.get("BITPIX", 8))) // 8 * int(cards.get("GCOUNT", 1)) * (
                 int(cards.get("PCOUNT", 0)) + (math.prod(int(cards[f"NAXIS{i}"]) for i in range(1, naxis + 1))
