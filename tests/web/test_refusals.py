@@ -301,3 +301,17 @@ def test_415_at_upload_for_a_fits_bitpix_the_reader_refuses(server):
     response = post_file(server, content + b"\x00" * 2880 * 3, "odd.fits")
     assert response.status_code == 415 and "BITPIX = 17" in response.json()["error"]
     still_serving(server)
+
+
+def test_messages_name_the_upload_not_the_servers_folders(server):
+    """Before: '... cannot identify image file '<data dir>/jobs/<id>/input.jpg'' at upload, and a
+    damaged PNG's job error began with the job folder's absolute path."""
+    response = post_file(server, b"\xff\xd8\xff", "three.jpg")
+    assert response.status_code == 415
+    assert str(server.data_dir) not in response.json()["error"] and "three.jpg" in response.json()["error"]
+    cut = png_header(64, 64)  # its IDAT holds one row's worth of the 64 its IHDR declares
+    job = post_file(server, cut, "cut.png").json()
+    state = server.wait_job(job["id"])
+    assert state["state"] == "failed" and "truncated or corrupt" in state["error"]
+    assert str(server.data_dir) not in state["error"] and state["error"].startswith("input.png: ")
+    still_serving(server)

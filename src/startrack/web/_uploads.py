@@ -199,8 +199,9 @@ def image_size(path: Path, kind: str, label: str) -> tuple[int, int]:
     except Refusal:
         raise
     except Exception as exc:  # any reader's complaint about a header means "not an image we read"
+        said = " ".join(str(exc).split()).replace(str(path), label)  # not the server's own folder
         raise Refusal(415, f"{label!r} has the signature of {kind.upper()} but its header cannot be read: "
-                           f"{' '.join(str(exc).split())[:200]}", "file") from None
+                           f"{said[:200]}", "file") from None
 
 
 def _heif_size(path: Path) -> tuple[int, int]:

@@ -11,6 +11,7 @@ the pool. The worker exits when the pipe closes (the server stopped).
 
 from __future__ import annotations
 
+import os
 import signal
 from multiprocessing.connection import Connection
 from pathlib import Path
@@ -52,20 +53,21 @@ def run_job(jobs_dir: Path, job_id: str) -> None:
 
             run_solve_job(folder)
     except (StartrackError, ValueError, OSError, KeyError, TypeError) as exc:
-        update_state(folder, state="failed", error=_one_line(exc), finished=now_iso())
+        update_state(folder, state="failed", error=_one_line(exc, folder), finished=now_iso())
     except Exception as exc:  # a bug must end the job, not the worker
-        update_state(folder, state="failed", error=f"internal error: {type(exc).__name__}: {_one_line(exc)}",
-                     finished=now_iso())
+        update_state(folder, state="failed",
+                     error=f"internal error: {type(exc).__name__}: {_one_line(exc, folder)}", finished=now_iso())
 
 
-def _one_line(exc: BaseException) -> str:
-    return " ".join(str(exc).split()) or type(exc).__name__
+def _one_line(exc: BaseException, folder: Path) -> str:
+    """The exception's message on one line, the server's own folder left out of the paths it
+    names (``input.png: PNG file is truncated``, not the job folder's absolute path)."""
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return text.replace(f"{folder}{os.sep}", "")
 
 
 def worker_main(conn: Connection, jobs_dir: str, warm: bool) -> None:
     """Entry point of a worker process (see the module docstring)."""
-    import os
-
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C stops the server, which stops us
     if warm:
         prewarm()
