@@ -150,6 +150,9 @@ def test_a_camera_profile_is_saved_and_fixes_the_focal_length(idle_server, real_
     bad = client.post("/api/cameras", json={"name": "bad-cam", "width": 507, "height": 507, "fx": -3})
     assert bad.status_code == 422 and "focal length" in bad.json()["error"]
     assert client.post("/api/cameras", json={"name": "far-mst", "width": 9, "height": 9, "fx": 3}).status_code == 422
+    # a preset's name spelled with '_' (which options.camera reads as the preset) is refused too
+    hidden = client.post("/api/cameras", json={"name": "droid_x2", "width": 1024, "height": 1024, "fx": 1000})
+    assert hidden.status_code == 422 and hidden.json()["field"] == "name"
     wrong = idle_server.wait_job(idle_server.submit(real_images["img3.png"], {"camera": "roof-cam"}).json()["id"])
     assert wrong["state"] == "failed" and "507 x 507 px but the image is 1392 x 1040 px" in wrong["error"]
 

@@ -204,7 +204,7 @@ class Service:
             raise Refusal(422, "the body must be a JSON object: name and the camera's fields", "body")
         fields = dict(body)
         name = fields.pop("profile", None) or fields.get("name")
-        if not isinstance(name, str) or not PROFILE_NAME.match(name) or name.lower() in PRESETS:
+        if not isinstance(name, str) or not PROFILE_NAME.match(name) or name.lower().replace("_", "-") in PRESETS:
             raise Refusal(422, f"name must be 1-64 letters, digits, '.', '_' or '-' and not a preset, got {name!r}",
                           "name")
         try:
