@@ -136,3 +136,22 @@ def public_name(cls: type) -> str:
     parts = cls.__module__.split(".")
     public = next((i for i, part in enumerate(parts) if part.startswith("_")), len(parts))
     return ".".join([*parts[:public], cls.__qualname__])
+
+
+def hidden_interruption(exc: BaseException) -> BaseException | None:
+    """The KeyboardInterrupt or SystemExit that ``exc`` stands for, if any (else None).
+
+    A signal handler that raises (Ctrl-C's KeyboardInterrupt, the CLI's SIGTERM ``Terminated``)
+    while compiled code runs comes back from it as ``SystemError: ... returned a result with an
+    exception set``, an Exception whose cause or context is the interruption. A handler that
+    turns any Exception into a result (a failed trial, a batch's error line) must re-raise it
+    instead, or the process records a failure that never happened and carries on.
+    """
+    seen: set[int] = set()
+    current: BaseException | None = exc
+    while current is not None and id(current) not in seen:
+        if not isinstance(current, Exception):
+            return current
+        seen.add(id(current))
+        current = current.__cause__ or current.__context__
+    return None

@@ -209,3 +209,16 @@ def test_closed_output_stops_quietly_but_a_csv_is_still_written(folder, tmp_path
         assert len(list(csv.DictReader(fh))) == len(many)  # one star from each
     code, _ = _first_line_then_close("detect", *many, "--max-stars", 1)
     assert code == 141
+
+
+def test_an_interruption_inside_compiled_code_stops_the_batch(tmp_path):
+    """Ctrl-C or SIGTERM inside a compiled function comes back as a SystemError whose cause is the
+    interruption: the batch stops, rather than writing an error line and going on."""
+    image = tmp_path / "a.png"
+    image.write_bytes(b"")
+
+    def interrupted(path):
+        raise SystemError("CPUDispatcher returned a result with an exception set") from KeyboardInterrupt()
+
+    with pytest.raises(KeyboardInterrupt):
+        _safe(interrupted, image)

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..errors import InvalidInputError, StartrackError
+from ..errors import InvalidInputError, StartrackError, hidden_interruption
 from ..io import IMAGE_SUFFIXES
 
 ERROR = "error"
@@ -122,6 +122,9 @@ def _safe(process: Callable[[Path], Record], path: Path) -> Record:
     except (StartrackError, ValueError, OSError) as exc:
         return error_record(path, one_line(exc))
     except Exception as exc:  # noqa: BLE001  # a fault on one image must not cost the rest of the batch
+        interruption = hidden_interruption(exc)  # ... but Ctrl-C or SIGTERM inside compiled code stops it
+        if interruption is not None:
+            raise interruption from None
         return error_record(path, f"unexpected {type(exc).__name__} (a fault of startrack's, please report it): "
                                   f"{one_line(exc)}")
 

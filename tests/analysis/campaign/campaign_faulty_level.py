@@ -16,7 +16,7 @@ from startrack.analysis.campaign.levels import _stars as stars
 
 FAULT_PARAMS = (
     Param("fail_fraction", "float", 0.0, "share of trials that fail", lo=0.0, hi=1.0),
-    Param("fault", "str", "raise", "how a trial fails", choices=("raise", "exit")),
+    Param("fault", "str", "raise", "how a trial fails", choices=("raise", "exit", "interrupt")),
 )
 
 
@@ -24,6 +24,9 @@ def run(params, rot, rng, tolerance_px):
     if rng.random() < params["fail_fraction"]:
         if params["fault"] == "exit":
             os._exit(3)
+        if params["fault"] == "interrupt":  # what Ctrl-C inside a compiled function comes back as
+            raise SystemError("CPUDispatcher(<function search>) returned a result with an exception set") \
+                from KeyboardInterrupt()
         raise RuntimeError("faulty level: this trial fails on purpose")
     return stars.run(params, rot, rng, tolerance_px)
 

@@ -72,6 +72,16 @@ def test_a_raising_trial_becomes_an_error_row_with_its_traceback():
     assert all(r["error"] == "" for r in ok)
 
 
+def test_an_interruption_inside_compiled_code_stops_the_run_not_a_trial():
+    """A SIGTERM or Ctrl-C that lands inside a compiled function comes back as a SystemError
+    (an Exception) whose cause is the interruption; it was saved as an ERROR trial (which --resume
+    then never reran) and the run went on."""
+    text = STARS.replace('level = "stars"', 'level = "test-faulty"') + "\n"
+    spec = parse_spec(text.replace("[sweep]", '[sweep]\nfail_fraction = [1.0]\nfault = ["interrupt"]'))
+    with pytest.raises(KeyboardInterrupt):
+        run_chunk(spec, Chunk(spec.cells()[0], 0, 2))
+
+
 CAMERA = Camera.from_fov(1000, 800, 10.0)
 
 

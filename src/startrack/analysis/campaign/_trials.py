@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
+from ...errors import hidden_interruption
 from ._attitudes import trial_attitude
 from ._outcome import COLUMNS, arrow_type, as_column_value, empty_value, failure_columns
 from ._spec import CampaignSpec, Cell
@@ -88,7 +89,10 @@ def run_trial(spec: CampaignSpec, cell: Cell, k: int) -> TrialOutput:
     try:
         rot = trial_attitude(spec.attitudes, k, spec.trials, rng)
         out = spec.level_def.run(cell.params, rot, rng, spec.tolerance_px)
-    except Exception:  # a trial that raises is a result: a failure row with its traceback
+    except Exception as exc:  # a trial that raises is a result: a failure row with its traceback
+        interruption = hidden_interruption(exc)  # ... unless a signal stopped it inside compiled code
+        if interruption is not None:
+            raise interruption from None
         return TrialOutput(failure_row(spec, cell, k, "ERROR", traceback.format_exc(), rot))
     row = {**_keys(spec, cell, k), **out.row, "wall_s": time.perf_counter() - t0}
     return TrialOutput(row, out.image, out.truth)
