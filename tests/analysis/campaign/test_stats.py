@@ -57,14 +57,21 @@ def test_wilson_without_trials_is_nan_and_bad_counts_are_refused():
         wilson_interval(1, 4, confidence=1.0)
 
 
-def test_rule_of_three_when_nothing_was_seen():
-    assert rate_upper_bound(0, 100) == pytest.approx(0.03, rel=1e-12)
-    assert rate_upper_bound(0, 1000) == pytest.approx(0.003, rel=1e-12)
-    # other levels: -ln(1 - confidence) / n, within 1 % of the exact bound 1 - (1 - c)^(1/n) for large n
-    assert rate_upper_bound(0, 1000, 0.99) == pytest.approx(-math.log(0.01) / 1000, rel=1e-12)
-    assert rate_upper_bound(0, 1000, 0.99) == pytest.approx(1 - 0.01 ** (1 / 1000), rel=0.01)
-    assert rate_upper_bound(0, 1) == 1.0
+def test_the_exact_bound_when_nothing_was_seen_is_the_rule_of_three_for_large_n():
+    for n, confidence in ((3, 0.95), (100, 0.95), (1000, 0.99)):
+        bound = rate_upper_bound(0, n, confidence)
+        assert bound == pytest.approx(1 - (1 - confidence) ** (1 / n), rel=1e-12)
+        assert bound == pytest.approx(stats.beta.ppf(confidence, 1, n), rel=1e-9)
+    assert rate_upper_bound(0, 100_000) == pytest.approx(3 / 100_000, rel=0.002)  # 2.996 / n
+    assert rate_upper_bound(0, 1) == pytest.approx(0.95, rel=1e-12)
     assert math.isnan(rate_upper_bound(0, 0))
+
+
+@pytest.mark.parametrize("n", [2, 3, 4, 10, 30, 1000])
+def test_seeing_a_false_solve_never_lowers_the_bound(n):
+    """With the rule of three at k = 0, n = 3 gave 1.0 for none seen and 0.865 for one."""
+    bounds = [rate_upper_bound(k, n) for k in range(n + 1)]
+    assert all(a < b for a, b in zip(bounds, bounds[1:], strict=False))
 
 
 @pytest.mark.parametrize(("k", "n", "confidence"), [(1, 100, 0.95), (5, 50, 0.95), (17, 1000, 0.99), (3, 8, 0.9)])

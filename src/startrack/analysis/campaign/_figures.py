@@ -145,7 +145,7 @@ def rates_figure(table: pa.Table, axis: str | None, line: str | None, note: str 
     uppers = table["false_upper"].to_numpy(zero_copy_only=False)
     ax_f.set_ylim(0.0, max(float(np.nanmax(uppers, initial=0.0)) * 1.15, 1e-3))
     ax_f.set_ylabel("false-solve rate (solved, not correct)")
-    ax_f.set_title("false solves: seen (o), 95 % upper bound (▼, rule of three at 0)", fontsize=10)
+    ax_f.set_title("false solves: seen (o), 95 % upper bound (▼, Clopper-Pearson)", fontsize=10)
     for ax in (ax_s, ax_f):
         ax.grid(True, alpha=0.3)
     if line:
@@ -328,7 +328,7 @@ def _norm(column: str, grid: np.ndarray) -> Normalize:
 
 
 RATES_CAPTION = ("Success: correct / trials with the Wilson 95 % interval; false solves: solved but not correct, "
-                 "with the one-sided 95 % upper bound (rule of three when none was seen, else Clopper-Pearson).")
+                 "with the one-sided 95 % upper bound (Clopper-Pearson; about 3 / n when none was seen).")
 ACCURACY_CAPTION = ("Median and 95th percentile of the cross-boresight and |roll| errors of the correct trials (the "
                     "same table as the rates).")
 CDF_CAPTION = ("Cumulative distributions of the errors of the correct trials, per {split}; marks at the 50, 68, 95 "

@@ -4,8 +4,9 @@
   its coverage near the nominal level for small ``n`` and rates near 0 or 1, where the normal
   ("Wald") interval collapses to a point.
 - :func:`rate_upper_bound`: the one-sided upper confidence bound of a rate, for false solves: the
-  rule of three (``3 / n`` at 95 %, Hanley & Lippman-Hand 1983) when no event was seen, else the
-  exact Clopper-Pearson bound ``Beta.ppf(confidence, k + 1, n - k)`` (Clopper & Pearson 1934).
+  exact Clopper-Pearson bound ``Beta.ppf(confidence, k + 1, n - k)`` (Clopper & Pearson 1934),
+  which for no event seen is ``1 - (1 - confidence)^(1/n)``, the rule of three (``3 / n`` at 95 %,
+  Hanley & Lippman-Hand 1983) of large ``n``.
 - :func:`percentiles`: NaN-ignoring percentiles (numpy's default linear interpolation).
 - :class:`Metric` and :func:`parse_metric`: the mini-language of a spec's ``[[reference]]``
   tables, ``AGG:COLUMN[@ROWS]`` (``docs/campaign_report.md``).
@@ -30,8 +31,6 @@ PERCENTILES: tuple[float, ...] = (50.0, 68.0, 95.0, 99.7)
 """The error percentiles every table and figure reports (the 1-, 2- and 3-sigma levels of a normal
 distribution are near 68, 95 and 99.7 %)."""
 
-RULE_OF_THREE: float = 3.0
-"""Events bound (at 95 %) when none was seen in ``n`` trials: ``3 / n`` (exactly ``-ln 0.05 = 2.996``)."""
 
 
 def _check_confidence(confidence: float) -> float:
@@ -75,19 +74,22 @@ def wilson_interval(k: int, n: int, confidence: float = 0.95) -> tuple[float, fl
 
 
 def rate_upper_bound(k: int, n: int, confidence: float = 0.95) -> float:
-    """One-sided upper confidence bound of a rate of which ``k`` events were seen in ``n`` trials.
+    """One-sided upper confidence bound of a rate of which ``k`` events were seen in ``n`` trials:
+    the exact Clopper-Pearson bound ``scipy.stats.beta.ppf(confidence, k + 1, n - k)``, the rate
+    at which seeing ``k`` or fewer has probability ``1 - confidence`` (1 when ``k == n``; NaN when
+    ``n == 0``).
 
-    ``k == 0``: the rule of three, ``3 / n`` at 95 % (``-ln(1 - confidence) / n`` at other
-    levels, of which 3 is the 95 % value rounded up); ``k > 0``: the exact Clopper-Pearson bound
-    ``scipy.stats.beta.ppf(confidence, k + 1, n - k)`` (1 when ``k == n``). NaN when ``n == 0``.
+    For ``k == 0`` that is ``1 - (1 - confidence)^(1/n)``, whose large-``n`` form is the rule of
+    three ``3 / n`` at 95 % (2.996 / n). The rule itself is not used: for small ``n`` it exceeds
+    the exact bound (1.0 against 0.63 for n = 3) and even the bound of one event seen (0.87), so
+    that seeing a false solve would lower the bound.
     """
     k, n = _check_counts(k, n)
     confidence = _check_confidence(confidence)
     if n == 0:
         return math.nan
     if k == 0:
-        factor = RULE_OF_THREE if confidence == 0.95 else -math.log1p(-confidence)
-        return min(1.0, factor / n)
+        return -math.expm1(math.log1p(-confidence) / n)  # 1 - (1 - confidence)^(1/n), accurate for large n
     if k == n:
         return 1.0
     return float(stats.beta.ppf(confidence, k + 1, n - k))
