@@ -71,6 +71,8 @@ def _with(text: str, old: str, new: str) -> str:
     ("centroid_sigma_px = [0.1, 0.5]", "centroid_sigma_px = []", ["[sweep] centroid_sigma_px", "non-empty"]),
     ("centroid_sigma_px = [0.1, 0.5]", "centroid_sigma_px = [0.1, -0.5]", ["[sweep] centroid_sigma_px", "[0, 100]"]),
     ("centroid_sigma_px = [0.1, 0.5]", "centroid_sigma_px = [0.1, 0.1]", ["[sweep] centroid_sigma_px", "repeats"]),
+    ("centroid_sigma_px = [0.1, 0.5]", "centroid_sigma_px = [0.0, -0.0]", ["[sweep] centroid_sigma_px", "repeats"]),
+    ("seed = 12345", "seed = 9223372036854775808", ["[campaign] seed", "whole number in [0"]),  # 2**63
     ("[sweep]", "[sweeps]", ["unknown table [sweeps]", "[sweep]"]),
     ("fov_known = true", "fov_known = true\nfov_range_deg = [30.0, 10.0]", ["fov_range_deg", "lower end"]),
     ("seed = 12345", "seed = 12345\nattitudes = \"random\"", ["[campaign] attitudes", "'fibonacci'"]),
@@ -125,3 +127,10 @@ def test_fibonacci_lattice_spreads_sin_dec_evenly_and_keeps_the_roll_random():
     np.testing.assert_allclose(bores[7], expected, atol=1e-12)
     gaps = np.sort(bores @ bores.T, axis=1)[:, -2]   # cosine to the nearest other boresight
     assert np.degrees(np.arccos(gaps)).max() < 2.5 * np.degrees(np.arccos(gaps)).min()
+
+
+def test_the_largest_documented_seed_is_taken():
+    """2**63 - 1 was refused: its check went through a float, which rounds it up to 2**63."""
+    assert parse_spec(_with(GOOD, "seed = 12345", "seed = 9223372036854775807")).seed == 2**63 - 1
+    with pytest.raises(SpecError, match="seed"):
+        parse_spec(_with(GOOD, "seed = 12345", "seed = -1"))

@@ -104,9 +104,12 @@ def _number(param: Param, value: Any) -> float:
 
 
 def _check_int(param: Param, value: Any) -> int:
+    """A whole number within the bounds, compared as integers (through a float, 2**63 - 1 rounds
+    up to 2**63 and the largest valid seed was refused)."""
     if isinstance(value, bool) or not isinstance(value, int):
         raise TypeError(f"must be {param.valid()}")
-    _number(param, value)
+    if (param.lo is not None and value < param.lo) or (param.hi is not None and value > param.hi):
+        raise ValueError(f"must be {param.valid()}")
     return int(value)
 
 

@@ -182,9 +182,19 @@ def _sweep(params: Mapping[str, Param], table: Mapping[str, Any]) -> dict[str, t
         if not isinstance(values, list) or not values:
             raise SpecError(f"[sweep] {key}: must be a non-empty list of values, got {values!r}")
         out[key] = tuple(params[key].check(v, "[sweep]") for v in values)
-        if len(set(map(repr, out[key]))) != len(out[key]):
+        if len(set(map(_value_key, out[key]))) != len(out[key]):
             raise SpecError(f"[sweep] {key}: repeats a value ({list(values)!r})")
     return out
+
+
+def _value_key(value: Any) -> str:
+    """A sweep value as the cells tell it apart: ``repr``, with -0.0 as 0.0 (the same number,
+    and the same cell, as 0.0) in a number or a list of numbers."""
+    if isinstance(value, float):
+        return repr(value + 0.0)  # -0.0 + 0.0 is 0.0
+    if isinstance(value, list | tuple):
+        return repr([_value_key(v) for v in value])
+    return repr(value)
 
 
 def _references(data: Mapping[str, Any]) -> tuple[dict[str, Any], ...]:
