@@ -193,3 +193,44 @@ def test_nothing_is_left_behind_when_a_run_cannot_start(tmp_path):
     with pytest.raises(InvalidInputError):
         run_campaign(SPEC, tmp_path / "x", scheduler="tcp://127.0.0.1:1", workers=2, report=False)
     assert not (tmp_path / "x" / "manifest.json").exists()
+
+
+def test_a_refused_scheduler_or_chunk_size_leaves_no_folder(tmp_path):
+    """Before: --chunk-size 0 was checked after OUT/trials/ was made, and a scheduler that could
+    not be reached left an empty OUT/."""
+    with pytest.raises(InvalidInputError, match="--chunk-size"):
+        run_campaign(SPEC, tmp_path / "a", chunk_size=0, report=False)
+    with pytest.raises(InvalidInputError, match="tcp://127.0.0.1:1"):
+        run_campaign(SPEC, tmp_path / "b", scheduler="tcp://127.0.0.1:1", report=False)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_web_server_given_as_the_scheduler_is_refused_naming_it(tmp_path, monkeypatch):
+    """The dashboard's port given by mistake: Dask read 'HTTP/1.1' as a frame length of exabytes
+    (a MemoryError, worded as 'use a smaller image'), or, with a server that keeps the connection
+    open without answering, waited past its own 20 s timeout."""
+    import http.server
+    import socket
+    import threading
+
+    from startrack.analysis.campaign import _engine as engine
+
+    monkeypatch.setattr(engine, "CONNECT_S", 2.0)
+    silent = socket.create_server(("127.0.0.1", 0))  # accepts, never answers
+    class Quiet(http.server.BaseHTTPRequestHandler):
+        def log_message(self, *args) -> None:  # the test's own output stays clean
+            pass
+
+    web = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Quiet)
+    threading.Thread(target=web.serve_forever, daemon=True).start()
+    try:
+        for port in (web.server_address[1], silent.getsockname()[1]):
+            t0 = time.perf_counter()
+            with pytest.raises(InvalidInputError, match="no Dask scheduler answered") as info:
+                run_campaign(SPEC, tmp_path / "out", scheduler=f"tcp://127.0.0.1:{port}", report=False)
+            assert f"tcp://127.0.0.1:{port}" in str(info.value) and "dashboard" in str(info.value)
+            assert time.perf_counter() - t0 < 30.0  # s: CONNECT_S (2 s here) and the margin, not a hang
+            assert not (tmp_path / "out").exists()
+    finally:
+        web.shutdown()
+        silent.close()

@@ -93,7 +93,7 @@ def dask_client(workers: int | None = None, scheduler: str | None = None) -> Ite
     except ImportError:
         raise InvalidInputError("campaigns need Dask: pip install 'startrack[campaign]'") from None
     if scheduler is not None:
-        with Client(scheduler, timeout="20s") as client:
+        with _scheduler_client(Client, scheduler) as client:
             yield client
         return
     n = workers if workers is not None else (os.cpu_count() or 1)
@@ -105,6 +105,42 @@ def dask_client(workers: int | None = None, scheduler: str | None = None) -> Ite
           LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
                        silence_logs=logging.ERROR) as cluster, Client(cluster) as client):
         yield client
+
+
+CONNECT_S = 20.0
+"""How long a connection to a ``--scheduler`` may take (Dask's own timeout, and the bound on a
+peer that accepts the connection but never answers as a scheduler)."""
+
+
+def _scheduler_client(client_class: Any, address: str) -> Any:
+    """A Dask ``Client`` on the scheduler at ``address``; InvalidInputError naming the address
+    when it is not one.
+
+    A web server there (the dashboard's port given by mistake) answers Dask's handshake with
+    ``HTTP/1.1 ...``, whose bytes Dask reads as a frame length of exabytes (a MemoryError), or
+    keeps the connection open without a reply past Dask's own timeout; so the connection is made
+    in a daemon thread and waited for :data:`CONNECT_S` (plus a margin) at most.
+    """
+    outcome: dict[str, Any] = {}
+
+    def connect() -> None:
+        try:
+            outcome["client"] = client_class(address, timeout=f"{CONNECT_S:g}s")
+        except BaseException as exc:  # noqa: BLE001  # handed to the caller below
+            outcome["error"] = exc
+
+    thread = threading.Thread(target=connect, name="startrack-scheduler-connect", daemon=True)
+    thread.start()
+    thread.join(CONNECT_S + 5.0)
+    if "client" in outcome:
+        return outcome["client"]
+    error = outcome.get("error")
+    if isinstance(error, KeyboardInterrupt | SystemExit):
+        raise error
+    detail = "no answer" if error is None else " ".join(f"{type(error).__name__}: {error}".split())[:200]
+    raise InvalidInputError(f"--scheduler {address}: no Dask scheduler answered there within {CONNECT_S:g} s "
+                            f"({detail}); give the scheduler's own address (tcp://HOST:8786 by default), "
+                            "not its dashboard's") from None
 
 
 NO_WORKERS_S = 120.0

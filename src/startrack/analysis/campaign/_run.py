@@ -114,9 +114,9 @@ def run_campaign(spec: CampaignSpec | str | Path, out: str | Path, *, workers: i
     """
     spec = as_spec(spec)
     n_workers = _executor_info(workers, scheduler, sync)
-    store, manifest = open_store(out, spec, resume=resume)
-    if chunk_size is not None and chunk_size < 1:
+    if chunk_size is not None and chunk_size < 1:  # before the folder is made
         raise InvalidInputError(f"--chunk-size must be at least 1, got {chunk_size}")
+    store, manifest = open_store(out, spec, resume=resume)
     fresh = manifest is None
     if manifest is None:
         manifest = _manifest(spec, chunk_size or default_chunk_size(spec, n_workers))

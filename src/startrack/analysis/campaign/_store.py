@@ -43,6 +43,8 @@ class CampaignStore:
     """The files of one campaign output folder."""
 
     out: Path
+    made_out: bool = False
+    """Whether this run made ``out`` (then :meth:`discard` removes it too)."""
 
     @property
     def manifest_path(self) -> Path:
@@ -83,10 +85,13 @@ class CampaignStore:
         write_json(self.manifest_path, manifest)
 
     def discard(self) -> None:
-        """Remove the manifest and the (empty) trials folder of a run that never finished a chunk."""
+        """Remove the manifest and the (empty) trials folder of a run that never finished a chunk,
+        and ``out`` itself when this run made it and it is empty (a refused scheduler left it)."""
         self.manifest_path.unlink(missing_ok=True)
         with contextlib.suppress(OSError):
             self.trials_dir.rmdir()
+            if self.made_out:
+                self.out.rmdir()
 
     def read_trials(self) -> pa.Table:
         """Every trial row on disk, sorted by cell and trial."""
@@ -105,7 +110,7 @@ def open_store(out: str | Path, spec: CampaignSpec, *, resume: bool) -> tuple[Ca
         If ``out`` already holds a campaign and ``resume`` is false, if it holds another spec's
         campaign, or if it is a file.
     """
-    store = CampaignStore(Path(out))
+    store = CampaignStore(Path(out), made_out=not Path(out).exists())
     if store.out.exists() and not store.out.is_dir():
         raise InvalidInputError(f"--out {store.out} is a file; give a folder")
     started = store.manifest_path.exists() or any(store.trials_dir.glob("*.parquet"))
