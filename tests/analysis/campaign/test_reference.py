@@ -10,6 +10,7 @@ import pytest
 from synthetic_campaign import BAD, GOOD, synthetic_campaign
 
 from startrack.analysis.campaign._aggregate import read_campaign
+from startrack.analysis.campaign._params import SpecError
 from startrack.analysis.campaign._reference import (
     check_references,
     evaluate_reference,
@@ -140,3 +141,22 @@ title = "t"
 metric = "rate:correct"
 rows = [ { where = { fov_deg = 20.0 }, seed = 1 } ]
 """
+
+
+def test_a_bad_reference_in_a_spec_is_named_once():
+    """The spec's check prefixed '[[reference]]' to a message that names the reference already."""
+    bad = SPEC_WITH_REFERENCE.replace('metric = "rate:correct"', 'metric = "nonsense:foo"')
+    with pytest.raises(SpecError) as info:
+        parse_spec(bad)
+    assert str(info.value).startswith("[[reference]] 't': metric 'nonsense:foo'")
+    assert str(info.value).count("[[reference]]") == 1
+
+
+def test_the_summary_of_an_unfinished_campaign_says_how_far_it_got(tmp_path):
+    """It printed '7000 trials in 1 cells on not run' for a run stopped at 7000 of 100000."""
+    from startrack.analysis.campaign._summary import summary_text
+
+    synthetic_campaign(tmp_path, {"fov_deg": [10.0, 20.0], "centroid_sigma_px": [0.1]}, trials=40, finished=False)
+    next((tmp_path / "trials").glob("part-00001-*.parquet")).unlink()  # half of cell 1 never ran
+    head = summary_text(tmp_path).splitlines()[0]
+    assert "60 of 80 trials in 2 cells, a run that did not finish (--resume finishes it)" in head

@@ -244,7 +244,7 @@ def _check_cells(spec: CampaignSpec) -> None:
     try:
         check_references(spec.reference, cells)
     except InvalidInputError as exc:
-        raise SpecError(f"[[reference]] {exc}") from None
+        raise SpecError(str(exc)) from None  # it names the reference already
     check = spec.level_def.check
     if check is None:
         return

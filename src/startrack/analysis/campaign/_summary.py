@@ -48,9 +48,12 @@ def summary_text(out: str | Path) -> str:
     rows = cell_table(trials, manifest).to_pylist()
     statuses = ", ".join(f"{name} {count}" for name, count in Counter(trials["status"].to_pylist()).most_common())
     runs = manifest.get("runs", [])
-    where = f"{runs[-1].get('workers', '?')} workers ({runs[-1].get('mode', '?')})" if runs else "not run"
-    head = (f"campaign {manifest['name']} (level {manifest['level']}): {trials.num_rows} trials in "
-            f"{len(manifest['cells'])} cells on {where}; status: {statuses}")
+    where = (f" on {runs[-1].get('workers', '?')} workers ({runs[-1].get('mode', '?')})" if runs
+             else ", a run that did not finish (--resume finishes it)")
+    planned = int(manifest.get("trials_per_cell", 0)) * len(manifest["cells"])
+    count = f"{trials.num_rows} of {planned}" if 0 < trials.num_rows < planned else f"{trials.num_rows}"
+    head = (f"campaign {manifest['name']} (level {manifest['level']}): {count} trials in "
+            f"{len(manifest['cells'])} cells{where}; status: {statuses}")
     parts = [head, cells_text(rows)]
     if manifest.get("mode") == "budget":
         from ._budget_report import budget_text
