@@ -24,6 +24,7 @@ from .. import _exports_of, _lazy_exports
 if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
     from ._atomic import atomic_path, discard, open_output, remove_stale_temps, temp_name, write_output
     from ._channels import channel_index, to_single_channel
+    from ._fits_cards import BITPIX_VALUES
     from ._fitsfile import fits_bytes, write_fits
     from ._heif import HEIF_BRANDS, is_heif
     from ._image import IMAGE_SUFFIXES, RAW_SUFFIXES, SUPPORTED_FORMATS, Image, read_image

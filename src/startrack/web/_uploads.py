@@ -33,8 +33,7 @@ from starlette.datastructures import UploadFile
 from starlette.formparsers import MultiPartException, MultiPartParser
 from starlette.requests import Request
 
-from ..io import RAW_SUFFIXES, is_heif
-from ..io._fits_cards import BITPIX_VALUES
+from ..io import BITPIX_VALUES, RAW_SUFFIXES, is_heif
 from ._config import MAX_SIDE_PX, MIN_SIDE_PX
 from ._refusals import Refusal, bad_request
 
