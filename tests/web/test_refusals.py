@@ -315,3 +315,18 @@ def test_messages_name_the_upload_not_the_servers_folders(server):
     assert state["state"] == "failed" and "truncated or corrupt" in state["error"]
     assert str(server.data_dir) not in state["error"] and state["error"].startswith("input.png: ")
     still_serving(server)
+
+
+@pytest.mark.parametrize(("analysis", "params", "said"), [
+    ("gallery", {"stamp_px": 6}, "must be odd"),
+    ("sweep", {"setting": "kernel"}, "3.0 is not a value of kernel"),
+    ("corrections", {"camera": "nope"}, "unknown camera preset 'nope'"),
+])
+def test_422_for_analysis_params_only_the_analysis_refuses(server, analysis, params, said):
+    """Before: 201, and the job failed in the worker (an even stamp, the sweep's default numbers
+    for a text setting, an unknown camera)."""
+    body = {"analysis": analysis, "sets": [{"jobs": ["0" * 32]}], "params": params}
+    response = server.client.post("/api/analyses", json=body)
+    assert response.status_code == 422, response.text
+    assert response.json()["field"] == "params" and said in response.json()["error"]
+    still_serving(server)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import csv
 import json
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -55,6 +55,10 @@ class AnalysisInfo:
         bounds of its length).
     choices : mapping
         ``name -> allowed values`` for string parameters.
+    check : callable or None
+        ``check(params)`` on the typed, bounded values, for what the type and limits cannot say
+        (an odd stamp size, a value the detector refuses); raises InvalidInputError naming the
+        parameter, so that the web tool refuses such a request when it is posted, not in its job.
     """
 
     name: str
@@ -66,6 +70,7 @@ class AnalysisInfo:
     needs_images: bool = False
     limits: Mapping[str, tuple[float | None, float | None]] = field(default_factory=dict)
     choices: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    check: Callable[[dict[str, Any]], None] | None = None
 
 
 @dataclass(frozen=True)
@@ -182,6 +187,8 @@ def check_params(info: AnalysisInfo, params: Mapping[str, Any] | None) -> dict[s
     for key, (kind, default, _) in info.params.items():
         value = given.get(key, default)
         out[key] = None if value is None else _checked(info, key, kind, value)
+    if info.check is not None:
+        info.check(out)
     return out
 
 

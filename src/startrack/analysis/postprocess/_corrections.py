@@ -40,6 +40,16 @@ from ._core import AnalysisInfo, AnalysisResult, ResultSet
 from ._figures import new_figure, no_data
 from ._ground import SITE_LIMITS, SITE_PARAMS, error_arcsec, site_from_params, true_rotation
 
+
+def check(params: dict) -> None:
+    """The ``camera`` parameter names a preset (:func:`startrack.camera.get_preset` says which)."""
+    if params["camera"]:
+        try:
+            get_preset(params["camera"])
+        except InvalidInputError as exc:
+            raise InvalidInputError(f"corrections: parameter 'camera': {exc}") from None
+
+
 INFO = AnalysisInfo(
     name="corrections",
     title="Attitude error with and without lens and atmosphere corrections",
@@ -50,6 +60,7 @@ INFO = AnalysisInfo(
     min_sets=1, max_sets=6,
     params={"camera": (str, None, "camera preset of the lens model (default: the records' camera)"), **SITE_PARAMS},
     limits=SITE_LIMITS,
+    check=check,
 )
 VARIANTS = ((True, True), (True, False), (False, True), (False, False))
 """(lens, atmosphere), the most corrected first."""

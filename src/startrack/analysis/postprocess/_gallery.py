@@ -22,6 +22,13 @@ from ._figures import new_figure, no_data
 from ._records_io import record_pixels
 from ._spots import matched_mask
 
+
+def check(params: dict) -> None:
+    """A stamp has a centre pixel: its side is odd."""
+    if params["stamp_px"] % 2 == 0:
+        raise InvalidInputError(f"gallery: parameter 'stamp_px' must be odd, got {params['stamp_px']}")
+
+
 INFO = AnalysisInfo(
     name="gallery",
     title="Spot gallery: star spots against noise spots",
@@ -33,6 +40,7 @@ INFO = AnalysisInfo(
             "stamp_px": (int, 15, "side of each stamp, px (odd)"),
             "seed": (int, 0, "seed of the random choice")},
     limits={"count": (1, 40), "stamp_px": (5, 101), "seed": (0, None)},
+    check=check,
 )
 COLUMNS = 8
 
@@ -40,8 +48,6 @@ COLUMNS = 8
 def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
     """The analysis of this module over result sets and parameters already checked by
     :func:`~.registry.run_analysis` (see :data:`INFO` and the module docstring)."""
-    if params["stamp_px"] % 2 == 0:
-        raise InvalidInputError(f"gallery: parameter 'stamp_px' must be odd, got {params['stamp_px']}")
     rng = np.random.default_rng(params["seed"])
     picks = {kind: _pick(sets, kind, params["count"], rng) for kind in ("star", "noise")}
     half = params["stamp_px"] // 2

@@ -21,6 +21,32 @@ SWEEPABLE = tuple(f.name for f in fields(StarDetector)
                   if f.name not in ("dark_frame", "dark_columns", "smear_px", "channel", "max_block_px"))
 """Settings with a single number, boolean or string value."""
 
+def check(params: dict) -> None:
+    """Each value once, and each of the setting's kind (text, true / false, or a number, as its
+    default): the sweep of ``kernel`` with the default values 3.0 .. 6.0 is refused when it is
+    asked for. Whether a value of the right kind is valid depends on the record's detector
+    (:func:`._rerun.detectors_for` says so when the analysis runs)."""
+    setting, values = params["setting"], list(params["values"])
+    if len(set(map(repr, values))) != len(values):
+        raise InvalidInputError(f"sweep: parameter 'values' holds a value twice: {values!r}")
+    default = getattr(StarDetector(), setting)
+    for value in values:
+        if not _same_kind(default, value):
+            raise InvalidInputError(f"sweep: parameter 'values': {value!r} is not a value of {setting} "
+                                    f"(of the kind of its default, {default!r})")
+
+
+def _same_kind(default, value) -> bool:
+    """Text for text, true / false for true / false, a number for a number (or None)."""
+    if isinstance(default, bool) or isinstance(value, bool):
+        return isinstance(default, bool) and isinstance(value, bool)
+    if default is None:
+        return True
+    if isinstance(default, str):
+        return isinstance(value, str)
+    return isinstance(value, int | float)
+
+
 INFO = AnalysisInfo(
     name="sweep",
     title="Parameter sweep over a detection setting",
@@ -32,16 +58,15 @@ INFO = AnalysisInfo(
             "values": (list, [3.0, 4.0, 5.0, 6.0], "its values")},
     limits={"values": (1, 30)},
     choices={"setting": SWEEPABLE},
+    check=check,
 )
 
 
 def run(sets: Sequence[ResultSet], params: dict) -> AnalysisResult:
     """The analysis of this module over result sets and parameters already checked by
     :func:`~.registry.run_analysis` (see :data:`INFO` and the module docstring)."""
-    setting, values = params["setting"], list(params["values"])
-    if len(set(map(repr, values))) != len(values):
-        raise InvalidInputError(f"sweep: parameter 'values' holds a value twice: {values!r}")
-    values = [_typed(setting, v) for v in values]
+    setting = params["setting"]
+    values = [_typed(setting, v) for v in params["values"]]
     images = rerun(INFO.name, "values", sets, setting, values)
     table = per_value(images, values)
     fig = draw_per_value(table, setting, f"{INFO.title}: {setting}")
