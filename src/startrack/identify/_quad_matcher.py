@@ -306,9 +306,9 @@ def level_stars(db: PatternDatabase, level: int) -> StarSet:
 
 
 _INDEXED: set[tuple] = set()
-"""(id of the database, id of the focal grid, short side, area's square side, nominal focal length, level slack) of
-the searches
-whose levels :func:`_index_levels` has indexed (the grids are cached by :func:`.quad_search.focal_grid`)."""
+"""(id of the database, id of the focal grid, short side, area's square side, nominal focal length,
+level slack) of the searches whose levels :func:`_index_levels` has indexed (the grids are cached
+by :func:`.quad_search.focal_grid`)."""
 
 
 def _index_levels(db: PatternDatabase, searches: list[_Search]) -> None:
