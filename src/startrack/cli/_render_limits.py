@@ -17,12 +17,16 @@ from __future__ import annotations
 
 import argparse
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import InvalidInputError
 from ..io import ENV_VAR, resolve_max_pixels
 from ._scene_options import DEFAULT_SIZE_PX, render_sensor, scene_camera
+
+if TYPE_CHECKING:
+    from ..simulate import Sensor
 
 MAX_PSF_SIGMA_PX = 20.0
 """Largest Gaussian PSF sigma, px (a rendered star spans about 12 sigma)."""
@@ -70,15 +74,12 @@ def _check_stray(args: argparse.Namespace, exposure_s: float) -> None:
                                 f"{exposure_s:g} s exposure; valid: 0 to {MAX_STRAY_E_PER_FRAME:.0e}")
 
 
-def _check_sky(args: argparse.Namespace) -> None:
-    mu = getattr(args, "sky_mag_arcsec2", None)
+def _check_sky(args: argparse.Namespace, sensor: Sensor) -> None:
+    mu = getattr(args, "sky_mag_arcsec2", None)  # finite: check_finite_options refused NaN and inf
     if mu is None:
         return
-    if not math.isfinite(mu):
-        raise InvalidInputError(f"--sky-mag-arcsec2 must be a finite magnitude, got {mu:g}")
     from ..simulate import SkyBackground
 
-    sensor = render_sensor(args)
     electrons = SkyBackground(mag_arcsec2=mu).sky_electrons_px(scene_camera(args), sensor)
     if electrons > MAX_STRAY_E_PER_FRAME:
         brightest = mu + 2.5 * math.log10(electrons / MAX_STRAY_E_PER_FRAME)
@@ -97,10 +98,11 @@ def check_render_options(args: argparse.Namespace) -> None:
     """
     _check_size(args)
     _check_psf(args)
-    exposure_s = render_sensor(args).exposure_s
+    sensor = render_sensor(args)
+    exposure_s = sensor.exposure_s
     rows = 1 if getattr(args, "rig", None) is not None else scene_camera(args).height
     if not math.isfinite(exposure_s):
         return
     _check_motion(args, exposure_s, rows)
     _check_stray(args, exposure_s)
-    _check_sky(args)
+    _check_sky(args, sensor)
