@@ -77,11 +77,11 @@ def test_a_truncated_plain_file_is_refused_by_the_astropy_path(tmp_path):
         read_image(path)
 
 
-def test_a_header_with_a_text_size_is_left_to_astropy(tmp_path):
+def test_a_header_with_a_text_size_is_refused_naming_the_card(tmp_path):
     cards = ["SIMPLE  =                    T", "BITPIX  =                   16", "NAXIS   =                    2",
              "NAXIS1  = 'abc'", "NAXIS2  =                    4", "END"]
     path = tmp_path / "odd.fits"
     path.write_bytes("".join(c.ljust(80) for c in cards).ljust(2880).encode() + bytes(2880))
-    assert read_plain_fits(path, None, 100) is None
-    with pytest.raises(ImageReadError):
-        read_image(path)
+    for read in (lambda: read_plain_fits(path, None, 100), lambda: read_image(path)):
+        with pytest.raises(ImageReadError, match="card NAXIS1 is 'abc'"):
+            read()

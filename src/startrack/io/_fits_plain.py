@@ -20,7 +20,7 @@ import numpy as np
 from astropy.io import fits
 from numpy.typing import NDArray
 
-from ._fits_cards import header_text
+from ._fits_cards import check_layout_cards, header_text
 from ._limits import check_image_size
 
 BLOCK = 2880
@@ -63,7 +63,8 @@ def read_plain_fits(path: Path, max_pixels: int | None, max_blocks: int) -> tupl
     Parameters
     ----------
     path : Path
-        The file (its header already checked to end within ``max_blocks`` blocks).
+        The file (its header already checked to end within ``max_blocks`` blocks). Its cards that
+        lay out the pixels are checked here (:func:`._fits_cards.check_layout_cards`).
     max_pixels : int or None
         As in :func:`startrack.io._limits.check_image_size` (checked before the pixels are read).
     max_blocks : int
@@ -85,6 +86,7 @@ def read_plain_fits(path: Path, max_pixels: int | None, max_blocks: int) -> tupl
             header = fits.Header.fromstring(header_text(head))
         except (ValueError, TypeError):
             return None
+    check_layout_cards(header, path)  # before the cards below are trusted
     layout = _plain_layout(header)
     if layout is None:
         return None

@@ -38,9 +38,10 @@ MAX_HEADER_BLOCKS = 2000
 _BLOCK = 2880
 
 
-def _primary_header(path: Path) -> bytes | None:
+def _primary_header(path: Path) -> tuple[bytes | None, bool]:
     """The primary header's blocks up to the one holding END (decompressed, for gzip), or None
-    when the file ends before an END card (astropy then reports the truncation).
+    when the file ends before an END card (astropy then reports the truncation); and whether the
+    file is gzip-compressed.
 
     Reads block by block, so a huge or endless header costs at most :data:`MAX_HEADER_BLOCKS`
     blocks, refused beyond that; astropy then parses only a header that is known to end.
@@ -53,10 +54,10 @@ def _primary_header(path: Path) -> bytes | None:
             for _ in range(MAX_HEADER_BLOCKS):
                 block = fh.read(_BLOCK)
                 if len(block) < _BLOCK:
-                    return None
+                    return None, gzipped
                 head += block
                 if any(block[i:i + 8] == b"END     " for i in range(0, _BLOCK, 80)):
-                    return bytes(head)
+                    return bytes(head), gzipped
     except (OSError, EOFError, zlib.error) as exc:
         raise ImageReadError(f"{path}: not a readable FITS file ({exc})") from exc
     raise ImageReadError(f"{path}: FITS header has no END card in its first {MAX_HEADER_BLOCKS} blocks "
@@ -64,10 +65,12 @@ def _primary_header(path: Path) -> bytes | None:
 
 
 def _check_primary_header(path: Path) -> None:
-    """Refuse a primary header that ends too late or lays out its pixels wrongly
-    (:func:`._fits_cards.check_layout_cards`), before astropy or the direct reader reads it."""
-    head = _primary_header(path)
-    if head is None:
+    """Refuse a primary header that ends too late, or, in a gzip file, lays out its pixels
+    wrongly (:func:`._fits_cards.check_layout_cards`) before astropy reads it. An uncompressed
+    file's header is checked by the direct reader, which parses it anyway
+    (:func:`._fits_plain.read_plain_fits`; parsing it here too cost 0.3 ms of a 1.4 ms read)."""
+    head, gzipped = _primary_header(path)
+    if head is None or not gzipped:
         return
     with warnings.catch_warnings():  # odd descriptive cards are left out of the header, not reported
         warnings.simplefilter("ignore")
