@@ -168,6 +168,8 @@ def test_unknown_analysis_wrong_set_counts_and_empty_sets_are_refused(image_set)
     ("thresholds", {"sigmas": [[4.0]]}, "list of numbers or strings"),
     ("sweep", {"setting": "colour"}, "'setting' must be one of"),
     ("sweep", {"setting": "min_area_px", "values": [2, 2]}, "holds a value twice"),
+    ("sweep", {"setting": "sigma", "values": [4, 4.0]}, "holds a value twice"),  # both run as sigma=4.0
+    ("histograms", [1], "the parameters must be a mapping"),
     ("sweep", {"setting": "min_area_px", "values": [2, 0]}, "parameter 'values': min_area_px=0 is refused"),
     ("sweep", {"setting": "centroid", "values": ["windowed", "magic"]}, "centroid='magic' is refused"),
 ])

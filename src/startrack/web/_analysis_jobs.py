@@ -50,9 +50,6 @@ def validate_request(body: Any, jobs: JobStore, batches: BatchStore) -> dict[str
         n = f"{info.min_sets}" if info.min_sets == info.max_sets else f"{info.min_sets} to {info.max_sets}"
         got = len(sets) if isinstance(sets, list) else repr(sets)
         raise Refusal(422, f"{info.name} takes {n} result set(s), got {got}", "sets")
-    if not isinstance(body.get("params") or {}, dict):
-        raise Refusal(422, f"params must be a JSON object of {info.name}'s parameters, got {body['params']!r}",
-                      "params")
     try:
         params = check_params(info, body.get("params") or {})
     except InvalidInputError as exc:

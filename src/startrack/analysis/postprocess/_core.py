@@ -178,6 +178,8 @@ def check_params(info: AnalysisInfo, params: Mapping[str, Any] | None) -> dict[s
         An unknown name (listing the valid ones), a value of the wrong type, or one outside its
         limits or choices, naming the parameter.
     """
+    if params is not None and not isinstance(params, Mapping):
+        raise InvalidInputError(f"{info.name}: the parameters must be a mapping of name to value, got {params!r}")
     given = dict(params or {})
     unknown = sorted(set(given) - set(info.params))
     if unknown:

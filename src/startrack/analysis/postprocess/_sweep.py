@@ -27,9 +27,10 @@ def check(params: dict) -> None:
     asked for. Whether a value of the right kind is valid depends on the record's detector
     (:func:`._rerun.detectors_for` says so when the analysis runs)."""
     setting, values = params["setting"], list(params["values"])
-    if len(set(map(repr, values))) != len(values):
-        raise InvalidInputError(f"sweep: parameter 'values' holds a value twice: {values!r}")
     default = getattr(StarDetector(), setting)
+    typed = [_typed(setting, v) for v in values]  # as the sweep runs them: 4 and 4.0 are one sigma
+    if len({repr(v + 0.0) if isinstance(v, float) else repr(v) for v in typed}) != len(typed):  # -0.0 is 0.0
+        raise InvalidInputError(f"sweep: parameter 'values' holds a value twice: {values!r}")
     for value in values:
         if not _same_kind(default, value):
             raise InvalidInputError(f"sweep: parameter 'values': {value!r} is not a value of {setting} "
