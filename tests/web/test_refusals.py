@@ -242,6 +242,11 @@ def test_json_that_is_not_json_is_refused(server, real_images, text):
         response = server.client.post("/api/jobs", files={"file": ("roof.jpg", fh)}, data={"options": text})
     assert response.status_code == 422, response.text
     assert response.json()["field"] == "options"
+    still_serving(server)
+
+
+def test_400_for_a_body_nested_too_deeply(server):
+    """30,000 nested lists as a JSON body ended in a RecursionError and a 500."""
     nested = server.client.post("/api/cameras", content=("[" * 30000 + "]" * 30000).encode(),
                                 headers={"Content-Type": "application/json"})
     assert nested.status_code == 400 and "nested too deeply" in nested.json()["error"]

@@ -74,8 +74,8 @@ class TileGrid:
         held, :func:`.tile_geometry.axis_weights`): float64 (K, *x.shape). One compiled loop
         (:func:`.frame_kernels.grid_at_points`)."""
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-        grids, extrapolate, first, spacing = self._stacked
-        out = kernels().grid_at_points(grids[which], extrapolate[which], first, spacing, y.ravel(), x.ravel())
+        grids, extrapolate, first, steps = self._stacked  # not `spacing`: the function of that name
+        out = kernels().grid_at_points(grids[which], extrapolate[which], first, steps, y.ravel(), x.ravel())
         return out.reshape((out.shape[0], *x.shape))
 
     @functools.cached_property

@@ -5,8 +5,8 @@ Each loop gives the numbers of the numpy expressions it replaces, operation for 
 separable moments summed along x first, then along y, as :func:`.frame_kernels.separable_moments`
 does), so a centroid does not depend on which one ran; numba's ``exp`` and ``erf`` may differ
 from numpy's and scipy's in the last bit, which moves a centroid by far less than 1e-10 px (and
-its uncertainty by a relative 1e-15; ``tests/detect/test_detect_window_kernels.py`` keeps the
-numpy versions as the reference). Loaded on first use through
+its uncertainty by far less than a relative 1e-9, what ``tests/detect/test_detect_window_kernels.py``
+checks against the numpy versions it keeps as the reference). Loaded on first use through
 :func:`.compiled.window_kernels` (importing startrack does not import numba); cached on disk
 (``cache=True``); numpy's error model (a division by zero gives inf or NaN, as in numpy).
 """

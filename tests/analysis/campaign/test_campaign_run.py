@@ -229,7 +229,7 @@ def test_a_web_server_given_as_the_scheduler_is_refused_naming_it(tmp_path, monk
             with pytest.raises(InvalidInputError, match="no Dask scheduler answered") as info:
                 run_campaign(SPEC, tmp_path / "out", scheduler=f"tcp://127.0.0.1:{port}", report=False)
             assert f"tcp://127.0.0.1:{port}" in str(info.value) and "dashboard" in str(info.value)
-            assert time.perf_counter() - t0 < 30.0  # s: CONNECT_S (2 s here) and the margin, not a hang
+            assert time.perf_counter() - t0 < engine.CONNECT_S + 8.0  # s: the 2 s patched in, the 5 s margin, slack
             assert not (tmp_path / "out").exists()
     finally:
         web.shutdown()
