@@ -35,6 +35,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from detect_frames import grid_positions, match, render_frame  # noqa: E402
 from peers.detect_env import run_peers  # noqa: E402
+from process_clocks import CLOCKS, add_clock_option, clock_name  # noqa: E402
 
 from startrack.detect import StarDetector  # noqa: E402
 from startrack.detect import _crb as crb
@@ -43,8 +44,6 @@ from startrack.simulate import render_gaussian_psf  # noqa: E402
 SHAPE = (1024, 1024)
 PSF_SIGMA_PX = 1.5
 N_STARS = 30
-CLOCKS = {"wall": time.perf_counter, "cpu": time.process_time}
-"""How a detection is timed: the wall clock, or the CPU time of the process."""
 
 
 def _without_fine_pass() -> StarDetector:
@@ -221,11 +220,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--no-peers", action="store_true")
     parser.add_argument("--huge", action="store_true", help="also the 20,000 x 20,000 frame")
-    parser.add_argument("--clock", choices=tuple(CLOCKS), default="wall",
-                        help="time by the wall clock or by the CPU time of the process (default wall)")
+    add_clock_option(parser)
     args = parser.parse_args(argv)
     print(f"load average {os.getloadavg()[0]:.2f}; times by the "
-          f"{'CPU time of the process' if args.clock == 'cpu' else 'wall clock'}")
+          f"{clock_name(args.clock)}")
     frames = make_frames(args.frames, args.seed)
     detectors = {"startrack (default)": StarDetector(), "startrack, no fine pass": _without_fine_pass(),
                  "startrack weighted": StarDetector(centroid="weighted"), "startrack mle": StarDetector(centroid="mle")}

@@ -34,13 +34,14 @@ import argparse
 import os
 import sys
 import tempfile
-import time
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from process_clocks import CLOCKS, add_clock_option, clock_name  # noqa: E402
 
 from startrack import solve_image, solve_stars  # noqa: E402
 from startrack.analysis._scoring import TOLERANCE_PIXELS, attitude_errors_rad, roll_weight, summarize, tolerance_rad  # noqa: E402
@@ -49,8 +50,6 @@ from startrack.frames import random_rotations  # noqa: E402
 
 TARGET_MEDIAN_MS = {"png": 50.0, "fits": 6.0, "raw": 6.0}
 FORMATS = ("png", "fits", "raw")
-CLOCKS = {"wall": time.perf_counter, "cpu": time.process_time}
-"""How a read and solve is timed: the wall clock, or the CPU time of the process."""
 EPOCH_JYEAR = 2025.0
 """Epoch of the simulated star positions, given to the solver too."""
 
@@ -155,7 +154,7 @@ def print_end_to_end(frames: list, fmt: str, camera: Camera, args: argparse.Name
     s = summarize(solved, err, times, tolerance_rad(camera))
     target = TARGET_MEDIAN_MS[fmt]
     verdict = "meets" if s["median_ms"] <= target else "misses"
-    clock = "CPU time of the process" if args.clock == "cpu" else "wall clock"
+    clock = clock_name(args.clock)
     print(f"\nimage path (read {fmt.upper()}, detect, solve), {args.size} x {args.size} px, "
           f"FOV {args.fov_deg:g} deg, {s['n']} frames ({int(solved.sum())} solved), by the {clock}")
     print(f"  median {s['median_ms']:.1f} ms, p95 {s['p95_ms']:.1f} ms "
@@ -194,8 +193,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--psf-sigma-px", type=float, default=1.5)
     parser.add_argument("--formats", nargs="+", choices=FORMATS, default=list(FORMATS),
                         help="file formats to time (default: all)")
-    parser.add_argument("--clock", choices=tuple(CLOCKS), default="wall",
-                        help="time by the wall clock or by the CPU time of the process (default wall)")
+    add_clock_option(parser)
     args = parser.parse_args(argv)
     camera = Camera.from_fov(args.size, args.size, args.fov_deg)
     with tempfile.TemporaryDirectory(prefix="startrack-imgbench-") as tmp:
