@@ -433,9 +433,15 @@ PRESETS: dict[str, Camera] = {
 }
 
 
+def preset_key(name: str) -> str:
+    """The key of :data:`PRESETS` a preset name stands for: case, surrounding blanks and ``_`` for
+    ``-`` do not matter (``" Droid_X2"`` is ``"droid-x2"``)."""
+    return name.strip().lower().replace("_", "-")
+
+
 def get_preset(name: str) -> Camera:
     """A named camera from the seeds (see :data:`PRESETS` for the names and their sources)."""
-    key = name.strip().lower().replace("_", "-")
+    key = preset_key(name)
     if key not in PRESETS:
         raise InvalidInputError(f"unknown camera preset {name!r}; valid presets: {', '.join(sorted(PRESETS))}")
     return PRESETS[key]

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .camera import PRESETS, Camera, get_preset
+from .camera import PRESETS, Camera, get_preset, preset_key
 from .errors import InvalidInputError
 
 ROTATION_TOLERANCE = 1e-6
@@ -386,7 +386,7 @@ def _head_from_dict(entry: Any, index: int, base: Path) -> RigHead:
 def _camera_from(value: Any, label: str, base: Path) -> Camera:
     """A camera from its profile (fields), a preset name or a profile file."""
     if isinstance(value, str):
-        if value.strip().lower().replace("_", "-") in PRESETS:
+        if preset_key(value) in PRESETS:
             return get_preset(value)
         path = Path(value) if Path(value).is_absolute() else base / value
         try:

@@ -43,7 +43,7 @@ from astropy.time import Time
 
 from ..calibrate import Site, get_site
 from ..camera import PRESETS as CAMERA_PRESETS
-from ..camera import Camera, get_preset
+from ..camera import Camera, get_preset, preset_key
 from ..detect import StarDetector
 from ..errors import InvalidInputError
 from ..identify import MATCHERS
@@ -239,7 +239,7 @@ def load_camera(name: Any, cameras_dir: Path) -> Camera:
     """A camera preset, else the saved profile ``<cameras_dir>/<name>.json``."""
     if not isinstance(name, str) or not PROFILE_NAME.match(name):
         raise OptionError("options.camera", f"must be a camera preset or profile name, got {name!r}")
-    if name.strip().lower().replace("_", "-") in CAMERA_PRESETS:
+    if preset_key(name) in CAMERA_PRESETS:
         return get_preset(name)
     path = cameras_dir / f"{name}.json"
     if not path.is_file():

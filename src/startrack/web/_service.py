@@ -198,13 +198,13 @@ class Service:
     # --- cameras ------------------------------------------------------------------------------
     def save_camera(self, body: Any) -> dict[str, Any]:
         """Save a camera profile (``name`` + the fields of :class:`startrack.camera.Camera`)."""
-        from ..camera import PRESETS
+        from ..camera import PRESETS, preset_key
 
         if not isinstance(body, dict):
             raise Refusal(422, "the body must be a JSON object: name and the camera's fields", "body")
         fields = dict(body)
         name = fields.pop("profile", None) or fields.get("name")
-        if not isinstance(name, str) or not PROFILE_NAME.match(name) or name.lower().replace("_", "-") in PRESETS:
+        if not isinstance(name, str) or not PROFILE_NAME.match(name) or preset_key(name) in PRESETS:
             raise Refusal(422, f"name must be 1-64 letters, digits, '.', '_' or '-' and not a preset, got {name!r}",
                           "name")
         try:
