@@ -21,6 +21,7 @@ import pytest
 from startrack.camera import Camera
 from startrack.cli import main
 from startrack.cli._progress import ensure_database
+from startrack.cli._run_context import DUBIOUS_YEAR
 from startrack.frames import rotation_from_radec_roll
 from startrack.io import write_fits, write_png
 from startrack.io._truth_files import write_frame
@@ -224,3 +225,13 @@ def test_max_pixels_refuses_a_larger_image_in_every_command_that_reads_images(tm
         code = main([str(a) for a in argv] + ["--max-pixels", "1000"])
     assert code == (0 if command == "analyse" else 2), err.getvalue()
     assert "over the limit of 1,000 px" in err.getvalue(), err.getvalue()
+
+
+def test_a_time_past_the_known_leap_seconds_is_one_warning_in_words(realdata_dir):
+    """Before: ERFA's 'ERFA function "dtf2d" yielded 1 of "dubious year (Note 6)"'."""
+    photo = realdata_dir / "smroid-cedar-solve" / "crappy.jpg"
+    proc = subprocess.run([*STARTRACK, "solve", str(photo), "--fov-deg", "10.2", "--time", "2045-01-01T00:00:00"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    warning = [line for line in proc.stderr.splitlines() if "warning" in line]
+    assert warning == ["startrack solve: warning: " + DUBIOUS_YEAR], proc.stderr

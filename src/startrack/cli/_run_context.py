@@ -7,7 +7,8 @@
 * SIGTERM raises :class:`Terminated` in the main thread, so that the outputs' ``finally`` blocks
   run (temporary files removed, old files kept) as for Ctrl-C; the exit status is 143.
 * A warning is printed as one line ``startrack <cmd>: warning: ...`` (e.g. a cache folder that
-  cannot be written), not Python's two-line form with a source line.
+  cannot be written), not Python's two-line form with a source line; ERFA's "dubious year" (a
+  time past the leap seconds astropy knows) is put in words.
 * :func:`memory_message` words a MemoryError (an input or an option asking for more memory than
   the machine has) for the one-line error and exit status 2.
 """
@@ -47,12 +48,22 @@ def _sigterm_raises() -> Iterator[None]:
         signal.signal(signal.SIGTERM, previous)
 
 
+DUBIOUS_YEAR = ("a time beyond the leap seconds astropy knows (ERFA's \"dubious year\"): its conversion between "
+                "UTC and other time scales may be off by the leap seconds to come, a few seconds at most")
+"""ERFA's warning for a UTC time past its leap-second table (the future, or before 1960), in words."""
+
+
+def warning_text(message: Warning | str) -> str:
+    """A warning's message on one line, ERFA's "dubious year" put in words (:data:`DUBIOUS_YEAR`)."""
+    text = " ".join(str(message).split())
+    return DUBIOUS_YEAR if "dubious year" in text else text
+
+
 @contextmanager
 def _one_line_warnings(name: str) -> Iterator[None]:
     with warnings.catch_warnings():
         def show(message, category, filename, lineno, file=None, line=None) -> None:
-            text = " ".join(str(message).split())
-            print(f"startrack {name}: warning: {text}", file=sys.stderr if file is None else file)
+            print(f"startrack {name}: warning: {warning_text(message)}", file=sys.stderr if file is None else file)
 
         warnings.showwarning = show
         yield
