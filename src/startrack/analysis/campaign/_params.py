@@ -94,12 +94,19 @@ def _span(param: Param) -> str:
     return f" in [{lo}, {hi}]"
 
 
+def _within(param: Param, value: int | float) -> None:
+    """Refuse a value outside the parameter's bounds (compared in the value's own type)."""
+    if (param.lo is not None and value < param.lo) or (param.hi is not None and value > param.hi):
+        raise ValueError(f"must be {param.valid()}")
+
+
 def _number(param: Param, value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise TypeError(f"must be {param.valid()}")
     out = float(value)
-    if not math.isfinite(out) or (param.lo is not None and out < param.lo) or (param.hi is not None and out > param.hi):
+    if not math.isfinite(out):
         raise ValueError(f"must be {param.valid()}")
+    _within(param, out)
     return out
 
 
@@ -108,8 +115,7 @@ def _check_int(param: Param, value: Any) -> int:
     up to 2**63 and the largest valid seed was refused)."""
     if isinstance(value, bool) or not isinstance(value, int):
         raise TypeError(f"must be {param.valid()}")
-    if (param.lo is not None and value < param.lo) or (param.hi is not None and value > param.hi):
-        raise ValueError(f"must be {param.valid()}")
+    _within(param, value)
     return int(value)
 
 
