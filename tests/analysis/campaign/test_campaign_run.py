@@ -234,3 +234,24 @@ def test_a_web_server_given_as_the_scheduler_is_refused_naming_it(tmp_path, monk
     finally:
         web.shutdown()
         silent.close()
+
+
+def test_a_scheduler_that_answers_after_the_wait_leaves_no_client_open(monkeypatch):
+    """Before: the connection thread kept a Client that connected after the caller had given up."""
+    import threading
+
+    from startrack.analysis.campaign import _engine as engine
+
+    monkeypatch.setattr(engine, "CONNECT_S", 0.1)
+    closed = threading.Event()
+
+    class Late:
+        def __init__(self, address, timeout):
+            time.sleep(engine.CONNECT_S + 5.5)  # s: past the caller's wait (CONNECT_S + 5 s)
+
+        def close(self) -> None:
+            closed.set()
+
+    with pytest.raises(InvalidInputError, match="no Dask scheduler answered"):
+        engine._scheduler_client(Late, "tcp://127.0.0.1:1")
+    assert closed.wait(timeout=10.0)  # s: the late client is closed as soon as it exists

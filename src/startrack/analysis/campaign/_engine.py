@@ -119,21 +119,31 @@ def _scheduler_client(client_class: Any, address: str) -> Any:
     A web server there (the dashboard's port given by mistake) answers Dask's handshake with
     ``HTTP/1.1 ...``, whose bytes Dask reads as a frame length of exabytes (a MemoryError), or
     keeps the connection open without a reply past Dask's own timeout; so the connection is made
-    in a daemon thread and waited for :data:`CONNECT_S` (plus a margin) at most.
+    in a daemon thread and waited for :data:`CONNECT_S` (plus a margin) at most; a client that
+    connects after that is closed by the thread.
     """
     outcome: dict[str, Any] = {}
+    lock = threading.Lock()
 
     def connect() -> None:
         try:
-            outcome["client"] = client_class(address, timeout=f"{CONNECT_S:g}s")
+            client = client_class(address, timeout=f"{CONNECT_S:g}s")
         except BaseException as exc:  # noqa: BLE001  # handed to the caller below
             outcome["error"] = exc
+            return
+        with lock:
+            if not outcome.get("abandoned"):
+                outcome["client"] = client
+                return
+        client.close()  # connected after the caller gave up: nobody else would close it
 
     thread = threading.Thread(target=connect, name="startrack-scheduler-connect", daemon=True)
     thread.start()
     thread.join(CONNECT_S + 5.0)
-    if "client" in outcome:
-        return outcome["client"]
+    with lock:
+        if "client" in outcome:
+            return outcome["client"]
+        outcome["abandoned"] = True
     error = outcome.get("error")
     if isinstance(error, KeyboardInterrupt | SystemExit):
         raise error
