@@ -185,6 +185,12 @@ class Camera:
         return math.degrees(fov_from_focal_px(self.height, self.fy))
 
     @property
+    def fov_long_deg(self) -> float:
+        """Pinhole field of view along the image's long side (the larger of :attr:`fov_deg` and
+        :attr:`fov_height_deg`) in degrees: how wide a lens is, whichever way the image is held."""
+        return max(self.fov_deg, self.fov_height_deg)
+
+    @property
     def fov_diagonal_deg(self) -> float:
         """Diagonal pinhole field of view in degrees (through the principal point, no distortion)."""
         half_w = (self.width / 2.0) / self.fx

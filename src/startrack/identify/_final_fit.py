@@ -52,8 +52,8 @@ length only, unless the field is wide (:data:`WIDE_FOV_DEG`)."""
 
 WIDE_FOV_DEG = 40.0
 MIN_STARS_FOR_K2 = 30
-"""A lens that is not calibrated and spans at least WIDE_FOV_DEG horizontally (a phone, a
-webcam, a wide lens) is fitted with k1 at every round of the re-match, not only at the end (its
+"""A lens that is not calibrated and spans at least WIDE_FOV_DEG along its long side (a phone, a
+webcam, a wide lens; a portrait image as a landscape one) is fitted with k1 at every round of the re-match, not only at the end (its
 far side is bent by tens of pixels, beyond the re-match radius of a pinhole fit), and with k2 as
 well once MIN_STARS_FOR_K2 stars are matched."""
 
@@ -402,7 +402,7 @@ def settle_matches(x: NDArray, y: NDArray, stars: FieldStars, cand: Candidate,
     FinalFit
     """
     fit_focal = focal_range is not None
-    wide = fit_focal and cand.camera.fov_deg >= WIDE_FOV_DEG
+    wide = fit_focal and cand.camera.fov_long_deg >= WIDE_FOV_DEG
     fit_k1 = wide or (focal_range is not None
                       and (focal_range[1] > focal_range[0] * (1 + K1_FOCAL_SPAN) or cand.camera.k1 != 0))
     field = _Field(x, y, stars, fit_focal, fit_aspect and fit_focal, wide, wide,

@@ -229,7 +229,7 @@ class _Search:
                                  fit_focal, distortion, shape_floor, level_slack)
         self.confirmer = Confirmer(x, y, match_radius_px(camera, options.match_radius_px), options.verify_stars,
                                    options.max_false_match_prob, fit_focal,
-                                   fit_distortion=distortion > 0 and camera.fov_deg >= CONFIRM_K1_FOV_DEG,
+                                   fit_distortion=distortion > 0 and camera.fov_long_deg >= CONFIRM_K1_FOV_DEG,
                                    fit_aspect=fit_aspect)
         self.pattern_index = distinct_stars(x, y, options.max_pattern_stars)
 
@@ -326,7 +326,7 @@ def _index_levels(db: PatternDatabase, searches: list[_Search]) -> None:
 
 CONFIRM_K1_FOV_DEG = 25.0
 """The confirmation of a candidate from a lens that is not calibrated fits k1 when the nominal
-field is at least this wide (narrower, k1 is poorly determined by a few stars and moves them by
+field is at least this wide along the image's long side (narrower, k1 is poorly determined by a few stars and moves them by
 less than the match radius)."""
 
 ASPECT_TOLERANCE = 0.005
