@@ -1,5 +1,5 @@
 """startrack demo: simulate a star image at a random attitude, solve it lost-in-space with no
-field of view given (searching 5 to 35 deg), and compare the attitude with the truth. Writes
+field of view given (searching 3 to 100 deg), and compare the attitude with the truth. Writes
 demo.png (16 bit), demo.truth.json and an annotated demo_solved.png to the output folder
 (created if missing)."""
 
