@@ -1,0 +1,42 @@
+"""A search that found nothing says what it took as known that the user may have got wrong: a
+field of view given (searched within 3 %), a calibrated camera, the image's parity."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from startrack import Camera, Status, solve_stars
+from startrack.frames import random_rotations
+from startrack.identify._field_stars import field_stars
+
+CAMERA = Camera.from_fov(1024, 1024, 15.0)
+FOV_HINT = "the field of view was searched within 3% of the one given"
+PARITY_HINT = "a mirror image (flipped, or y up) needs parity 'either'"
+
+
+def _star_list() -> tuple[np.ndarray, np.ndarray]:
+    """Catalog stars to V 7 (J2000) of a 15 deg field at a random attitude, brightest first."""
+    v_cam = random_rotations(rng=np.random.default_rng(11)).apply(field_stars(7.0, 2000.0).vectors)
+    x, y = CAMERA.vector_to_pixel(v_cam[v_cam[:, 2] > 0.9])
+    inside = CAMERA.in_image(x, y)
+    return x[inside], y[inside]
+
+
+@pytest.mark.parametrize(("given", "hints"), [
+    ({"fov_deg": 12.0}, (FOV_HINT, PARITY_HINT)),  # 20 % off: outside what a given field allows
+    ({"camera": Camera.from_fov(1024, 1024, 12.0)}, ("taken as calibrated", PARITY_HINT)),
+    ({"fov_range_deg": (11.0, 12.0)}, (PARITY_HINT,)),
+])
+def test_a_failed_search_names_what_it_took_as_known(given, hints):
+    x, y = _star_list()
+    solution = solve_stars(x, y, width=1024, height=1024, **given)
+    assert solution.status is Status.NO_MATCH
+    assert [hint in solution.reason for hint in (FOV_HINT, "taken as calibrated", PARITY_HINT)] == \
+        [hint in hints for hint in (FOV_HINT, "taken as calibrated", PARITY_HINT)], solution.reason
+
+
+def test_a_mirror_search_that_fails_does_not_point_at_parity():
+    x, y = _star_list()
+    solution = solve_stars(x, y, width=1024, height=1024, fov_range_deg=(11.0, 12.0), parity="either")
+    assert solution.status is Status.NO_MATCH and "parity" not in solution.reason, solution.reason
