@@ -81,9 +81,36 @@ def camera_to_dict(camera: Camera) -> dict[str, Any]:
     return {k: (float(v) if isinstance(v, float | np.floating) else v) for k, v in dataclasses.asdict(camera).items()}
 
 
-def _from_stars(args) -> dict[str, Any]:
-    from ..calibrate import CalibrationFrame, calibrate_from_stars
+def _calibrated(solutions, camera: Camera, fit: tuple[str, ...]) -> Any:
+    """Joint calibration of solved images, fitted from the pinhole of ``camera``.
 
+    Every round starts from the same null values (centred principal point, square pixels, no
+    distortion; :func:`startrack.calibrate.pinhole_of`), as :func:`startrack.calibrate.self_calibrate`
+    does: a term is pruned only when it is at its null value in the returned camera, and every other
+    fitted term has its sigma. (From an earlier round's camera, cx, cy and aspect would be offsets
+    from that round's values: near zero, always pruned, their values kept without an uncertainty.)
+
+    Parameters
+    ----------
+    solutions : list of AttitudeSolution
+        Solved images (``solve_image`` results, with their detections).
+    camera : Camera
+        Only its size and focal length start the fit.
+    fit : tuple of str
+        Parameters to fit, from :data:`PARAMETERS`.
+
+    Returns
+    -------
+    CalibrationResult (of :func:`startrack.calibrate.calibrate_from_stars`)
+        TOO_FEW_STARS when the stars cannot fix the unknowns.
+    """
+    from ..calibrate import CalibrationFrame, calibrate_from_stars, pinhole_of
+
+    frames = [CalibrationFrame.from_solution(s) for s in solutions]
+    return calibrate_from_stars(frames, pinhole_of(camera), fit=fit)
+
+
+def _from_stars(args) -> dict[str, Any]:
     fit = _fit(args.fit)
     # the calibration fits a plain camera: a mirror image's solution would not give one
     solve_kw = {**fov_kwargs(args), "epoch": epoch_option(args), "parity": "normal"}
@@ -95,13 +122,13 @@ def _from_stars(args) -> dict[str, Any]:
         return {"status": "not_solved", "reason": "no image could be solved", "images": _per_image(args, solutions)}
     cameras = [require(solutions[i].camera, "a solved image's camera") for i in solved]
     start = Camera(width=cameras[0].width, height=cameras[0].height, fx=float(np.median([c.fx for c in cameras])))
-    result = calibrate_from_stars([CalibrationFrame.from_solution(solutions[i]) for i in solved], start, fit=fit)
+    result = _calibrated([solutions[i] for i in solved], start, fit)
     if result.status:  # one self-improving round: re-solve with the calibrated camera, fit again
         calibrated = require(result.camera, "the calibrated camera")
         again = [solve_image(images[i], camera=calibrated, epoch=solve_kw["epoch"], parity="normal") for i in solved]
         if all(s.solved for s in again):
             solutions = [again[solved.index(i)] if i in solved else s for i, s in enumerate(solutions)]
-            redo = calibrate_from_stars([CalibrationFrame.from_solution(s) for s in again], calibrated, fit=fit)
+            redo = _calibrated(again, calibrated, fit)
             result = redo if redo.status else result
     if not result.status:
         return {"status": result.status.value, "reason": result.reason, "images": _per_image(args, solutions)}
