@@ -398,7 +398,7 @@ def test_solve_stars_two_stars_is_an_expected_failure(bad_lists):
     ("nan.csv", ("nan.csv", "line 7", "finite")),
     ("outside.csv", ("outside.csv", "(1500, 12.5)", "outside the 1024 x 1024 image")),
     ("binary.csv", ()),
-    ("binary.csv", ("binary.csv", "not a UTF-8 text")),
+    ("binary.csv", ("binary.csv", "not a text CSV file in UTF-8 or UTF-16")),
     ("missing.csv", ("missing.csv", "does not exist")),
 ])
 def test_solve_stars_bad_list_is_misuse(bad_lists, name, words):

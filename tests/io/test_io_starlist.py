@@ -55,3 +55,45 @@ def test_bad_lists_name_file_and_problem(tmp_path, text, match):
 def test_missing_file(tmp_path):
     with pytest.raises(InvalidInputError, match="does not exist"):
         read_star_list(tmp_path / "nope.csv")
+
+
+@pytest.mark.parametrize("text", [
+    "x\ty\tflux\n1.5\t2.25\t100\n-0.5\t3\t2000\n",  # tab-separated
+    "x;y;flux\n1,5;2,25;100\n-0,5;3;2000\n",  # a spreadsheet's semicolons and decimal commas
+    "x y  flux\n 1.5   2.25 100\n-0.5 3 2000\n",  # blanks
+    "# x y flux\n1.5 2.25 100\n-0.5 3 2000\n",  # the header written as a comment
+    "x_px,y_px,intensity # pixels\n1.5,2.25,100\n-0.5,3,2e3 # a note\n",  # a unit in the names, comments after
+    "id,xcentroid,ycentroid,flux,sharpness\n1,1.5,2.25,100,0.5\n2,-0.5,3,2000,0.6\n",  # photutils' names
+    "col,row,counts\r\n1.5,2.25,100\r\n-0.5,3,2000\r\n",  # a pixel grid's names, Windows line ends
+])
+def test_the_csv_forms_people_write_read_the_same(tmp_path, text):
+    """Before: each of these was refused (a separator other than a comma, other column names) or,
+    for a comment after the header's names, lost its flux column without a word."""
+    stars = read_star_list(_write(tmp_path, text))
+    assert set(stars) == {"x", "y", "flux"}
+    np.testing.assert_array_equal(stars["x"], [1.5, -0.5])
+    np.testing.assert_array_equal(stars["y"], [2.25, 3.0])
+    np.testing.assert_array_equal(stars["flux"], [100.0, 2000.0])
+
+
+def test_the_canonical_name_wins_over_another_name_of_the_same_column(tmp_path):
+    stars = read_star_list(_write(tmp_path, "xcentroid,x,y\n9,1,2\n"))
+    assert stars["x"].tolist() == [1.0]
+
+
+@pytest.mark.parametrize(("text", "match"), [
+    ("X_IMAGE,Y_IMAGE,FLUX_AUTO\n10,20,300\n", r"1-based positions.*subtract 1"),
+    ("u,v\n1,2\n", r"lacks required column.*x may also be named x_px.*col"),
+    ("# u v\n1 2\n", r"lacks required column"),  # a comment that is not a header is not taken as one
+    ("1.5,2.5\n3,4\n", r"first row holds numbers: start it with a header row"),
+])
+def test_lists_that_cannot_be_read_as_ours_say_why(tmp_path, text, match):
+    with pytest.raises(InvalidInputError, match=match):
+        read_star_list(_write(tmp_path, text))
+
+
+def test_a_spreadsheets_unicode_text_reads_as_utf8_does(tmp_path):
+    """Excel's "Unicode text": UTF-16 with its byte-order mark, tab-separated."""
+    path = tmp_path / "stars.txt"
+    path.write_bytes("x\ty\tflux\r\n1.5\t2.25\t100\r\n".encode("utf-16"))
+    assert {k: v.tolist() for k, v in read_star_list(path).items()} == {"x": [1.5], "y": [2.25], "flux": [100.0]}

@@ -1,0 +1,56 @@
+"""How the lines of a star list split into fields: the separators and comments of the CSV files
+people write by hand, export from a spreadsheet or get from another program.
+
+* The separator is the header row's: a comma, else a tab, else a semicolon, else runs of blanks
+  (``x y flux``). With a tab or a semicolon, a number's decimal comma (``12,5``, as a spreadsheet
+  in many locales writes it) is read as a point.
+* ``#`` starts a comment, on a line of its own or after the fields of a row (``x,y,flux # px``).
+* A header written as a comment (``# x y flux``, as some programs write it) is taken as the header
+  when the first row that is not a comment holds only numbers.
+"""
+
+from __future__ import annotations
+
+import csv
+
+SEPARATORS = (",", "\t", ";")
+"""The separators looked for in the header row, in this order; none of them: runs of blanks."""
+
+DECIMAL_COMMA_SEPARATORS = ("\t", ";")
+"""Separators beside which a comma in a number is a decimal comma."""
+
+
+def without_comment(line: str) -> str:
+    """``line`` up to its first ``#`` (the whole line when it has none)."""
+    return line.split("#", 1)[0]
+
+
+def separator_of(header: str) -> str | None:
+    """The separator of a list whose header row is ``header``; None for runs of blanks."""
+    return next((sep for sep in SEPARATORS if sep in header), None)
+
+
+def split_rows(lines: list[str], separator: str | None) -> list[list[str]]:
+    """Each line's fields (the lines hold no comment); with a tab or a semicolon, a comma in a
+    field is turned into a decimal point.
+
+    Raises
+    ------
+    csv.Error
+        A field's quotes are broken.
+    """
+    if separator is None:
+        return [line.split() for line in lines]
+    rows = list(csv.reader(lines, delimiter=separator))
+    if separator in DECIMAL_COMMA_SEPARATORS:
+        rows = [[field.replace(",", ".") for field in row] for row in rows]
+    return rows
+
+
+def is_numeric_row(fields: list[str]) -> bool:
+    """Whether every field of a row reads as a number."""
+    try:
+        [float(field) for field in fields]
+    except ValueError:
+        return False
+    return bool(fields)
