@@ -19,7 +19,7 @@ import math
 from collections.abc import Callable, Iterator, Mapping
 from functools import partial
 from importlib import import_module
-from typing import TYPE_CHECKING, Literal, Protocol, TypeVar, get_args
+from typing import TYPE_CHECKING, Any, Literal, Protocol, TypeVar, get_args
 
 from ..errors import InvalidInputError, check_choice, check_instance
 from ._database import DB_MAX_FOV_DEG, DatabaseSettings
@@ -155,10 +155,11 @@ def _known_focal(request: MatchRequest, name: str) -> tuple[Camera, float]:
     return camera, tolerance
 
 
-def _on_pairs(module: str, function: str, name: str,
+def _on_pairs(module: str, function: str, name: str, tables: Callable[[Any], object] | None = None,
               **keywords) -> Callable[[MatchRequest], tuple[Matcher, FieldStars]]:
     """Entry of a matcher with the signature of :func:`.pyramid.match_pyramid`: ``function`` of
-    ``module`` with ``keywords``, imported when the entry is called."""
+    ``module`` with ``keywords``, imported when the entry is called; ``tables(pdb)`` loads (or
+    builds) the other tables the matcher reads from the pair directory, before the solve's clock."""
 
     def prepare(request: MatchRequest) -> tuple[Matcher, FieldStars]:
         from ._field_stars import field_stars
@@ -168,6 +169,8 @@ def _on_pairs(module: str, function: str, name: str,
         camera, tolerance = _known_focal(request, name)
         settings = PairSettings(fov_deg=float(math.ceil(camera.fov_diagonal_deg * (1 + tolerance))))
         pdb = load_pair_database(settings)
+        if tables is not None:
+            tables(pdb)
 
         def run(options: MatcherOptionsBase | None) -> MatchOutcome:
             return match(request.x, request.y, camera, pdb, focal_tolerance=tolerance, options=options)
@@ -195,12 +198,19 @@ def _overlay(request: MatchRequest) -> tuple[Matcher, FieldStars]:
     return run, field_stars(PairSettings.max_mag, request.epoch_jyear)
 
 
+def _triangle_directory(variant: str) -> Callable[[Any], object]:
+    """The tables of the triangle matchers: a pair directory's triangle directory of ``variant``."""
+    return lambda pdb: _load("triangle_database", "load_triangle_database")(pdb, variant)
+
+
 MATCHERS: dict[MethodName, Callable[[MatchRequest], tuple[Matcher, FieldStars]]] = {
     "quads": _quads,
     "pyramid": _on_pairs("pyramid", "match_pyramid", "pyramid"),
     "angle": _on_pairs("angle_pivot", "match_angle_pivot", "angle"),
-    "triangle-planar": _on_pairs("triangles", "match_triangles", "triangle-planar", variant="planar"),
-    "triangle-spherical": _on_pairs("triangles", "match_triangles", "triangle-spherical", variant="spherical"),
+    "triangle-planar": _on_pairs("triangles", "match_triangles", "triangle-planar", _triangle_directory("planar"),
+                                 variant="planar"),
+    "triangle-spherical": _on_pairs("triangles", "match_triangles", "triangle-spherical",
+                                    _triangle_directory("spherical"), variant="spherical"),
     "nvertex-3": _on_pairs("nvertex", "match_nvertex", "nvertex-3", n=3),
     "nvertex-4": _on_pairs("nvertex", "match_nvertex", "nvertex-4", n=4),
     "nvertex-5": _on_pairs("nvertex", "match_nvertex", "nvertex-5", n=5),
@@ -271,8 +281,14 @@ def options_for(method: str, **settings) -> MatcherOptionsBase:
 
 
 def prepare_matcher(method: MethodName | str, request: MatchRequest) -> tuple[Matcher, FieldStars]:
-    """The named matcher, ready to run on the request, and the stars of the final re-match."""
-    return MATCHERS[check_method(method)](request)
+    """The named matcher, ready to run on the request, and the stars of the final re-match (their
+    sky index made, :func:`.verify.bands_of`): what a solve loads or builds once is done here,
+    before its clock starts, not in its reported time."""
+    from ._verify import bands_of
+
+    matcher, stars = MATCHERS[check_method(method)](request)
+    bands_of(stars, stars.vectors)
+    return matcher, stars
 
 
 __all__ = ["DEFAULT_FOV_RANGE_DEG", "MATCHERS", "METHOD_NAMES", "OPTIONS", "MatchRequest", "MethodName",
