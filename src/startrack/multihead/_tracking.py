@@ -22,12 +22,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from ..errors import InvalidInputError, require
+from ..errors import InvalidInputError, check_instance, require
 from ..identify import field_stars
 from ..results import Status
 from ..rig import CameraRig
 from ..solve import epoch_jyear
-from ..track import LOST_IN_SPACE, TRACKING, TrackerOptions, WindowMatcher, checked_rate
+from ..track import LOST_IN_SPACE, TRACKING, TrackerOptions, WindowMatcher, checked_rate, checked_time
 from ._joint import fit_joint, measured_sigma_px, residuals_px
 from ._predict import head_matcher, match_predicted
 from ._solution import RigOptions, RigSolution
@@ -91,8 +91,11 @@ class RigTracker:
                  rig_options: RigOptions | None = None):
         if not isinstance(rig, CameraRig):
             raise InvalidInputError(f"rig must be a CameraRig, got {type(rig).__name__}")
-        self.rig, self.options = rig, options or TrackerOptions()
-        self.rig_options = rig_options or RigOptions(catalog_max_mag=self.options.catalog_max_mag)
+        self.rig = rig
+        self.options = TrackerOptions() if options is None else check_instance(options, TrackerOptions,
+                                                                                 "options of the RigTracker")
+        self.rig_options = RigOptions(catalog_max_mag=self.options.catalog_max_mag) if rig_options is None else \
+            check_instance(rig_options, RigOptions, "rig_options of the RigTracker")
         self._epoch = epoch_jyear(epoch)
         catalog = field_stars(self.options.catalog_max_mag, self._epoch)
         self._matchers: dict[str, WindowMatcher] = {h.name: head_matcher(h, catalog) for h in rig}
@@ -107,14 +110,19 @@ class RigTracker:
     def update(self, stars: Mapping[str, tuple], t_s: float, *,
                gyro_rate_rad_s: ArrayLike | None = None) -> RigTrackStep:
         """Process one frame: head name to ``(x, y)`` or ``(x, y, flux)`` (as :func:`startrack.solve_rig`),
-        taken at ``t_s`` (s); ``gyro_rate_rad_s`` is a body-frame rate (rad/s)."""
+        taken at ``t_s`` (s); ``gyro_rate_rad_s`` is a body-frame rate (rad/s).
+
+        Every input is checked before the tracker's state changes: a non-finite time or rate, or
+        a bad star list, raises InvalidInputError (as :meth:`startrack.track.Tracker.update`) and
+        leaves the attitude and rate as they were."""
         t0 = time.perf_counter()
+        t_s = checked_time(t_s)
         lists = rig_stars(stars, self.rig)
         if gyro_rate_rad_s is not None:
             self._rate = checked_rate(gyro_rate_rad_s, "body")
-        step = self._track(lists, float(t_s)) if self._rot is not None else None
+        step = self._track(lists, t_s) if self._rot is not None else None
         if step is None:
-            step = self._lost_in_space(lists, float(t_s))
+            step = self._lost_in_space(lists, t_s)
         return replace(step, time_s=time.perf_counter() - t0)
 
     # --- modes --------------------------------------------------------------------------------

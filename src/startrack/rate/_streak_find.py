@@ -10,7 +10,9 @@ along 8 directions, a matched filter for a streak at least that long), threshold
 with enough signal (``min_snr``) gives a candidate: its intensity centroid, major axis and the
 length ``sqrt(12 (var_along - var_across))`` of its second moments (a uniform segment of length
 L has variance L^2 / 12 along), the first guess of the fit. Background and noise are the median
-and the MAD of every fourth pixel in each direction (a star field's light is a small share).
+and the MAD of every eighth pixel in each direction (a star field's light is a small share); a
+frame whose MAD is 0 (constant, or noise-free) has nothing to set the threshold by and gives no
+candidate.
 """
 
 from __future__ import annotations
@@ -32,6 +34,10 @@ THRESHOLD_SIGMA = 4.0
 MIN_SNR = 12.0
 """Smallest summed signal of a blob over its pixels' noise (blocks of the binned frame)."""
 MAX_CANDIDATES = 60
+ROUNDING_SIGMA = 1.0 / 12.0**0.5
+"""The noise (counts) given to a frame whose robust sigma is 0 (:func:`robust_level`): the rounding
+of its pixels to whole counts (a uniform error of one count has this sigma), the least noise a
+digitised frame has."""
 _EIGHT = np.ones((3, 3), dtype=bool)
 COMPILED_DTYPES = tuple(np.dtype(t) for t in (np.uint8, np.uint16, np.uint32, np.int16, np.int32, np.float32,
                                               np.float64))
@@ -93,7 +99,15 @@ class StreakCandidates:
 
 
 def robust_level(image: NDArray, step: int = 8) -> tuple[float, float]:
-    """Median and MAD-based sigma of every ``step``-th pixel in each direction."""
+    """Median and MAD-based sigma of every ``step``-th pixel in each direction; a sigma of 0 (a
+    constant frame, or a noise-free one mostly at its background) is raised to
+    :data:`ROUNDING_SIGMA`, so that fits weighted by it stay defined. NaN for non-finite pixels."""
+    centre, sigma = _median_sigma(image, step)
+    return centre, ROUNDING_SIGMA if sigma == 0 else sigma
+
+
+def _median_sigma(image: NDArray, step: int) -> tuple[float, float]:
+    """Median and MAD-based sigma (as measured, 0 included) of every ``step``-th pixel in each direction."""
     sample = np.asarray(image[::step, ::step], dtype=np.float64)
     centre = float(np.median(sample))
     return centre, float(1.4826 * np.median(np.abs(sample - centre)))
@@ -131,19 +145,36 @@ def find_streak_candidates(image: ArrayLike, *, bin_px: int = BIN_PX, line_bins:
         Threshold of the filtered image (robust sigmas) and the least summed SNR of a blob.
     max_candidates : int
         The brightest this many blobs are kept.
+
+    Returns
+    -------
+    StreakCandidates
+        No candidate when the frame has no noise to set the threshold by (its robust sigma is 0:
+        a constant frame, or a noise-free simulated one, most of whose pixels are its background;
+        ``noise`` is then :data:`ROUNDING_SIGMA`): its streaks, if any, are not measured.
+
+    Raises
+    ------
+    InvalidInputError
+        The frame is not 2-D, is smaller than 8 blocks a side, or has non-finite pixels (a NaN
+        background or noise); ``line_bins`` is not a positive odd number.
     """
     img = np.asarray(image)
     if img.ndim != 2 or min(img.shape) < 8 * bin_px:
         raise InvalidInputError(f"image must be a 2-D frame of at least {8 * bin_px} px a side, got {img.shape}")
     if line_bins < 1 or line_bins % 2 == 0:
         raise InvalidInputError(f"line_bins must be a positive odd number of blocks, got {line_bins}")
-    background, noise = robust_level(img)
-    if not np.isfinite(background) or not noise > 0:
-        raise InvalidInputError("image has no noise to set a threshold by (constant or non-finite pixels)")
+    background, noise = _median_sigma(img, 8)
+    if not (np.isfinite(background) and np.isfinite(noise)):
+        raise InvalidInputError(f"image must hold finite pixel values, got a background of {background!r} and a "
+                                f"noise of {noise!r} (NaN or infinite pixels)")
+    if noise == 0:  # a constant frame, or a noise-free one mostly at its background: no threshold to set
+        empty_labels = np.zeros((img.shape[0] // bin_px, img.shape[1] // bin_px), dtype=np.int32)
+        return _empty(background, ROUNDING_SIGMA, empty_labels, bin_px)
     blocks = binned(img, bin_px) - background * bin_px**2
     filtered = np.empty_like(blocks)
     kernel().line_filter(blocks, line_bins, ORIENTATIONS, filtered)
-    centre, spread = robust_level(filtered, 2)
+    centre, spread = _median_sigma(filtered, 2)
     labels, count = ndimage.label(filtered > centre + threshold_sigma * spread, structure=_EIGHT)
     labels = labels.astype(np.int32)
     if count == 0:

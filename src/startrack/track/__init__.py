@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 from .. import _exports_of, _lazy_exports
 
 if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
-    from ._inputs import checked_rate
+    from ._inputs import checked_rate, checked_time
     from ._relative import RelativeMatch, rate_match, triangle_match
     from ._tracker import LOST_IN_SPACE, STEP_MODES, TRACKING, FrameMode, StepMode, Tracker, TrackerOptions, TrackStep
     from ._windows import EXTRA_PREDICTED, WindowMatch, WindowMatcher, match_in_windows, one_to_one, project

@@ -45,7 +45,16 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
-from ..errors import InvalidInputError, check_instance, require
+from ..errors import (
+    InvalidInputError,
+    check_finite,
+    check_instance,
+    check_int,
+    check_non_negative,
+    check_positive,
+    is_real_number,
+    require,
+)
 from ..frames import radec_roll_from_rotation
 from ..identify import field_stars
 from ..rate import SmearLimits, image_smear_px, usable_for_prediction
@@ -76,6 +85,10 @@ FrameMode = Literal["point", "streak"]
 """The kind of image :meth:`Tracker.update_image` is in (:attr:`Tracker.mode`; module docstring)."""
 POINT_MODE: Final = "point"
 STREAK_MODE: Final = "streak"
+MIN_TRACKED_STARS: Final = 2
+"""Smallest :attr:`TrackerOptions.min_stars`: two stars (in different directions) are the fewest
+that fix an attitude (the window fit's q-method, the rig's joint fit); with fewer the fit has no
+unique answer (an empty frame has none at all, one star leaves the roll about it free)."""
 
 
 @dataclass(frozen=True)
@@ -85,30 +98,35 @@ class TrackerOptions:
     Attributes
     ----------
     min_stars : int
-        Fewest matched stars for a tracked attitude.
+        Fewest matched stars for a tracked attitude (an integer >= :data:`MIN_TRACKED_STARS`, 2).
     window_px : float
-        Search half-window around each predicted star when the rate is known.
+        Search half-window around each predicted star when the rate is known (px, > 0).
     max_rate_deg_s : float
-        Largest rate expected; sets the window when the rate is not known yet.
+        Largest rate expected; sets the window when the rate is not known yet (deg/s, >= 0).
     rate_error_fraction : float
-        Assumed relative error of the rate estimate; widens the window with the motion.
+        Assumed relative error of the rate estimate; widens the window with the motion (>= 0).
     match_px : float
-        Match radius once the attitude is refitted to the window matches.
+        Match radius once the attitude is refitted to the window matches (px, > 0).
     max_residual_px : float
-        A tracked attitude whose matched stars leave a larger rms residual is rejected.
+        A tracked attitude whose matched stars leave a larger rms residual is rejected (px, > 0).
     rate_gain : float
         Weight of the newest frame-to-frame rate in the smoothed rate (0 < gain <= 1).
     catalog_max_mag : float
-        Faintest catalog star predicted (V).
+        Faintest catalog star predicted (V, finite).
     target_stars : int or None
         For :meth:`Tracker.update_image`: detect with the dynamic threshold aiming at this many
-        stars (None: the detector's default k-sigma threshold).
+        stars (an integer >= 1; None: the detector's default k-sigma threshold).
     streak_on_px, streak_off_px : float
         Mode switching of :meth:`Tracker.update_image` (module docstring): streak mode from a
         smear of ``streak_on_px`` (px), point mode again below ``streak_off_px``.
     streak : StreakOptions or None
         Settings of the streak path (None: the defaults of
         :class:`startrack.rate._streak_solve.StreakOptions`).
+
+    Raises
+    ------
+    InvalidInputError
+        A setting of the wrong type, NaN, infinite or out of the range above, naming it.
     """
 
     min_stars: int = 5
@@ -125,11 +143,22 @@ class TrackerOptions:
     streak: StreakOptions | None = None
 
     def __post_init__(self) -> None:
+        """Refuse a setting the tracker cannot use (a wrong type, NaN, infinite or out of its range),
+        naming it and its valid range."""
+        check_int(self, ("min_stars",), MIN_TRACKED_STARS)
+        check_int(self, ("target_stars",), 1, optional=True)
+        check_positive(self, ("window_px", "match_px", "max_residual_px"))
+        check_non_negative(self, ("max_rate_deg_s", "rate_error_fraction"))
+        check_finite(self, ("catalog_max_mag",))
+        if not (is_real_number(self.rate_gain) and 0 < self.rate_gain <= 1):
+            raise InvalidInputError(f"rate_gain must be a number with 0 < rate_gain <= 1 (the newest rate's weight), "
+                                    f"got {self.rate_gain!r}")
         if self.streak is not None:
             from ..rate import StreakOptions
 
             check_instance(self.streak, StreakOptions, "TrackerOptions.streak")
-        if not 0 < self.streak_off_px <= self.streak_on_px:
+        if not (is_real_number(self.streak_on_px) and is_real_number(self.streak_off_px)
+                and 0 < self.streak_off_px <= self.streak_on_px):
             raise InvalidInputError(f"streak_off_px must be positive and at most streak_on_px (hysteresis), got "
                                     f"{self.streak_off_px!r} and {self.streak_on_px!r}")
 
@@ -183,6 +212,7 @@ class Tracker:
                  fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
                  epoch: Time | float | None = None, options: TrackerOptions | None = None, rig=None):
         self._rig = None
+        self.options = _checked_options(options)
         if rig is not None:
             if any(v is not None for v in (camera, width, height, fov_deg, fov_range_deg)):
                 raise InvalidInputError("a rig has its cameras: give rig, or a camera (or size and FOV), not both")
@@ -191,7 +221,6 @@ class Tracker:
             self._rig = RigTracker(rig, epoch=epoch, options=options)
         elif camera is None and (width is None or height is None):
             raise InvalidInputError("give a camera, or the image width and height (and a FOV or FOV range)")
-        self.options = _checked_options(options)
         self._lis_kwargs: dict[str, Any] = {"width": width, "height": height, "fov_deg": fov_deg,
                                             "fov_range_deg": fov_range_deg, "epoch": epoch}
         self._camera = camera

@@ -86,6 +86,14 @@ def project(camera: Camera, vectors: NDArray) -> tuple[NDArray[np.float64], NDAr
     return camera.cx + fx * (vectors[0] * inv_z), camera.cy + camera.fy * (vectors[1] * inv_z)
 
 
+def _angle_rad(u: tuple[float, float, float], v: tuple[float, float, float]) -> float:
+    """Angle (rad, 0 to pi) between two 3-vectors given as tuples, by the stable atan2 form of
+    :func:`startrack.frames.angle_between` on plain floats (no ``acos`` of a dot product, which a
+    rounded dot of -1.0000000000000002 between opposite unit vectors takes out of its domain)."""
+    cx, cy, cz = u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]
+    return math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), u[0] * v[0] + u[1] * v[1] + u[2] * v[2])
+
+
 class WindowMatcher:
     """:func:`match_in_windows` for a sequence of frames of one camera and star set.
 
@@ -111,10 +119,8 @@ class WindowMatcher:
         """Indices (ascending, so brightest first) and ICRS vectors (3, K) of a set of catalog stars
         that holds every star within ``cone_rad`` of the boresight."""
         b = tuple(boresight.tolist())
-        if self._centre is not None:
-            cos_moved = min(1.0, sum(u * v for u, v in zip(b, self._centre, strict=True)))
-            if math.acos(cos_moved) + cone_rad <= self._radius:
-                return self._idx, self._vectors
+        if self._centre is not None and _angle_rad(b, self._centre) + cone_rad <= self._radius:
+            return self._idx, self._vectors
         radius = min(cone_rad + self.slack_rad, math.pi)
         self._idx = np.asarray(query_cone(self.stars.tree, b, radius, return_sorted=True), dtype=np.int64)
         self._vectors = np.ascontiguousarray(self.stars.vectors[self._idx].T)
