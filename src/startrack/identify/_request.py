@@ -183,14 +183,18 @@ def star_arrays(x, y, flux, width, height) -> tuple[NDArray, NDArray, NDArray]:
 
 
 def _coordinates(values, name: str) -> NDArray[np.float64]:
-    """A 1-D float array of ``values``; refuses a masked array with masked entries (say which)."""
+    """A 1-D float array of ``values``; refuses a masked array with masked entries (say which),
+    None, complex numbers and arrays of more than one dimension (a table or an image given by
+    mistake, which flattening would turn into a list of the wrong numbers)."""
     if np.ma.isMaskedArray(values) and np.ma.count_masked(values):
         raise InvalidInputError(f"{name} has {np.ma.count_masked(values)} masked entries; "
                                 "drop those stars (or fill them) before solving")
-    try:
-        return np.asarray(np.ma.getdata(values), dtype=float).ravel()
-    except (TypeError, ValueError):
-        raise InvalidInputError(f"{name} must be numbers (an array of pixel positions), got {values!r:.80}") from None
+    data = None if values is None else np.asarray(np.ma.getdata(values))
+    if data is None or data.dtype.kind not in "biuf" or data.ndim > 1:
+        what = "None" if data is None else f"an array of shape {data.shape}" if data.ndim > 1 else repr(values)
+        raise InvalidInputError(f"{name} must be real numbers in one dimension (one per star, shape (N,)), "
+                                f"got {what:.80}")
+    return data.astype(float).ravel()
 
 
 def _check_size(width, height) -> None:
