@@ -3,15 +3,18 @@
 One image (Sease 2013 ch. 4, no catalog): the streaks' two ends are located, grouped into the
 start and end of the exposure, and the rate is solved between the groups (OLAE) with the RSO
 indicators; ``--exposure-s`` is the time between the ends. Two images (Samaan 2002 step 6 /
-Huffman 2006 §7.2): the stars found in both are matched frame to frame and the relative attitude
-over ``--dt-s`` gives the rate. Either way no star catalog is used. A calibrated camera is
-needed (``--camera`` preset or ``--fov-deg``, pinhole at the image centre).
+Huffman 2006 §7.2): the stars found in both are matched frame to frame (the pairs that agree on
+one rotation) and the relative attitude over ``--dt-s`` gives the rate, reported only when at
+least four stars match and fit the rotation within the centroid noise. Either way no star catalog
+is used. A calibrated camera is needed (``--camera`` preset or ``--fov-deg``, pinhole at the
+image centre).
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 
 import numpy as np
 
@@ -24,18 +27,28 @@ from ..rate import (
     RateEstimate,
     StreakRate,
     find_streaks,
-    match_frames,
-    rate_from_vectors,
+    rate_from_frames,
     streak_rate,
 )
 from ..units import DEG
-from ._common import add_max_pixels_option, apply_max_pixels_option, print_json
+from ._common import add_max_pixels_option, apply_max_pixels_option, check_finite_options, print_json
 
 EPILOG = """\
-output: status, rate (deg/s), axis (camera frame, unit), omega_deg_s (x, y, z), and for one image
-the streaks used and the RSO candidates (streak index, ends in 0-based pixels); for a pair the
-stars matched. --json gives the same as an object. Exit status 0 rate found, 1 not found, 2 misuse.
+output: status, reason, rate (deg/s), axis (camera frame, unit), omega_deg_s (x, y, z),
+sigma_deg_s (1-sigma of each component, when known), and for one image the streaks used and the
+RSO candidates (streak index, ends in 0-based pixels); for a pair the stars matched, the stars
+found in each image and the rms misfit of the matched stars to the rotation (px). --json gives
+the same as an object. Exit status 0 rate found, 1 not found, 2 misuse.
 """
+
+EXPOSURE_RANGE_S = (1e-4, 3600.0)
+"""Valid --exposure-s and |--dt-s|: 0.1 ms to an hour."""
+MAX_BIAS_PX = 10.0
+"""Largest |--bias-px|: a corner detector pulls the ends in by about a PSF width (0.6-2.3 px)."""
+MAX_MOTION_DEG = 90.0
+"""Largest --max-motion-deg."""
+CENTROID_SIGMA_PX = 0.5
+"""1-sigma centroid error of a star (px per axis) assumed when matching an image pair."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -53,7 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--prior-rate-deg-s", type=float, nargs=3, metavar=("WX", "WY", "WZ"),
                         help="a rough rate (camera frame) to order the streak ends in time")
     parser.add_argument("--max-motion-deg", type=float, default=1.0,
-                        help="largest star motion between two images, deg (pair matching gate)")
+                        help="largest star motion between two images, deg (pair matching gate, default 1)")
     parser.add_argument("--json", action="store_true", help="print a JSON object")
     add_max_pixels_option(parser)
     return parser
@@ -70,14 +83,40 @@ def _camera(args, width: int, height: int) -> Camera:
 
 
 def _rate_fields(rate: RateEstimate) -> dict:
+    sigma = rate.sigma_rad_s / DEG
     return {"status": rate.status.value, "reason": rate.reason, "rate_deg_s": rate.rate_deg_s if rate.ok else None,
             "axis": rate.axis.tolist() if rate.ok else None,
-            "omega_deg_s": (rate.omega_rad_s / DEG).tolist() if rate.ok else None, "method": rate.method}
+            "omega_deg_s": (rate.omega_rad_s / DEG).tolist() if rate.ok else None,
+            "sigma_deg_s": sigma.tolist() if rate.ok and np.all(np.isfinite(sigma)) else None, "method": rate.method}
+
+
+def _check_time(value: float | None, option: str, what: str, *, signed: bool = False) -> float:
+    """``value`` if it is a time within :data:`EXPOSURE_RANGE_S` (in magnitude when ``signed``), else
+    an InvalidInputError naming ``option`` and the valid range."""
+    lo, hi = EXPOSURE_RANGE_S
+    valid = f"{lo:g} to {hi:g} s" + (f", or -{hi:g} to -{lo:g} s" if signed else "")
+    if value is None:
+        raise InvalidInputError(f"{what} needs {option} ({valid})")
+    if not lo <= (abs(value) if signed else value) <= hi:
+        raise InvalidInputError(f"{option} must be {valid}, got {value:g}")
+    return value
+
+
+def _check_options(args) -> None:
+    """Refuse NaN / infinite numbers and values out of their sensible ranges (stated in the message)."""
+    check_finite_options(args)
+    if not abs(args.bias_px) <= MAX_BIAS_PX:
+        raise InvalidInputError(f"--bias-px must be between -{MAX_BIAS_PX:g} and {MAX_BIAS_PX:g} px, "
+                                f"got {args.bias_px:g}")
+    if not 0 < args.max_motion_deg <= MAX_MOTION_DEG:
+        raise InvalidInputError(f"--max-motion-deg must be above 0 and at most {MAX_MOTION_DEG:g} deg, "
+                                f"got {args.max_motion_deg:g}")
+    if args.prior_rate_deg_s is not None and not np.any(args.prior_rate_deg_s):
+        raise InvalidInputError("--prior-rate-deg-s must be a non-zero rate (it orders the streak ends in time)")
 
 
 def _one_image(args, image) -> tuple[dict, RateEstimate]:
-    if not (args.exposure_s and args.exposure_s > 0):
-        raise InvalidInputError("one image needs --exposure-s (the exposure time, > 0)")
+    _check_time(args.exposure_s, "--exposure-s", "one image")
     camera = _camera(args, image.shape[1], image.shape[0])
     prior = None if args.prior_rate_deg_s is None else np.array(args.prior_rate_deg_s) * DEG
     result: StreakRate = streak_rate(image, camera, args.exposure_s, detector=args.detector, bias_px=args.bias_px,
@@ -96,16 +135,18 @@ def _centroids(image) -> np.ndarray:
 
 
 def _two_images(args, first, second) -> tuple[dict, RateEstimate]:
-    if not (args.dt_s and args.dt_s != 0):
-        raise InvalidInputError("two images need --dt-s (the time between them, non-zero)")
+    _check_time(args.dt_s, "--dt-s", "two images", signed=True)
     if first.shape != second.shape:
         raise InvalidInputError(f"the two images differ in size: {first.shape} and {second.shape}")
     camera = _camera(args, first.shape[1], first.shape[0])
-    a, b = _centroids(first), _centroids(second)
+    a, b = _centroids(first), _centroids(second)  # brightest first
     va, vb = camera.pixel_to_vector(a[:, 0], a[:, 1]), camera.pixel_to_vector(b[:, 0], b[:, 1])
-    pairs = match_frames(va, vb, args.max_motion_deg * DEG)
-    rate = rate_from_vectors(va[pairs[:, 0]], vb[pairs[:, 1]], args.dt_s)
-    return _rate_fields(rate) | {"stars_matched": int(len(pairs)), "stars": [len(a), len(b)]}, rate
+    found = rate_from_frames(va, vb, args.dt_s, max_angle_rad=args.max_motion_deg * DEG,
+                             sigma_rad=CENTROID_SIGMA_PX / camera.fx)
+    rate = replace(found.estimate, reason=found.estimate.reason.replace("max_angle_rad", "--max-motion-deg"))
+    misfit = found.residual_rms_rad * camera.fx
+    return _rate_fields(rate) | {"stars_matched": int(len(found.pairs)), "stars": [len(a), len(b)],
+                                 "residual_rms_px": float(misfit) if np.isfinite(misfit) else None}, rate
 
 
 def _print_table(out: dict) -> None:
@@ -120,6 +161,7 @@ def _print_table(out: dict) -> None:
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     apply_max_pixels_option(args)
+    _check_options(args)
     if len(args.images) > 2:
         raise InvalidInputError(f"give one streaked image or two images, got {len(args.images)}")
     images = [np.asarray(read_image(path).data, dtype=float) for path in args.images]

@@ -2,9 +2,9 @@
 
 Convention: ``omega_rad_s`` is the camera's angular velocity relative to ICRS in camera-frame
 components (``rot_cam_from_icrs(t + dt) = exp(-[omega x] dt) rot_cam_from_icrs(t)``); see
-:mod:`._estimate`. Modules: :mod:`._from_attitudes` (Samaan 2002 eq. 3), :mod:`._from_vectors`
-(frame-to-frame, no catalog), :mod:`._filter` (a constant-rate Kalman filter), and the streak
-chain of Sease 2013 chapters 3-4.
+:mod:`._estimate`. Modules: :mod:`._from_attitudes` (Samaan 2002 eq. 3), :mod:`._from_vectors` and
+:mod:`._frame_match` (frame-to-frame, no catalog), :mod:`._filter` (a constant-rate Kalman
+filter), and the streak chain of Sease 2013 chapters 3-4.
 """
 
 from __future__ import annotations
@@ -26,8 +26,9 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     )
     from ._estimate import RateEstimate, axis_error_rad
     from ._filter import FilterState, RateFilter
+    from ._frame_match import FrameRate, match_frames, rate_from_frames
     from ._from_attitudes import rate_between, rate_from_attitudes
-    from ._from_vectors import match_frames, rate_from_vectors
+    from ._from_vectors import rate_from_vectors
     from ._rso import INDICATORS, IndicatorName
     from ._smear_mode import SmearLimits, image_smear_px, usable_for_prediction
     from ._streak_bound import rate_bound, target_chance

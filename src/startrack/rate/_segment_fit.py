@@ -154,7 +154,8 @@ def fit_segment(
     (unit (x, y)) start the fit (from :class:`.streak_detect.StreakRegion`); ``noise`` is the
     per-pixel noise sigma (image units); ``mask`` (h, w) leaves out pixels (other stars);
     ``image_shape`` (H, W) enables the border check; only pixels within ``band_px`` of the
-    starting line are fitted.
+    starting line are fitted. A region the fit cannot take (a noise that is not positive, a
+    model that cannot be evaluated at the start) gives a not-ok result with the reason.
     """
     img = np.asarray(roi, dtype=float)
     use = np.ones(img.shape, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
@@ -167,13 +168,17 @@ def fit_segment(
     xs, ys, values = cols + origin[0], rows + origin[1], img[rows, cols]
     if len(values) < 10:
         return _failed("too few pixels near the streak's line")
+    if not (np.isfinite(noise) and noise > 0) or not np.all(np.isfinite(values)):
+        return _failed(f"no fit without a positive noise and finite pixels (noise {noise!r})")
     start = _initial(xs, ys, values, centroid, u, noise)
-
     lower = [-np.inf, -np.inf, -np.inf, -np.inf, 0.0, 0.2, -np.inf, -0.1]
     upper = [np.inf, np.inf, np.inf, np.inf, np.inf, 10.0, np.inf, 0.1]
-    fit = optimize.least_squares(lambda p: (model_and_jacobian(p, xs, ys, centroid)[0] - values) / noise, start,
-                                 jac=lambda p: model_and_jacobian(p, xs, ys, centroid)[1] / noise,
-                                 bounds=(lower, upper), x_scale="jac", max_nfev=MAX_EVALUATIONS, tr_solver="lsmr")
+    try:
+        fit = optimize.least_squares(lambda p: (model_and_jacobian(p, xs, ys, centroid)[0] - values) / noise, start,
+                                     jac=lambda p: model_and_jacobian(p, xs, ys, centroid)[1] / noise,
+                                     bounds=(lower, upper), x_scale="jac", max_nfev=MAX_EVALUATIONS, tr_solver="lsmr")
+    except (ValueError, np.linalg.LinAlgError) as exc:  # a start the model cannot evaluate: not a streak
+        return _failed(f"the segment fit could not run ({exc})")
     return _judge(fit, centroid, len(values), image_shape, max_reduced_chi2, sigma_range_px)
 
 

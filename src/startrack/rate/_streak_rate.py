@@ -35,7 +35,7 @@ from scipy.spatial.transform import Rotation
 
 from ..attitude import WahbaMethod, solve_wahba
 from ..camera import Camera
-from ..errors import InvalidInputError, check_choice, require
+from ..errors import InvalidInputError, check_choice, is_real_number, require
 from ..results import AttitudeSolution, Status
 from ._catalog_free import CatalogFreeRate, catalog_free_rate, consensus, regroup
 from ._endpoints import CornerDetector, EndpointBias, locate_endpoints
@@ -88,6 +88,9 @@ BLUR_TOLERANCE = 0.35
 """Largest relative difference of a streak's fitted blur from the median (one PSF for all)."""
 CHI2_FACTOR = 3.0
 """Largest chi-square per pixel of a segment fit relative to the median (crossing streaks)."""
+NOISE_FLOOR = 1.0 / np.sqrt(12.0)
+"""Least per-pixel noise (counts) the segment fit assumes: the quantisation noise of one count, for
+images whose background has no measurable noise (simulated without noise, or clipped at zero)."""
 
 
 @dataclass(frozen=True)
@@ -130,9 +133,10 @@ def _corner_ends(img, found, detector, bias_px, min_length_px, length_tolerance,
 def _segment_ends(img, found, min_length_px):
     """Regions, ends (N, 2, 2) and end sigmas (N,) from the segment fit, with a common blur."""
     fits = []
+    noise = max(found.noise, NOISE_FLOOR)
     for region in found.regions:
         result = fit_segment(img[region.rows, region.cols] - found.background, region.origin_xy,
-                             region.centroid_xy, region.direction, found.noise, mask=~_other_streaks(region, found),
+                             region.centroid_xy, region.direction, noise, mask=~_other_streaks(region, found),
                              image_shape=img.shape,
                              band_px=BAND_PX + 2.0 * region.width_px)
         length = np.linalg.norm(result.xy[1] - result.xy[0])
@@ -189,6 +193,7 @@ def measure_streaks(
     TOO_FEW_STARS.
     """
     detector = check_endpoint_method(detector)
+    _check_bias(bias_px)
     img = np.asarray(image, dtype=float)
     defaults = SEGMENT_FIND_OPTIONS if detector == SEGMENT else {}
     found = find_streaks(img, **(defaults | (find_options or {})))
@@ -268,6 +273,35 @@ class StreakRate:
     time_order_known: bool = False
 
 
+def _check_bias(bias_px: float | EndpointBias) -> float | EndpointBias:
+    """``bias_px`` if it is a finite number (px) or an :class:`EndpointBias` with finite
+    coefficients; else an InvalidInputError saying so."""
+    if isinstance(bias_px, EndpointBias):
+        if not np.all(np.isfinite(bias_px.coeffs)):
+            raise InvalidInputError("bias_px must have finite coefficients (an EndpointBias from calibrate_bias_model)")
+        return bias_px
+    if not (is_real_number(bias_px) and np.isfinite(bias_px)):
+        raise InvalidInputError(f"bias_px must be a finite number of pixels or an EndpointBias, got {bias_px!r}")
+    return bias_px
+
+
+def _check_rate_inputs(exposure_s: float, prior: ArrayLike | None, k_sigma: float, endpoint_sigma_px) -> None:
+    """Refuse a non-positive or non-finite exposure, a prior rate that is not a finite non-zero
+    vector (3,), and non-positive thresholds."""
+    if not (is_real_number(exposure_s) and np.isfinite(exposure_s) and exposure_s > 0):
+        raise InvalidInputError(f"exposure_s must be a positive, finite number of seconds, got {exposure_s!r}")
+    if prior is not None:
+        w = np.asarray(prior, dtype=float)
+        if w.shape != (3,) or not np.all(np.isfinite(w)) or not np.any(w):
+            raise InvalidInputError(f"prior_omega_rad_s must be a finite, non-zero rate of shape (3,) rad/s, "
+                                    f"got {prior!r}")
+    if not (is_real_number(k_sigma) and np.isfinite(k_sigma) and k_sigma > 0):
+        raise InvalidInputError(f"k_sigma must be a positive number, got {k_sigma!r}")
+    if endpoint_sigma_px is not None and not (is_real_number(endpoint_sigma_px) and 0 < endpoint_sigma_px < np.inf):
+        raise InvalidInputError(f"endpoint_sigma_px must be a positive number of pixels or None, "
+                                f"got {endpoint_sigma_px!r}")
+
+
 def _ordered(omega: NDArray, prior: ArrayLike | None) -> tuple[bool, bool]:
     """(swap the groups?, order known?) from the A -> B rate and an optional prior rate."""
     if prior is None:
@@ -315,6 +349,7 @@ def streak_rate(
         Reuse an earlier :func:`measure_streaks` of this image.
     """
     detector = check_endpoint_method(detector)
+    _check_rate_inputs(exposure_s, prior_omega_rad_s, k_sigma, endpoint_sigma_px)
     meas = measurement or measure_streaks(image, camera, detector=detector, bias_px=bias_px)
     if meas.status is not Status.OK:
         return StreakRate(failed(meas.status, meas.reason, "catalog-free OLAE"), meas)
