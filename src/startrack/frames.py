@@ -48,6 +48,22 @@ def normalize(v: ArrayLike) -> NDArray[np.float64]:
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
+def checked_unit_vectors(vectors: ArrayLike, name: str, shape: str = "(N, 3)") -> NDArray[np.float64]:
+    """``vectors`` (N, 3) (or (3,) where ``shape`` says so) scaled to unit length, after checking
+    that they are finite and non-zero; an InvalidInputError naming ``name`` and ``shape`` if not
+    (pixel positions (N, 2) given for directions, a NaN row)."""
+    try:
+        v = np.asarray(vectors, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{name} must be finite non-zero vectors of shape {shape}, got {vectors!r:.80}") \
+            from None
+    norms = np.linalg.norm(v, axis=-1) if v.ndim in (1, 2) and v.shape[-1] == 3 else None
+    if norms is None or (shape == "(N, 3)" and v.ndim != 2) or not np.all(np.isfinite(norms)) or np.any(norms == 0):
+        raise InvalidInputError(f"{name} must be finite non-zero vectors of shape {shape}, got shape {v.shape}"
+                                + ("" if norms is None else " with a NaN, infinite or zero row"))
+    return v / norms[..., None]
+
+
 def cross(u: NDArray, v: NDArray) -> NDArray[np.float64]:
     """Cross products of vectors (..., 3), broadcasting; written out, as ``np.cross`` spends most
     of its time in set-up for 3-component vectors."""

@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from ..errors import InvalidInputError
-from ..frames import normalize
+from ..frames import checked_unit_vectors
 from ._chord import chord_from_angle
 from ._star_catalog import StarCatalog
 
@@ -49,15 +49,6 @@ def query_cone(tree: cKDTree, centers: ArrayLike, radius_rad: float, *, return_s
                                  workers=workers)
 
 
-def _unit_vectors(vectors: ArrayLike, name: str, shape: str) -> NDArray[np.float64]:
-    v = np.asarray(vectors, dtype=float)
-    norms = np.linalg.norm(v, axis=-1) if v.ndim and v.shape[-1] == 3 else None
-    if norms is None or not np.all(np.isfinite(norms)) or np.any(norms == 0):
-        raise InvalidInputError(f"{name} must be finite non-zero vectors of shape {shape}, "
-                                f"got shape {v.shape}")
-    return normalize(v)
-
-
 class ConeIndex:
     """A k-d tree over unit vectors (N, 3) for repeated cone searches.
 
@@ -67,7 +58,7 @@ class ConeIndex:
     """
 
     def __init__(self, vectors: ArrayLike) -> None:
-        v = _unit_vectors(vectors, "vectors", "(N, 3)")
+        v = checked_unit_vectors(vectors, "vectors", "(N, 3)")
         if v.ndim != 2:
             raise InvalidInputError(f"vectors must have shape (N, 3), got {v.shape}")
         self.vectors = v
@@ -78,14 +69,14 @@ class ConeIndex:
 
     def query(self, center: ArrayLike, radius_rad: float) -> NDArray[np.int64]:
         """Sorted indices of the vectors within ``radius_rad`` of ``center`` (3,)."""
-        c = _unit_vectors(center, "center", "(3,)")
+        c = checked_unit_vectors(center, "center", "(3,)")
         if c.shape != (3,):
             raise InvalidInputError(f"center must have shape (3,), got {c.shape}")
         return np.asarray(query_cone(self._tree, c, radius_rad, return_sorted=True), dtype=np.int64)
 
     def query_many(self, centers: ArrayLike, radius_rad: float) -> list[NDArray[np.int64]]:
         """For each of ``centers`` (M, 3), the sorted indices within ``radius_rad`` of it."""
-        c = _unit_vectors(centers, "centers", "(M, 3)")
+        c = checked_unit_vectors(centers, "centers", "(M, 3)")
         if c.ndim != 2:
             raise InvalidInputError(f"centers must have shape (M, 3), got {c.shape}")
         return [np.asarray(f, dtype=np.int64) for f in query_cone(self._tree, c, radius_rad, return_sorted=True)]
@@ -99,7 +90,7 @@ def cone_search(catalog: StarCatalog, center_vec: ArrayLike, radius_rad: float,
     single query is a vectorised chord test over all N stars (no tree to build); use
     :class:`ConeIndex` for many queries on the same stars.
     """
-    c = _unit_vectors(center_vec, "center_vec", "(3,)")
+    c = checked_unit_vectors(center_vec, "center_vec", "(3,)")
     if c.shape != (3,):
         raise InvalidInputError(f"center_vec must have shape (3,), got {c.shape}")
     chord = _radius_chord(radius_rad)

@@ -27,7 +27,7 @@ from scipy.spatial.transform import Rotation
 from ..attitude import solve_wahba
 from ..catalog import chord_from_angle, query_cone
 from ..errors import InvalidInputError, is_real_number, require
-from ..frames import angle_between, normalize
+from ..frames import angle_between, checked_unit_vectors, normalize
 from ..results import Status
 from ..units import DEG
 from ._estimate import RateEstimate, failed
@@ -47,17 +47,6 @@ keeping the few pairs that happen to fit (with that noise, all but ~3e-4 of them
 SEED_STARS = 12
 """Stars of frame a (the first ones: pass the brightest first) whose pairs propose rotations."""
 REFINE_ROUNDS = 3
-
-
-def _unit_vectors(vectors: ArrayLike, name: str) -> NDArray[np.float64]:
-    """``vectors`` (N, 3) as finite unit vectors, or an InvalidInputError naming ``name``."""
-    v = np.asarray(vectors, dtype=float)
-    if v.ndim != 2 or v.shape[1] != 3:
-        raise InvalidInputError(f"{name} must have shape (N, 3) (camera-frame unit vectors), got {v.shape}")
-    norm = np.linalg.norm(v, axis=1, keepdims=True)
-    if not (np.all(np.isfinite(v)) and np.all(norm > 0)):
-        raise InvalidInputError(f"{name} must be finite, non-zero vectors (a NaN or zero row was given)")
-    return v / norm
 
 
 def _angle(value: float, name: str, upper: float = math.pi) -> float:
@@ -160,7 +149,7 @@ def match_frames(
         pair. When no two candidate pairs agree: the one mutual-nearest pair within the gate if
         there is exactly one (it cannot be checked), else none.
     """
-    a, b = _unit_vectors(vectors_a, "vectors_a"), _unit_vectors(vectors_b, "vectors_b")
+    a, b = checked_unit_vectors(vectors_a, "vectors_a"), checked_unit_vectors(vectors_b, "vectors_b")
     gate = _angle(max_angle_rad, "max_angle_rad")
     tol = max(0.1 * gate, 1e-4) if tol_rad is None else _angle(tol_rad, "tol_rad", gate)
     if predicted is not None and (not isinstance(predicted, Rotation) or not predicted.single):
@@ -262,7 +251,7 @@ def rate_from_frames(
         sigmas); the covariance is scaled up by the misfit (Birge ratio) when it exceeds the noise.
     """
     _checked_inputs(dt_s, sigma_rad, min_pairs)
-    a, b = _unit_vectors(vectors_a, "vectors_a"), _unit_vectors(vectors_b, "vectors_b")
+    a, b = checked_unit_vectors(vectors_a, "vectors_a"), checked_unit_vectors(vectors_b, "vectors_b")
     gate = _angle(max_angle_rad, "max_angle_rad")
     tol = min(TOL_SIGMAS * math.sqrt(2.0) * sigma_rad, gate)
     if min(len(a), len(b)) < min_pairs:

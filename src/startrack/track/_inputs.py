@@ -12,11 +12,14 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import InvalidInputError
 
 
-def checked_rate(rate_rad_s: ArrayLike, frame: str = "camera") -> NDArray[np.float64]:
-    """A gyro rate (3,), rad/s in ``frame`` (named in the message), finite."""
-    rate = np.array(rate_rad_s, dtype=float)
+def checked_rate(rate_rad_s: ArrayLike, frame: str = "camera", name: str = "gyro_rate_rad_s") -> NDArray[np.float64]:
+    """A rate (3,), rad/s in ``frame``, finite; the message names the argument ``name`` and the frame."""
+    try:
+        rate = np.array(rate_rad_s, dtype=float)
+    except (TypeError, ValueError):
+        rate = np.full(0, np.nan)
     if rate.shape != (3,) or not np.all(np.isfinite(rate)):
-        raise InvalidInputError(f"gyro_rate_rad_s must be 3 finite numbers (rad/s, {frame} frame), got {rate_rad_s!r}")
+        raise InvalidInputError(f"{name} must be 3 finite numbers (rad/s, {frame} frame), got {rate_rad_s!r}")
     return rate
 
 

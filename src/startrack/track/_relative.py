@@ -15,6 +15,7 @@ camera vectors onto second-frame ones: ``rot_cam2_from_cam1``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -22,12 +23,33 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..attitude import q_method_quaternions
-from ..frames import angle_between
+from ..errors import InvalidInputError, is_real_number
+from ..frames import angle_between, checked_unit_vectors
 from ..identify import pyramid_triads
 from ..results import Status
+from ..units import DEG
+from ._inputs import checked_rate
 
 MIN_CONFIRMED = 4
 """Matched pairs (the three of the triangle included) needed to accept a relative attitude."""
+
+MAX_TOL_RAD = 0.1
+"""Largest angle tolerance taken (radians, 5.7 deg): a few centroid sigmas over the focal length
+are far less; a tolerance near the stars' spacing matches any star to any other, and a triangle
+to one of another shape, so that "confirmed" would mean nothing."""
+
+
+def _tolerance(tol_rad: float) -> float:
+    if not (is_real_number(tol_rad) and math.isfinite(tol_rad) and 0 < tol_rad <= MAX_TOL_RAD):
+        raise InvalidInputError(f"tol_rad must be an angle in (0, {MAX_TOL_RAD:g}] radians (0 to "
+                                f"{MAX_TOL_RAD / DEG:.2g} deg): a few centroid sigmas over the focal length, "
+                                f"got {tol_rad!r}")
+    return float(tol_rad)
+
+
+def _frames(first: ArrayLike, second: ArrayLike) -> tuple[NDArray, NDArray]:
+    """The two frames' camera-frame directions (N1, 3), (N2, 3), checked and of unit length."""
+    return checked_unit_vectors(first, "first"), checked_unit_vectors(second, "second")
 
 
 @dataclass(frozen=True)
@@ -90,11 +112,20 @@ def triangle_match(first: ArrayLike, second: ArrayLike, tol_rad: float, max_star
     first, second : array_like, shape (N1, 3), (N2, 3)
         Camera-frame unit vectors of the two frames' stars, brightest first.
     tol_rad : float
-        Angle tolerance (radians): a few centroid sigmas over the focal length.
+        Angle tolerance (radians, in (0, :data:`MAX_TOL_RAD`]): a few centroid sigmas over the
+        focal length.
     max_stars : int
-        Brightest first-frame stars used for triads.
+        Brightest first-frame stars used for triads (at least 3).
+
+    Raises
+    ------
+    InvalidInputError
+        Directions that are not finite non-zero vectors (N, 3), a tolerance out of range.
     """
-    first, second = np.asarray(first, dtype=float), np.asarray(second, dtype=float)
+    first, second = _frames(first, second)
+    tol_rad = _tolerance(tol_rad)
+    if isinstance(max_stars, bool) or not isinstance(max_stars, int | np.integer) or max_stars < 3:
+        raise InvalidInputError(f"max_stars must be an integer >= 3 (a triangle's stars), got {max_stars!r}")
     if len(first) < 3 or len(second) < 3:
         return RelativeMatch(Status.TOO_FEW_STARS, reason="each frame needs at least 3 stars")
     second_angles = angle_between(second[:, None, :], second[None, :, :])
@@ -123,11 +154,17 @@ def rate_match(first: ArrayLike, second: ArrayLike, rate_rad_s: ArrayLike, dt_s:
                tol_rad: float) -> RelativeMatch:
     """Relative attitude of two frames from a known rate: predict, match the nearest, refit.
 
-    ``rate_rad_s`` is the camera's angular velocity in its own frame; stars turn by
-    ``-rate * dt`` between the frames.
+    ``rate_rad_s`` (3,) is the camera's angular velocity in its own frame (rad/s, finite); stars
+    turn by ``-rate * dt_s`` between the frames, ``dt_s`` (s) finite and non-zero. ``first``,
+    ``second`` and ``tol_rad`` as for :func:`triangle_match`; InvalidInputError for any of them
+    out of range.
     """
-    first, second = np.asarray(first, dtype=float), np.asarray(second, dtype=float)
+    first, second = _frames(first, second)
+    tol_rad = _tolerance(tol_rad)
+    rate = checked_rate(rate_rad_s, name="rate_rad_s")
+    if not (is_real_number(dt_s) and math.isfinite(dt_s) and dt_s != 0):
+        raise InvalidInputError(f"dt_s must be a finite, non-zero number of seconds between the frames, got {dt_s!r}")
     if len(first) < MIN_CONFIRMED or len(second) < MIN_CONFIRMED:
         return RelativeMatch(Status.TOO_FEW_STARS, reason=f"each frame needs at least {MIN_CONFIRMED} stars")
-    predicted = Rotation.from_rotvec(-np.asarray(rate_rad_s, dtype=float) * dt_s).as_matrix()
+    predicted = Rotation.from_rotvec(-rate * dt_s).as_matrix()
     return _finish(first, second, predicted, tol_rad)
