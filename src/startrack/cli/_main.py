@@ -3,7 +3,8 @@
 Exit status: 0 success, 1 an expected failure reported as a result (e.g. not solved: too few
 stars, no match), 2 misuse (bad option, unreadable or invalid input), reported as one line
 ``startrack <cmd>: error: <message>`` on standard error with no traceback (argparse's own
-errors print the usage line first).
+errors print the usage line first), 3 an unexpected error: a fault of startrack's, one line
+naming the exception's type (:data:`DEBUG_ENV` set to 1 shows its traceback).
 """
 
 from __future__ import annotations
@@ -14,6 +15,11 @@ import sys
 
 from .. import __version__
 from ..errors import StartrackError
+
+DEBUG_ENV = "STARTRACK_DEBUG"
+"""Set to 1, an unexpected error raises with its traceback instead of its one line (exit 3)."""
+INTERNAL_ERROR = 3
+"""Exit status of an unexpected error (a fault of startrack's)."""
 
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "solve": ("startrack.cli._solve_cmd", "solve an image lost-in-space (FITS, PNG, JPEG, TIFF)"),
@@ -36,7 +42,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
 USAGE = "usage: startrack {" + ",".join(SUBCOMMANDS) + "} [options]\n\n" + "\n".join(
     f"  {name:<12} {text}" for name, (_, text) in SUBCOMMANDS.items()) + \
     "\n\nRun 'startrack COMMAND --help' for the options of a command.\n" \
-    "Exit status: 0 success, 1 not solved (the reason is printed), 2 misuse."
+    "Exit status: 0 success, 1 not solved (the reason is printed), 2 misuse, 3 a fault of startrack's."
 
 
 def one_line(exc: BaseException) -> str:
@@ -86,6 +92,12 @@ def _run(name: str, argv: list[str]) -> int:
     except KeyboardInterrupt:
         print(f"startrack {name}: interrupted", file=sys.stderr)
         return 130
+    except Exception as exc:
+        if os.environ.get(DEBUG_ENV) == "1":
+            raise
+        print(f"startrack {name}: error: unexpected {type(exc).__name__} (a fault of startrack's, please report it; "
+              f"{DEBUG_ENV}=1 shows where): {one_line(exc)}", file=sys.stderr)
+        return INTERNAL_ERROR
 
 
 if __name__ == "__main__":
