@@ -35,6 +35,7 @@ from typing import Any
 
 from ..errors import InvalidInputError, StartrackError, hidden_interruption
 from ..io import IMAGE_SUFFIXES
+from ._file_order import in_name_order
 
 ERROR = "error"
 """Status of an image that could not be read or used (the reason says why)."""
@@ -81,8 +82,9 @@ def is_batch(paths: Sequence[str], csv_out: str | None = None) -> bool:
 
 
 def expand_inputs(paths: Sequence[str | os.PathLike]) -> list[Path]:
-    """The images of ``paths``: each folder's image files (:data:`IMAGE_SUFFIXES`, sorted by
-    name, not recursive), other paths as given (a missing one is reported on its own line).
+    """The images of ``paths``: each folder's image files (:data:`IMAGE_SUFFIXES`, in name order
+    with numbers compared as numbers, :func:`.file_order.natural_key`; not recursive), other paths
+    as given (a missing one is reported on its own line).
 
     Raises
     ------
@@ -92,7 +94,7 @@ def expand_inputs(paths: Sequence[str | os.PathLike]) -> list[Path]:
     out: list[Path] = []
     for item in map(Path, paths):
         if item.is_dir():
-            found = sorted(p for p in item.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES)
+            found = in_name_order([p for p in item.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES])
             if not found:
                 raise InvalidInputError(f"folder {item} holds no image files ({', '.join(sorted(IMAGE_SUFFIXES))})")
             out.extend(found)

@@ -68,7 +68,8 @@ def add_fov_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--fov-deg", type=float, metavar="F",
                        help="horizontal field of view in deg (0.5 to 100), trusted to +-3 %%")
     group.add_argument("--fov-range-deg", type=float, nargs=2, metavar=("LO", "HI"),
-                       help="range of horizontal fields of view to search, deg (default 3 100, the default database's range)")
+                       help="range of horizontal fields of view to search, deg (default 3 100, the default "
+                            "database's range)")
     group.add_argument("--camera", metavar="PRESET", help="a calibrated camera preset (fixes the focal length)")
 
 

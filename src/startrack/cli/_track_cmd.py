@@ -38,6 +38,7 @@ from ._common import (
     fov_kwargs,
     max_pixels_option,
 )
+from ._file_order import in_name_order
 from ._progress import ProgressBar, ensure_database_for
 
 EPILOG = "CSV columns: " + ", ".join(COLUMNS) + (
@@ -53,7 +54,7 @@ def _frames(source: Path) -> list[Path]:
         return [source]
     if not source.is_dir():
         raise InvalidInputError(f"{source}: no such file or folder")
-    files = sorted(p for p in source.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    files = in_name_order([p for p in source.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES])
     if not files:
         raise InvalidInputError(f"{source}: no image files (valid: {', '.join(sorted(IMAGE_SUFFIXES))})")
     return files
@@ -62,7 +63,8 @@ def _frames(source: Path) -> list[Path]:
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="startrack track", description=__doc__, epilog=EPILOG,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("source", help="a folder of images (name order = time order) or one image")
+    parser.add_argument("source", help="a folder of images (name order = time order, numbers in names compared as "
+                                       "numbers: frame_2 before frame_10) or one image")
     add_fov_options(parser)
     parser.add_argument("--frame-interval-s", type=float, default=0.1, help="time between frames (default 0.1 s)")
     parser.add_argument("--exposure-s", type=float, default=None, metavar="T",

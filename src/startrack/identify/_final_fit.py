@@ -53,9 +53,9 @@ length only, unless the field is wide (:data:`WIDE_FOV_DEG`)."""
 WIDE_FOV_DEG = 40.0
 MIN_STARS_FOR_K2 = 30
 """A lens that is not calibrated and spans at least WIDE_FOV_DEG along its long side (a phone, a
-webcam, a wide lens; a portrait image as a landscape one) is fitted with k1 at every round of the re-match, not only at the end (its
-far side is bent by tens of pixels, beyond the re-match radius of a pinhole fit), and with k2 as
-well once MIN_STARS_FOR_K2 stars are matched."""
+webcam, a wide lens; a portrait image as a landscape one) is fitted with k1 at every round of the
+re-match, not only at the end (its far side is bent by tens of pixels, beyond the re-match radius
+of a pinhole fit), and with k2 as well once MIN_STARS_FOR_K2 stars are matched."""
 
 MIN_STARS_FOR_ASPECT = 6
 """The pixel aspect (fy / fx), when not known, is fitted once this many stars are matched: from

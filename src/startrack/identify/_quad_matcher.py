@@ -326,8 +326,8 @@ def _index_levels(db: PatternDatabase, searches: list[_Search]) -> None:
 
 CONFIRM_K1_FOV_DEG = 25.0
 """The confirmation of a candidate from a lens that is not calibrated fits k1 when the nominal
-field is at least this wide along the image's long side (narrower, k1 is poorly determined by a few stars and moves them by
-less than the match radius)."""
+field is at least this wide along the image's long side (narrower, k1 is poorly determined by a
+few stars and moves them by less than the match radius)."""
 
 ASPECT_TOLERANCE = 0.005
 """A searched pixel aspect is tried in steps of twice this (relative), each trial's patterns
