@@ -68,3 +68,12 @@ def test_the_principal_point_and_aspect_are_recovered_with_their_sigmas(report):
     assert camera["fy"] / camera["fx"] == pytest.approx(TRUTH.fy / TRUTH.fx, abs=1e-4)  # ratio; sigma ~2e-5
     assert sigma["cx"] < 1.0 and sigma["cy"] < 1.0  # px
     assert camera["k1"] == pytest.approx(TRUTH.k1, abs=2e-3)  # dimensionless; sigma ~4e-4
+
+
+def test_an_image_given_twice_is_refused(tmp_path, monkeypatch):
+    """Before: its stars counted twice and every sigma came out too small by sqrt(2)."""
+    image = tmp_path / "a.fits"
+    image.write_bytes(b"")
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run("calibrate", str(image), "a.fits")
+    assert code == 2 and out == "" and "a.fits is given twice" in err, err

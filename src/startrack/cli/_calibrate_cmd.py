@@ -194,9 +194,22 @@ def _table(report: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _each_once(paths: list[str]) -> None:
+    """Refuse an image given twice (the same file under any name): its stars would count twice
+    in the fit and its sigmas come out too small by the square root of two."""
+    seen: dict[Path, str] = {}
+    for path in paths:
+        key = Path(path).resolve()
+        if key in seen:
+            raise InvalidInputError(f"{path} is given twice (also as {seen[key]}): each image may count once in "
+                                    "the fit")
+        seen[key] = path
+
+
 def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
     apply_max_pixels_option(args)
+    _each_once(args.images)
     report = _from_checkerboard(args) if args.checkerboard else _from_stars(args)
     if args.out and report["status"] == "ok":
         with atomic_path(args.out) as tmp:
