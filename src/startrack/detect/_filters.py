@@ -15,7 +15,7 @@ From Fowler 2013 §II.B ("Noise-removal techniques" 5-7) and Huffman 2006 §4.1:
   that sum in its peak; a hot pixel puts nearly all);
 * **clutter** -- the background's lower-half noise there is more than ``max_clutter`` times
   that of the clean sky (lit leaves, roof texture: structure, not stars; stars do not raise
-  the lower half);
+  the lower half); the clean sky is checked against a dark foreground (:func:`clutter_ok`);
 * **edge** -- the cluster's core (its pixels above the detection threshold) touches the image
   border, so part of the star may be cut off and the centroid pulled inwards; the detector
   keeps a small spot whose peak is inside (:func:`peak_away_from_edge`): a star whose centre is
@@ -97,11 +97,33 @@ def hot_pixel_ok(fraction: NDArray, max_peak_fraction: float | None) -> NDArray[
     return (fraction >= 0) & (fraction <= max_peak_fraction)
 
 
-def clutter_ok(clutter: NDArray, max_clutter: float | None) -> NDArray[np.bool_]:
-    """Clutter ratio of the background (see :mod:`._background`) at most ``max_clutter``
-    (no limit when None)."""
+QUIET_SPOTS_QUANTILE = 0.1
+"""The clutter filter's check of its reference (:func:`clutter_ok`): this quantile of the
+candidate spots' clutter ratios."""
+MIN_SPOTS_TO_CHECK = 5
+"""Fewest candidate spots for that check."""
+
+
+def clutter_ok(clutter: NDArray, max_clutter: float | None, candidates: NDArray[np.bool_] | None = None
+               ) -> NDArray[np.bool_]:
+    """Clutter ratio of the background (see :mod:`._background`) at most ``max_clutter`` (no
+    limit when None), shape (N,).
+
+    The ratio is relative to the quietest quarter of the frame's tiles, taken to be clean sky. A
+    dark, smooth foreground (a horizon, trees in silhouette) over a quarter of the frame or more is
+    quieter than the sky and holds no stars; relative to it, all of the sky looks cluttered. So
+    when even the quietest :data:`QUIET_SPOTS_QUANTILE` of the ``candidates`` (the spots that
+    pass the other filters, at least :data:`MIN_SPOTS_TO_CHECK`) lie above ``max_clutter``, the
+    ratios are taken relative to that quantile: the quietest tiles that hold spots are the sky.
+    """
     if max_clutter is None:
         return np.ones(clutter.shape, dtype=bool)
+    quiet = clutter[candidates] if candidates is not None else clutter
+    quiet = quiet[np.isfinite(quiet)]
+    if quiet.size >= MIN_SPOTS_TO_CHECK:
+        reference = float(np.quantile(quiet, QUIET_SPOTS_QUANTILE))
+        if reference > max_clutter:
+            return clutter <= max_clutter * reference
     return clutter <= max_clutter
 
 

@@ -335,7 +335,7 @@ def spot_filters(cfg: DetectionSettings, frame: Frame, regions: Regions, spots: 
     keep &= filters.elongation_ok(spots.elongation, cfg.max_elongation)
     keep &= filters.flatness_ok(spots.flatness, cfg.min_flatness)
     keep &= filters.hot_pixel_ok(fraction, cfg.max_peak_fraction)
-    keep &= filters.clutter_ok(frame.model.clutter_at(spots.peak_x, spots.peak_y), cfg.max_clutter)
+    keep &= filters.clutter_ok(frame.model.clutter_at(spots.peak_x, spots.peak_y), cfg.max_clutter, keep)
     if cfg.min_packing > 0:
         keep &= packing(regions) >= cfg.min_packing
     if cfg.smear_px is not None or cfg.max_axis_difference_px is not None:
