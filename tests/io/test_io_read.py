@@ -10,6 +10,7 @@ import pytest
 from astropy.io import fits
 from PIL import Image as PILImage
 
+from startrack.errors import ImageReadError
 from startrack.io import Image, read_image
 
 RNG = np.random.default_rng(20240611)
@@ -154,6 +155,22 @@ def test_fits_gzip(tmp_path):
     path = tmp_path / "image.fits.gz"
     fits.writeto(path, GREY16)
     np.testing.assert_array_equal(read_image(path).data, GREY16)
+
+
+@pytest.mark.parametrize(("inner", "held"), [("png", "PNG"), ("txt", "something other than FITS")])
+def test_a_gzip_file_of_something_else_than_fits_says_what_it_holds(tmp_path, inner, held):
+    """Before: 'not a readable FITS file (Empty or corrupt FITS file)' for a gzipped PNG or JPEG."""
+    import gzip
+
+    source = tmp_path / f"image.{inner}"
+    if inner == "png":
+        PILImage.fromarray(GREY16.astype(np.uint8)).save(source)
+    else:
+        source.write_text("x,y\n1,2\n")
+    path = tmp_path / f"image.{inner}.gz"
+    path.write_bytes(gzip.compress(source.read_bytes()))
+    with pytest.raises(ImageReadError, match=f"a gzip file holding {held}; only gzip-compressed FITS is read"):
+        read_image(path)
 
 
 # --- 16-bit colour TIFF, which Pillow would cut to 8 bits -------------------------------------

@@ -8,7 +8,9 @@ their native dtype and are never rescaled; colour is reduced to one channel by t
 
 from __future__ import annotations
 
+import gzip
 import os
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -24,9 +26,10 @@ from ._raster import identify_format, read_raster
 from ._targets import note_input
 
 SUPPORTED_FORMATS = ("FITS", "PNG", "JPEG", "TIFF", "HEIF")
+GZIP_MAGIC = b"\x1f\x8b"
 _SIGNATURES = {
     b"SIMPLE  =": "FITS",
-    b"\x1f\x8b": "FITS",  # gzip-compressed FITS (astropy decompresses it)
+    GZIP_MAGIC: "FITS",  # gzip-compressed FITS (astropy decompresses it)
     b"\x89PNG\r\n\x1a\n": "PNG",
     b"\xff\xd8\xff": "JPEG",
     b"II*\x00": "TIFF",
@@ -143,6 +146,8 @@ def _sniff(path: Path) -> str:
         raise ImageReadError(f"{path}: file is empty (0 bytes)")
     for signature, name in _SIGNATURES.items():
         if head.startswith(signature):
+            if signature == GZIP_MAGIC:
+                _check_gzip_holds_fits(path)
             return name
     if is_heif(head):
         return "HEIF"
@@ -155,6 +160,21 @@ def _sniff(path: Path) -> str:
         f"{path}: not an image file (no {', '.join(SUPPORTED_FORMATS)} signature; it starts "
         f"with {head[:12]!r})"
     )
+
+
+def _check_gzip_holds_fits(path: Path) -> None:
+    """Refuse a gzip file whose content is not FITS (a gzipped JPEG, say), naming what it holds;
+    a damaged gzip stream is left for the FITS reader to report."""
+    try:
+        with gzip.open(path, "rb") as fh:
+            inner = fh.read(16)
+    except (OSError, EOFError, zlib.error):
+        return
+    if inner.startswith(b"SIMPLE  =") or not inner:
+        return
+    held = next((name for signature, name in _SIGNATURES.items() if inner.startswith(signature)), None)
+    raise ImageReadError(f"{path}: a gzip file holding {held or 'something other than FITS'}; only gzip-compressed "
+                         "FITS is read: decompress it first (gunzip)")
 
 
 RAW_SUFFIXES = frozenset({".dng", ".cr2", ".cr3", ".nef", ".arw", ".raf", ".orf", ".rw2", ".pef", ".srw"})
