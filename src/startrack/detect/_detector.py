@@ -17,6 +17,7 @@ from ._blocks import detect_in_strips
 from ._details import DetectionDetails
 from ._pipeline import detect_frame
 from ._predictive import WindowDetections, measure_windows
+from ._prepare import pixel_array
 from ._settings import DetectionSettings
 
 
@@ -37,7 +38,8 @@ class StarDetector(DetectionSettings):
         Parameters
         ----------
         image : array_like, shape (H, W) or (H, W, C)
-            Raw counts, any integer or float dtype; NaN / inf pixels are ignored.
+            Raw counts, any integer or float dtype; NaN / inf pixels are ignored. A
+            :class:`startrack.io.Image` (or an astropy HDU) is taken for its ``.data``.
 
         Returns
         -------
@@ -54,7 +56,7 @@ class StarDetector(DetectionSettings):
     def detect_details(self, image: NDArray) -> DetectionDetails:
         """As :meth:`detect`, with the instrument magnitude, the spot shape, the PSF width and
         the threshold used (:class:`startrack.detect.DetectionDetails`)."""
-        array = np.asarray(image)
+        array = pixel_array(image)
         h, w = array.shape[:2] if array.ndim >= 2 else (0, 0)
         if h * w > self.max_block_px and array.ndim in (2, 3):
             return detect_in_strips(self, array)

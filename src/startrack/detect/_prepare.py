@@ -33,6 +33,14 @@ class PreparedImage:
     invalid: NDArray[np.bool_] | None
 
 
+def pixel_array(image: object) -> NDArray:
+    """``image`` as an array: the array ``.data`` of an object that holds its pixels so (a
+    :class:`startrack.io.Image`, an astropy HDU), else ``np.asarray(image)``."""
+    if not isinstance(image, np.ndarray) and isinstance(getattr(image, "data", None), np.ndarray):
+        return image.data  # type: ignore[attr-defined]
+    return np.asarray(image)
+
+
 def prepare_image(image: NDArray, channel: str | int | None = None) -> PreparedImage:
     """Check ``image``, reduce it to one channel, make float planes float32 with NaN for
     every non-finite pixel.
@@ -42,7 +50,9 @@ def prepare_image(image: NDArray, channel: str | int | None = None) -> PreparedI
     image : array_like, shape (H, W) or (H, W, C)
         uint8, uint16, any integer, bool, float32 or float64, in either byte order (the
         big-endian arrays of FITS files are converted). Colour images are reduced by
-        :func:`startrack.detect._channels.to_single_channel` (R + G + B by default).
+        :func:`startrack.detect._channels.to_single_channel` (R + G + B by default). An object
+        that holds its pixels as an array ``.data`` (a :class:`startrack.io.Image`, an astropy
+        HDU) is taken for them.
     channel : {None, "r", "g", "b", 0, 1, 2}
         Plane of a colour image to use instead of R + G + B (by name or index).
 
@@ -55,7 +65,7 @@ def prepare_image(image: NDArray, channel: str | int | None = None) -> PreparedI
     InvalidInputError
         Not 2-D / 3-D, a side shorter than 2 px, empty, not numeric, or no finite pixel.
     """
-    array = np.asarray(image)
+    array = pixel_array(image)
     if not array.dtype.isnative:  # big-endian data (astropy.io.fits.getdata's): in native order
         array = array.astype(array.dtype.newbyteorder("="))
     if array.dtype == np.bool_:
