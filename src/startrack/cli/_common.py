@@ -81,6 +81,30 @@ def add_method_option(parser: argparse.ArgumentParser) -> None:
                              "see docs/identification.md")
 
 
+def add_timeout_option(parser: argparse.ArgumentParser) -> None:
+    """--timeout-s: the lost-in-space search's time limit (the matcher's option ``timeout_s``)."""
+    parser.add_argument("--timeout-s", type=float, metavar="S",
+                        help="give up the lost-in-space search after S seconds of wall time (default 5; raise it "
+                             "on a slow or busy machine, or for lists full of spots that are not stars)")
+
+
+def method_kwargs(args: argparse.Namespace) -> dict[str, Any]:
+    """``method`` (and ``options`` when --timeout-s is given) for solve_image / solve_stars.
+
+    Raises
+    ------
+    InvalidInputError
+        A --timeout-s that is not a positive finite number of seconds.
+    """
+    if getattr(args, "timeout_s", None) is None:
+        return {"method": args.method}
+    from ..identify import options_for
+
+    if not args.timeout_s > 0:  # NaN and infinities are refused with every float option
+        raise InvalidInputError(f"--timeout-s must be a positive number of seconds, got {args.timeout_s:g}")
+    return {"method": args.method, "options": options_for(args.method, timeout_s=args.timeout_s)}
+
+
 def add_epoch_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--epoch", type=float, metavar="YEAR",
                         help="catalog epoch as a Julian year, e.g. 2025.5 (default 2000.0)")

@@ -28,8 +28,10 @@ from ._common import (
     add_fov_options,
     add_max_pixels_option,
     add_method_option,
+    add_timeout_option,
     apply_max_pixels_option,
     fov_kwargs,
+    method_kwargs,
     report,
     utc_offset_hours,
 )
@@ -45,6 +47,7 @@ def _parser() -> argparse.ArgumentParser:
                         help="FITS, PNG, JPEG or TIFF file; several files or folders for a batch")
     add_fov_options(parser)
     add_method_option(parser)
+    add_timeout_option(parser)
     parser.add_argument("--channel", choices=("r", "g", "b"),
                         help="colour channel to use (default: the mean of R, G and B)")
     add_epoch_option(parser)
@@ -89,7 +92,7 @@ def _site(args):
 def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
     apply_max_pixels_option(args)
-    solver_options = {**fov_kwargs(args), "epoch": solver_epoch(args), "method": args.method,
+    solver_options = {**fov_kwargs(args), "epoch": solver_epoch(args), **method_kwargs(args),
                       "pixel_aspect": aspect_option(args), "parity": args.parity, "guided": args.guided}
     fov_options = {key: solver_options[key] for key in ("fov_deg", "fov_range_deg", "camera")}
     if is_batch(args.image, args.csv):

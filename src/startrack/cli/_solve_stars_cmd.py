@@ -23,9 +23,11 @@ from ._common import (
     add_fov_options,
     add_max_pixels_option,
     add_method_option,
+    add_timeout_option,
     apply_max_pixels_option,
     epoch_option,
     fov_kwargs,
+    method_kwargs,
     positive_int,
     report,
 )
@@ -40,6 +42,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--height", type=positive_int, metavar="H", help="image height in pixels")
     add_fov_options(parser)
     add_method_option(parser)
+    add_timeout_option(parser)
     add_epoch_option(parser)
     add_aspect_option(parser)
     add_parity_option(parser, "normal")
@@ -91,7 +94,7 @@ def main(argv: list[str]) -> int:
     if args.camera is None and (args.width is None or args.height is None):
         parser.error("--width and --height are required unless --camera gives them")
     apply_max_pixels_option(args)
-    solver_options = {**fov_kwargs(args), "epoch": solver_epoch(args), "method": args.method,
+    solver_options = {**fov_kwargs(args), "epoch": solver_epoch(args), **method_kwargs(args),
                       "pixel_aspect": aspect_option(args), "parity": args.parity}
     _check_size(args, solver_options["camera"])
     stars = read_star_list(args.starlist)
