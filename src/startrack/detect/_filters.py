@@ -150,7 +150,8 @@ def clutter_ok(clutter: NDArray, max_clutter: float | None, candidates: NDArray[
         return np.ones(clutter.shape, dtype=bool)
     quiet = clutter[candidates] if candidates is not None else clutter
     quiet = quiet[np.isfinite(quiet)]
-    if quiet.size >= MIN_SPOTS_TO_CHECK:
+    above = np.count_nonzero(quiet > max_clutter)  # the quantile can exceed the limit only if most do
+    if quiet.size >= MIN_SPOTS_TO_CHECK and above >= (1 - QUIET_SPOTS_QUANTILE) * quiet.size:
         reference = float(np.quantile(quiet, QUIET_SPOTS_QUANTILE))
         if reference > max_clutter:
             return clutter <= max_clutter * reference
