@@ -159,3 +159,15 @@ def test_misuse_names_the_head():
     with pytest.raises(InvalidInputError, match="method must be one of quads, pyramid, .*van-bezooijen, got 'overlay'"):
         solve_rig({"a": star}, rig, method="overlay")  # needs a prior attitude, which a rig's lost-in-space has not
     assert "overlay" not in RIG_METHODS and set(RIG_METHODS) | {"overlay"} == set(typing.get_args(MethodName))
+
+
+def test_two_heads_that_agree_outvote_the_reference_head():
+    """Head a (the reference) given the stars of another pointing (a list given to the wrong head):
+    before, the rig followed it and called the two agreeing heads inconsistent, degrees off."""
+    rig, rng = three_heads(), np.random.default_rng(5)
+    truth = random_rotations(None, rng)
+    stars = lists_at(rig, truth, rng)
+    stars["a"] = lists_at(rig, Rotation.from_euler("y", 40.0, degrees=True) * truth, rng)["a"]
+    sol = solve_rig(stars, rig)
+    assert sol.solved and sol.inconsistent_heads == ("a",), sol.inconsistent_heads
+    assert (truth * sol.rot_body_from_icrs.inv()).magnitude() < CORRECT

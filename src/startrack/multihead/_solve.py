@@ -12,8 +12,9 @@
    and noise estimates.
 4. **Consistency.** A head whose stars the prediction did not find, or found less than half of
    (a wrong mounting moves them out of the windows), is identified on its own if it can be. Every
-   head with its own solution is compared, through its mounting, with an *anchor* (the rig's
-   reference head when it has its own solution, else the head with the most matched stars): a
+   head with its own solution is compared, through its mounting, with an *anchor* (the head that
+   the most other heads agree with; among equals the rig's reference head, then the head with the
+   most matched stars): a
    chi-square above :attr:`RigOptions.consistency_chi2` marks the head inconsistent; it is left
    out and the rig is solved again from the anchor. ``consistency_deg`` is the largest angle
    between a head's own solution and the joint one.
@@ -267,14 +268,19 @@ def _own_solutions(work: _Work, matches: dict[str, HeadMatch], false_match_prob:
     return own
 
 
-def _anchor(rig: CameraRig, own: dict[str, AttitudeSolution]) -> str | None:
-    """The reference head if it has its own solution, else the head with the most matched stars."""
+def _anchor(rig: CameraRig, own: dict[str, AttitudeSolution], chi2_max: float) -> str | None:
+    """The head with its own solution that the most other heads agree with (by chi-square), the
+    reference head first among equals, then the head with the most matched stars: a head given
+    another head's stars, or a wrong mounting, is outvoted when two others agree."""
     solved = [n for n, s in own.items() if s.solved]
     if not solved:
         return None
-    if rig.reference in solved:
-        return rig.reference
-    return max(solved, key=lambda n: len(own[n].matches))
+
+    def standing(name: str) -> tuple[int, bool, int]:
+        agree = len(solved) - 1 - len(_disagreeing(rig, own, name, chi2_max))
+        return agree, name == rig.reference, len(own[name].matches)
+
+    return max(solved, key=standing)
 
 
 def _disagreeing(rig: CameraRig, own: dict[str, AttitudeSolution], anchor: str, chi2_max: float) -> set[str]:
@@ -296,7 +302,7 @@ def _settled(work: _Work, rig: CameraRig, seed: _Seed) -> RigSolution:
     for _ in range(len(rig)):
         matches, fit, sigma = _refined(work, rot, cov, [n for n in work.stars if n not in excluded])
         own = _own_solutions(work, matches, seed.false_match_prob)
-        anchor = _anchor(rig, own)
+        anchor = _anchor(rig, own, work.options.consistency_chi2)
         if anchor is None:
             break
         new = _disagreeing(rig, own, anchor, work.options.consistency_chi2) - excluded
