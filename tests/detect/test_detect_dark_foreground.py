@@ -36,3 +36,22 @@ def test_the_stars_above_a_dark_foreground_are_found(ground_fraction):
     near = (distance < 1.0).any(axis=1)  # px
     assert near.mean() >= 0.9, f"{near.sum()} of {x.size} stars found"
     assert (~(distance < 1.0).any(axis=0)).sum() <= 2  # detections that are no star (the horizon's edge)
+
+
+def test_spots_of_a_lit_textured_foreground_are_still_refused():
+    """The check above must not undo the clutter filter where it is needed: lit leaves or a roof
+    over two thirds of the frame, hundreds of bright round spots on them, a dozen stars above."""
+    from scipy import ndimage
+
+    rng = np.random.default_rng(1)
+    horizon = int(SHAPE[0] * 0.35)
+    x, y = rng.uniform(20, SHAPE[1] - 20, 12), rng.uniform(20, horizon - 20, 12)
+    mean = render_gaussian_psf(SHAPE, x, y, np.exp(rng.uniform(np.log(3e3), np.log(2e4), 12)), 1.3) + SKY_E
+    texture = ndimage.gaussian_filter(rng.normal(size=SHAPE), 2.0)
+    mean[horizon:] += 150.0 * texture[horizon:] / texture.std() + 300.0  # e-
+    bx, by = rng.uniform(10, SHAPE[1] - 10, 600), rng.uniform(horizon + 10, SHAPE[0] - 10, 600)
+    mean += render_gaussian_psf(SHAPE, bx, by, np.exp(rng.uniform(np.log(3e4), np.log(2e5), 600)), 1.3)
+    image = np.clip(np.rint(rng.poisson(np.clip(mean, 0, None)) + rng.normal(0, 3, SHAPE)), 0, 65535).astype(np.uint16)
+    found = detect(image)
+    assert (found.y > horizon).sum() <= 2  # spots on the foreground (485 with the filter off)
+    assert (np.hypot(x[:, None] - found.x[None], y[:, None] - found.y[None]) < 1.0).any(axis=1).all()  # px

@@ -128,10 +128,12 @@ def hot_pixel_ok(fraction: NDArray, max_peak_fraction: float | None) -> NDArray[
 
 
 QUIET_SPOTS_QUANTILE = 0.1
-"""The clutter filter's check of its reference (:func:`clutter_ok`): this quantile of the
-candidate spots' clutter ratios."""
+"""The clutter filter's new reference (:func:`clutter_ok`): this quantile of the candidate spots'
+clutter ratios."""
 MIN_SPOTS_TO_CHECK = 5
-"""Fewest candidate spots for that check."""
+"""Fewest candidate spots for the clutter filter's check of its reference."""
+MAX_QUIET_SPOTS = 2
+"""Most candidate spots at or below ``max_clutter`` for that check to find the reference wrong."""
 
 
 def clutter_ok(clutter: NDArray, max_clutter: float | None, candidates: NDArray[np.bool_] | None = None
@@ -141,17 +143,19 @@ def clutter_ok(clutter: NDArray, max_clutter: float | None, candidates: NDArray[
 
     The ratio is relative to the quietest quarter of the frame's tiles, taken to be clean sky. A
     dark, smooth foreground (a horizon, trees in silhouette) over a quarter of the frame or more is
-    quieter than the sky and holds no stars; relative to it, all of the sky looks cluttered. So
-    when even the quietest :data:`QUIET_SPOTS_QUANTILE` of the ``candidates`` (the spots that
-    pass the other filters, at least :data:`MIN_SPOTS_TO_CHECK`) lie above ``max_clutter``, the
-    ratios are taken relative to that quantile: the quietest tiles that hold spots are the sky.
+    quieter than the sky and holds no stars; relative to it, all of the sky looks cluttered and no
+    star passes. So when at least :data:`MIN_SPOTS_TO_CHECK` ``candidates`` (the spots that pass
+    the other filters) are found and at most :data:`MAX_QUIET_SPOTS` of them lie at or below
+    ``max_clutter``, the ratios are taken relative to the :data:`QUIET_SPOTS_QUANTILE` of the
+    candidates' (when that is above the limit): the quietest tiles that hold spots are the sky. A
+    frame whose sky shows a few stars at a ratio near 1 keeps its reference, however many spots
+    lit leaves or a roof add.
     """
     if max_clutter is None:
         return np.ones(clutter.shape, dtype=bool)
     quiet = clutter[candidates] if candidates is not None else clutter
     quiet = quiet[np.isfinite(quiet)]
-    above = np.count_nonzero(quiet > max_clutter)  # the quantile can exceed the limit only if most do
-    if quiet.size >= MIN_SPOTS_TO_CHECK and above >= (1 - QUIET_SPOTS_QUANTILE) * quiet.size:
+    if quiet.size >= MIN_SPOTS_TO_CHECK and np.count_nonzero(quiet <= max_clutter) <= MAX_QUIET_SPOTS:
         reference = float(np.quantile(quiet, QUIET_SPOTS_QUANTILE))
         if reference > max_clutter:
             return clutter <= max_clutter * reference
