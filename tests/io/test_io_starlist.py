@@ -65,6 +65,8 @@ def test_missing_file(tmp_path):
     "x_px,y_px,intensity # pixels\n1.5,2.25,100\n-0.5,3,2e3 # a note\n",  # a unit in the names, comments after
     "id,xcentroid,ycentroid,flux,sharpness\n1,1.5,2.25,100,0.5\n2,-0.5,3,2000,0.6\n",  # photutils' names
     "col,row,counts\r\n1.5,2.25,100\r\n-0.5,3,2000\r\n",  # a pixel grid's names, Windows line ends
+    "# x;y;flux\n1,5;2,25;100\n-0,5;3;2000\n",  # a commented header, semicolons and decimal commas
+    'x,y,name,flux\n1.5,2.25,"HIP #5",100\n-0.5,3,"Vega",2000\n',  # a quoted '#' is no comment
 ])
 def test_the_csv_forms_people_write_read_the_same(tmp_path, text):
     """Before: each of these was refused (a separator other than a comma, other column names) or,

@@ -97,7 +97,7 @@ def _rows(path: Path) -> tuple[list[str], list[tuple[int, list[str]]]]:
         raise InvalidInputError(f"star list {path} is empty: expected a header row with x, y")
     texts = [text for _, text in lines]
     numbered = lines
-    if comment_header and is_numeric_row(split_rows(texts[:1], separator_of(texts[0]))[0]):
+    if comment_header and is_numeric_row(split_rows(texts[:1], separator_of(comment_header))[0]):
         texts, numbered = [comment_header, *texts], [(0, comment_header), *lines]  # "# x y flux", then numbers
     separator = separator_of(texts[0])
     try:

@@ -4,7 +4,8 @@ people write by hand, export from a spreadsheet or get from another program.
 * The separator is the header row's: a comma, else a tab, else a semicolon, else runs of blanks
   (``x y flux``). With a tab or a semicolon, a number's decimal comma (``12,5``, as a spreadsheet
   in many locales writes it) is read as a point.
-* ``#`` starts a comment, on a line of its own or after the fields of a row (``x,y,flux # px``).
+* ``#`` starts a comment, on a line of its own or after the fields of a row (``x,y,flux # px``);
+  a field that holds one is quoted (``"HIP #5"``).
 * A header written as a comment (``# x y flux``, as some programs write it) is taken as the header
   when the first row that is not a comment holds only numbers.
 """
@@ -21,8 +22,17 @@ DECIMAL_COMMA_SEPARATORS = ("\t", ";")
 
 
 def without_comment(line: str) -> str:
-    """``line`` up to its first ``#`` (the whole line when it has none)."""
-    return line.split("#", 1)[0]
+    """``line`` up to its first ``#`` outside double quotes (the whole line when it has none):
+    a quoted field may hold one (``"HIP #5"``)."""
+    if '"' not in line:
+        return line.split("#", 1)[0]
+    quoted = False
+    for k, char in enumerate(line):
+        if char == '"':
+            quoted = not quoted
+        elif char == "#" and not quoted:
+            return line[:k]
+    return line
 
 
 def separator_of(header: str) -> str | None:
