@@ -33,6 +33,15 @@ def test_an_image_without_background_noise_gives_a_rate():
     np.testing.assert_allclose(result.rate.omega_rad_s, OMEGA, atol=0.01 * 0.05)  # rad/s: 1 % of the rate
 
 
+def test_a_zero_prior_rate_orders_nothing_as_no_prior():
+    """A tracker at rest passes its zero rate as the prior: found in review to raise."""
+    scene = _scene()
+    without = streak_rate(scene.image, CAMERA, EXPOSURE)
+    zero = streak_rate(scene.image, CAMERA, EXPOSURE, prior_omega_rad_s=np.zeros(3))
+    assert zero.rate.ok and without.rate.ok
+    np.testing.assert_array_equal(zero.rate.omega_rad_s, without.rate.omega_rad_s)
+
+
 def test_the_segment_fit_reports_a_region_it_cannot_fit():
     roi = np.zeros((20, 20))
     roi[10, 5:15] = 100.0
@@ -46,7 +55,6 @@ def test_the_segment_fit_reports_a_region_it_cannot_fit():
     ({"bias_px": np.nan}, "bias_px"),
     ({"bias_px": np.inf}, "bias_px"),
     ({"prior_omega_rad_s": [np.nan, 0.0, 0.0]}, "prior_omega_rad_s"),
-    ({"prior_omega_rad_s": [0.0, 0.0, 0.0]}, "prior_omega_rad_s"),
     ({"prior_omega_rad_s": [0.1, 0.0]}, "prior_omega_rad_s"),
     ({"endpoint_sigma_px": -1.0}, "endpoint_sigma_px"),
 ])

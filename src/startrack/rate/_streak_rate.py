@@ -45,6 +45,7 @@ from ._grouping import CentreOfRotation, centre_of_rotation, group_endpoints
 from ._rso import RsoIndicators, rso_indicators
 from ._segment_fit import BAND_PX, fit_segment
 from ._streak_detect import StreakRegion, find_streaks, median_length_px
+from ._streak_find import ROUNDING_SIGMA
 from ._trust import MAX_RELATIVE_UNCERTAINTY, consensus_tolerance_px, consistency, rate_covariance
 
 MIN_STREAK_FRACTION = 0.10
@@ -88,7 +89,7 @@ BLUR_TOLERANCE = 0.35
 """Largest relative difference of a streak's fitted blur from the median (one PSF for all)."""
 CHI2_FACTOR = 3.0
 """Largest chi-square per pixel of a segment fit relative to the median (crossing streaks)."""
-NOISE_FLOOR = 1.0 / np.sqrt(12.0)
+NOISE_FLOOR = ROUNDING_SIGMA
 """Least per-pixel noise (counts) the segment fit assumes: the quantisation noise of one count, for
 images whose background has no measurable noise (simulated without noise, or clipped at zero)."""
 
@@ -286,15 +287,14 @@ def _check_bias(bias_px: float | EndpointBias) -> float | EndpointBias:
 
 
 def _check_rate_inputs(exposure_s: float, prior: ArrayLike | None, k_sigma: float, endpoint_sigma_px) -> None:
-    """Refuse a non-positive or non-finite exposure, a prior rate that is not a finite non-zero
-    vector (3,), and non-positive thresholds."""
+    """Refuse a non-positive or non-finite exposure, a prior rate that is not a finite vector (3,),
+    and non-positive thresholds."""
     if not (is_real_number(exposure_s) and np.isfinite(exposure_s) and exposure_s > 0):
         raise InvalidInputError(f"exposure_s must be a positive, finite number of seconds, got {exposure_s!r}")
     if prior is not None:
         w = np.asarray(prior, dtype=float)
-        if w.shape != (3,) or not np.all(np.isfinite(w)) or not np.any(w):
-            raise InvalidInputError(f"prior_omega_rad_s must be a finite, non-zero rate of shape (3,) rad/s, "
-                                    f"got {prior!r}")
+        if w.shape != (3,) or not np.all(np.isfinite(w)):
+            raise InvalidInputError(f"prior_omega_rad_s must be a finite rate of shape (3,) rad/s, got {prior!r}")
     if not (is_real_number(k_sigma) and np.isfinite(k_sigma) and k_sigma > 0):
         raise InvalidInputError(f"k_sigma must be a positive number, got {k_sigma!r}")
     if endpoint_sigma_px is not None and not (is_real_number(endpoint_sigma_px) and 0 < endpoint_sigma_px < np.inf):
@@ -303,8 +303,9 @@ def _check_rate_inputs(exposure_s: float, prior: ArrayLike | None, k_sigma: floa
 
 
 def _ordered(omega: NDArray, prior: ArrayLike | None) -> tuple[bool, bool]:
-    """(swap the groups?, order known?) from the A -> B rate and an optional prior rate."""
-    if prior is None:
+    """(swap the groups?, order known?) from the A -> B rate and an optional prior rate (a zero
+    prior, as a tracker at rest passes, orders nothing)."""
+    if prior is None or not np.any(prior):
         return False, False
     return bool(np.dot(omega, np.asarray(prior, dtype=float)) < 0), True
 
@@ -339,7 +340,8 @@ def streak_rate(
     detector, bias_px : EndpointMethod, float
         Endpoint detector and its calibrated bias (:mod:`._endpoints`).
     prior_omega_rad_s : array_like, shape (3,), optional
-        A rough rate of the right sign, to order the two ends in time.
+        A rough rate of the right sign, to order the two ends in time (zero: the order is not
+        known, as without one).
     k_sigma, endpoint_sigma_px : float
         Outlier threshold and the endpoint precision (px) that sets the floors of the OLAE
         rejection and of the RSO indicators; None takes the measurement's median end precision
