@@ -243,15 +243,16 @@ def test_a_scheduler_that_answers_after_the_wait_leaves_no_client_open(monkeypat
     from startrack.analysis.campaign import _engine as engine
 
     monkeypatch.setattr(engine, "CONNECT_S", 0.1)
-    closed = threading.Event()
+    closed, answer = threading.Event(), threading.Event()
 
     class Late:
         def __init__(self, address, timeout):
-            time.sleep(engine.CONNECT_S + 5.5)  # s: past the caller's wait (CONNECT_S + 5 s)
+            answer.wait(60.0)  # s: connects only once the caller has given up (below)
 
         def close(self) -> None:
             closed.set()
 
     with pytest.raises(InvalidInputError, match="no Dask scheduler answered"):
         engine._scheduler_client(Late, "tcp://127.0.0.1:1")
+    answer.set()
     assert closed.wait(timeout=10.0)  # s: the late client is closed as soon as it exists
