@@ -49,18 +49,21 @@ def normalize(v: ArrayLike) -> NDArray[np.float64]:
 
 
 def checked_unit_vectors(vectors: ArrayLike, name: str, shape: str = "(N, 3)") -> NDArray[np.float64]:
-    """``vectors`` (N, 3) (or (3,) where ``shape`` says so) scaled to unit length, after checking
-    that they are finite and non-zero; an InvalidInputError naming ``name`` and ``shape`` if not
-    (pixel positions (N, 2) given for directions, a NaN row)."""
+    """``vectors`` scaled to unit length, after checking that they have ``shape`` ("(3,)" for one
+    vector, anything else such as "(N, 3)" for rows) and are finite and non-zero; an
+    InvalidInputError naming ``name`` and what is wrong otherwise (pixel positions (N, 2) given for
+    directions, a NaN row)."""
+    one = shape == "(3,)"
     try:
         v = np.asarray(vectors, dtype=float)
     except (TypeError, ValueError):
-        raise InvalidInputError(f"{name} must be finite non-zero vectors of shape {shape}, got {vectors!r:.80}") \
-            from None
-    norms = np.linalg.norm(v, axis=-1) if v.ndim in (1, 2) and v.shape[-1] == 3 else None
-    if norms is None or (shape == "(N, 3)" and v.ndim != 2) or not np.all(np.isfinite(norms)) or np.any(norms == 0):
-        raise InvalidInputError(f"{name} must be finite non-zero vectors of shape {shape}, got shape {v.shape}"
-                                + ("" if norms is None else " with a NaN, infinite or zero row"))
+        raise InvalidInputError(f"{name} must be vectors of shape {shape}, got {vectors!r:.80}") from None
+    if v.shape != (3,) if one else (v.ndim != 2 or v.shape[1] != 3):
+        raise InvalidInputError(f"{name} must be vectors of shape {shape}, got shape {v.shape}")
+    norms = np.linalg.norm(v, axis=-1)
+    if not (np.all(np.isfinite(norms)) and np.all(norms > 0)):
+        raise InvalidInputError(f"{name} must be finite, non-zero vectors (a NaN, infinite or zero "
+                                f"{'vector' if one else 'row'} was given)")
     return v / norms[..., None]
 
 

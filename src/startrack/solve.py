@@ -92,24 +92,25 @@ def _run(problem: SolveRequest, method: MethodName, options: MatcherOptionsBase 
     t0 = time.perf_counter()
     outcome = matcher(options)
     if outcome.candidate is None:
-        reason = outcome.reason + (_no_match_hints(problem) if outcome.status is Status.NO_MATCH else "")
+        reason = outcome.reason + (_no_match_hints(problem, method) if outcome.status is Status.NO_MATCH else "")
         return AttitudeSolution(status=outcome.status, reason=reason, solve_time_s=time.perf_counter() - t0,
                                 epoch_jyear=problem.epoch.jyear, epoch_source=problem.epoch.source)
     return _solution(problem, stars, outcome.candidate, t0)
 
 
-def _no_match_hints(problem: SolveRequest) -> str:
+def _no_match_hints(problem: SolveRequest, method: MethodName) -> str:
     """What a search that found nothing took as known that the user may have got wrong, for its
-    reason: a calibrated camera or a field of view given (searched within ``FOV_DEG_TOLERANCE``),
-    and the image's parity."""
+    reason: a calibrated camera or a field of view given (searched within ``FOV_DEG_TOLERANCE``:
+    a range of exactly that span), and, for the matcher that can search mirror images, the
+    image's parity."""
     hints = []
     lo, hi = problem.fov_range_deg
     if problem.focal_range is None:
         hints.append("the camera's focal length was taken as calibrated")
-    elif hi <= lo * (1 + FOV_DEG_TOLERANCE) / (1 - FOV_DEG_TOLERANCE) * (1 + 1e-9):  # a field of view given
+    elif math.isclose(hi / lo, (1 + FOV_DEG_TOLERANCE) / (1 - FOV_DEG_TOLERANCE), rel_tol=1e-9):
         hints.append(f"the field of view was searched within {FOV_DEG_TOLERANCE:.0%} of the one given; if it is "
                      "less sure, give a range or none")
-    if problem.parity == "normal":
+    if problem.parity == "normal" and method == "quads":
         hints.append("a mirror image (flipped, or y up) needs parity 'either'")
     return "".join(f"; {hint}" for hint in hints)
 

@@ -40,3 +40,21 @@ def test_a_mirror_search_that_fails_does_not_point_at_parity():
     x, y = _star_list()
     solution = solve_stars(x, y, width=1024, height=1024, fov_range_deg=(11.0, 12.0), parity="either")
     assert solution.status is Status.NO_MATCH and "parity" not in solution.reason, solution.reason
+
+
+def test_a_narrow_range_is_not_taken_for_a_field_of_view_given():
+    """Found in review: a range of (11, 11.5) deg was reported as a field of view given."""
+    x, y = _star_list()
+    solution = solve_stars(x, y, width=1024, height=1024, fov_range_deg=(11.0, 11.5))
+    assert solution.status is Status.NO_MATCH and FOV_HINT not in solution.reason, solution.reason
+
+
+@pytest.mark.parametrize(("method", "offered"), [("quads", True), ("pyramid", False), ("angle", False)])
+def test_parity_is_offered_only_by_the_matcher_that_can_search_mirror_images(method, offered):
+    """Found in review: the other matchers refuse parity 'either', which the hint proposed."""
+    from types import SimpleNamespace
+
+    from startrack.solve import _no_match_hints
+
+    request = SimpleNamespace(fov_range_deg=(11.0, 12.0), focal_range=(1.0, 2.0), parity="normal")
+    assert (PARITY_HINT in _no_match_hints(request, method)) is offered
