@@ -168,3 +168,22 @@ def test_residual_magnification_and_grid_spacing_are_round():
 def test_a_refused_job_options_file_is_plain_json(auto_job):
     meta = json.loads((auto_job / "job.json").read_text())
     assert meta["options"]["detection_preset"] == "auto" and meta["options"]["fit_camera"] is True
+
+
+def test_pairs_of_hot_pixels_are_named_as_hot_where_hot_pixels_abound():
+    """The detector refuses two hot pixels side by side where single ones abound; the list of
+    refused spots names them so (before: "another filter")."""
+    rng = np.random.default_rng(1)
+    image = rng.normal(100.0, 3.0, (300, 300))
+    cells = rng.permutation(np.stack(np.mgrid[1:14, 1:14], -1).reshape(-1, 2))[:45] * 20 + 10  # px, apart
+    for y, x in cells[:40]:
+        image[y, x] += 3000.0  # single hot pixels
+    pairs = cells[40:]
+    for y, x in pairs:
+        image[y, x] += 3000.0
+        image[y, x + 1] += 2900.0  # its neighbour
+    detector = StarDetector()
+    refused = rejected_spots(image, detector, detector.detect(image))
+    found = {(round(x), round(y)): c for x, y, c in zip(refused["x"], refused["y"], refused["category"], strict=True)}
+    named = [c for (x, y), c in found.items() if any(abs(y - py) <= 1 and abs(x - px - 0.5) <= 1 for py, px in pairs)]
+    assert named and all(c == "hot pixel" for c in named), found

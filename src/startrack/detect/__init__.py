@@ -44,7 +44,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._denoise import stack_frames
     from ._details import DetectionDetails
     from ._detector import StarDetector, detect
-    from ._filters import peak_fraction
+    from ._filters import hot_pixel_ok, hot_pixels_abound, peak_fraction
     from ._fine_pass import MAX_RING_NOISE, fine_significance, quiet_surroundings, ring_noise_ratio, stands_above_ring
     from ._magnitude import calibrate_zero_point, instrument_magnitude
     from ._pipeline import background_model, noise_floor, preprocess
@@ -73,6 +73,8 @@ __all__ = [
     "extract_windows",
     "fine_significance",
     "flux_for_snr",
+    "hot_pixel_ok",
+    "hot_pixels_abound",
     "instrument_magnitude",
     "integrated_snr",
     "low_side_clipped",

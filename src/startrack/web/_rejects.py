@@ -6,7 +6,9 @@ with the same settings but every spot filter off (:data:`RELAXED`); each spot of
 is not one of the kept detections (no kept centroid within :data:`SAME_SPOT_PX`) was refused by a
 filter, and the first filter it fails, in the detector's order, is given as its reason, from the
 spot's own measurements and the filters of :mod:`startrack.detect._filters`: area, elongation,
-edge, hot pixel (peak fraction of the 3 x 3 sum), peak SNR. The clutter test needs the local
+edge, hot pixel (peak fraction of the 3 x 3 sum; where single hot pixels outnumber the other
+spots, as the detector judges it, also two side by side: their share of the sum, squared), peak
+SNR. The clutter test needs the local
 background model that only the detector sees, so the spots left are detected once more with only
 that filter on: those it drops are "clutter". A spot that passes all of those was refused by
 packing or the smear-shape test: "another filter (packing or shape)".
@@ -20,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..detect import StarDetector, peak_fraction
+from ..detect import StarDetector, hot_pixel_ok, hot_pixels_abound, peak_fraction
 from ..results import Detections
 
 RELAXED: dict[str, Any] = {"min_area_px": 1, "max_area_px": None, "max_elongation": None, "max_peak_fraction": None,
@@ -53,7 +55,7 @@ def rejected_spots(image: NDArray, detector: StarDetector, kept: Detections) -> 
     spots = replace(detector, **RELAXED).detect(image)
     refused = _not_kept(spots, kept)[:MAX_REJECTS]
     spots = spots.take(refused)
-    fraction = _peak_fraction(image, spots)
+    fraction = _peak_fraction(image, spots, detector.max_peak_fraction)
     reasons = [_reason(detector, spots, i, fraction[i], image.shape) for i in range(len(spots))]
     reasons = _clutter(image, detector, spots, reasons)
     out: dict[str, list] = {k: [] for k in ("x", "y", "area_px", "peak", "elongation", "category", "reason")}
@@ -92,15 +94,20 @@ def _not_kept(spots: Detections, kept: Detections) -> NDArray[np.int64]:
     return np.flatnonzero(nearest > SAME_SPOT_PX**2)
 
 
-def _peak_fraction(image: NDArray, spots: Detections) -> NDArray[np.float64]:
-    """Peak over 3 x 3 sum at the pixel nearest each centroid (the hot-pixel test's measure)."""
+def _peak_fraction(image: NDArray, spots: Detections, limit: float | None) -> NDArray[np.float64]:
+    """The hot-pixel test's measure at the pixel nearest each centroid: the peak over the 3 x 3
+    sum, or with pairs where the spots over ``limit`` outnumber the rest (at least
+    ``HOT_PIXELS_ABOUND``), as the detector decides (:func:`startrack.detect.peak_fraction`)."""
     if len(spots) == 0:
         return np.zeros(0)
     h, w = image.shape
     px = np.clip(np.rint(spots.x).astype(np.int64), 0, w - 1)
     py = np.clip(np.rint(spots.y).astype(np.int64), 0, h - 1)
     level = np.full(len(spots), spots.background)
-    return peak_fraction(np.asarray(image, dtype=np.float64), level, px, py)
+    pixels = np.asarray(image, dtype=np.float64)
+    single = peak_fraction(pixels, level, px, py)
+    hot = ~hot_pixel_ok(single, limit)
+    return peak_fraction(pixels, level, px, py, pairs=True) if hot_pixels_abound(hot, ~hot) else single
 
 
 def _reason(cfg: StarDetector, spots: Detections, i: int, fraction: float, shape: tuple[int, int]) -> tuple[str, str]:
@@ -116,7 +123,8 @@ def _reason(cfg: StarDetector, spots: Detections, i: int, fraction: float, shape
     if cfg.reject_edge and (x < EDGE_PX or y < EDGE_PX or x > w - 1 - EDGE_PX or y > h - 1 - EDGE_PX):
         return "edge", "touches the image edge"
     if cfg.max_peak_fraction is not None and not (0 <= fraction <= cfg.max_peak_fraction):
-        return "hot pixel", f"hot pixel: peak is {fraction:.2f} of its 3 x 3 sum (> {cfg.max_peak_fraction:g})"
+        return "hot pixel", (f"hot pixel (or two side by side): {fraction:.2f} of its 3 x 3 sum "
+                             f"(> {cfg.max_peak_fraction:g})")
     snr = float(spots.peak[i]) / spots.noise if spots.noise > 0 else np.inf
     if snr < cfg.min_peak_snr:
         return "peak SNR", f"peak SNR {snr:.1f} < min_peak_snr {cfg.min_peak_snr:g}"
