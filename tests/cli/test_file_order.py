@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from startrack.cli._batch import expand_inputs
-from startrack.cli._file_order import in_name_order
+from startrack.io import in_name_order
 
 
 def test_numbers_in_names_are_compared_as_numbers():

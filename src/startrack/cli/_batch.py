@@ -34,8 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InvalidInputError, StartrackError, hidden_interruption
-from ..io import IMAGE_SUFFIXES
-from ._file_order import in_name_order
+from ..io import IMAGE_SUFFIXES, in_name_order
 
 ERROR = "error"
 """Status of an image that could not be read or used (the reason says why)."""
@@ -83,7 +82,7 @@ def is_batch(paths: Sequence[str], csv_out: str | None = None) -> bool:
 
 def expand_inputs(paths: Sequence[str | os.PathLike]) -> list[Path]:
     """The images of ``paths``: each folder's image files (:data:`IMAGE_SUFFIXES`, in name order
-    with numbers compared as numbers, :func:`.file_order.natural_key`; not recursive), other paths
+    with numbers compared as numbers, :func:`startrack.io.natural_key`; not recursive), other paths
     as given (a missing one is reported on its own line).
 
     Raises

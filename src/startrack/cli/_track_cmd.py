@@ -23,6 +23,7 @@ from ..io import (
     IMAGE_SUFFIXES,
     STDOUT,
     error_row,
+    in_name_order,
     max_pixels_limit,
     output_target,
     read_image,
@@ -38,7 +39,6 @@ from ._common import (
     fov_kwargs,
     max_pixels_option,
 )
-from ._file_order import in_name_order
 from ._progress import ProgressBar, ensure_database_for
 
 EPILOG = "CSV columns: " + ", ".join(COLUMNS) + (

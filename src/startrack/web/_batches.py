@@ -59,7 +59,7 @@ def folder_images(root: Path | None, relative: str) -> tuple[Path, list[Path], l
     """The folder ``relative`` under ``root``, its image files and the names skipped (module docstring)."""
     if root is None:
         raise Refusal(404, "folder mode is off: start the server with --root DIR to process folders under DIR")
-    from ..io import IMAGE_SUFFIXES
+    from ..io import IMAGE_SUFFIXES, in_name_order
 
     if not isinstance(relative, str) or "\x00" in relative:
         raise Refusal(422, "folder must be a path relative to --root", "folder")
@@ -67,7 +67,7 @@ def folder_images(root: Path | None, relative: str) -> tuple[Path, list[Path], l
     if not folder.is_relative_to(root) or not folder.is_dir():
         raise Refusal(404, f"no folder {relative!r} under --root")
     images, skipped = [], []
-    for path in sorted(folder.iterdir()):
+    for path in in_name_order(list(folder.iterdir())):
         if path.suffix.lower() not in IMAGE_SUFFIXES or not path.is_file():
             continue
         if not path.resolve().is_relative_to(root):

@@ -41,7 +41,7 @@ from ...camera import Camera, get_preset
 from ...catalog import jyear_tdb
 from ...detect import StarDetector
 from ...errors import ImageReadError, InvalidInputError
-from ...io import IMAGE_SUFFIXES, Image, read_image
+from ...io import IMAGE_SUFFIXES, Image, in_name_order, read_image
 from ...results import AttitudeSolution, Status
 from ...solve import check_fov_deg, epoch_jyear, solve_image
 from .._records import ImageRecord
@@ -143,14 +143,15 @@ def _detector(value, extra: Mapping[str, Any]) -> StarDetector:
 
 
 def image_paths(paths: str | os.PathLike | Sequence[str | os.PathLike]) -> list[Path]:
-    """Image files of ``paths``: files as given, each folder's image files (by suffix, sorted by
-    name, not recursive). Raises InvalidInputError for a missing path or a folder with none."""
+    """Image files of ``paths``: files as given, each folder's image files (by suffix, in name
+    order with numbers compared as numbers, :func:`startrack.io.in_name_order`; not recursive).
+    Raises InvalidInputError for a missing path or a folder with none."""
     items = [paths] if isinstance(paths, str | os.PathLike) else list(paths)
     out: list[Path] = []
     for item in items:
         path = Path(item)
         if path.is_dir():
-            found = sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES)
+            found = in_name_order([p for p in path.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES])
             if not found:
                 raise InvalidInputError(f"folder {path} holds no image files ({', '.join(sorted(IMAGE_SUFFIXES))})")
             out.extend(found)
