@@ -3,21 +3,11 @@ timeout_s; 5 s by default), for slow or busy machines."""
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 
 import numpy as np
 import pytest
-
-from startrack.cli import main
-
-
-def _run(*argv) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
+from test_cli import run as _run
 
 
 def test_the_time_limit_given_is_the_searchs(tmp_path):
