@@ -22,7 +22,8 @@ def test_a_star_list_that_is_not_real_numbers_in_one_dimension_is_refused(x, sai
     assert said in str(info.value)
 
 
-@pytest.mark.parametrize("x", [[1, 2, 3], np.float32([1, 2, 3]), np.ma.array([1.0, 2.0, 3.0])])
+@pytest.mark.parametrize("x", [[1, 2, 3], np.float32([1, 2, 3]), np.ma.array([1.0, 2.0, 3.0]),
+                               np.array([[1.0], [2.0], [3.0]]), np.array([[1.0, 2.0, 3.0]])])
 def test_lists_arrays_and_unmasked_arrays_of_numbers_are_taken(x):
     solution = solve_stars(x, [1.0, 2.0, 3.0], width=10, height=10)
     assert not solution.solved  # three stars: too few, but read

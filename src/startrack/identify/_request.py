@@ -185,11 +185,14 @@ def star_arrays(x, y, flux, width, height) -> tuple[NDArray, NDArray, NDArray]:
 def _coordinates(values, name: str) -> NDArray[np.float64]:
     """A 1-D float array of ``values``; refuses a masked array with masked entries (say which),
     None, complex numbers and arrays of more than one dimension (a table or an image given by
-    mistake, which flattening would turn into a list of the wrong numbers)."""
+    mistake, which flattening would turn into a list of the wrong numbers); a column or a row,
+    (N, 1) or (1, N), is one dimension."""
     if np.ma.isMaskedArray(values) and np.ma.count_masked(values):
         raise InvalidInputError(f"{name} has {np.ma.count_masked(values)} masked entries; "
                                 "drop those stars (or fill them) before solving")
     data = None if values is None else np.asarray(np.ma.getdata(values))
+    if data is not None and data.ndim == 2 and 1 in data.shape:
+        data = data.ravel()
     if data is None or data.dtype.kind not in "biuf" or data.ndim > 1:
         what = "None" if data is None else f"an array of shape {data.shape}" if data.ndim > 1 else repr(values)
         raise InvalidInputError(f"{name} must be real numbers in one dimension (one per star, shape (N,)), "
