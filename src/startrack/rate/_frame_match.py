@@ -259,14 +259,8 @@ def rate_from_frames(
                   "and check the rotation")
         return FrameRate(failed(Status.TOO_FEW_STARS, reason, METHOD), np.zeros((0, 2), dtype=np.intp), np.zeros(0))
     pairs = match_frames(a, b, gate, predicted=predicted, tol_rad=tol)
-    hint = f"if the stars move farther than {gate / DEG:.3g} deg between the frames, raise max_angle_rad"
-    if len(pairs) == 0:
-        reason = f"no stars matched between the frames ({len(a)} and {len(b)} stars found): {hint}"
-        return FrameRate(failed(Status.NO_MATCH, reason, METHOD), pairs, np.zeros(0))
     if len(pairs) < min_pairs:
-        reason = (f"only {len(pairs)} of the stars matched between the frames ({len(a)} and {len(b)} found; "
-                  f"{min_pairs} needed to fix and check the rotation): {hint}")
-        return FrameRate(failed(Status.TOO_FEW_STARS, reason, METHOD), pairs, np.full(len(pairs), np.nan))
+        return _too_few_matched(pairs, len(a), len(b), min_pairs, gate)
     est, residuals = _fit(a, b, pairs, dt_s, sigma_rad)
     if est.ok:
         near = len(_mutual_nearest(Rotation.from_rotvec(-est.omega_rad_s * dt_s).apply(a), b,
@@ -276,6 +270,17 @@ def rate_from_frames(
                       "noise: the centroids scatter more than sigma_rad, or the matches are wrong")
             return FrameRate(failed(Status.DEGENERATE, reason, METHOD), pairs, residuals)
     return _judged(est, pairs, residuals, sigma_rad, max_birge)
+
+
+def _too_few_matched(pairs: NDArray, n_a: int, n_b: int, min_pairs: int, gate_rad: float) -> FrameRate:
+    """NO_MATCH (no pair) or TOO_FEW_STARS (fewer than ``min_pairs``), saying to widen the gate."""
+    hint = f"if the stars move farther than {gate_rad / DEG:.3g} deg between the frames, raise max_angle_rad"
+    if len(pairs) == 0:
+        reason = f"no stars matched between the frames ({n_a} and {n_b} stars found): {hint}"
+        return FrameRate(failed(Status.NO_MATCH, reason, METHOD), pairs, np.zeros(0))
+    reason = (f"only {len(pairs)} of the stars matched between the frames ({n_a} and {n_b} found; "
+              f"{min_pairs} needed to fix and check the rotation): {hint}")
+    return FrameRate(failed(Status.TOO_FEW_STARS, reason, METHOD), pairs, np.full(len(pairs), np.nan))
 
 
 def _judged(est: RateEstimate, pairs: NDArray, residuals: NDArray, sigma_rad: float, max_birge: float) -> FrameRate:

@@ -159,15 +159,7 @@ def find_streak_candidates(image: ArrayLike, *, bin_px: int = BIN_PX, line_bins:
         The frame is not 2-D, is smaller than 8 blocks a side, or has non-finite pixels (a NaN
         background or noise); ``line_bins`` is not a positive odd number.
     """
-    img = np.asarray(image)
-    if img.ndim != 2 or min(img.shape) < 8 * bin_px:
-        raise InvalidInputError(f"image must be a 2-D frame of at least {8 * bin_px} px a side, got {img.shape}")
-    if line_bins < 1 or line_bins % 2 == 0:
-        raise InvalidInputError(f"line_bins must be a positive odd number of blocks, got {line_bins}")
-    background, noise = _median_sigma(img, 8)
-    if not (np.isfinite(background) and np.isfinite(noise)):
-        raise InvalidInputError(f"image must hold finite pixel values, got a background of {background!r} and a "
-                                f"noise of {noise!r} (NaN or infinite pixels)")
+    img, background, noise = _checked_frame(image, bin_px, line_bins)
     if noise == 0:  # a constant frame, or a noise-free one mostly at its background: no threshold to set
         empty_labels = np.zeros((img.shape[0] // bin_px, img.shape[1] // bin_px), dtype=np.int32)
         return _empty(background, ROUNDING_SIGMA, empty_labels, bin_px)
@@ -226,6 +218,21 @@ def _candidates(blocks: NDArray, labels: NDArray, wanted: NDArray, bin_px: int) 
     corner = 0.5 * bin_px * (np.abs(axis[:, 0]) + np.abs(axis[:, 1]))  # a block's half-extent along the axis
     table = np.column_stack([cx, cy, axis[:, 0], axis[:, 1], length, width, first - corner, last + corner])
     return table, good
+
+
+def _checked_frame(image: ArrayLike, bin_px: int, line_bins: int) -> tuple[NDArray, float, float]:
+    """The frame as an array with its background and robust noise (counts), after the checks of
+    :func:`find_streak_candidates` (its Raises)."""
+    img = np.asarray(image)
+    if img.ndim != 2 or min(img.shape) < 8 * bin_px:
+        raise InvalidInputError(f"image must be a 2-D frame of at least {8 * bin_px} px a side, got {img.shape}")
+    if line_bins < 1 or line_bins % 2 == 0:
+        raise InvalidInputError(f"line_bins must be a positive odd number of blocks, got {line_bins}")
+    background, noise = _median_sigma(img, 8)
+    if not (np.isfinite(background) and np.isfinite(noise)):
+        raise InvalidInputError(f"image must hold finite pixel values, got a background of {background!r} and a "
+                                f"noise of {noise!r} (NaN or infinite pixels)")
+    return img, background, noise
 
 
 def _empty(background: float, noise: float, labels: NDArray, bin_px: int) -> StreakCandidates:
