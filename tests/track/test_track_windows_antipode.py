@@ -37,4 +37,4 @@ def test_the_angle_is_exact_at_both_ends():
     assert _angle_rad(u, u) == 0.0
     small = Rotation.from_rotvec([1e-9, 0.0, 0.0]).apply(u).tolist()
     # rad; the rotated components carry 1e-16 rounding (acos of the dot, rounded to 1.0, gives 0 here)
-    assert abs(_angle_rad(u, tuple(small)) - 1e-9 * math.hypot(u[1], u[2])) < 1e-15
+    assert abs(_angle_rad(u, tuple(small)) - 1e-9 * math.hypot(u[1], u[2])) < 1e-15  # rad
