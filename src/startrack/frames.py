@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from .errors import InvalidInputError
+from .errors import InvalidInputError, is_real_number
 
 TWO_PI = 2.0 * np.pi
 
@@ -65,6 +65,15 @@ def checked_unit_vectors(vectors: ArrayLike, name: str, shape: str = "(N, 3)") -
         raise InvalidInputError(f"{name} must be finite, non-zero vectors (a NaN, infinite or zero "
                                 f"{'vector' if one else 'row'} was given)")
     return v / norms[..., None]
+
+
+def checked_angle(value: float, name: str, upper_rad: float = np.pi) -> float:
+    """``value`` as a float if it is an angle in (0, ``upper_rad``] radians; else an
+    InvalidInputError naming ``name`` and the range (in degrees too)."""
+    if not (is_real_number(value) and np.isfinite(value) and 0 < value <= upper_rad):
+        raise InvalidInputError(f"{name} must be an angle in (0, {upper_rad:.4g}] radians (0 to "
+                                f"{np.degrees(upper_rad):.4g} deg), got {value!r}")
+    return float(value)
 
 
 def cross(u: NDArray, v: NDArray) -> NDArray[np.float64]:

@@ -27,7 +27,7 @@ from scipy.spatial.transform import Rotation
 from ..attitude import solve_wahba
 from ..catalog import chord_from_angle, query_cone
 from ..errors import InvalidInputError, is_real_number, require
-from ..frames import angle_between, checked_unit_vectors, normalize
+from ..frames import angle_between, checked_angle, checked_unit_vectors, normalize
 from ..results import Status
 from ..units import DEG
 from ._estimate import RateEstimate, failed
@@ -47,13 +47,6 @@ keeping the few pairs that happen to fit (with that noise, all but ~3e-4 of them
 SEED_STARS = 12
 """Stars of frame a (the first ones: pass the brightest first) whose pairs propose rotations."""
 REFINE_ROUNDS = 3
-
-
-def _angle(value: float, name: str, upper: float = math.pi) -> float:
-    """A finite angle in (0, upper] radians, or an InvalidInputError naming ``name``."""
-    if not (is_real_number(value) and math.isfinite(value) and 0 < value <= upper):
-        raise InvalidInputError(f"{name} must be an angle in (0, {upper / DEG:.4g} deg] (radians), got {value!r}")
-    return float(value)
 
 
 def _mutual_nearest(a: NDArray, b: NDArray, max_angle_rad: float) -> NDArray[np.intp]:
@@ -150,8 +143,8 @@ def match_frames(
         there is exactly one (it cannot be checked), else none.
     """
     a, b = checked_unit_vectors(vectors_a, "vectors_a"), checked_unit_vectors(vectors_b, "vectors_b")
-    gate = _angle(max_angle_rad, "max_angle_rad")
-    tol = max(0.1 * gate, 1e-4) if tol_rad is None else _angle(tol_rad, "tol_rad", gate)
+    gate = checked_angle(max_angle_rad, "max_angle_rad")
+    tol = max(0.1 * gate, 1e-4) if tol_rad is None else checked_angle(tol_rad, "tol_rad", gate)
     if predicted is not None and (not isinstance(predicted, Rotation) or not predicted.single):
         raise InvalidInputError(f"predicted must be a single scipy Rotation or None, got {predicted!r}")
     if len(a) == 0 or len(b) == 0:
@@ -206,7 +199,7 @@ def _fit(a: NDArray, b: NDArray, pairs: NDArray, dt_s: float, sigma_rad: float) 
 def _checked_inputs(dt_s: float, sigma_rad: float, min_pairs: int) -> None:
     if not (is_real_number(dt_s) and math.isfinite(dt_s) and dt_s != 0):
         raise InvalidInputError(f"dt_s must be a finite, non-zero number of seconds, got {dt_s!r}")
-    _angle(sigma_rad, "sigma_rad", 0.1)
+    checked_angle(sigma_rad, "sigma_rad", 0.1)
     if isinstance(min_pairs, bool) or not isinstance(min_pairs, Integral) or min_pairs < 2:
         raise InvalidInputError(f"min_pairs must be an integer >= 2, got {min_pairs!r}")
 
@@ -252,7 +245,7 @@ def rate_from_frames(
     """
     _checked_inputs(dt_s, sigma_rad, min_pairs)
     a, b = checked_unit_vectors(vectors_a, "vectors_a"), checked_unit_vectors(vectors_b, "vectors_b")
-    gate = _angle(max_angle_rad, "max_angle_rad")
+    gate = checked_angle(max_angle_rad, "max_angle_rad")
     tol = min(TOL_SIGMAS * math.sqrt(2.0) * sigma_rad, gate)
     if min(len(a), len(b)) < min_pairs:
         reason = (f"{len(a)} and {len(b)} stars found in the two frames; {min_pairs} in each are needed to fix "

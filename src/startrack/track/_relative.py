@@ -24,10 +24,9 @@ from scipy.spatial.transform import Rotation
 
 from ..attitude import q_method_quaternions
 from ..errors import InvalidInputError, is_real_number
-from ..frames import angle_between, checked_unit_vectors
+from ..frames import angle_between, checked_angle, checked_unit_vectors
 from ..identify import pyramid_triads
 from ..results import Status
-from ..units import DEG
 from ._inputs import checked_rate
 
 MIN_CONFIRMED = 4
@@ -37,14 +36,6 @@ MAX_TOL_RAD = 0.1
 """Largest angle tolerance taken (radians, 5.7 deg): a few centroid sigmas over the focal length
 are far less; a tolerance near the stars' spacing matches any star to any other, and a triangle
 to one of another shape, so that "confirmed" would mean nothing."""
-
-
-def _tolerance(tol_rad: float) -> float:
-    if not (is_real_number(tol_rad) and math.isfinite(tol_rad) and 0 < tol_rad <= MAX_TOL_RAD):
-        raise InvalidInputError(f"tol_rad must be an angle in (0, {MAX_TOL_RAD:g}] radians (0 to "
-                                f"{MAX_TOL_RAD / DEG:.2g} deg): a few centroid sigmas over the focal length, "
-                                f"got {tol_rad!r}")
-    return float(tol_rad)
 
 
 def _frames(first: ArrayLike, second: ArrayLike) -> tuple[NDArray, NDArray]:
@@ -123,7 +114,7 @@ def triangle_match(first: ArrayLike, second: ArrayLike, tol_rad: float, max_star
         Directions that are not finite non-zero vectors (N, 3), a tolerance out of range.
     """
     first, second = _frames(first, second)
-    tol_rad = _tolerance(tol_rad)
+    tol_rad = checked_angle(tol_rad, "tol_rad", MAX_TOL_RAD)
     if isinstance(max_stars, bool) or not isinstance(max_stars, int | np.integer) or max_stars < 3:
         raise InvalidInputError(f"max_stars must be an integer >= 3 (a triangle's stars), got {max_stars!r}")
     if len(first) < 3 or len(second) < 3:
@@ -160,7 +151,7 @@ def rate_match(first: ArrayLike, second: ArrayLike, rate_rad_s: ArrayLike, dt_s:
     out of range.
     """
     first, second = _frames(first, second)
-    tol_rad = _tolerance(tol_rad)
+    tol_rad = checked_angle(tol_rad, "tol_rad", MAX_TOL_RAD)
     rate = checked_rate(rate_rad_s, name="rate_rad_s")
     if not (is_real_number(dt_s) and math.isfinite(dt_s) and dt_s != 0):
         raise InvalidInputError(f"dt_s must be a finite, non-zero number of seconds between the frames, got {dt_s!r}")
