@@ -12,13 +12,15 @@
 7. ``detect_huffman2006.py``: Huffman 2006's Table 4.2 (WS vs MLE) and Table 7.2 (pre-filter time),
    campaigns of their shipped specs;
 8. ``detect_realdata.py``: detections on the real images against astrometry.net;
-9. ``attitude_benchmark.py``: every Wahba solver batched and one by one, beside scipy and ahrs
+9. ``jpeg_quality.py``: the real images and simulated frames saved as JPEGs of qualities 40-95,
+   solved with the detector's compression noise floor and without;
+10. ``attitude_benchmark.py``: every Wahba solver batched and one by one, beside scipy and ahrs
    (``benchmarks/.venv-ahrs``, created on first use);
-10. ``streak_benchmark.py``: Sease 2013 Tables 3.1, 4.1, 4.2, 4.4 and Samaan 2002 Table 2;
-11. ``simulate_benchmark.py``: simulator speed beside a plain per-pixel loop, Samaan 2002 Table 1,
+11. ``streak_benchmark.py``: Sease 2013 Tables 3.1, 4.1, 4.2, 4.4 and Samaan 2002 Table 2;
+12. ``simulate_benchmark.py``: simulator speed beside a plain per-pixel loop, Samaan 2002 Table 1,
     Huffman 2006 Tables 5.1 and 5.3 (campaigns of their shipped specs);
-12. ``huffman2006_table82.py``: Huffman 2006's Table 8.2 (time to match a 14-frame sequence by method);
-13. ``jacobs1995_matching.py``: Jacobs 1995's Tables 3-5 to 3-7 (lost-in-space matching trade).
+13. ``huffman2006_table82.py``: Huffman 2006's Table 8.2 (time to match a 14-frame sequence by method);
+14. ``jacobs1995_matching.py``: Jacobs 1995's Tables 3-5 to 3-7 (lost-in-space matching trade).
 
 The cedar-solve environment (``benchmarks/.venv-cedar``) and the SEP / photutils one
 (``benchmarks/.venv-detectpeers``) are created first if needed. A benchmark
@@ -45,6 +47,7 @@ import detect_speed  # noqa: E402
 import huffman2006_table82  # noqa: E402
 import image_path_benchmark  # noqa: E402
 import jacobs1995_matching  # noqa: E402
+import jpeg_quality  # noqa: E402
 import lis_benchmark  # noqa: E402
 import simulate_benchmark  # noqa: E402
 import streak_benchmark  # noqa: E402
@@ -80,6 +83,7 @@ def main(argv: list[str] | None = None) -> int:
         _run("detect_speed", detect_speed.main, []),
         _run("detect_huffman2006", detect_huffman2006.main, []),
         _run("detect_realdata", detect_realdata.main, []),
+        _run("jpeg_quality", jpeg_quality.main, []),
         _run("attitude_benchmark", attitude_benchmark.main, []),
         _run("streak_benchmark", streak_benchmark.main, []),
         _run("simulate_benchmark", simulate_benchmark.main, []),

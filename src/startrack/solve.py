@@ -292,8 +292,9 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
     if camera is not None and isinstance(camera, Camera) and (camera.width, camera.height) != (width, height):
         raise InvalidInputError(f"the camera is {camera.width} x {camera.height} px but the image is "
                                 f"{width} x {height} px")
+    detector = (detector or StarDetector()).for_image(img)  # a JPEG's noise floor (:mod:`.detect._compression`)
     t0 = time.perf_counter()
-    found = (detector or StarDetector()).detect(img.data)
+    found = detector.detect(img.data)
     detect_s = time.perf_counter() - t0
     from . import _smeared_image as smeared_image
 

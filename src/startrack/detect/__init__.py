@@ -39,6 +39,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._centroiders import CENTROIDERS
     from ._channels import to_single_channel
     from ._compiled import warm_up_detect
+    from ._compression import compression_noise_floor
     from ._crb import crb_sigma_px, flux_for_snr, integrated_snr
     from ._dark import median_frame, subtract_dark
     from ._denoise import stack_frames
@@ -67,6 +68,7 @@ __all__ = [
     "WindowDetections",
     "background_model",
     "calibrate_zero_point",
+    "compression_noise_floor",
     "crb_sigma_px",
     "detect",
     "detection_image",

@@ -55,6 +55,9 @@ class TileGrid:
         Per-tile clutter ratio (module docstring).
     centres_y, centres_x : ndarray, shape (ny,), (nx,)
         Tile-centre coordinates, in the pixel convention of the image they are evaluated on.
+    clutter_reference : float
+        The clean sky's lower-half width that the clutter ratios are relative to, image units
+        (NaN when not known).
     """
 
     level: NDArray[np.float64]
@@ -62,6 +65,7 @@ class TileGrid:
     clutter: NDArray[np.float64]
     centres_y: NDArray[np.float64]
     centres_x: NDArray[np.float64]
+    clutter_reference: float = float("nan")
 
     def map(self, grid: NDArray, ys: NDArray, xs: NDArray, extrapolate: bool) -> NDArray[np.float32]:
         """``grid`` (one of these grids) on the grid of rows ``ys`` x columns ``xs``
@@ -219,7 +223,8 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
     lower_global = _grid_quantile(lower, CLEAN_SKY_QUANTILE)
     clutter = lower / lower_global if lower_global > 0 else np.ones_like(lower)
     tiles = TileGrid(level=level, noise=np.maximum(noise, MIN_NOISE_RATIO * noise_global), clutter=clutter,
-                     centres_y=offset + scale * centres_y, centres_x=offset + scale * centres_x)
+                     centres_y=offset + scale * centres_y, centres_x=offset + scale * centres_x,
+                     clutter_reference=lower_global)
     return BackgroundModel(level=_grid_quantile(level, 0.5), noise=noise_global, tiles=tiles,
                            level_map=level_map if keep_map else None)
 
@@ -388,6 +393,17 @@ def pixel_noise(image: NDArray, model: BackgroundModel) -> float:
         level = np.rint(level) if q == 1 else q * np.rint(level / q)
     residual = finite(sample - level)
     return clipped_level_noise(residual, q, upper_half=True)[1] if residual.size else 0.0
+
+
+def with_clutter_floor(model: BackgroundModel, floor: float) -> BackgroundModel:
+    """The model with its clutter ratios taken relative to a clean sky at least ``floor`` wide
+    (image units; :attr:`TileGrid.clutter_reference`): a JPEG flattens its quietest blocks to
+    their mean (:mod:`.compression`), and against those any tile with content looks cluttered."""
+    tiles = model.tiles
+    if tiles is None or not tiles.clutter_reference < floor:
+        return model
+    scale = tiles.clutter_reference / floor
+    return replace(model, tiles=replace(tiles, clutter=tiles.clutter * scale, clutter_reference=floor))
 
 
 def with_noise_floor(model: BackgroundModel, floor: float) -> BackgroundModel:

@@ -6,7 +6,7 @@ See the package docstring of :mod:`startrack.detect` for the pipeline and its de
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -14,6 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import InvalidInputError
 from ..results import Detections
 from ._blocks import detect_in_strips
+from ._compression import compression_noise_floor
 from ._details import DetectionDetails
 from ._pipeline import detect_frame
 from ._predictive import WindowDetections, measure_windows
@@ -39,7 +40,8 @@ class StarDetector(DetectionSettings):
         ----------
         image : array_like, shape (H, W) or (H, W, C)
             Raw counts, any integer or float dtype; NaN / inf pixels are ignored. A
-            :class:`startrack.io.Image` (or an astropy HDU) is taken for its ``.data``.
+            :class:`startrack.io.Image` (or an astropy HDU) is taken for its ``.data``, and a
+            JPEG's for its compression too (:meth:`for_image`).
 
         Returns
         -------
@@ -56,11 +58,20 @@ class StarDetector(DetectionSettings):
     def detect_details(self, image: NDArray) -> DetectionDetails:
         """As :meth:`detect`, with the instrument magnitude, the spot shape, the PSF width and
         the threshold used (:class:`startrack.detect.DetectionDetails`)."""
-        array = pixel_array(image)
+        cfg, array = self.for_image(image), pixel_array(image)
         h, w = array.shape[:2] if array.ndim >= 2 else (0, 0)
-        if h * w > self.max_block_px and array.ndim in (2, 3):
-            return detect_in_strips(self, array)
-        return detect_frame(self, array, self.dark_frame)
+        if h * w > cfg.max_block_px and array.ndim in (2, 3):
+            return detect_in_strips(cfg, array)
+        return detect_frame(cfg, array, cfg.dark_frame)
+
+    def for_image(self, image: object) -> StarDetector:
+        """These settings for ``image``: with the ``compression_noise`` of a
+        :class:`startrack.io.Image`'s ``compression_step`` (a JPEG's,
+        :func:`startrack.detect.compression_noise_floor`) when that is higher, else ``self`` (an
+        array, a lossless file). :meth:`detect` applies it; use it to detect the pixels of a
+        JPEG's ``.data`` as :meth:`detect` would the image."""
+        floor = compression_noise_floor(float(getattr(image, "compression_step", 0.0)), self.sigma)
+        return replace(self, compression_noise=floor) if floor > self.compression_noise else self
 
     def measure_windows(self, image: NDArray, x: ArrayLike, y: ArrayLike,
                         half_width_px: int = 6) -> WindowDetections:

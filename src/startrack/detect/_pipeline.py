@@ -21,10 +21,12 @@ from ._background import (
     low_side_clipped,
     pixel_noise,
     tiled_background,
+    with_clutter_floor,
     with_noise_floor,
 )
 from ._centroid import SpotMeasurements, centroid_sigma, measure_spots, sigma_eq42, take_spots
 from ._centroiders import CentroidInputs, run_centroider
+from ._compression import crowded
 from ._dark import subtract_dark, subtract_row_reference
 from ._deblend import split_regions
 from ._denoise import anisotropic_diffusion, gaussian_smooth
@@ -131,6 +133,8 @@ def detect_frame(cfg: DetectionSettings, image: NDArray, dark: NDArray | None) -
     det = detection_image(prepared.data, binning, cfg.kernel, cfg.kernel_px, prepared.invalid)
     skewed = low_side_clipped(np.asarray(image))  # the raw frame: a dark frame shifts the zero
     model = background_model(cfg, det, binning, skewed)
+    if cfg.compression_noise > 0:
+        model = with_compression_floor(cfg, det, model, binning)
     noise_px = pixel_noise(prepared.data, model) or noise_floor(prepared.data, model.level)
     frame = Frame(prepared, model, skewed, noise_px, binning, x_offset)
     if model.noise <= 0:  # a constant image
@@ -176,6 +180,16 @@ def background_model(cfg: DetectionSettings, det: NDArray, binning: int, skewed:
         tile = max(1, cfg.tile_px // binning)
         model = tiled_background(det, tile, scale=binning, offset=(binning - 1) / 2, skewed=skewed)
     return with_noise_floor(model, noise_floor(det, model.level)) if model.noise <= 0 else model
+
+
+def with_compression_floor(cfg: DetectionSettings, det: NDArray, model: BackgroundModel, binning: int
+                           ) -> BackgroundModel:
+    """A JPEG's floor (``cfg.compression_noise``, :mod:`.compression`): on the clutter filter's
+    clean sky always, on the noise where the unfloored threshold finds a crowd of spots."""
+    floor = cfg.compression_noise
+    if crowded(significance(det, model, binning), cfg.sigma):
+        model = with_noise_floor(model, floor)
+    return with_clutter_floor(model, floor)
 
 
 def noise_floor(values: NDArray, level: float) -> float:
@@ -356,9 +370,12 @@ def pack(cfg: DetectionSettings, frame: Frame, inputs: CentroidInputs, k_sigma: 
     spots, noise = inputs.spots, inputs.noise
     result = run_centroider(cfg.centroid, inputs, psf_sigma_px=cfg.psf_sigma_px,
                             half=cfg.window_half_px, gain_e_per_adu=cfg.gain_e_per_adu)
-    ok = result.ok
+    ok = result.ok & on_frame(frame, result.x, result.y)
     x, y = np.where(ok, result.x, spots.x), np.where(ok, result.y, spots.y)
     flux = np.where(ok & np.isfinite(result.flux), result.flux, spots.flux)
+    # the centroided, and the rest whose weighted sum is a flux on the frame: not a piece of mostly
+    # negative signal of a blend the fine pass split
+    kept = np.flatnonzero(ok | ((flux > 0) & on_frame(frame, x, y)))
     with np.errstate(invalid="ignore", divide="ignore"):
         peak_snr = spots.peak / noise
     if cfg.uncertainty == "eq4.2":
@@ -376,7 +393,15 @@ def pack(cfg: DetectionSettings, frame: Frame, inputs: CentroidInputs, k_sigma: 
         detections=detections, mag=instrument_magnitude(flux, cfg.mag_zero_point),
         peak_snr=peak_snr, major_px=shape.major_px, minor_px=shape.minor_px,
         angle_deg=shape.angle_deg, psf_sigma_px=psf, k_sigma=float(k_sigma), centroid=cfg.centroid)
-    return brightest_first(details, cfg.max_stars)
+    return brightest_first(details if kept.size == len(x) else details.take(kept), cfg.max_stars)
+
+
+def on_frame(frame: Frame, x: NDArray, y: NDArray) -> NDArray[np.bool_]:
+    """Whether the points (x, y) (shape (N,), prepared-plane pixels) lie on the frame (False for
+    NaN)."""
+    h, w = frame.prepared.data.shape
+    with np.errstate(invalid="ignore"):
+        return (np.abs(x - (w - 1) / 2) <= w / 2) & (np.abs(y - (h - 1) / 2) <= h / 2)
 
 
 def point_quality_of(inputs: CentroidInputs, peak_snr: NDArray, top: float) -> NDArray[np.float64]:

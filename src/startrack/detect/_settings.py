@@ -42,7 +42,10 @@ class DetectionSettings:
         (Jacobs 1995), subtracted row by row and cut off (x stays in the full frame's pixels).
         background : {"tiled", "global"} -- local (per ``tile_px`` tile, interpolated) or
         global level and noise; with ``threshold="ksigma"`` these are the local and global
-        k-sigma thresholds.
+        k-sigma thresholds. compression_noise -- a lossy compression's noise floor, image
+        units (0: none; :meth:`StarDetector.for_image` sets it for a JPEG): the clutter filter's
+        clean sky is at least this, and so is the threshold's noise where a crowd of spots passes
+        the threshold without it (:mod:`._compression`).
     Noise removal (optional, :mod:`._denoise`)
         denoise : {"none", "gaussian", "diffusion"}; denoise_sigma_px; diffusion_iterations;
         diffusion_kappa_sigma (the edge threshold K in noise units). Stacking:
@@ -88,6 +91,7 @@ class DetectionSettings:
     dark_columns: tuple[int, int] = (0, 0)
     background: BackgroundMode = "tiled"
     tile_px: int = 32
+    compression_noise: float = 0.0
     denoise: DenoiseMethod = "none"
     denoise_sigma_px: float = 1.0
     diffusion_iterations: int = 10
@@ -153,7 +157,7 @@ class DetectionSettings:
         check_int(self, ("prefilter_count",), minimum=1)
         check_int(self, ("max_block_px",), minimum=1024)
         check_int(self, ("max_area_px", "max_stars", "window_half_px"), minimum=1, optional=True)
-        check_non_negative(self, ("min_peak_snr", "min_flatness", "min_packing"))
+        check_non_negative(self, ("min_peak_snr", "min_flatness", "min_packing", "compression_noise"))
         if not isinstance(self.mag_zero_point, int | float) or not np.isfinite(self.mag_zero_point):
             raise InvalidInputError(f"mag_zero_point must be a finite number, got "
                                     f"{self.mag_zero_point!r}")

@@ -57,6 +57,11 @@ class Image:
         in bits.
     colour : bool
         True if the source had colour channels (RGB or RGBA) that were reduced to one.
+    compression_step : float
+        For a JPEG, its quantization step at the lowest spatial frequencies
+        (:func:`startrack.io._raster.jpeg_step`) in the units of ``data``: three times the
+        luminance's when the colour planes are summed. 0.0 for a lossless file or an array.
+        Detection raises its noise floor to match (:func:`startrack.detect.compression_noise_floor`).
     """
 
     data: NDArray
@@ -64,6 +69,7 @@ class Image:
     header: dict[str, Any] = field(default_factory=dict)
     bit_depth: int | None = None
     colour: bool = False
+    compression_step: float = 0.0
 
     @property
     def height(self) -> int:
@@ -248,13 +254,21 @@ def read_image(
         from ._fitsfile import read_fits  # astropy.io.fits: loaded only for FITS files
 
         data, header, bit_depth = read_fits(path, max_pixels)
+        step = 0.0
     elif kind == "HEIF":
         from ._heif import read_heif  # pillow-heif (the "heif" extra): loaded only for HEIF files
 
         data, header, bit_depth = read_heif(path, max_pixels)
+        step = 0.0
     else:
-        data, header, bit_depth = read_raster(path, max_pixels, kind=kind)
+        data, header, bit_depth, step = read_raster(path, max_pixels, kind=kind)
     colour = data.ndim == 3
     single = to_single_channel(data, channel)
     check_pixel_values(single, path)
-    return Image(single, path, header, bit_depth, colour)
+    return Image(single, path, header, bit_depth, colour, step * _planes_summed(data, channel))
+
+
+def _planes_summed(data: NDArray, channel: str | int | None) -> int:
+    """How many colour planes the colour rule added into one (:func:`._channels.to_single_channel`):
+    3 for R + G + B, else 1. (A JPEG's colour planes carry the luminance's steps, each one.)"""
+    return 3 if channel is None and data.ndim == 3 and data.shape[-1] >= 3 else 1

@@ -50,6 +50,9 @@ SUPPORTED_PILLOW_FORMATS = ("PNG", "JPEG", "MPO", "TIFF")
 """Pillow format names read here (MPO is the multi-picture JPEG some cameras write)."""
 
 _JPEG_FORMATS = ("JPEG", "MPO")
+JPEG_LOWEST_FREQUENCIES = (1, 8)
+"""Indices of the (0, 1) and (1, 0) entries of a JPEG quantization table of 64 in natural (row
+by row) order, the order in which Pillow gives them."""
 _UINT16_MODES = ("I;16", "I;16L", "I;16B", "I;16N")
 _TO_RGB_MODES = ("P", "PA", "CMYK", "YCbCr", "LAB", "HSV", "RGBX", "RGBa")
 _EXIF_IFD = 0x8769
@@ -255,7 +258,7 @@ def _open(fh: BinaryIO, path: Path, strict_metadata: bool) -> PILImage.Image:
 
 
 def read_raster(path: Path, max_pixels: int | None = None, *, kind: str | None = None
-                ) -> tuple[NDArray, dict[str, Any], int]:
+                ) -> tuple[NDArray, dict[str, Any], int, float]:
     """Decode a PNG, JPEG or TIFF file, refusing one over the size limit from its header.
 
     Parameters
@@ -277,6 +280,8 @@ def read_raster(path: Path, max_pixels: int | None = None, *, kind: str | None =
         ...) and simple Pillow info items (``dpi``, PNG text chunks).
     bit_depth : int
         Bits per sample in the file.
+    step : float
+        A JPEG's quantization step (:func:`jpeg_step`), 0.0 for PNG and TIFF.
 
     Raises
     ------
@@ -292,4 +297,20 @@ def read_raster(path: Path, max_pixels: int | None = None, *, kind: str | None =
                 raise ImageReadError(f"{path}: unsupported image format {image.format}")
             check_image_size(image.width, image.height, max_pixels, path)
             data, bit_depth = _decode(image, head, fh, path)
-            return data, _header(image), bit_depth
+            return data, _header(image), bit_depth, jpeg_step(image)
+
+
+def jpeg_step(image: PILImage.Image) -> float:
+    """A JPEG's quantization step at its lowest spatial frequencies: the mean of the (0, 1) and
+    (1, 0) entries of its luminance table (:data:`JPEG_LOWEST_FREQUENCIES`), in grey levels of
+    its 8-bit samples; 0.0 for a lossless format.
+
+    One step of those two coefficients is the smallest pattern the compression can add or take
+    away over an 8 x 8 block: on a dark, noisy sky, noise that rounds up to a step becomes a
+    smooth blob the size of a star (:func:`startrack.detect.compression_noise_floor`).
+    """
+    tables = getattr(image, "quantization", None) if image.format in _JPEG_FORMATS else None
+    table = None if not tables else tables.get(0, next(iter(tables.values())))
+    if table is None or len(table) != 64:
+        return 0.0
+    return float(np.mean([table[i] for i in JPEG_LOWEST_FREQUENCIES]))

@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from astropy.time import Time
 
     from ..identify import MethodName
+    from ..io import Image
 
 
 def detector_stars(image, rig: CameraRig, detector_name: str, detector=None, margin: float = DEFAULT_MARGIN,
@@ -38,12 +39,13 @@ def detector_stars(image, rig: CameraRig, detector_name: str, detector=None, mar
     from ..detect import StarDetector
 
     heads = rig.detectors[detector_name]
-    data = _image_data(image)
+    image = _as_image(image)
+    data = image if isinstance(image, np.ndarray) else image.data
     size = (heads[0].camera.width, heads[0].camera.height)
     if data.shape[:2] != size[::-1]:
         raise InvalidInputError(f"detector {detector_name!r}: the image is {data.shape[1]} x {data.shape[0]} px, "
                                 f"its camera {size[0]} x {size[1]} px")
-    found = (detector or StarDetector()).detect(data)
+    found = (detector or StarDetector()).detect(image)  # an Image: with a JPEG's noise floor
     if len(heads) == 1:
         return {heads[0].name: HeadStars.of(heads[0], found.x, found.y, found.flux)}, found, None
     moments = spot_moments(data, found.x, found.y, background=found.background, noise=found.noise,
@@ -56,13 +58,11 @@ def detector_stars(image, rig: CameraRig, detector_name: str, detector=None, mar
     return out, found, fields
 
 
-def _image_data(image) -> np.ndarray:
-    """The pixel array of a path, an ndarray or a :class:`startrack.io.Image`."""
+def _as_image(image) -> np.ndarray | Image:
+    """An ndarray or a :class:`startrack.io.Image` as it is, a path read."""
     from ..io import Image, read_image
 
-    if isinstance(image, np.ndarray):
-        return image
-    return image.data if isinstance(image, Image) else read_image(image).data
+    return image if isinstance(image, np.ndarray | Image) else read_image(image)
 
 
 def solve_rig_images(images: Mapping[str, object], rig: CameraRig, *, epoch: Time | float | None = None,

@@ -67,6 +67,7 @@ from ._windows import WindowMatcher
 if TYPE_CHECKING:
     from astropy.time import Time
 
+    from ..io import Image
     from ..rate import StreakOptions
 
 StepMode = Literal["lost-in-space", "tracking", "streak lost-in-space", "streak tracking"]
@@ -286,14 +287,15 @@ class Tracker:
         data = img.data
         if streak_exposure_s is not None and streak_bias_px is not None:
             gyro_rate_rad_s = self._streak_rate(data, streak_exposure_s, streak_bias_px, gyro_rate_rad_s)
-            return self._point_image(data, t_s, detector, gyro_rate_rad_s)
+            return self._point_image(img, t_s, detector, gyro_rate_rad_s)
         exposure = streak_exposure_s if streak_exposure_s is not None else header_exposure_s(img.header)
         if exposure is None or not exposure > 0:
-            return self._point_image(data, t_s, detector, gyro_rate_rad_s)
+            return self._point_image(img, t_s, detector, gyro_rate_rad_s)
         return self._switching(data, t_s, float(exposure), detector, gyro_rate_rad_s)
 
-    def _point_image(self, data: NDArray, t_s: float, detector, gyro_rate_rad_s) -> TrackStep:
-        """Point-star processing: detect, then :meth:`update`."""
+    def _point_image(self, data: NDArray | Image, t_s: float, detector, gyro_rate_rad_s) -> TrackStep:
+        """Point-star processing: detect (a JPEG with its noise floor, :meth:`.StarDetector.for_image`),
+        then :meth:`update`."""
         from ..detect import StarDetector
 
         if detector is None:

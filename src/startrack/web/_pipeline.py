@@ -88,6 +88,7 @@ def run_solve_job(folder: Path) -> None:
         image = _read(job)
     with job.stage("detect"):
         detector, auto = _detector(image.data, opts)
+        detector = detector.for_image(image)  # a JPEG's noise floor, for every later detection too
         details = detector.detect_details(image.data)
         rejects = rejected_spots(image.data, detector, details.detections)
     when, site = _when(opts, image), _site(opts)
