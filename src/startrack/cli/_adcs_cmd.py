@@ -34,7 +34,7 @@ from ..adcs import (
     write_files,
 )
 from ..errors import InvalidInputError
-from ._common import print_json
+from ._common import exit_status_epilog, print_json
 from ._progress import ProgressBar, ensure_database_for
 
 EPILOG = """\
@@ -47,12 +47,10 @@ output
   rise_time_s, settling_time_s, avg_power_w, peak_power_w (null where not reached), plus
   meets_table_5_3, seed, plans, tracker (with the star tracker) and files.
 
-exit status
-  0 the run meets the seed's Table 5.3 (steady-state < 4.5 deg, overshoot < 20 %, rise < 8 s,
-  settling < 30 s); 1 it does not (the table says where; a run shorter than one step's 20 s
-  steady-state window never does); 2 misuse, with one line 'startrack adcs-demo: error: ...'
-  on standard error.
-"""
+""" + exit_status_epilog("0 the run meets the seed's Table 5.3 (steady-state < 4.5 deg, overshoot < 20 %, rise < 8 s, "
+                         "settling < 30 s); 1 it does not (the table says where; a run shorter than one step's 20 s "
+                         "steady-state window never does); 2 misuse, with one line 'startrack adcs-demo: error: ...' "
+                         "on standard error;")
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -25,15 +25,20 @@ from ..analysis.postprocess import (
     run_analysis,
 )
 from ..errors import InvalidInputError
-from ._common import add_fov_options, add_max_pixels_option, apply_max_pixels_option, fov_kwargs, utc_offset_hours
+from ._common import (
+    add_fov_options,
+    add_max_pixels_option,
+    apply_max_pixels_option,
+    exit_status_epilog,
+    fov_kwargs,
+    utc_offset_hours,
+)
 from ._progress import ProgressBar, ensure_database_for
 
-EPILOG = """\
-exit status
-  0 the analysis ran (its files are written); 2 misuse (unknown analysis, bad --param, missing
-  path, wrong number of PATHs), with one line 'startrack analyse: error: ...' on standard error.
-  Images that cannot be read or solved do not stop the run: they count as unsolved.
-"""
+EPILOG = exit_status_epilog(
+    "0 the analysis ran (its files are written); 2 misuse (unknown analysis, bad --param, missing path, wrong "
+    "number of PATHs), with one line 'startrack analyse: error: ...' on standard error;",
+    "Images that cannot be read or solved do not stop the run: they count as unsolved.")
 
 
 def _parser() -> argparse.ArgumentParser:

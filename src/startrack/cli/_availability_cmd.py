@@ -17,7 +17,7 @@ from ..camera import Camera, get_preset
 from ..catalog import load_catalog, thin_uniform
 from ..errors import InvalidInputError
 from ..io import open_output, output_target
-from ._common import check_finite_options, positive_count, print_json, time_option
+from ._common import check_finite_options, exit_status_epilog, positive_count, print_json, time_option
 from ._progress import ProgressBar
 
 
@@ -28,6 +28,15 @@ def _camera(args) -> Camera:
         raise InvalidInputError("give --camera PRESET or --fov-deg F (with --width and --height)")
     return Camera.from_fov(args.width, args.height, args.fov_deg)
 
+
+EPILOG = (
+    "--json keys: camera, fov_deg, fov_height_deg, max_mag, catalog_stars, pointings, mean, min, max, "
+    "p_below_3, p_below_4, probability (pointing fraction by star count), reduced_catalog_stars.\n"
+    "With --rig: rig, max_mag, pointings, time_utc (null without exclusion), altitude_km, min_stars, "
+    "min_joint_stars, any_head, joint (fractions of pointings), heads: {name: {enough, blinded, "
+    "mean_stars}}.\n\n" + exit_status_epilog(
+        "0 done; 2 misuse (bad option or input), with one line 'startrack availability: error: ...' on standard "
+        "error;"))
 
 MAX_POINTINGS = 10_000_000
 """Most random pointings (the counts of 10^7 pointings take about a minute and some 100 MB)."""
@@ -55,14 +64,8 @@ def _check(args) -> None:
 
 
 def main(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser(
-        prog="startrack availability", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog="--json keys: camera, fov_deg, fov_height_deg, max_mag, catalog_stars, pointings, mean, min, max, "
-               "p_below_3, p_below_4, probability (pointing fraction by star count), reduced_catalog_stars.\n"
-               "With --rig: rig, max_mag, pointings, time_utc (null without exclusion), altitude_km, min_stars, "
-               "min_joint_stars, any_head, joint (fractions of pointings), heads: {name: {enough, blinded, "
-               "mean_stars}}.\n"
-               "Exit status: 0 done, 2 on bad input.")
+    parser = argparse.ArgumentParser(prog="startrack availability", description=__doc__, epilog=EPILOG,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--camera", help="camera preset")
     parser.add_argument("--fov-deg", type=float, help="pinhole camera: horizontal FOV")
     parser.add_argument("--width", type=positive_count, default=1024)

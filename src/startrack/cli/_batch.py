@@ -270,10 +270,21 @@ def add_batch_options(parser) -> None:
                         help="images in N worker processes at once (default 1: all in this process)")
 
 
-BATCH_EPILOG = """\
-batches (several images, a folder, or --csv)
-  One line per image (or one JSON object per line with --json), in the order given (a
-  folder's image files by name), a progress bar on a terminal, and a summary on standard error
-  naming each image not done and why. A file that cannot be read is reported on its line
-  (status error) and the others go on. Exit status: 0 every image done, 1 some not (not
-  solved, or an error), 2 misuse (a bad option, a folder without images)."""
+def batch_epilog() -> str:
+    """The "batches" paragraph of the ``--help`` of the commands that take a batch (solve, detect).
+
+    Returns
+    -------
+    str
+        A heading and its lines (:func:`startrack.cli._common.wrap_help`), the batch's exit
+        statuses last, ending with :data:`startrack.cli._common.FAULT_EXIT_STATUS`.
+    """
+    from ._common import FAULT_EXIT_STATUS, wrap_help  # not at import: a worker process does not need them
+
+    return "batches (several images, a folder, or --csv)\n" + wrap_help(
+        "One line per image (or one JSON object per line with --json), in the order given (a folder's image "
+        "files by name), a progress bar on a terminal, and a summary on standard error naming each image not "
+        "done and why. A file that cannot be read is reported on its line (status error), as is an unexpected "
+        "error on one image, and the others go on. "
+        "Exit status: 0 every image done; 1 some not (not solved, or an error); 2 misuse (a bad option, a "
+        f"folder without images); {FAULT_EXIT_STATUS}").rstrip("\n")

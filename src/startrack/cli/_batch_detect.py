@@ -26,7 +26,7 @@ def detect_record(path: Path, *, detector) -> Record:
 
     image = read_image(path)
     t0 = time.perf_counter()
-    details = detector.detect_details(image.data)
+    details = detector.detect_details(image)
     elapsed = time.perf_counter() - t0
     return {"image": str(path), "status": "ok", "reason": "", "n_stars": len(details.detections),
             "detect_time_s": elapsed, **json_record(path, details, detector)}

@@ -7,8 +7,6 @@ that no later command waits for either. The solving commands also warm up before
 solve (:func:`warm_up`): a star list of catalog stars is solved, so that compiling, or loading
 the compiled code from the cache, never falls inside a reported solve time, and when numba does
 compile they say so first ("compiling ... (one time ...)") on standard error.
-
-Exit status 0, 2 on a bad option.
 """
 
 from __future__ import annotations
@@ -23,6 +21,7 @@ from numpy.typing import NDArray
 
 from ..camera import Camera
 from ..warm_up import solve_catalog_stars
+from ._common import exit_status_epilog
 from ._process_gc import collection_paused, no_collection_at_exit
 
 COMPILE_ESTIMATE_S = 60
@@ -30,6 +29,10 @@ COMPILE_ESTIMATE_S = 60
 measured by ``benchmarks/startup_benchmark.py --cold`` with the machine shared (load 3-4) before
 the detector's per-region and uncertainty loops were compiled, 59 s on 2026-12-06 after (the
 same machine then ran the earlier code's compile in 48 s)."""
+
+EXIT_STATUS = exit_status_epilog("0 ready (the database built or found, the kernels compiled or loaded); 2 misuse (a "
+                                 "bad option), with one line 'startrack warm-up: error: ...' on standard error;")
+"""The exit status paragraph of ``startrack warm-up --help``."""
 
 
 class _CompileNotice:
@@ -112,7 +115,7 @@ def _detection(image: NDArray | None, every_detection: bool) -> None:
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="startrack warm-up", description=__doc__,
+    parser = argparse.ArgumentParser(prog="startrack warm-up", description=__doc__, epilog=EXIT_STATUS,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--fov-range-deg", type=float, nargs=2, metavar=("LO", "HI"),
                         help="also build the database for this range of fields of view, deg "

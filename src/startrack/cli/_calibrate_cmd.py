@@ -24,6 +24,7 @@ from ._common import (
     add_max_pixels_option,
     apply_max_pixels_option,
     epoch_option,
+    exit_status_epilog,
     fov_kwargs,
     print_json,
 )
@@ -44,10 +45,8 @@ output (--json)
   calibrated camera; null when not solved). Checkerboards: camera, sigma, pruned, rms_px,
   sigma_xy_px, used_views, rejected_views.
 
-exit status
-  0 calibrated; 1 nothing could be solved or calibrated (the reason is printed); 2 misuse (bad
-  option, unreadable file, images of different sizes), one line on standard error.
-"""
+""" + exit_status_epilog("0 calibrated; 1 nothing could be solved or calibrated (the reason is printed); 2 misuse (bad "
+                         "option, unreadable file, images of different sizes), one line on standard error;")
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -7,7 +7,8 @@
     startrack campaign list [--params LEVEL]
 
 SPEC is a TOML file or the name of a shipped spec (``campaign list``). Exit status 0 when the
-campaign ran (whatever its trials did), 2 for a bad spec or options (one line, before any work).
+campaign ran (whatever its trials did), 2 for a bad spec or options (one line, before any work),
+3 for an unexpected error (a fault of startrack's; :data:`startrack.cli._common.FAULT_EXIT_STATUS`).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InvalidInputError
+from ._common import exit_status_epilog
 
 DEFAULT_OUT = Path("startrack-campaigns")
 EPILOG = """\
@@ -28,8 +30,8 @@ SPEC is a TOML file (docs/campaigns.md) or the name of a shipped spec ('startrac
 OUT/report.html, and prints a table per cell (and the seed's numbers beside ours where the spec
 has them). 'rerun --json' prints {"row": {...}, "same_as_stored": true|false|null, "files": [...]}.
 
-Exit status: 0 the campaign ran (whatever its trials did), 2 a bad spec, folder or option (one
-line on stderr, before any work)."""
+""" + exit_status_epilog("0 the campaign ran (whatever its trials did); 2 a bad spec, folder or option, with one line "
+                         "'startrack campaign: error: ...' on standard error, before any work;")
 
 
 def _needs_extra() -> None:

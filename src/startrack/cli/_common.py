@@ -2,7 +2,10 @@
 
 Exit status of every subcommand: 0 solved (or written), 1 an expected failure (not solved: the
 status and reason are printed), 2 misuse (a bad option, an unreadable file, an invalid image or
-star list), reported as one line ``startrack <cmd>: error: ...`` on standard error.
+star list), reported as one line ``startrack <cmd>: error: ...`` on standard error, 3 an
+unexpected error, a fault of startrack's, reported as one line naming the exception's type
+(:data:`startrack.cli._main.DEBUG_ENV` set to 1 shows its traceback instead). Each subcommand's
+``--help`` says so with :data:`FAULT_EXIT_STATUS` (:func:`exit_status_epilog`).
 """
 
 from __future__ import annotations
@@ -10,7 +13,9 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
+import textwrap
 from typing import Any
 
 import numpy as np
@@ -21,6 +26,58 @@ from ..identify import MATCHERS
 from ..io import solution_to_dict, streak_fields
 from ..results import AttitudeSolution, Detections
 from ..solve import check_fov_deg, epoch_jyear
+from ._main import DEBUG_ENV, INTERNAL_ERROR
+
+FAULT_EXIT_STATUS = (f"{INTERNAL_ERROR} an unexpected error, a fault of startrack's (please report it), with one "
+                     f"line naming the exception's type on standard error ({DEBUG_ENV}=1 shows its traceback).")
+"""Exit status 3 as every subcommand's ``--help`` states it, after the statuses 0 to 2 of the
+command (:func:`exit_status_epilog`); :func:`startrack.cli._main.main` returns it."""
+
+HELP_WIDTH = 100
+"""Width the ``--help`` epilogs are wrapped at, characters."""
+
+_UNBROKEN = re.compile(r"(?:^|(?<=[;:] ))\d \S+|'startrack [^']*'")
+"""What :func:`wrap_help` keeps on one line: an exit status and its first word, a quoted message."""
+
+
+def wrap_help(text: str) -> str:
+    """``text`` as lines of a ``--help`` epilog: two spaces in, wrapped at :data:`HELP_WIDTH`.
+
+    Parameters
+    ----------
+    text : str
+        One paragraph; its line breaks and runs of spaces count as one space.
+
+    Returns
+    -------
+    str
+        The wrapped lines, ending with a newline: words are never split (at hyphens neither), nor
+        an exit status from its first word ("3 an") or a quoted ``'startrack <cmd>: error: ...'``.
+    """
+    glued = _UNBROKEN.sub(lambda m: m[0].replace(" ", "\0"), " ".join(text.split()))
+    return textwrap.fill(glued, width=HELP_WIDTH, initial_indent="  ", subsequent_indent="  ",
+                         break_long_words=False, break_on_hyphens=False).replace("\0", " ") + "\n"
+
+
+def exit_status_epilog(statuses: str, note: str = "") -> str:
+    """The "exit status" paragraph of a subcommand's ``--help``.
+
+    Parameters
+    ----------
+    statuses : str
+        The statuses 0 to 2 the command returns, separated and ended by ';'
+        (e.g. ``"0 solved; 1 not solved; 2 misuse ...;"``).
+    note : str, optional
+        A sentence after the statuses.
+
+    Returns
+    -------
+    str
+        ``exit status`` and, under it (:func:`wrap_help`), ``statuses``, :data:`FAULT_EXIT_STATUS`
+        and ``note``; ending with a newline.
+    """
+    return "exit status\n" + wrap_help(f"{statuses} {FAULT_EXIT_STATUS} {note}")
+
 
 SOLUTION_FORMATS = """\
 output (table, the default)
@@ -56,10 +113,8 @@ output (--json)
   --latitude-deg / --longitude-deg) also: time_utc, site, latitude_deg, longitude_deg,
   altitude_deg, azimuth_deg.
 
-exit status
-  0 solved; 1 not solved (the reason is printed); 2 misuse (bad option, unreadable file or
-  invalid input), with one line 'startrack <cmd>: error: ...' on standard error.
-"""
+""" + exit_status_epilog("0 solved; 1 not solved (the reason is printed); 2 misuse (bad option, unreadable file or "
+                         "invalid input), with one line 'startrack <cmd>: error: ...' on standard error;")
 
 
 def add_fov_options(parser: argparse.ArgumentParser) -> None:

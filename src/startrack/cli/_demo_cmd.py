@@ -15,7 +15,7 @@ from ..io import solution_to_dict, write_frame
 from ..solve import DEFAULT_FOV_RANGE_DEG, solve_image
 from ..units import ARCSEC
 from ._batch_warmup import warm_up
-from ._common import SOLUTION_FORMATS, print_json, solution_table
+from ._common import SOLUTION_FORMATS, exit_status_epilog, print_json, solution_table
 from ._progress import ensure_database
 from ._scene_options import add_scene_options, scene_epoch, simulate_scene
 
@@ -25,9 +25,8 @@ demo adds
   total angle and boresight angle, arcsec) and the files written; with --json the keys seed,
   attitude_error_arcsec, boresight_error_arcsec, pixel_scale_arcsec (when solved) and files.
 
-exit status
-  0 solved; 1 not solved; 2 misuse, with one line 'startrack demo: error: ...' on standard error.
-"""
+""" + exit_status_epilog("0 solved; 1 not solved; 2 misuse, with one line 'startrack demo: error: ...' on standard "
+                         "error;")
 
 
 def main(argv: list[str]) -> int:

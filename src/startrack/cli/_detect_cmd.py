@@ -4,8 +4,7 @@ Prints one row per star: x, y in our pixel convention (0-based pixel centres, x 
 add 1 for FITS / astrometry.net), flux (background subtracted, image units), sigma_px (1-sigma
 centroid error per axis), instrument magnitude, peak SNR, area and shape. --json prints the
 same records with every field of startrack.detect.DetectionDetails, plus the frame's
-background, noise, size, threshold and the settings used. Exit status 0 (also when no star is
-found), 2 on bad input.
+background, noise, size, threshold and the settings used.
 """
 
 from __future__ import annotations
@@ -15,13 +14,23 @@ import argparse
 from ..detect import CENTROIDERS, THRESHOLDS, DetectionDetails, StarDetector
 from ..errors import require
 from ..io import read_image
-from ._batch import BATCH_EPILOG, add_batch_options, is_batch
+from ._batch import add_batch_options, batch_epilog, is_batch
 from ._batch_warmup import warm_up_detection
-from ._common import add_max_pixels_option, apply_max_pixels_option, positive_count, print_json
+from ._common import (
+    add_max_pixels_option,
+    apply_max_pixels_option,
+    exit_status_epilog,
+    positive_count,
+    print_json,
+)
+
+EXIT_STATUS = exit_status_epilog("0 done (also when no star is found); 2 misuse (bad option, unreadable file or "
+                                 "invalid image), with one line 'startrack detect: error: ...' on standard error;")
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="startrack detect", description=__doc__, epilog=BATCH_EPILOG,
+    parser = argparse.ArgumentParser(prog="startrack detect", description=__doc__,
+                                     epilog=EXIT_STATUS + "\n" + batch_epilog(),
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("image", nargs="+", metavar="IMAGE",
                         help="FITS, PNG, JPEG or TIFF file; several files or folders for a batch")
@@ -69,7 +78,9 @@ def main(argv: list[str]) -> int:
         from ._batch_detect import detect_spec
 
         return run_batch(detect_spec(detector), args.image, as_json=args.json, csv_out=args.csv, jobs=args.jobs)
-    details = detector.detect_details(require(image, "the image").data)
+    image = require(image, "the image")
+    detector = detector.for_image(image)  # a JPEG's noise floor, in the settings the JSON records
+    details = detector.detect_details(image.data)
     if args.json:
         print_json(json_record(args.image[0], details, detector))
     else:

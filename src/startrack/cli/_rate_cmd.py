@@ -31,15 +31,23 @@ from ..rate import (
     streak_rate,
 )
 from ..units import DEG
-from ._common import add_max_pixels_option, apply_max_pixels_option, check_finite_options, print_json
+from ._common import (
+    add_max_pixels_option,
+    apply_max_pixels_option,
+    check_finite_options,
+    exit_status_epilog,
+    print_json,
+)
 
 EPILOG = """\
 output: status, reason, rate (deg/s), axis (camera frame, unit), omega_deg_s (x, y, z),
 sigma_deg_s (1-sigma of each component, when known), and for one image the streaks used and the
 RSO candidates (streak index, ends in 0-based pixels); for a pair the stars matched, the stars
 found in each image and the rms misfit of the matched stars to the rotation (px). --json gives
-the same as an object. Exit status 0 rate found, 1 not found, 2 misuse.
-"""
+the same as an object.
+
+""" + exit_status_epilog("0 rate found; 1 not found (the status and reason are printed); 2 misuse, with one line "
+                         "'startrack rate: error: ...' on standard error;")
 
 EXPOSURE_RANGE_S = (1e-4, 3600.0)
 """Valid --exposure-s and |--dt-s|: 0.1 ms to an hour."""

@@ -41,7 +41,7 @@ from ..io import (
     write_with_sidecar,
 )
 from ..simulate import ConstantRate, FrameTiming, SplitFieldFrame, load_profile, simulate_sequence
-from ._common import add_max_pixels_option, check_finite_options, print_json, time_option
+from ._common import add_max_pixels_option, check_finite_options, exit_status_epilog, print_json, time_option
 from ._progress import ProgressBar
 from ._render_limits import check_render_options
 from ._scene_options import (
@@ -82,10 +82,8 @@ output with --rig (files in the --out folder, default startrack-rig-sim)
   ra_deg, dec_deg, roll_deg (body +z axis), rate_deg_s (body frame), epoch_jyear, time_utc, heads:
   {name: {detector, file, stars_csv, blinded_by, n_stars, qx, qy, qz, qw (its rot_cam_from_icrs)}}.
 
-exit status
-  0 written; 2 misuse (bad option or output path), with one line
-  'startrack simulate: error: ...' on standard error.
-"""
+""" + exit_status_epilog("0 written; 2 misuse (bad option or output path), with one line 'startrack simulate: error: "
+                         "...' on standard error;")
 
 SEQUENCE_FORMATS = {"fits": ".fits", "png": ".png", "tif": ".tif"}
 

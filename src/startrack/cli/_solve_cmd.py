@@ -20,7 +20,7 @@ from ..identify import resolve_epoch
 from ..io import Image, read_image
 from ..results import AttitudeSolution, Detections, Status
 from ..solve import solve_image
-from ._batch import BATCH_EPILOG, add_batch_options, is_batch
+from ._batch import add_batch_options, batch_epilog, is_batch
 from ._batch_warmup import warm_up
 from ._common import (
     SOLUTION_FORMATS,
@@ -41,7 +41,7 @@ from ._solve_stars_cmd import add_aspect_option, add_parity_option, aspect_optio
 
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="startrack solve", description=__doc__,
-                                     epilog=SOLUTION_FORMATS + "\n" + BATCH_EPILOG,
+                                     epilog=SOLUTION_FORMATS + "\n" + batch_epilog(),
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("image", nargs="+", metavar="IMAGE",
                         help="FITS, PNG, JPEG or TIFF file; several files or folders for a batch")

@@ -33,6 +33,7 @@ from ._common import (
     add_method_option,
     apply_max_pixels_option,
     epoch_option,
+    exit_status_epilog,
     print_json,
 )
 from ._progress import ensure_database_for
@@ -57,10 +58,9 @@ output (--json)
   own_sigma_cross_arcsec, own_sigma_roll_arcsec; matches: [{index, hip, residual_arcsec}]}.
   Undefined values are null.
 
-exit status
-  0 solved; 1 not solved (the reason is printed); 2 misuse (bad option, unreadable rig or file,
-  a HEAD that is not in the rig), with one line 'startrack solve-rig: error: ...' on standard error.
-"""
+""" + exit_status_epilog("0 solved; 1 not solved (the reason is printed); 2 misuse (bad option, unreadable rig or "
+                         "file, a HEAD that is not in the rig), with one line 'startrack solve-rig: error: ...' on "
+                         "standard error;")
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -36,6 +36,7 @@ from ._common import (
     add_fov_options,
     add_max_pixels_option,
     epoch_option,
+    exit_status_epilog,
     fov_kwargs,
     max_pixels_option,
 )
@@ -46,7 +47,10 @@ EPILOG = "CSV columns: " + ", ".join(COLUMNS) + (
     "streaks, with an exposure time), or none for a frame that could not be used; status is ok, "
     "too_few_stars, no_match, timeout, or error (an unreadable frame or one of another size; the reason "
     "says which); the quaternion (qw >= 0) is rot_cam_from_icrs; the rate is the camera's, in the camera "
-    "frame.\nExit status: 0 when every frame has an attitude, 1 when some have none, 2 on bad input.")
+    "frame.\n\n") + exit_status_epilog(
+    "0 every frame has an attitude; 1 some have none (the status and reason columns say why); 2 misuse (a bad "
+    "option, no images, an --out that cannot be written), with one line 'startrack track: error: ...' on standard "
+    "error;")
 
 
 def _frames(source: Path) -> list[Path]:

@@ -19,12 +19,11 @@ from ..web import (
     WebConfig,
     default_data_dir,
 )
+from ._common import exit_status_epilog
 
-EPILOG = """\
-exit status
-  0 the server stopped normally (Ctrl-C); 2 misuse (a bad option, a --root that is not a folder, a
-  port in use), with one line 'startrack web: error: ...' on standard error.
-"""
+EPILOG = exit_status_epilog(
+    "0 the server stopped normally (Ctrl-C); 2 misuse (a bad option, a --root that is not a folder, a port in use), "
+    "with one line 'startrack web: error: ...' on standard error;")
 
 
 def _parser() -> argparse.ArgumentParser:
