@@ -188,7 +188,7 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
     ----------
     image : ndarray, shape (H, W)
         NaN pixels are left out; a tile without any other takes its nearest neighbour's
-        values.
+        values, and so does a tile of fill (:func:`fill_tiles`).
     tile : int
         Tile side in pixels of ``image``; the grid has max(1, H // tile) x max(1, W // tile)
         tiles of equal size, the last H % tile rows (W % tile columns) are left out.
@@ -207,7 +207,10 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
     """
     layout = tile_layout(image.shape, tile)
     rows, cols, centres_y, centres_x = layout.rows, layout.cols, layout.centres_y, layout.centres_x
-    q_lo, median = _stack_quantiles(_gather(image, rows, cols, layout.grid), (GAUSS_LO, 0.5))
+    lowest, q_lo, median, highest = last_axis_quantiles(_gather(image, rows, cols, layout.grid),
+                                                        (0.0, GAUSS_LO, 0.5, 1.0))
+    fill = fill_tiles(lowest, q_lo, median, highest)
+    q_lo, median = (_fill_from_nearest(_without(v, fill)) for v in (q_lo, median))
     if not np.isfinite(median).any():
         return global_background(image)
     level, lower = _median3(median, linear=True), _median3(median - q_lo)
@@ -215,17 +218,18 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
     keep_map = rows.size == image.shape[0] and cols.size == image.shape[1]
     level_map = np.empty((rows.size, cols.size), np.float32)
     residual = _gather(image, rows, cols, layout.grid, (level, layout.weights), level_map)
-    q_lo, q_mid, q_hi = _stack_quantiles(residual, (GAUSS_LO, 0.5, GAUSS_HI))
-    noise = _median3(0.5 * (q_hi - q_lo) * (upper_tail_factor(q_lo, q_mid, q_hi) if skewed else 1.0))
-    noise_global = _grid_quantile(noise, CLEAN_SKY_QUANTILE)
+    q_lo, q_mid, q_hi = _stack_quantiles(residual, (GAUSS_LO, 0.5, GAUSS_HI), fill)
+    sky = ~fill  # the frame's noise, level, clean sky and tail from the sky's tiles
+    noise = _median3(0.5 * (q_hi - q_lo) * (upper_tail_factor(q_lo[sky], q_mid[sky], q_hi[sky]) if skewed else 1.0))
+    noise_global = _grid_quantile(noise[sky], CLEAN_SKY_QUANTILE)
     if noise_global <= 0:  # quantized, nearly flat tiles: fall back on the global estimate
         noise_global = global_background(image).noise
-    lower_global = _grid_quantile(lower, CLEAN_SKY_QUANTILE)
+    lower_global = _grid_quantile(lower[sky], CLEAN_SKY_QUANTILE)
     clutter = lower / lower_global if lower_global > 0 else np.ones_like(lower)
     tiles = TileGrid(level=level, noise=np.maximum(noise, MIN_NOISE_RATIO * noise_global), clutter=clutter,
                      centres_y=offset + scale * centres_y, centres_x=offset + scale * centres_x,
                      clutter_reference=lower_global)
-    return BackgroundModel(level=_grid_quantile(level, 0.5), noise=noise_global, tiles=tiles,
+    return BackgroundModel(level=_grid_quantile(level[sky], 0.5), noise=noise_global, tiles=tiles,
                            level_map=level_map if keep_map else None)
 
 
@@ -328,11 +332,47 @@ def _tile_quantiles(sample: NDArray, grid: tuple[int, int], q: tuple[float, ...]
     return _stack_quantiles(_gather(sample, np.arange(sample.shape[0]), np.arange(sample.shape[1]), grid), q)
 
 
-def _stack_quantiles(stack: NDArray, q: tuple[float, ...]) -> list[NDArray]:
+def _stack_quantiles(stack: NDArray, q: tuple[float, ...], fill: NDArray[np.bool_] | None = None) -> list[NDArray]:
     """Quantiles ``q`` of each tile of a :func:`_gather` stack (ny, nx, S), ignoring NaN, each of
-    shape (ny, nx); a tile with no finite value takes its nearest neighbour's (all NaN when
-    no tile has one). The stack is sorted in place."""
-    return [_fill_from_nearest(v) for v in last_axis_quantiles(stack, q)]
+    shape (ny, nx); a tile with no finite value, or of ``fill`` (shape (ny, nx)), takes its
+    nearest neighbour's (all NaN when no tile has one). The stack is sorted in place."""
+    return [_fill_from_nearest(_without(v, fill)) for v in last_axis_quantiles(stack, q)]
+
+
+FILL_SIGMA = 3.0
+"""A tile of one value is fill when it lies this many times the sky's lower-half width below it."""
+
+
+def fill_tiles(lowest: NDArray, q_lo: NDArray, median: NDArray, highest: NDArray) -> NDArray[np.bool_]:
+    """The tiles of fill: one value throughout, the frame's lowest, and more than
+    :data:`FILL_SIGMA` times the sky's lower-half width below the sky (the median level of the
+    tiles whose values vary): the black borders of a registered or stacked frame, a masked area.
+    Left as sky, a quarter of the frame's tiles of fill would make its clean sky noiseless, and
+    the noise fall back on the whole frame's, borders included: 20-30 times the sky's.
+
+    Parameters
+    ----------
+    lowest, q_lo, median, highest : ndarray, shape (ny, nx)
+        Each tile's smallest value, its :data:`GAUSS_LO` quantile, median and largest value
+        (NaN for a tile without a value).
+
+    Returns
+    -------
+    ndarray of bool, shape (ny, nx)
+        All False when no tile is of one value or every tile is (a noise-free frame's sky is of
+        one value, and so are its tiles, at the level of the sky in the tiles with stars).
+    """
+    constant = lowest == highest  # False for NaN
+    varying = np.isfinite(median) & ~constant
+    if not constant.any() or not varying.any():
+        return np.zeros(median.shape, dtype=bool)
+    sky, width = np.median(median[varying]), np.median(median[varying] - q_lo[varying])
+    return constant & (lowest <= np.nanmin(lowest)) & (median < sky - FILL_SIGMA * width)
+
+
+def _without(grid: NDArray, tiles: NDArray[np.bool_] | None) -> NDArray:
+    """``grid`` with NaN in ``tiles`` (``grid`` itself when there are none)."""
+    return grid if tiles is None or not tiles.any() else np.where(tiles, np.nan, grid)
 
 
 def last_axis_quantiles(stack: NDArray, q: tuple[float, ...]) -> list[NDArray]:
