@@ -26,7 +26,7 @@ from typing import Literal, get_args
 import numpy as np
 from numpy.typing import NDArray
 
-from ._centroid import SpotMeasurements
+from ._centroid import SpotMeasurements, take_spots
 from ._centroid_mle import mle_centroid
 from ._centroid_moments import area_centroid, peak_centroid, weighted_centroid, weighted_raw_centroid
 from ._centroid_windowed import windowed_centroid
@@ -39,6 +39,8 @@ CentroidMethod = Literal["peak", "area", "weighted", "weighted-raw", "windowed",
 CENTROIDERS: tuple[str, ...] = get_args(CentroidMethod)
 WINDOW_METHODS = ("windowed", "mle")
 MIN_PSF_SIGMA_PX, MAX_HALF_PX = 0.5, 16
+MIN_PSF_SPOTS = 3
+"""Fewest unsaturated spots to estimate the PSF width from them alone."""
 SIZE_TO_SIGMA = 1.1
 """A thresholded spot's RMS radius underestimates the PSF width (its wings are cut): about 10 %
 at the default thresholds."""
@@ -61,6 +63,9 @@ class CentroidInputs:
         Raw value of every region pixel (NaN where missing).
     level, noise : ndarray, shape (N,)
         Background level and pixel noise at each spot.
+    saturated : ndarray of bool, shape (N,), or None
+        Spots clipped at the frame's largest value (:func:`.point_source.saturated_spots`), left
+        out of the PSF width's estimate (:func:`estimate_psf_sigma`).
     """
 
     data: NDArray
@@ -70,12 +75,19 @@ class CentroidInputs:
     raw: NDArray[np.float64]
     level: NDArray[np.float64]
     noise: NDArray[np.float64]
+    saturated: NDArray[np.bool_] | None = None
 
 
-def estimate_psf_sigma(spots: SpotMeasurements) -> float:
-    """PSF standard deviation from the brighter half of the spots' RMS radii, px."""
+def estimate_psf_sigma(spots: SpotMeasurements, saturated: NDArray[np.bool_] | None = None) -> float:
+    """PSF standard deviation from the brighter half of the spots' RMS radii, px; the
+    ``saturated`` spots (shape (N,)) left out when at least :data:`MIN_PSF_SPOTS` others remain:
+    a clipped core is wider than the PSF, and the pieces of a saturated overlay (a timestamp, a
+    watermark) or of the Moon's limb, brighter than the stars, would set the width (6-8 px against
+    1.2 px on the openstartracker frames with a watermark)."""
     if len(spots.x) == 0:
         return 1.0
+    if saturated is not None and saturated.any() and np.count_nonzero(~saturated) >= MIN_PSF_SPOTS:
+        spots = take_spots(spots, ~saturated)
     flux = spots.flux  # np.median's values, from one partition where there is no NaN (fast_median)
     bright = spots.size_px[flux >= (np.median(flux) if np.isnan(flux).any() else fast_median(flux))]
     bright = bright[np.isfinite(bright)]
@@ -120,7 +132,7 @@ def run_centroider(name: str, inputs: CentroidInputs, *, psf_sigma_px: float | N
         return weighted_centroid(spots, inputs.noise)
     if name == "weighted-raw":
         return weighted_raw_centroid(inputs.regions, inputs.raw, inputs.noise)
-    sigma = estimate_psf_sigma(spots) if psf_sigma_px is None else float(psf_sigma_px)
+    sigma = estimate_psf_sigma(spots, inputs.saturated) if psf_sigma_px is None else float(psf_sigma_px)
     start_x = np.where(np.isfinite(spots.x), spots.x, spots.peak_x)
     start_y = np.where(np.isfinite(spots.y), spots.y, spots.peak_y)
     windows = extract_windows(inputs.data, np.rint(start_x), np.rint(start_y),

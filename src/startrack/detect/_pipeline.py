@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import require
 from ..results import Detections
 from . import _filters as filters
 from ._background import (
@@ -334,7 +335,7 @@ def measure(cfg: DetectionSettings, frame: Frame, kept: MeasuredRegions, k_sigma
             full_width: int) -> DetectionDetails:
     """Centroid the (filtered) spots and pack the result."""
     inputs = CentroidInputs(frame.prepared.data, frame.prepared.invalid, kept.regions, kept.spots, kept.raw,
-                            kept.peak_level, kept.local_noise)
+                            kept.peak_level, kept.local_noise, saturated_spots(kept.regions, kept.raw, frame.top))
     return pack(cfg, frame, inputs, k_sigma, full_width)
 
 
@@ -388,7 +389,7 @@ def pack(cfg: DetectionSettings, frame: Frame, inputs: CentroidInputs, k_sigma: 
         x=x + frame.x_offset, y=y, flux=flux, sigma_px=sigma, area_px=spots.area_px.astype(np.int64),
         peak=spots.peak, elongation=spots.elongation, background=frame.model.level,
         noise=frame.noise_px, width=full_width, height=frame.prepared.data.shape[0],
-        point_quality=point_quality_of(inputs, peak_snr, frame.top))
+        point_quality=point_quality_of(inputs, peak_snr))
     details = DetectionDetails(
         detections=detections, mag=instrument_magnitude(flux, cfg.mag_zero_point),
         peak_snr=peak_snr, major_px=shape.major_px, minor_px=shape.minor_px,
@@ -404,12 +405,12 @@ def on_frame(frame: Frame, x: NDArray, y: NDArray) -> NDArray[np.bool_]:
         return (np.abs(x - (w - 1) / 2) <= w / 2) & (np.abs(y - (h - 1) / 2) <= h / 2)
 
 
-def point_quality_of(inputs: CentroidInputs, peak_snr: NDArray, top: float) -> NDArray[np.float64]:
-    """Point-source quality of the spots (:mod:`._point_source`); spots clipped at the frame's
-    largest value ``top`` (at least two pixels) are saturated."""
+def point_quality_of(inputs: CentroidInputs, peak_snr: NDArray) -> NDArray[np.float64]:
+    """Point-source quality of the spots (:mod:`._point_source`), the saturated ones as
+    ``inputs.saturated`` says."""
     regions, raw = inputs.regions, inputs.raw
     size, elongation = core_shape(regions, raw - inputs.level[regions.index], inputs.spots.peak)
-    return point_quality(size, elongation, peak_snr, saturated_spots(regions, raw, top))
+    return point_quality(size, elongation, peak_snr, require(inputs.saturated, "the spots' saturation"))
 
 
 def empty_details(frame: Frame, full_width: int, cfg: DetectionSettings,
