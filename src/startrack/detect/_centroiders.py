@@ -95,6 +95,32 @@ def estimate_psf_sigma(spots: SpotMeasurements, saturated: NDArray[np.bool_] | N
     return max(MIN_PSF_SIGMA_PX, value)
 
 
+def clipped_width(spots: SpotMeasurements, saturated: NDArray[np.bool_], sigma: float) -> float:
+    """The Gaussian window width for the ``saturated`` spots (shape (N,)), px: the width of their
+    median size when that is wider than the PSF's ``sigma`` (a clipped core is wider than the PSF,
+    and a window as wide centres it, as the width estimated from all spots did), else ``sigma``."""
+    sizes = spots.size_px[saturated]
+    sizes = sizes[np.isfinite(sizes)]
+    return max(sigma, SIZE_TO_SIGMA * float(np.median(sizes))) if sizes.size else sigma
+
+
+def _with_clipped_windows(first: Centroids, inputs: CentroidInputs, start_x: NDArray, start_y: NDArray,
+                          sigma: float, half: int | None, gain_e_per_adu: float | None) -> Centroids:
+    """``first`` with the saturated spots centroided again in windows of :func:`clipped_width`."""
+    saturated = inputs.saturated
+    if saturated is None or not saturated.any():
+        return first
+    width = clipped_width(inputs.spots, saturated, sigma)
+    if width <= sigma:
+        return first
+    index = np.flatnonzero(saturated)
+    windows = extract_windows(inputs.data, np.rint(start_x[index]), np.rint(start_y[index]),
+                              window_half_px(width, half), inputs.invalid)
+    part = windowed_centroid(windows, inputs.level[index], inputs.noise[index], start_x[index], start_y[index],
+                             width, gain_e_per_adu=gain_e_per_adu)
+    return first.with_rows(index, part)
+
+
 def window_half_px(psf_sigma_px: float, half: int | None = None) -> int:
     """Half-width of the windows of the window methods: ``half`` or ceil(3 s) + 1."""
     if half is not None:
@@ -139,6 +165,8 @@ def run_centroider(name: str, inputs: CentroidInputs, *, psf_sigma_px: float | N
                               window_half_px(sigma, half), inputs.invalid)
     first = windowed_centroid(windows, inputs.level, inputs.noise, start_x, start_y, sigma,
                               gain_e_per_adu=gain_e_per_adu)
+    if psf_sigma_px is None:
+        first = _with_clipped_windows(first, inputs, start_x, start_y, sigma, half, gain_e_per_adu)
     if name == "windowed":
         return first
     fallback = first.where(first.ok, weighted_centroid(spots, inputs.noise))

@@ -168,6 +168,15 @@ class Centroids:
         """A subset or reordering, by index array or boolean mask."""
         return Centroids(**{f.name: getattr(self, f.name)[index] for f in fields(self)})
 
+    def with_rows(self, index: NDArray[np.intp], part: Centroids) -> Centroids:
+        """This result with the rows ``index`` (shape (K,)) replaced by ``part`` (K rows)."""
+        out = {}
+        for f in fields(self):
+            values = getattr(self, f.name).copy()
+            values[index] = getattr(part, f.name)
+            out[f.name] = values
+        return Centroids(**out)
+
     def where(self, use: NDArray[np.bool_], other: Centroids) -> Centroids:
         """Element-wise: this result where ``use``, ``other`` elsewhere."""
         return Centroids(**{f.name: np.where(use, getattr(self, f.name), getattr(other, f.name))
