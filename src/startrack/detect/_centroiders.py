@@ -64,8 +64,10 @@ class CentroidInputs:
     level, noise : ndarray, shape (N,)
         Background level and pixel noise at each spot.
     saturated : ndarray of bool, shape (N,), or None
-        Spots clipped at the frame's largest value (:func:`.point_source.saturated_spots`), left
-        out of the PSF width's estimate (:func:`estimate_psf_sigma`).
+        Spots clipped at the frame's largest value (:func:`.point_source.saturated_spots`): left
+        out of the PSF width's estimate (:func:`estimate_psf_sigma`) and centroided in windows of
+        their own median size (:func:`clipped_width`); their point-source quality counts their
+        elongation only.
     """
 
     data: NDArray

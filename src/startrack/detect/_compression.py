@@ -22,9 +22,11 @@ filter's clean sky (:func:`.background.with_clutter_floor`) is held to the same 
 The noise floor is a trade: where the compression has left no noise to round up (8-bit frames
 with 1 grey level of sky noise at quality 50-60), there are no such patterns, and the floor only
 takes faint stars. So it applies when the unfloored threshold finds more than
-:data:`CROWDED_SPOTS` spots (:func:`crowded`): 14-22 on those frames, 330-2000 on frames whose
-noise was rounded into patterns. ``benchmarks/jpeg_quality.py`` measures what the floor does to
-photos and star-camera frames saved at JPEG qualities 40-95.
+:data:`CROWDED_SPOTS` spots (:func:`crowded`): 14-22 on those frames, 330-2050 on simulated
+frames whose noise was rounded into patterns. For R + G + B the step is three times the
+luminance's (:attr:`startrack.io.Image.compression_step`); the chroma planes' own steps, coarser
+and on a subsampled grid, are not counted. ``benchmarks/jpeg_quality.py`` measures what the floor
+does to photos and star-camera frames saved at JPEG qualities 40-95.
 """
 
 from __future__ import annotations

@@ -270,5 +270,6 @@ def read_image(
 
 def _planes_summed(data: NDArray, channel: str | int | None) -> int:
     """How many colour planes the colour rule added into one (:func:`._channels.to_single_channel`):
-    3 for R + G + B, else 1. (A JPEG's colour planes carry the luminance's steps, each one.)"""
+    3 for R + G + B, else 1. (Each colour plane of a JPEG carries its luminance's steps; the steps
+    of its chroma planes, coarser and subsampled, are not counted.)"""
     return 3 if channel is None and data.ndim == 3 and data.shape[-1] >= 3 else 1
