@@ -12,10 +12,14 @@ from startrack.cli import SUBCOMMANDS, main
 from startrack.cli._common import FAULT_EXIT_STATUS, HELP_WIDTH
 from startrack.cli._main import DEBUG_ENV, INTERNAL_ERROR
 
+CAMPAIGN_ACTIONS = ("run", "report", "rerun", "list")
+HELP_ARGS = [[command] for command in SUBCOMMANDS] + [["campaign", action] for action in CAMPAIGN_ACTIONS]
+"""Every subcommand, and each action of ``campaign``."""
 
-def _help(command: str, capsys) -> str:
+
+def _help(command: list[str], capsys) -> str:
     """The printed ``startrack COMMAND --help`` (argparse's SystemExit(0) is the exit status)."""
-    code = main([command, "--help"])
+    code = main([*command, "--help"])
     out, err = capsys.readouterr()
     assert code == 0, err
     return out
@@ -26,7 +30,7 @@ def _exit_status_texts(text: str) -> list[str]:
     return [text[m.start():].split("\n\n")[0] for m in re.finditer("exit status", text, re.IGNORECASE)]
 
 
-@pytest.mark.parametrize("command", list(SUBCOMMANDS))
+@pytest.mark.parametrize("command", HELP_ARGS, ids=" ".join)
 def test_every_exit_status_text_of_the_help_states_status_3(command, capsys):
     texts = _exit_status_texts(_help(command, capsys))
     assert texts, f"startrack {command} --help has no exit status"
@@ -36,7 +40,7 @@ def test_every_exit_status_text_of_the_help_states_status_3(command, capsys):
         assert f"{DEBUG_ENV}=1" in flat, text
 
 
-@pytest.mark.parametrize("command", list(SUBCOMMANDS))
+@pytest.mark.parametrize("command", HELP_ARGS, ids=" ".join)
 def test_the_help_states_status_3_with_the_shared_sentence(command, capsys):
     """The sentence of :mod:`startrack.cli._common`, wrapped within the epilogs' width."""
     texts = _exit_status_texts(_help(command, capsys))

@@ -24,14 +24,17 @@ from ..errors import InvalidInputError
 from ._common import exit_status_epilog
 
 DEFAULT_OUT = Path("startrack-campaigns")
+EXIT_STATUS = exit_status_epilog(
+    "0 the campaign ran (whatever its trials did); 2 a bad spec, folder or option, with one line "
+    "'startrack campaign: error: ...' on standard error, before any work;")
+"""The exit statuses, in the help of the command and of each of its actions."""
 EPILOG = """\
 SPEC is a TOML file (docs/campaigns.md) or the name of a shipped spec ('startrack campaign list').
 'run' writes OUT/manifest.json, OUT/trials/*.parquet (one row per trial), OUT/cells.csv and
 OUT/report.html, and prints a table per cell (and the seed's numbers beside ours where the spec
 has them). 'rerun --json' prints {"row": {...}, "same_as_stored": true|false|null, "files": [...]}.
 
-""" + exit_status_epilog("0 the campaign ran (whatever its trials did); 2 a bad spec, folder or option, with one line "
-                         "'startrack campaign: error: ...' on standard error, before any work;")
+""" + EXIT_STATUS
 
 
 def _needs_extra() -> None:
@@ -47,7 +50,11 @@ def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="startrack campaign", description=__doc__.split("\n\n")[0],
                                      epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="action", required=True, metavar="{run,report,rerun,list}")
-    run = sub.add_parser("run", help="run a campaign spec")
+
+    def action(name: str, text: str) -> argparse.ArgumentParser:
+        return sub.add_parser(name, help=text, epilog=EXIT_STATUS, formatter_class=argparse.RawDescriptionHelpFormatter)
+
+    run = action("run", "run a campaign spec")
     run.add_argument("spec", help="a TOML spec file, or the name of a shipped spec")
     run.add_argument("--out", type=Path, help=f"output folder (default {DEFAULT_OUT}/NAME)")
     where = run.add_mutually_exclusive_group()
@@ -57,15 +64,15 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--chunk-size", type=int, metavar="N", help="trials per task (default: the level's)")
     run.add_argument("--resume", action="store_true", help="finish an interrupted campaign in --out")
     run.add_argument("--no-report", action="store_true", help="skip cells.csv and the report")
-    report = sub.add_parser("report", help="(re)write cells.csv and report.html of a campaign folder")
+    report = action("report", "(re)write cells.csv and report.html of a campaign folder")
     report.add_argument("out", type=Path)
-    rerun = sub.add_parser("rerun", help="reproduce one trial exactly and print its row")
+    rerun = action("rerun", "reproduce one trial exactly and print its row")
     rerun.add_argument("out", type=Path)
     rerun.add_argument("--cell", type=int, required=True)
     rerun.add_argument("--trial", type=int, required=True)
     rerun.add_argument("--save-image", type=Path, metavar="DIR", help="write the trial's frame (or star list) here")
     rerun.add_argument("--json", action="store_true", help="print the row as JSON")
-    listing = sub.add_parser("list", help="list the shipped specs, or a level's parameters")
+    listing = action("list", "list the shipped specs, or a level's parameters")
     listing.add_argument("--params", metavar="LEVEL", help="print the parameters of a level (stars, image, ...)")
     return parser
 
