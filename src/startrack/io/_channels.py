@@ -107,3 +107,9 @@ def to_single_channel(array: NDArray, channel: str | int | None = None) -> NDArr
     if index is not None:
         return array[..., index]
     return array[..., :3].sum(axis=-1, dtype=_sum_dtype(array.dtype))
+
+
+def planes_summed(array: NDArray, channel: str | int | None = None) -> int:
+    """How many planes :func:`to_single_channel` adds into one: 3 for R + G + B (``channel`` None
+    and 3 or 4 channels), else 1 (a grey image, grey + alpha, or one colour plane)."""
+    return 3 if channel_index(channel) is None and array.ndim == 3 and array.shape[-1] >= 3 else 1

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ImageReadError, InvalidInputError
-from ._channels import channel_index, to_single_channel
+from ._channels import channel_index, planes_summed, to_single_channel
 from ._heif import is_heif
 from ._limits import check_image_size, resolve_max_pixels
 from ._raster import identify_format, read_raster
@@ -265,11 +265,5 @@ def read_image(
     colour = data.ndim == 3
     single = to_single_channel(data, channel)
     check_pixel_values(single, path)
-    return Image(single, path, header, bit_depth, colour, step * _planes_summed(data, channel))
-
-
-def _planes_summed(data: NDArray, channel: str | int | None) -> int:
-    """How many colour planes the colour rule added into one (:func:`._channels.to_single_channel`):
-    3 for R + G + B, else 1. (Each colour plane of a JPEG carries its luminance's steps; the steps
-    of its chroma planes, coarser and subsampled, are not counted.)"""
-    return 3 if channel is None and data.ndim == 3 and data.shape[-1] >= 3 else 1
+    # each colour plane of a JPEG carries its luminance's steps (its chroma planes' own are not counted)
+    return Image(single, path, header, bit_depth, colour, step * planes_summed(data, channel))
