@@ -83,3 +83,13 @@ def test_command_line_loads_only_the_chosen_command():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
     assert "startrack.cli._main" in out.stdout
     assert "_cmd" not in out.stdout
+
+
+def test_default_detection_does_not_load_scipy_ndimage():
+    # scipy.ndimage costs about 30 ms of a command's start; only optional stages (denoising, the
+    # region-grow grouping, tiles without sky) use it, and they import it when they run
+    code = ("import sys, numpy as np; from startrack.detect import StarDetector; "
+            "StarDetector().detect(np.random.default_rng(0).normal(100, 3, (64, 64)).astype(np.uint16)); "
+            "print('scipy.ndimage' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
+    assert out.stdout.split()[-1] == "False"

@@ -24,7 +24,6 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage
 
 from ._compiled import kernels
 from ._robust import GAUSS_HI, GAUSS_LO, clipped_level_noise, quantization_step, strided_sample
@@ -409,6 +408,8 @@ def _fill_from_nearest(grid: NDArray) -> NDArray:
     missing = np.isnan(grid)
     if not missing.any() or missing.all():
         return grid
+    from scipy import ndimage  # here, not at import: few frames have tiles without sky (issue 20)
+
     index = ndimage.distance_transform_edt(missing, return_distances=False, return_indices=True)
     return grid[tuple(index)]
 

@@ -19,7 +19,6 @@ from typing import Literal, get_args
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage
 
 from ..errors import InvalidInputError
 
@@ -33,6 +32,8 @@ DIFFUSION_STEP = 0.2
 def gaussian_smooth(image: NDArray, sigma_px: float) -> NDArray[np.float32]:
     """Gaussian low-pass filter (edges mirrored), float32; NaN pixels are filled with the
     median first and set back to NaN after."""
+    from scipy import ndimage  # here, not at import: denoising is optional (issue 20)
+
     data = np.asarray(image, dtype=np.float32)
     nan = np.isnan(data)
     if nan.any():

@@ -15,11 +15,11 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage
 
 from ._label import Regions, regions_from_index
 
-FOUR_CONNECTED = ndimage.generate_binary_structure(2, 1)
+FOUR_CONNECTED = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], dtype=bool)
+"""The 4-connectivity structure (``scipy.ndimage.generate_binary_structure(2, 1)``)."""
 DEFAULT_JUMP_PX = 3
 
 
@@ -29,6 +29,8 @@ def grow_regions(mask: NDArray[np.bool_], jump: int = DEFAULT_JUMP_PX) -> Region
     Regions are numbered in the order the seed's scan finds them (row by row of the grid, then
     column); a region touching no grid pixel is not found.
     """
+    from scipy import ndimage  # here, not at import: only this grouping uses it (issue 20)
+
     labels, n = ndimage.label(mask, structure=FOUR_CONNECTED)
     if n == 0:
         return regions_from_index(np.zeros(0, np.int64), np.zeros(0, np.int64),
