@@ -313,7 +313,7 @@ def test_the_search_order_puts_point_sources_first_and_drops_repeats():
 
 def test_the_search_order_keeps_each_positions_first_occurrence():
     """Against np.unique's first occurrences, on lists with many repeated positions, some of them
-    repeated between a point source and an extended spot."""
+    repeated between a point source and an extended spot (in the order of :func:`spread_rounds`)."""
     from startrack.results import Detections
     from startrack.solve import search_order
 
@@ -325,7 +325,38 @@ def test_the_search_order_keeps_each_positions_first_occurrence():
                            point_quality=rng.choice([0.1, 1.0], n))
         index = np.argsort(~found.is_point_source, kind="stable")
         _, first = np.unique(np.column_stack([found.x[index], found.y[index]]), axis=0, return_index=True)
-        np.testing.assert_array_equal(search_order(found), index[np.sort(first)])
+        order = search_order(found)
+        np.testing.assert_array_equal(np.sort(order), np.sort(index[first]))  # each position once, its first
+        assert not np.any(np.diff(found.is_point_source[order].astype(int)) > 0)  # point sources first
+
+
+def test_spread_rounds_count_each_cells_spots_in_turns_of_two():
+    """Against a loop: a spot's round is the number of earlier spots in its cell, halved."""
+    from startrack.solve import spread_rounds
+
+    rng = np.random.default_rng(4)
+    for _ in range(10):
+        n = int(rng.integers(0, 80))
+        x, y = rng.uniform(-0.5, 639.5, n), rng.uniform(-0.5, 479.5, n)
+        cell = [(min(int(max(u, 0) / 640 * 6), 5), min(int(max(v, 0) / 480 * 6), 5)) for u, v in zip(x, y, strict=True)]
+        expected = [cell[:k].count(c) // 2 for k, c in enumerate(cell)]
+        np.testing.assert_array_equal(spread_rounds(x, y, 640, 480), expected)
+
+
+def test_the_search_order_lets_a_bright_crowd_in_two_at_a_time():
+    """Twelve bright spots in one corner (a caption's pieces) and twelve fainter ones spread over
+    the frame: the first twenty the solver sees hold the twelve spread ones."""
+    from startrack.results import Detections
+    from startrack.solve import search_order
+
+    rng = np.random.default_rng(2)
+    crowd_x, crowd_y = rng.uniform(10, 90, 12), rng.uniform(400, 470, 12)  # px: one cell of 6 x 6
+    gx, gy = np.meshgrid(np.arange(4) * 150 + 120, np.arange(3) * 140 + 60)  # px: 12 cells
+    found = Detections(x=np.r_[crowd_x, gx.ravel()], y=np.r_[crowd_y, gy.ravel()],
+                       flux=np.r_[np.full(12, 9e4), np.full(12, 1e3)], width=640, height=480)
+    first = search_order(found)[:20]
+    assert set(range(12, 24)) <= set(first.tolist())
+    assert (first < 12).sum() == 8  # two per round while the spread spots last (6 rounds), then the rest
 
 
 def _cli(*argv) -> tuple[int, str, str]:

@@ -73,7 +73,7 @@ def test_core_shape_is_the_reduceat_value(seed):
         dx, dy = x - mx[regions.index], y - my[regions.index]
         ratio = axis_ratio(regions.sum(core * dx * dx) / area + 1 / 12, regions.sum(core * dy * dy) / area + 1 / 12,
                            regions.sum(core * dx * dy) / area)
-    size, elongation = core_shape(regions, signal, peak)
+    size, elongation, _ = core_shape(regions, signal, peak)
     np.testing.assert_allclose(size, np.sqrt(area / HALF_MAX_AREA), rtol=1e-12)  # px
     np.testing.assert_allclose(elongation, np.where(area >= MIN_SHAPE_PIXELS, ratio, 1.0), rtol=1e-12)  # ratio
     assert (elongation > 1.0).any()

@@ -45,7 +45,7 @@ from ._fine_pass import (
 from ._label import Regions, label_regions
 from ._magnitude import instrument_magnitude
 from ._merge import brightest_first
-from ._point_source import core_shape, frame_top, point_quality, saturated_spots
+from ._point_source import CoreShape, core_shape, frame_top, point_quality, saturated_spots
 from ._prefilters import packing, prefilter
 from ._prepare import PreparedImage, prepare_image
 from ._region_grow import grow_regions
@@ -264,10 +264,9 @@ def point_like(frame: Frame, base: MeasuredRegions, extra: MeasuredRegions) -> N
     the frame's reference taken from ``base`` and ``extra`` together."""
     both = [(m.regions, m.signal) for m in (base, extra)]
     shapes = [core_shape(r, signal, r.max(signal)) for r, signal in both]
-    size = np.concatenate([sz for sz, _ in shapes])
-    elongation = np.concatenate([el for _, el in shapes])
+    shape = CoreShape(*(np.concatenate(measure) for measure in zip(*shapes, strict=True)))
     snr = np.concatenate([r.max(signal) for r, signal in both]) / frame.noise_px
-    quality = point_quality(size, elongation, snr, np.zeros(size.size, dtype=bool))
+    quality = point_quality(shape, snr, np.zeros(shape.size.size, dtype=bool))
     return quality[len(base):] >= Detections.POINT_SOURCE_MIN_QUALITY
 
 
@@ -279,7 +278,7 @@ def stars_are_sharp(frame: Frame, kept: MeasuredRegions) -> bool:
         return True
     regions, signal = kept.regions, kept.signal
     peak = regions.max(signal)
-    size, _ = core_shape(regions, signal, peak)
+    size = core_shape(regions, signal, peak).size
     significant = np.isfinite(size) & (peak >= SHARP_MIN_SNR * frame.noise_px)
     return significant.sum() < 3 or float(fast_median(size[significant])) < SHARP_CORE_PX  # finite sizes
 
@@ -409,8 +408,8 @@ def point_quality_of(inputs: CentroidInputs, peak_snr: NDArray) -> NDArray[np.fl
     """Point-source quality of the spots (:mod:`._point_source`), the saturated ones as
     ``inputs.saturated`` says."""
     regions, raw = inputs.regions, inputs.raw
-    size, elongation = core_shape(regions, raw - inputs.level[regions.index], inputs.spots.peak)
-    return point_quality(size, elongation, peak_snr, require(inputs.saturated, "the spots' saturation"))
+    shape = core_shape(regions, raw - inputs.level[regions.index], inputs.spots.peak)
+    return point_quality(shape, peak_snr, require(inputs.saturated, "the spots' saturation"))
 
 
 def empty_details(frame: Frame, full_width: int, cfg: DetectionSettings,
