@@ -12,7 +12,9 @@ noises, i.e. that of the clean sky. A frame whose noise is clipped at zero, and 
 upwards, gets its noise scaled to the width of the upper half (:func:`upper_tail_factor`),
 the side a threshold cuts. A third grid, the *clutter* ratio, compares each tile's
 lower-half width (median - 15.87 % quantile, which stars cannot raise) with the clean sky's:
-about 1 on sky with or without stars, several times more on lit leaves or roof texture.
+about 1 on sky with or without stars, several times more on lit leaves or roof texture. Like the
+noise, it is measured on the residual from the interpolated level, so that the Moon's glow, whose
+gradient widens a tile's raw values, is not taken for clutter.
 Where the tiles sample the image and how their grids are interpolated is
 :mod:`._tile_geometry`'s.
 """
@@ -212,12 +214,13 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
     q_lo, median = (_fill_from_nearest(_without(v, fill)) for v in (q_lo, median))
     if not np.isfinite(median).any():
         return global_background(image)
-    level, lower = _median3(median, linear=True), _median3(median - q_lo)
+    level = _median3(median, linear=True)
     # noise from the residual, so that a gradient across a tile does not count as noise
     keep_map = rows.size == image.shape[0] and cols.size == image.shape[1]
     level_map = np.empty((rows.size, cols.size), np.float32)
     residual = _gather(image, rows, cols, layout.grid, (level, layout.weights), level_map)
     q_lo, q_mid, q_hi = _stack_quantiles(residual, (GAUSS_LO, 0.5, GAUSS_HI), fill)
+    lower = _median3(q_mid - q_lo)  # the residual's too: a glow's gradient across a tile is not clutter
     sky = ~fill  # the frame's noise, level, clean sky and tail from the sky's tiles
     noise = _median3(0.5 * (q_hi - q_lo) * (upper_tail_factor(q_lo[sky], q_mid[sky], q_hi[sky]) if skewed else 1.0))
     noise_global = _grid_quantile(noise[sky], CLEAN_SKY_QUANTILE)
