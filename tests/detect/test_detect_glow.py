@@ -1,6 +1,7 @@
 """Stars in the Moon's glow are detected: the clutter ratio is measured on the residual from the
-interpolated background level, as the noise is, so that the glow's gradient across a tile does
-not count as clutter (lit leaves and roof texture, which vary within a tile, still do).
+interpolated background level too, as the noise is, and the smaller ratio counts, so that the
+glow's gradient across a tile does not count as clutter (lit leaves and roof texture, which vary
+within a tile, still do).
 
 Before, a tile's lower-half width was that of its raw values: where the glow fell by tens of
 its noise across a 32 px tile, the tiles looked 3-10 times as cluttered as the clean sky and

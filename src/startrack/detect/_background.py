@@ -12,9 +12,10 @@ noises, i.e. that of the clean sky. A frame whose noise is clipped at zero, and 
 upwards, gets its noise scaled to the width of the upper half (:func:`upper_tail_factor`),
 the side a threshold cuts. A third grid, the *clutter* ratio, compares each tile's
 lower-half width (median - 15.87 % quantile, which stars cannot raise) with the clean sky's:
-about 1 on sky with or without stars, several times more on lit leaves or roof texture. Like the
-noise, it is measured on the residual from the interpolated level, so that the Moon's glow, whose
-gradient widens a tile's raw values, is not taken for clutter.
+about 1 on sky with or without stars, several times more on lit leaves or roof texture. It is
+measured twice, on the tile's raw values and, as the noise is, on their residual from the
+interpolated level, and the smaller of the two ratios counts (:func:`clutter_ratios`), so that
+the Moon's glow, whose gradient widens a tile's raw values, is not taken for clutter.
 Where the tiles sample the image and how their grids are interpolated is
 :mod:`._tile_geometry`'s.
 """
@@ -214,25 +215,44 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
     q_lo, median = (_fill_from_nearest(_without(v, fill)) for v in (q_lo, median))
     if not np.isfinite(median).any():
         return global_background(image)
-    level = _median3(median, linear=True)
+    level, lower_raw = _median3(median, linear=True), _median3(median - q_lo)
     # noise from the residual, so that a gradient across a tile does not count as noise
     keep_map = rows.size == image.shape[0] and cols.size == image.shape[1]
     level_map = np.empty((rows.size, cols.size), np.float32)
     residual = _gather(image, rows, cols, layout.grid, (level, layout.weights), level_map)
     q_lo, q_mid, q_hi = _stack_quantiles(residual, (GAUSS_LO, 0.5, GAUSS_HI), fill)
-    lower = _median3(q_mid - q_lo)  # the residual's too: a glow's gradient across a tile is not clutter
     sky = ~fill  # the frame's noise, level, clean sky and tail from the sky's tiles
     noise = _median3(0.5 * (q_hi - q_lo) * (upper_tail_factor(q_lo[sky], q_mid[sky], q_hi[sky]) if skewed else 1.0))
     noise_global = _grid_quantile(noise[sky], CLEAN_SKY_QUANTILE)
     if noise_global <= 0:  # quantized, nearly flat tiles: fall back on the global estimate
         noise_global = global_background(image).noise
-    lower_global = _grid_quantile(lower[sky], CLEAN_SKY_QUANTILE)
-    clutter = lower / lower_global if lower_global > 0 else np.ones_like(lower)
+    clutter, lower_global = clutter_ratios(lower_raw, _median3(q_mid - q_lo), sky)
     tiles = TileGrid(level=level, noise=np.maximum(noise, MIN_NOISE_RATIO * noise_global), clutter=clutter,
                      centres_y=offset + scale * centres_y, centres_x=offset + scale * centres_x,
                      clutter_reference=lower_global)
     return BackgroundModel(level=_grid_quantile(level[sky], 0.5), noise=noise_global, tiles=tiles,
                            level_map=level_map if keep_map else None)
+
+
+def clutter_ratios(lower_raw: NDArray, lower_residual: NDArray, sky: NDArray[np.bool_]) -> tuple[NDArray, float]:
+    """Per-tile clutter ratio (module docstring) and the clean sky's lower-half width it is
+    relative to (image units), from the tiles' lower-half widths (ny, nx) of their raw values
+    and of their residual from the interpolated level; ``sky``: the tiles that are not fill.
+
+    A tile is cluttered only when it is busy both ways, each against its own clean sky. The
+    Moon's glow widens a tile's raw values, not its residual. A steep ramp widens the residual
+    of some tiles, where the interpolated level misses it (at the frame's edges, where the
+    smoothing kernel meets the border, and where a few stars pull a tile's median, whose values
+    spread over the whole ramp), but the raw values of every tile alike. The width returned is
+    the residual's; a JPEG's floor (:func:`with_clutter_floor`) scales the smaller ratio by it,
+    exactly so where the two clean skies agree (a sky without a gradient).
+    """
+    ratios, references = [], []
+    for lower in (lower_raw, lower_residual):
+        reference = _grid_quantile(lower[sky], CLEAN_SKY_QUANTILE)
+        ratios.append(lower / reference if reference > 0 else np.ones_like(lower))
+        references.append(reference)
+    return np.minimum(*ratios), references[1]
 
 
 def _grid_quantile(grid: NDArray, q: float) -> float:
