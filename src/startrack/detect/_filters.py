@@ -64,15 +64,21 @@ def flatness_ok(flatness: NDArray, min_flatness: float) -> NDArray[np.bool_]:
 def peak_fraction(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y: NDArray, pairs: bool = False
                   ) -> NDArray[np.float64]:
     """The hot-pixel measure: the peak value over the sum of the 3 x 3 neighbourhood, both
-    background-subtracted; with ``pairs``, the square of the two brightest pixels' share of that
-    sum where it is larger (two hot pixels side by side, or one diagonal from the other).
+    background-subtracted; with ``pairs``, where they are larger, the square of the two brightest
+    pixels' share of that sum (two hot pixels side by side, or one diagonal from the other) and
+    the fourth power of the three brightest pixels' share (three together, as a demosaiced
+    colour photo turns one hot pixel into).
 
     The square makes one limit serve both: a star centred on the border of two pixels puts in
     them the square root of what it puts in its peak pixel when centred on one (the share of its
     light in one row, squared), so a limit on the measure with ``pairs`` refuses the same
-    sharpness of star wherever it falls on the pixel grid. The detector asks for pairs only where
-    hot pixels abound (:func:`hot_pixels_abound`): undersampled stars, as in a reduced photo,
-    fall on the border of two pixels as often as on one.
+    sharpness of star wherever it falls on the pixel grid. The fourth power does the same for
+    three pixels, measured: over 3,000 random sub-pixel positions of a Gaussian star, its largest
+    value was 0.706 at a PSF sd of 0.35 px and 0.576 at 0.4 px, against 0.717 and 0.622 for the
+    single pixel (the cube had reached 0.770 at 0.35 px). Hot pixels give about 1 either way. The
+    detector applies the measure with ``pairs`` only where hot pixels abound
+    (:func:`hot_pixels_abound`): undersampled stars, as in a reduced photo, fall on the border of
+    two pixels as often as on one.
 
     Parameters
     ----------
@@ -83,12 +89,12 @@ def peak_fraction(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y
     peak_x, peak_y : ndarray of int, shape (N,)
         Peak pixels. Neighbours beyond the border are replaced by the nearest pixel inside.
     pairs : bool
-        Take two hot pixels side by side as one (above).
+        Take two or three hot pixels side by side as one (above).
 
     Returns
     -------
     ndarray, shape (N,)
-        About 1 for an isolated hot pixel or a pair, 0.1-0.5 for a star image.
+        About 1 for an isolated hot pixel, a pair or a triple, 0.1-0.5 for a star image.
     """
     h, w = signal_image.shape
     ys = np.clip(peak_y[:, None] + NEIGHBOURS_3X3[:, 0], 0, h - 1)
@@ -101,9 +107,10 @@ def peak_fraction(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y
         single = peak / total
         if not pairs or len(window) == 0:
             return single
-        second = np.partition(np.nan_to_num(window, nan=-np.inf), -2, axis=1)[:, -2]
-        pair = (peak + np.maximum(second, 0.0)) / total
-        return np.where(total > 0, np.maximum(single, pair * pair), single)
+        ordered = np.partition(np.nan_to_num(window, nan=-np.inf), (-3, -2), axis=1)
+        second, third = np.maximum(ordered[:, -2], 0.0), np.maximum(ordered[:, -3], 0.0)
+        pair, triple = (peak + second) / total, (peak + second + third) / total
+        return np.where(total > 0, np.maximum(single, np.maximum(pair**2, triple**4)), single)
 
 
 HOT_PIXELS_ABOUND = 30
@@ -112,9 +119,9 @@ the tests and benchmarks have 0-6; a camera with hot pixels over 0.1 % of its pi
 
 
 def hot_pixels_abound(hot: NDArray[np.bool_], passing: NDArray[np.bool_]) -> bool:
-    """Whether the spots the single-pixel test refuses (``hot``) number at least
-    :data:`HOT_PIXELS_ABOUND` and at least as many as those that pass every test (``passing``):
-    then two hot pixels side by side are common too."""
+    """Whether the spots the hot-pixel tests would refuse (``hot``: single hot pixels, and
+    pairs or triples of them) number at least :data:`HOT_PIXELS_ABOUND` and at least as many as
+    those that pass every test (``passing``): then pairs and triples are refused too."""
     n_hot = int(np.count_nonzero(hot))
     return n_hot >= max(HOT_PIXELS_ABOUND, int(np.count_nonzero(passing)))
 

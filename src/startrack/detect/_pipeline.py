@@ -350,9 +350,10 @@ def spot_filters(cfg: DetectionSettings, frame: Frame, regions: Regions, spots: 
     keep &= filters.flatness_ok(spots.flatness, cfg.min_flatness)
     hot = ~filters.hot_pixel_ok(fraction, cfg.max_peak_fraction)
     keep &= ~hot
-    if filters.hot_pixels_abound(hot, keep):  # then pairs of them too: one fraction for both
-        pairs = filters.peak_fraction(data, peak_level, spots.peak_x, spots.peak_y, pairs=True)
-        keep &= filters.hot_pixel_ok(pairs, cfg.max_peak_fraction)
+    clusters = filters.peak_fraction(data, peak_level, spots.peak_x, spots.peak_y, pairs=True)
+    clustered = keep & ~filters.hot_pixel_ok(clusters, cfg.max_peak_fraction)  # pairs, triples
+    if filters.hot_pixels_abound(hot | clustered, keep & ~clustered):
+        keep &= ~clustered
     keep &= filters.clutter_ok(frame.model.clutter_at(spots.peak_x, spots.peak_y), cfg.max_clutter, keep)
     if cfg.min_packing > 0:
         keep &= packing(regions) >= cfg.min_packing
