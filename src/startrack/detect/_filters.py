@@ -12,8 +12,9 @@ From Fowler 2013 §II.B ("Noise-removal techniques" 5-7) and Huffman 2006 §4.1:
   finds > 0.10 for focused stars);
 * **hot pixels** -- a single bright pixel: its value is more than ``max_peak_fraction`` of the
   sum of the 3 x 3 pixels around it (a focused star with a 0.5 px sigma puts under half of
-  that sum in its peak; a hot pixel puts nearly all); or two side by side (or diagonal) whose
-  share of that sum, squared, is more (:func:`peak_fraction`);
+  that sum in its peak; a hot pixel puts nearly all); or, where hot pixels abound, two side by
+  side (or diagonal) whose share of that sum, squared, is more, or three whose share to the
+  fourth power is (:func:`peak_fraction`, :func:`hot_pixels_abound`);
 * **clutter** -- the background's lower-half noise there is more than ``max_clutter`` times
   that of the clean sky (lit leaves, roof texture: structure, not stars; stars do not raise
   the lower half); the clean sky is checked against a dark foreground (:func:`clutter_ok`);
@@ -96,6 +97,14 @@ def peak_fraction(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y
     ndarray, shape (N,)
         About 1 for an isolated hot pixel, a pair or a triple, 0.1-0.5 for a star image.
     """
+    single, clusters = peak_fractions(signal_image, level, peak_x, peak_y, clusters=pairs)
+    return clusters if pairs else single
+
+
+def peak_fractions(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y: NDArray, clusters: bool = True
+                   ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`peak_fraction` without and with ``pairs``, from one reading of the 3 x 3
+    neighbourhoods (arguments as there); with ``clusters`` False the second is the first."""
     h, w = signal_image.shape
     ys = np.clip(peak_y[:, None] + NEIGHBOURS_3X3[:, 0], 0, h - 1)
     xs = np.clip(peak_x[:, None] + NEIGHBOURS_3X3[:, 1], 0, w - 1)
@@ -105,12 +114,12 @@ def peak_fraction(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y
     total = window.sum(axis=1) if signal_image.dtype.kind in "biu" else np.nansum(window, axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         single = peak / total
-        if not pairs or len(window) == 0:
-            return single
+        if not clusters or len(window) == 0:
+            return single, single
         ordered = np.partition(np.nan_to_num(window, nan=-np.inf), (-3, -2), axis=1)
         second, third = np.maximum(ordered[:, -2], 0.0), np.maximum(ordered[:, -3], 0.0)
         pair, triple = (peak + second) / total, (peak + second + third) / total
-        return np.where(total > 0, np.maximum(single, np.maximum(pair**2, triple**4)), single)
+        return single, np.where(total > 0, np.maximum(single, np.maximum(pair**2, triple**4)), single)
 
 
 HOT_PIXELS_ABOUND = 30

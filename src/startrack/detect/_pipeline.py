@@ -342,7 +342,7 @@ def spot_filters(cfg: DetectionSettings, frame: Frame, regions: Regions, spots: 
                  local_noise: NDArray, peak_level: NDArray) -> NDArray[np.bool_]:
     """The AND of all spot filters (see :mod:`._filters`, :mod:`._prefilters`, :mod:`._shape`)."""
     data = frame.prepared.data
-    fraction = filters.peak_fraction(data, peak_level, spots.peak_x, spots.peak_y)
+    fraction, clusters = filters.peak_fractions(data, peak_level, spots.peak_x, spots.peak_y)
     keep = np.isfinite(spots.x) & (spots.flux > 0)
     keep &= filters.area_ok(spots.area_px, cfg.min_area_px, cfg.max_area_px)
     keep &= filters.peak_ok(spots.peak / local_noise, cfg.min_peak_snr)
@@ -350,7 +350,6 @@ def spot_filters(cfg: DetectionSettings, frame: Frame, regions: Regions, spots: 
     keep &= filters.flatness_ok(spots.flatness, cfg.min_flatness)
     hot = ~filters.hot_pixel_ok(fraction, cfg.max_peak_fraction)
     keep &= ~hot
-    clusters = filters.peak_fraction(data, peak_level, spots.peak_x, spots.peak_y, pairs=True)
     clustered = keep & ~filters.hot_pixel_ok(clusters, cfg.max_peak_fraction)  # pairs, triples
     if filters.hot_pixels_abound(hot | clustered, keep & ~clustered):
         keep &= ~clustered
