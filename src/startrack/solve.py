@@ -249,10 +249,10 @@ def spread_rounds(x: NDArray, y: NDArray, width: float, height: float, cells: in
     seldom all stars: the strokes of a saturated caption or watermark, a lit building, a cluster
     of hot pixels. Taking turns between cells lets a local crowd in only a few at a time, while
     a frame's stars, spread over the sky, keep nearly their order of brightness. Two a turn
-    rather than one keep a bright cluster's stars early enough: with one a turn (8 x 8 cells) the
-    Pleiades photo took 296 ms to solve, against 16 ms before and 11 ms with two (6 x 6 cells). astrometry.net
-    orders an image's sources the same way (solve-field's ``--uniformize``; Lang et al. 2010,
-    AJ 139, 1782).
+    rather than one keep a bright cluster's stars early enough: with one a turn (8 x 8 cells)
+    the Pleiades photo took 296 ms to solve, against 16 ms before and 11 ms with two (6 x 6
+    cells). astrometry.net orders an image's sources the same way (solve-field's
+    ``--uniformize``; Lang et al. 2010, AJ 139, 1782).
     """
     column = np.clip((np.asarray(x) / width * cells).astype(np.int64), 0, cells - 1)
     row = np.clip((np.asarray(y) / height * cells).astype(np.int64), 0, cells - 1)

@@ -123,8 +123,9 @@ def peak_fractions(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_
 
 
 HOT_PIXELS_ABOUND = 30
-"""Fewest single hot pixels among a frame's spots for :func:`hot_pixels_abound` (the frames of
-the tests and benchmarks have 0-6; a camera with hot pixels over 0.1 % of its pixels, hundreds)."""
+"""Fewest hot spots (single hot pixels, pairs or triples) among a frame's spots for
+:func:`hot_pixels_abound` (the frames of the tests and benchmarks have 0-6; a camera with hot
+pixels over 0.1 % of its pixels, hundreds)."""
 
 
 def hot_pixels_abound(hot: NDArray[np.bool_], passing: NDArray[np.bool_]) -> bool:
