@@ -14,6 +14,7 @@
 8. ``detect_realdata.py``: detections on the real images against astrometry.net;
 9. ``jpeg_quality.py``: the real images and simulated frames saved as JPEGs of qualities 40-95,
    solved with the detector's compression noise floor and without;
+   ``photo_hazards.py``: the real images with captions, the Moon, hot pixels, trails and clouds;
 10. ``attitude_benchmark.py``: every Wahba solver batched and one by one, beside scipy and ahrs
    (``benchmarks/.venv-ahrs``, created on first use);
 11. ``streak_benchmark.py``: Sease 2013 Tables 3.1, 4.1, 4.2, 4.4 and Samaan 2002 Table 2;
@@ -49,6 +50,7 @@ import image_path_benchmark  # noqa: E402
 import jacobs1995_matching  # noqa: E402
 import jpeg_quality  # noqa: E402
 import lis_benchmark  # noqa: E402
+import photo_hazards  # noqa: E402
 import simulate_benchmark  # noqa: E402
 import streak_benchmark  # noqa: E402
 import tracking_benchmark  # noqa: E402
@@ -84,6 +86,7 @@ def main(argv: list[str] | None = None) -> int:
         _run("detect_huffman2006", detect_huffman2006.main, []),
         _run("detect_realdata", detect_realdata.main, []),
         _run("jpeg_quality", jpeg_quality.main, []),
+        _run("photo_hazards", photo_hazards.main, []),
         _run("attitude_benchmark", attitude_benchmark.main, []),
         _run("streak_benchmark", streak_benchmark.main, []),
         _run("simulate_benchmark", simulate_benchmark.main, []),
