@@ -66,8 +66,8 @@ class CentroidInputs:
     saturated : ndarray of bool, shape (N,), or None
         Spots clipped at the frame's largest value (:func:`.point_source.saturated_spots`): left
         out of the PSF width's estimate (:func:`estimate_psf_sigma`) and centroided in windows of
-        their own median size (:func:`clipped_width`); their point-source quality counts their
-        elongation only.
+        their own median size (:func:`clipped_width`); their point-source quality counts the
+        fill of their core instead of its size (:mod:`._point_source`).
     """
 
     data: NDArray

@@ -73,7 +73,6 @@ def compression_noise_floor(step: float, sigma: float) -> float:
     return ARTEFACT_PER_STEP * step / sigma if step > 0 else 0.0
 
 
-
 def crowded(snr: NDArray[np.float32], sigma: float) -> bool:
     """Whether more than :data:`CROWDED_SPOTS` 8-connected spots of the detection image's
     significance ``snr`` (shape (h, w), noise units) pass ``sigma``."""

@@ -250,16 +250,15 @@ def read_image(
         return read_raw(path, channel=_raw_channel(channel), max_pixels=max_pixels)
     kind = _sniff(path)
     note_input(path)
+    step = 0.0  # a JPEG's quantization step; lossless formats have none
     if kind == "FITS":
         from ._fitsfile import read_fits  # astropy.io.fits: loaded only for FITS files
 
         data, header, bit_depth = read_fits(path, max_pixels)
-        step = 0.0
     elif kind == "HEIF":
         from ._heif import read_heif  # pillow-heif (the "heif" extra): loaded only for HEIF files
 
         data, header, bit_depth = read_heif(path, max_pixels)
-        step = 0.0
     else:
         data, header, bit_depth, step = read_raster(path, max_pixels, kind=kind)
     colour = data.ndim == 3
