@@ -119,6 +119,9 @@ class Frame:
     noise_px: float
     binning: int
     x_offset: int
+    det_snr: NDArray[np.float32] | None = None
+    """The detection image's significance when it was computed already for this model (a JPEG's
+    crowd test, :func:`with_compression_floor`), else None."""
 
     @functools.cached_property
     def top(self) -> float:
@@ -133,11 +136,11 @@ def detect_frame(cfg: DetectionSettings, image: NDArray, dark: NDArray | None) -
     binning = min(cfg.binning, *prepared.data.shape)
     det = detection_image(prepared.data, binning, cfg.kernel, cfg.kernel_px, prepared.invalid)
     skewed = low_side_clipped(np.asarray(image))  # the raw frame: a dark frame shifts the zero
-    model = background_model(cfg, det, binning, skewed)
+    model, snr = background_model(cfg, det, binning, skewed), None
     if cfg.compression_noise > 0:
-        model = with_compression_floor(cfg, det, model, binning)
+        model, snr = with_compression_floor(cfg, det, model, binning)
     noise_px = pixel_noise(prepared.data, model) or noise_floor(prepared.data, model.level)
-    frame = Frame(prepared, model, skewed, noise_px, binning, x_offset)
+    frame = Frame(prepared, model, skewed, noise_px, binning, x_offset, snr)
     if model.noise <= 0:  # a constant image
         return empty_details(frame, image.shape[1], cfg)
     regions, k_sigma = find_regions(cfg, frame, det)
@@ -184,13 +187,16 @@ def background_model(cfg: DetectionSettings, det: NDArray, binning: int, skewed:
 
 
 def with_compression_floor(cfg: DetectionSettings, det: NDArray, model: BackgroundModel, binning: int
-                           ) -> BackgroundModel:
+                           ) -> tuple[BackgroundModel, NDArray[np.float32] | None]:
     """A JPEG's floor (``cfg.compression_noise``, :mod:`.compression`): on the clutter filter's
-    clean sky always, on the noise where the unfloored threshold finds a crowd of spots."""
+    clean sky always, on the noise where the unfloored threshold finds a crowd of spots. Returns
+    the model and the detection image's significance under it (None when the noise changed:
+    :func:`find_regions` computes it again)."""
     floor = cfg.compression_noise
-    if crowded(significance(det, model, binning), cfg.sigma):
-        model = with_noise_floor(model, floor)
-    return with_clutter_floor(model, floor)
+    snr = significance(det, model, binning)
+    if crowded(snr, cfg.sigma):
+        return with_clutter_floor(with_noise_floor(model, floor), floor), None
+    return with_clutter_floor(model, floor), snr
 
 
 def noise_floor(values: NDArray, level: float) -> float:
@@ -215,7 +221,7 @@ def find_regions(cfg: DetectionSettings, frame: Frame, det: NDArray) -> tuple[Re
     if cfg.threshold.startswith("prefilter"):
         return _prefiltered_regions(cfg, frame), cfg.pixel_sigma
     binning = frame.binning
-    snr = significance(det, frame.model, binning)
+    snr = significance(det, frame.model, binning) if frame.det_snr is None else frame.det_snr
     regions = group(cfg, snr > min(cfg.grow_sigma, cfg.sigma), max(1, cfg.jump_px // binning))
     peak = regions.max(snr[regions.y, regions.x]) if len(regions) else np.zeros(0)
     k_sigma = dynamic_sigma(peak, cfg) if cfg.threshold == "dynamic" else cfg.sigma
