@@ -19,13 +19,19 @@ from startrack.simulate import render_gaussian_psf
 SHAPE = (512, 512)
 
 
-def _frame(hot_fraction: float, seed: int = 2) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """30 stars (sigma 1.2 px, 2,000-20,000 e-) on a 100 e- sky with hot pixels of 3,000-6,000 e-
-    over ``hot_fraction`` of the pixels: uint16 image and the stars' x, y (px)."""
-    rng = np.random.default_rng(seed)
+def _stars(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """30 stars (sigma 1.2 px, 2,000-20,000 e-) on a 100 e- sky with shot noise: float image (e-)
+    and the stars' x, y (px)."""
     x, y = rng.uniform(20, SHAPE[1] - 20, 30), rng.uniform(20, SHAPE[0] - 20, 30)
     flux = np.exp(rng.uniform(np.log(2e3), np.log(2e4), 30))
-    image = rng.poisson(render_gaussian_psf(SHAPE, x, y, flux, 1.2) + 100.0).astype(float)
+    return rng.poisson(render_gaussian_psf(SHAPE, x, y, flux, 1.2) + 100.0).astype(float), x, y
+
+
+def _frame(hot_fraction: float, seed: int = 2) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_stars` with hot pixels of 3,000-6,000 e- over ``hot_fraction`` of the pixels:
+    uint16 image and the stars' x, y (px)."""
+    rng = np.random.default_rng(seed)
+    image, x, y = _stars(rng)
     n = int(hot_fraction * image.size)
     image[rng.integers(0, SHAPE[0], n), rng.integers(0, SHAPE[1], n)] = rng.uniform(3e3, 6e3, n)
     return np.clip(image, 0, 65535).astype(np.uint16), x, y
@@ -56,12 +62,10 @@ def test_a_frame_with_few_hot_pixels_keeps_sharp_stars_on_a_pixel_border():
 
 
 def _clustered_frame(shape_offsets: list[tuple[int, int]], seed: int = 4) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """30 stars as in :func:`_frame` and 0.1 % of the pixels hot, in clusters of the given
-    (dy, dx) offsets (3,000-6,000 e- each): uint16 image and the stars' x, y (px)."""
+    """:func:`_stars` with 0.1 % of the pixels hot, in clusters of the given (dy, dx) offsets
+    (3,000-6,000 e- each): uint16 image and the stars' x, y (px)."""
     rng = np.random.default_rng(seed)
-    x, y = rng.uniform(20, SHAPE[1] - 20, 30), rng.uniform(20, SHAPE[0] - 20, 30)
-    flux = np.exp(rng.uniform(np.log(2e3), np.log(2e4), 30))
-    image = rng.poisson(render_gaussian_psf(SHAPE, x, y, flux, 1.2) + 100.0).astype(float)
+    image, x, y = _stars(rng)
     n = int(0.001 * image.size / len(shape_offsets))
     cy, cx = rng.integers(2, SHAPE[0] - 3, n), rng.integers(2, SHAPE[1] - 3, n)
     for dy, dx in shape_offsets:
