@@ -36,10 +36,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import hazard_renders as hz  # noqa: E402
 from detect_realdata import IMAGES, REALDATA, reference  # noqa: E402
+from realdata_benchmark import centre_error_px  # noqa: E402
 
 from startrack import solve_image  # noqa: E402
-from startrack.frames import angle_between, radec_to_vector  # noqa: E402
-from startrack.units import ARCSEC, DEG  # noqa: E402
 
 MATCH_PX = 2.0
 CLEAR_SKY = 0.05
@@ -82,12 +81,7 @@ def solve_variant(image: np.ndarray, name: str, hazard: str, folder: Path):
 
 def solved_right(solution, row: dict[str, str]) -> bool:
     """Whether the image centre lies within :data:`MATCH_PX` of astrometry.net's."""
-    if not solution.solved:
-        return False
-    width, height = int(row["width"]), int(row["height"])
-    centre = solution.rot_cam_from_icrs.inv().apply(solution.camera.pixel_to_vector((width - 1) / 2, (height - 1) / 2))
-    truth = radec_to_vector(float(row["ra_center_deg"]) * DEG, float(row["dec_center_deg"]) * DEG)
-    return bool(angle_between(centre, truth) < MATCH_PX * float(row["pixscale_arcsec"]) * ARCSEC)
+    return bool(solution.solved and centre_error_px(solution, row) < MATCH_PX)
 
 
 def found_stars(solution, ref) -> np.ndarray:

@@ -130,15 +130,20 @@ def real_row(row: dict[str, str], fov_range_deg: tuple[float, float] | None, fli
            "centre_err_px": float("nan"), "roll_err_deg": float("nan"), "fov_deg": float("nan")}
     if not solution.solved:
         return out
+    matched = solution.matches.det_index
+    roll_err = float("nan") if flip else (solution.roll_deg - float(row["roll_tetra3_deg"]) + 180.0) % 360.0 - 180.0
+    out.update(centre_err_px=centre_error_px(solution, row), roll_err_deg=roll_err,
+               fov_deg=solution.fov_deg, identified=score(found.x[matched], found.y[matched], ref).found)
+    return out
+
+
+def centre_error_px(solution, row: dict[str, str]) -> float:
+    """Angle between a solved image's centre ((W - 1) / 2, (H - 1) / 2) and astrometry.net's
+    (``truth.csv`` row ``row``), in the image's pixels (its ``pixscale_arcsec``)."""
     width, height = int(row["width"]), int(row["height"])
     centre = solution.rot_cam_from_icrs.inv().apply(solution.camera.pixel_to_vector((width - 1) / 2, (height - 1) / 2))
     truth = radec_to_vector(float(row["ra_center_deg"]) * DEG, float(row["dec_center_deg"]) * DEG)
-    matched = solution.matches.det_index
-    roll_err = float("nan") if flip else (solution.roll_deg - float(row["roll_tetra3_deg"]) + 180.0) % 360.0 - 180.0
-    out.update(centre_err_px=float(angle_between(centre, truth) / (float(row["pixscale_arcsec"]) * ARCSEC)),
-               roll_err_deg=roll_err,
-               fov_deg=solution.fov_deg, identified=score(found.x[matched], found.y[matched], ref).found)
-    return out
+    return float(angle_between(centre, truth) / (float(row["pixscale_arcsec"]) * ARCSEC))
 
 
 def _detect_s(data: np.ndarray) -> float:
