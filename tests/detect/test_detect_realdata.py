@@ -29,13 +29,13 @@ it passes):
   one 6 px from a brighter star at 3.3 sigma, one at 4.7 sigma;
 * tree: four at 2.5-6.0 sigma of the fine image, where 116-635 unconfirmed peaks of the frame
   are as significant (for 22 of 24, a threshold of 3.6-4.4 sigma in any of six full-resolution
-  filters measured, with 190-300 unconfirmed peaks above it), one inside the tree, and one
-  whose centroid lies 2.31 px off (blended). That last one was found, 1.99 px off, until the
-  clutter ratio was measured on the residual from the background level as well (so that the
-  Moon's glow is not clutter): an unconfirmed spot near the right border then passes, the frame's
-  PSF width estimate goes from 2.25 to 2.49 px, and the star's window with it. On 24 copies of
-  the real photos with a glow added, the matched stars found went from 369 to 418 of 495 with
-  that change.
+  filters measured, with 190-300 unconfirmed peaks above it), and one inside the tree. A sixth,
+  blended, was lost (its centroid 2.31 px off) while the clutter ratio measured on the residual
+  let an unconfirmed spot near the right border pass and the frame's PSF width estimate went
+  from 2.25 to 2.49 px; since the spots that are not point sources (lit leaves) are left out of
+  that estimate, it is 1.53 px, the star is found again, and the median offset from
+  astrometry.net fell from 0.20 to 0.09 px. One more unconfirmed spot now ranks above the
+  30th, so 9 of the found stars are among our brightest 30, not 10.
 
 ``test_every_miss_has_a_cause`` pins these causes (``benchmarks/detect_realdata.py --misses``):
 a significant, isolated star on open sky dropped by a filter would fail it.
@@ -85,7 +85,7 @@ EXPECTED = {
     "crappy.jpg": (11, 11, 2, 3, True),
     "orion_trees.jpg": (26, 18, 3, 14, True),
     "roof.jpg": (27, 24, 1, 1, False),
-    "tree.jpg": (18, 10, 18, 21, False),  # 19 and 19 until the clutter ratio was measured on the residual
+    "tree.jpg": (19, 9, 18, 21, False),
     "pleiades.jpg": (27, 18, 4, 4, True),
 }
 # the pipeline keeping the fine pass's spots by their own clutter (fine_pass.quiet_surroundings):
@@ -173,7 +173,7 @@ CAUSES = {
     # until the pipeline calls fine_pass.quiet_surroundings its old ring test drops img6's star at (809, 102)
     "img6.png": ["clutter"] if LOCAL_THRESHOLD else ["filtered", "clutter"],
     "roof.jpg": ["edge", "edge", "clutter", "faint", "blend", "edge"],
-    "tree.jpg": ["faint", "faint", "faint", "clutter", "faint", "blend"], "pleiades.jpg": ["blend", "faint", "faint"],
+    "tree.jpg": ["faint", "faint", "faint", "clutter", "faint"], "pleiades.jpg": ["blend", "faint", "faint"],
 }
 
 

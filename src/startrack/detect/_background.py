@@ -41,8 +41,8 @@ CLIPPED_FRACTION = 0.05
 """A frame with this fraction of its pixels at its minimum has a clipped low side."""
 
 MIN_NOISE_RATIO = 0.7
-"""No tile's noise is taken below this fraction of the global noise (guards flat or quantized
-tiles against a zero noise)."""
+"""No tile's noise is taken below this fraction of the clean sky's (guards flat or quantized
+tiles against a zero noise; :func:`tile_noise_floor`)."""
 
 
 @dataclass(frozen=True)
@@ -222,16 +222,29 @@ def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: floa
     residual = _gather(image, rows, cols, layout.grid, (level, layout.weights), level_map)
     q_lo, q_mid, q_hi = _stack_quantiles(residual, (GAUSS_LO, 0.5, GAUSS_HI), fill)
     sky = ~fill  # the frame's noise, level, clean sky and tail from the sky's tiles
-    noise = _median3(0.5 * (q_hi - q_lo) * (upper_tail_factor(q_lo[sky], q_mid[sky], q_hi[sky]) if skewed else 1.0))
+    own_noise = 0.5 * (q_hi - q_lo) * (upper_tail_factor(q_lo[sky], q_mid[sky], q_hi[sky]) if skewed else 1.0)
+    noise = _median3(own_noise)
     noise_global = _grid_quantile(noise[sky], CLEAN_SKY_QUANTILE)
     if noise_global <= 0:  # quantized, nearly flat tiles: fall back on the global estimate
         noise_global = global_background(image).noise
     clutter, lower_global = clutter_ratios(lower_raw, _median3(q_mid - q_lo), sky)
-    tiles = TileGrid(level=level, noise=np.maximum(noise, MIN_NOISE_RATIO * noise_global), clutter=clutter,
+    noise = np.maximum(noise, tile_noise_floor(own_noise[sky], noise_global))
+    tiles = TileGrid(level=level, noise=noise, clutter=clutter,
                      centres_y=offset + scale * centres_y, centres_x=offset + scale * centres_x,
                      clutter_reference=lower_global)
     return BackgroundModel(level=_grid_quantile(level[sky], 0.5), noise=noise_global, tiles=tiles,
                            level_map=level_map if keep_map else None)
+
+
+def tile_noise_floor(own_noise: NDArray, noise_global: float) -> float:
+    """The least noise a tile is given (image units): :data:`MIN_NOISE_RATIO` times the clean sky's,
+    a guard against flat or quantized tiles. The clean sky is the lower quartile of the sky tiles'
+    ``own_noise`` (K,), before their 3 x 3 median, when that is lower than ``noise_global`` (the
+    quartile after it): the median grows every noisy patch (lit cloud) by a tile on each side, and
+    where clean sky lies in patches between them, the quartile after it can fall in the cloud and
+    would raise every clean tile to 0.7 times the cloud's noise."""
+    own = _grid_quantile(own_noise, CLEAN_SKY_QUANTILE)
+    return MIN_NOISE_RATIO * (min(own, noise_global) if own > 0 else noise_global)
 
 
 def clutter_ratios(lower_raw: NDArray, lower_residual: NDArray, sky: NDArray[np.bool_]) -> tuple[NDArray, float]:

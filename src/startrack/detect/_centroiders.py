@@ -68,6 +68,9 @@ class CentroidInputs:
         out of the PSF width's estimate (:func:`estimate_psf_sigma`) and centroided in windows of
         their own median size (:func:`clipped_width`); their point-source quality counts the
         fill of their core instead of its size (:mod:`._point_source`).
+    extended : ndarray of bool, shape (N,), or None
+        Spots that are not point sources (:mod:`._point_source`: lit cloud, glow, a nebula's
+        knot): left out of the PSF width's estimate too.
     """
 
     data: NDArray
@@ -78,18 +81,25 @@ class CentroidInputs:
     level: NDArray[np.float64]
     noise: NDArray[np.float64]
     saturated: NDArray[np.bool_] | None = None
+    extended: NDArray[np.bool_] | None = None
 
 
-def estimate_psf_sigma(spots: SpotMeasurements, saturated: NDArray[np.bool_] | None = None) -> float:
+def estimate_psf_sigma(spots: SpotMeasurements, saturated: NDArray[np.bool_] | None = None,
+                       extended: NDArray[np.bool_] | None = None) -> float:
     """PSF standard deviation from the brighter half of the spots' RMS radii, px; the
-    ``saturated`` spots (shape (N,)) left out when at least :data:`MIN_PSF_SPOTS` others remain:
-    a clipped core is wider than the PSF, and the pieces of a saturated overlay (a timestamp, a
-    watermark) or of the Moon's limb, brighter than the stars, would set the width (6-8 px against
-    1.2 px on the openstartracker frames with a watermark)."""
+    ``saturated`` and ``extended`` spots (shape (N,) each) left out when at least
+    :data:`MIN_PSF_SPOTS` others remain: a clipped core is wider than the PSF, and the pieces of a
+    saturated overlay (a timestamp, a watermark) or of the Moon's limb, brighter than the stars,
+    would set the width (6-8 px against 1.2 px on the openstartracker frames with a watermark), as
+    would lit clouds brighter than the stars."""
     if len(spots.x) == 0:
         return 1.0
-    if saturated is not None and saturated.any() and np.count_nonzero(~saturated) >= MIN_PSF_SPOTS:
-        spots = take_spots(spots, ~saturated)
+    keep = np.ones(len(spots.x), dtype=bool)
+    for left_out in (saturated, extended):
+        if left_out is not None and np.count_nonzero(keep & ~left_out) >= MIN_PSF_SPOTS:
+            keep &= ~left_out
+    if not keep.all():
+        spots = take_spots(spots, keep)
     flux = spots.flux  # np.median's values, from one partition where there is no NaN (fast_median)
     bright = spots.size_px[flux >= (np.median(flux) if np.isnan(flux).any() else fast_median(flux))]
     bright = bright[np.isfinite(bright)]
@@ -160,7 +170,8 @@ def run_centroider(name: str, inputs: CentroidInputs, *, psf_sigma_px: float | N
         return weighted_centroid(spots, inputs.noise)
     if name == "weighted-raw":
         return weighted_raw_centroid(inputs.regions, inputs.raw, inputs.noise)
-    sigma = estimate_psf_sigma(spots, inputs.saturated) if psf_sigma_px is None else float(psf_sigma_px)
+    sigma = float(psf_sigma_px) if psf_sigma_px is not None else \
+        estimate_psf_sigma(spots, inputs.saturated, inputs.extended)
     start_x = np.where(np.isfinite(spots.x), spots.x, spots.peak_x)
     start_y = np.where(np.isfinite(spots.y), spots.y, spots.peak_y)
     windows = extract_windows(inputs.data, np.rint(start_x), np.rint(start_y),

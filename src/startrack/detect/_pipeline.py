@@ -8,7 +8,7 @@ grouping -> deblend, edge -> spot measurements and filters -> centroid -> Detect
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -59,8 +59,8 @@ EDGE_MARGIN_PX = 2
 """A spot whose peak is closer than this to the border (full-resolution px) is cut off."""
 
 SHARP_CORE_PX, SHARP_MIN_SNR = 1.3, 10.0
-"""The fine pass runs on frames whose significant spots (peak over pixel noise at least 10)
-have a median half-maximum size (Gaussian-equivalent sd) under 1.3 px: small JPEGs and the
+"""The fine pass runs on frames whose significant point sources (peak over pixel noise at least
+10) have a median half-maximum size (Gaussian-equivalent sd) under 1.3 px: small JPEGs and the
 openstartracker frames (0.5-1.0 px), not stars of 1.5 px sd that the binned image matches."""
 
 EDGE_CORE_PX = 64
@@ -277,16 +277,21 @@ def point_like(frame: Frame, base: MeasuredRegions, extra: MeasuredRegions) -> N
 
 
 def stars_are_sharp(frame: Frame, kept: MeasuredRegions) -> bool:
-    """Whether the frame's significant spots (peak SNR at least 10) have a median half-maximum
-    core (:func:`.point_source.core_shape`) under :data:`SHARP_CORE_PX`, or the frame has fewer
-    than three such spots to tell: the stars the binned image spreads out and blends."""
+    """Whether the frame's significant point sources (peak SNR at least 10, point-source quality
+    against the frame's stars, :mod:`.point_source`) have a median half-maximum core
+    (:func:`.point_source.core_shape`) under :data:`SHARP_CORE_PX`, or the frame has fewer than
+    three such spots to tell: the stars the binned image spreads out and blends. Extended spots
+    (lit cloud, glow, leaves) do not vote: two cloud blobs beside two stars would make the median
+    theirs."""
     if len(kept) == 0:
         return True
     regions, signal = kept.regions, kept.signal
     peak = regions.max(signal)
-    size = core_shape(regions, signal, peak).size
-    significant = np.isfinite(size) & (peak >= SHARP_MIN_SNR * frame.noise_px)
-    return significant.sum() < 3 or float(fast_median(size[significant])) < SHARP_CORE_PX  # finite sizes
+    shape = core_shape(regions, signal, peak)
+    snr = peak / frame.noise_px
+    point = point_quality(shape, snr, np.zeros(snr.size, dtype=bool)) >= Detections.POINT_SOURCE_MIN_QUALITY
+    significant = np.isfinite(shape.size) & (snr >= SHARP_MIN_SNR) & point
+    return significant.sum() < 3 or float(fast_median(shape.size[significant])) < SHARP_CORE_PX  # finite sizes
 
 
 def dynamic_sigma(peak_snr: NDArray, cfg: DetectionSettings) -> float:
@@ -341,7 +346,10 @@ def measure(cfg: DetectionSettings, frame: Frame, kept: MeasuredRegions, k_sigma
     """Centroid the (filtered) spots and pack the result."""
     inputs = CentroidInputs(frame.prepared.data, frame.prepared.invalid, kept.regions, kept.spots, kept.raw,
                             kept.peak_level, kept.local_noise, saturated_spots(kept.regions, kept.raw, frame.top))
-    return pack(cfg, frame, inputs, k_sigma, full_width)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        quality = point_quality_of(inputs, kept.spots.peak / kept.local_noise)
+    inputs = replace(inputs, extended=quality < Detections.POINT_SOURCE_MIN_QUALITY)
+    return pack(cfg, frame, inputs, k_sigma, full_width, quality)
 
 
 def spot_filters(cfg: DetectionSettings, frame: Frame, regions: Regions, spots: SpotMeasurements,
@@ -369,10 +377,10 @@ def spot_filters(cfg: DetectionSettings, frame: Frame, regions: Regions, spots: 
 
 
 def pack(cfg: DetectionSettings, frame: Frame, inputs: CentroidInputs, k_sigma: float,
-         full_width: int) -> DetectionDetails:
+         full_width: int, point_quality: NDArray[np.float64]) -> DetectionDetails:
     """Centroid with the chosen method (falling back to the weighted sum where it fails), merge
     coincident detections (:mod:`._merge`), sort brightest first, cut to ``max_stars``, and pack
-    with the extra measurements."""
+    with the extra measurements (the spots' ``point_quality`` (N,) among them)."""
     spots, noise = inputs.spots, inputs.noise
     result = run_centroider(cfg.centroid, inputs, psf_sigma_px=cfg.psf_sigma_px,
                             half=cfg.window_half_px, gain_e_per_adu=cfg.gain_e_per_adu)
@@ -394,7 +402,7 @@ def pack(cfg: DetectionSettings, frame: Frame, inputs: CentroidInputs, k_sigma: 
         x=x + frame.x_offset, y=y, flux=flux, sigma_px=sigma, area_px=spots.area_px.astype(np.int64),
         peak=spots.peak, elongation=spots.elongation, background=frame.model.level,
         noise=frame.noise_px, width=full_width, height=frame.prepared.data.shape[0],
-        point_quality=point_quality_of(inputs, peak_snr))
+        point_quality=point_quality)
     details = DetectionDetails(
         detections=detections, mag=instrument_magnitude(flux, cfg.mag_zero_point),
         peak_snr=peak_snr, major_px=shape.major_px, minor_px=shape.minor_px,
