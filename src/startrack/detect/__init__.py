@@ -10,6 +10,7 @@ one module per stage::
     label        8-connected regions above 3 sigma that reach 5 sigma (hysteresis)
     deblend      split regions with several separate peaks
     filters      edge, area, peak, elongation, flatness, hot-pixel and clutter rejection
+    hot_pixels   where hot pixels are most of the spots: replaced, and the frame detected again
     centroid     weighted sum over the full-resolution pixels of each region (flux, peak,
                  second moments, elongation), then the iteratively windowed Gaussian-weighted
                  centroid about it (the default ``centroid="windowed"``, within a few per cent

@@ -42,6 +42,7 @@ from ._fine_pass import (
     ring_noise_ratio,
     touches,
 )
+from ._hot_pixels import hot_pixels_dominate, without_hot_pixels
 from ._label import Regions, label_regions
 from ._magnitude import instrument_magnitude
 from ._merge import brightest_first
@@ -87,6 +88,9 @@ class MeasuredRegions:
         The weighted-sum measurements, shape (N,) each.
     peak_level, local_noise : ndarray, shape (N,)
         Background level and pixel noise at each spot's peak.
+    hot_tests : (ndarray, ndarray) of shape (N,) each, or None
+        The spots' peak fractions and cluster measures (:func:`._filters.peak_fractions`) when
+        measured already (:func:`with_hot_tests`); the filters measure them otherwise.
     """
 
     regions: Regions
@@ -95,6 +99,7 @@ class MeasuredRegions:
     spots: SpotMeasurements
     peak_level: NDArray[np.float64]
     local_noise: NDArray[np.float64]
+    hot_tests: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
 
     def __len__(self) -> int:
         return len(self.regions)
@@ -105,8 +110,9 @@ class MeasuredRegions:
         if keep.all():
             return self
         pixels = keep[self.regions.index]
+        tests = None if self.hot_tests is None else (self.hot_tests[0][keep], self.hot_tests[1][keep])
         return MeasuredRegions(self.regions.select(keep), self.raw[pixels], self.signal[pixels],
-                               take_spots(self.spots, keep), self.peak_level[keep], self.local_noise[keep])
+                               take_spots(self.spots, keep), self.peak_level[keep], self.local_noise[keep], tests)
 
 
 @dataclass(frozen=True)
@@ -131,23 +137,46 @@ class Frame:
 
 
 def detect_frame(cfg: DetectionSettings, image: NDArray, dark: NDArray | None) -> DetectionDetails:
-    """Run the whole pipeline on one frame (or one strip of a large frame)."""
+    """Run the whole pipeline on one frame (or one strip of a large frame); a second time with
+    the hot pixels replaced where they are most of the first pass's spots (:mod:`._hot_pixels`)."""
     prepared, x_offset = preprocess(cfg, image, dark)
+    skewed = low_side_clipped(np.asarray(image))  # the raw frame: a dark frame shifts the zero
+    frame, det = frame_of(cfg, prepared, skewed, x_offset)
+    if frame.model.noise <= 0:  # a constant image
+        return empty_details(frame, image.shape[1], cfg)
+    regions, k_sigma = find_regions(cfg, frame, det)
+    found = with_hot_tests(frame, measure_regions(frame, regions))
+    if hot_pixels_dominate(*require(found.hot_tests, "the hot-pixel tests"), cfg.max_peak_fraction):
+        frame, det = frame_of(cfg, without_hot_spots(cfg, frame), skewed, x_offset)
+        regions, k_sigma = find_regions(cfg, frame, det)
+        found = measure_regions(frame, regions)
+    kept = with_fine_pass(cfg, frame, filter_spots(cfg, frame, found), regions, k_sigma)
+    if len(kept) == 0:
+        return empty_details(frame, image.shape[1], cfg, k_sigma)
+    return measure(cfg, frame, kept, k_sigma, image.shape[1])
+
+
+def frame_of(cfg: DetectionSettings, prepared: PreparedImage, skewed: bool, x_offset: int
+             ) -> tuple[Frame, NDArray[np.float32]]:
+    """The frame of a prepared plane (its background model and pixel noise) and its detection
+    image; ``skewed``: the raw frame's low side is clipped."""
     binning = min(cfg.binning, *prepared.data.shape)
     det = detection_image(prepared.data, binning, cfg.kernel, cfg.kernel_px, prepared.invalid)
-    skewed = low_side_clipped(np.asarray(image))  # the raw frame: a dark frame shifts the zero
     model, snr = background_model(cfg, det, binning, skewed), None
     if cfg.compression_noise > 0:
         model, snr = with_compression_floor(cfg, det, model, binning)
     noise_px = pixel_noise(prepared.data, model) or noise_floor(prepared.data, model.level)
-    frame = Frame(prepared, model, skewed, noise_px, binning, x_offset, snr)
-    if model.noise <= 0:  # a constant image
-        return empty_details(frame, image.shape[1], cfg)
-    regions, k_sigma = find_regions(cfg, frame, det)
-    kept = with_fine_pass(cfg, frame, filter_spots(cfg, frame, measure_regions(frame, regions)), regions, k_sigma)
-    if len(kept) == 0:
-        return empty_details(frame, image.shape[1], cfg, k_sigma)
-    return measure(cfg, frame, kept, k_sigma, image.shape[1])
+    return Frame(prepared, model, skewed, noise_px, binning, x_offset, snr), det
+
+
+def without_hot_spots(cfg: DetectionSettings, frame: Frame) -> PreparedImage:
+    """The frame's plane with its hot pixels replaced (:func:`.hot_pixels.without_hot_pixels`,
+    against the interpolated background level and the pixel noise)."""
+    data = frame.prepared.data
+    level = frame.model.maps(np.arange(data.shape[0]), np.arange(data.shape[1]))[0]
+    level = np.broadcast_to(np.asarray(level, dtype=np.float32), data.shape)  # a constant model's is a float
+    cleaned = without_hot_pixels(data, level, frame.noise_px, require(cfg.max_peak_fraction, "max_peak_fraction"))
+    return PreparedImage(cleaned, frame.prepared.invalid)
 
 
 def preprocess(cfg: DetectionSettings, image: NDArray, dark: NDArray | None
@@ -334,11 +363,19 @@ def measure_regions(frame: Frame, regions: Regions) -> MeasuredRegions:
     return MeasuredRegions(regions, raw, signal, spots, peak_level, frame.noise_px * peak_noise / model.noise)
 
 
+def with_hot_tests(frame: Frame, found: MeasuredRegions) -> MeasuredRegions:
+    """``found`` with the spots' hot-pixel measures (:func:`._filters.peak_fractions`)."""
+    spots = found.spots
+    tests = filters.peak_fractions(frame.prepared.data, found.peak_level, spots.peak_x, spots.peak_y)
+    return replace(found, hot_tests=tests)
+
+
 def filter_spots(cfg: DetectionSettings, frame: Frame, found: MeasuredRegions) -> MeasuredRegions:
     """The regions that pass every spot filter (:func:`spot_filters`)."""
     if len(found) == 0:
         return found
-    return found.take(spot_filters(cfg, frame, found.regions, found.spots, found.local_noise, found.peak_level))
+    return found.take(spot_filters(cfg, frame, found.regions, found.spots, found.local_noise, found.peak_level,
+                                   found.hot_tests))
 
 
 def measure(cfg: DetectionSettings, frame: Frame, kept: MeasuredRegions, k_sigma: float,
@@ -353,10 +390,12 @@ def measure(cfg: DetectionSettings, frame: Frame, kept: MeasuredRegions, k_sigma
 
 
 def spot_filters(cfg: DetectionSettings, frame: Frame, regions: Regions, spots: SpotMeasurements,
-                 local_noise: NDArray, peak_level: NDArray) -> NDArray[np.bool_]:
-    """The AND of all spot filters (see :mod:`._filters`, :mod:`._prefilters`, :mod:`._shape`)."""
+                 local_noise: NDArray, peak_level: NDArray,
+                 hot_tests: tuple[NDArray, NDArray] | None = None) -> NDArray[np.bool_]:
+    """The AND of all spot filters (see :mod:`._filters`, :mod:`._prefilters`, :mod:`._shape`);
+    ``hot_tests``: the spots' peak fractions and cluster measures, when measured already."""
     data = frame.prepared.data
-    fraction, clusters = filters.peak_fractions(data, peak_level, spots.peak_x, spots.peak_y)
+    fraction, clusters = hot_tests or filters.peak_fractions(data, peak_level, spots.peak_x, spots.peak_y)
     keep = np.isfinite(spots.x) & (spots.flux > 0)
     keep &= filters.area_ok(spots.area_px, cfg.min_area_px, cfg.max_area_px)
     keep &= filters.peak_ok(spots.peak / local_noise, cfg.min_peak_snr)
