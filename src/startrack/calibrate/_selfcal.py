@@ -36,12 +36,16 @@ PRIORITY = ("f", "k1", "cx", "cy", "k2", "p1", "p2", "aspect", "k3")
 Jacobs 1995 §6.2: optical centre and focal length, then distortion)."""
 STARS_PER_UNKNOWN = 1.5
 """At least this many stars (two residuals each) per unknown (parameters + 3 for the attitude)."""
-SIGNIFICANCE = 0.01
+SIGNIFICANCE = 0.001
 """The calibrated model replaces the pinhole only when its lower residual is significant at this
 level for its terms jointly (F-test on the same stars, :func:`justified`). The per-term 3-sigma
 rule alone can keep correlated terms on a few stars of a narrow field: on img3.png (6 deg, 12
 stars) it kept a principal point 300-400 px off centre and k2 = -35, for an RMS of 0.264 px
-against the pinhole's 0.286 px (F = 0.7 on 4 and 16 degrees of freedom)."""
+against the pinhole's 0.286 px (F = 0.7 on 4 and 16 degrees of freedom). The level is stricter
+than the textbook 0.01 because the terms tested are those the pruning chose on the same stars,
+which makes the nominal p-value optimistic: img6.png (the same 6 deg camera, 17 stars) reached
+p = 0.0045 with aspect, cx, k1 = -1.1 and k2 = 89, while the images whose distortion is plain
+(crappy, orion_trees, pleiades, roof) give p = 1e-6 to 1e-44."""
 
 
 @dataclass(frozen=True)
