@@ -37,6 +37,14 @@ NEIGHBOURS_3X3 = np.stack(np.divmod(np.arange(9), 3), axis=1) - 1
 """Offsets (dy, dx) of a pixel's 3 x 3 neighbourhood, shape (9, 2)."""
 
 
+def neighbourhoods_3x3(shape: tuple[int, ...], y: NDArray, x: NDArray) -> tuple[NDArray, NDArray]:
+    """Rows and columns (K, 9) of the 3 x 3 neighbourhoods of the pixels (y, x) (K,) of an image
+    of ``shape`` (H, W), clipped to the image (a border pixel repeats its edge neighbours)."""
+    h, w = shape[:2]
+    return (np.clip(y[:, None] + NEIGHBOURS_3X3[:, 0], 0, h - 1),
+            np.clip(x[:, None] + NEIGHBOURS_3X3[:, 1], 0, w - 1))
+
+
 def area_ok(area_px: NDArray, min_area_px: int, max_area_px: int | None) -> NDArray[np.bool_]:
     """Area within [min_area_px, max_area_px] (no upper limit when None)."""
     keep = area_px >= min_area_px
@@ -105,9 +113,7 @@ def peak_fractions(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_
                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """:func:`peak_fraction` without and with ``pairs``, from one reading of the 3 x 3
     neighbourhoods (arguments as there); with ``clusters`` False the second is the first."""
-    h, w = signal_image.shape
-    ys = np.clip(peak_y[:, None] + NEIGHBOURS_3X3[:, 0], 0, h - 1)
-    xs = np.clip(peak_x[:, None] + NEIGHBOURS_3X3[:, 1], 0, w - 1)
+    ys, xs = neighbourhoods_3x3(signal_image.shape, peak_y, peak_x)
     window = signal_image[ys, xs].astype(np.float64) - level[:, None]
     peak = signal_image[peak_y, peak_x] - level
     # NaN (missing) neighbours count as 0; an integer frame has none (np.nansum's copy skipped)

@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ._filters import HOT_PIXELS_ABOUND, NEIGHBOURS_3X3, hot_pixel_ok, peak_fractions
+from ._filters import HOT_PIXELS_ABOUND, hot_pixel_ok, neighbourhoods_3x3, peak_fractions
 
 HOT_SIGMA = 5.0
 """A local maximum is replaced when it stands this many times the pixel noise over the level
@@ -86,9 +86,7 @@ def _bright_maxima(values: NDArray, level: NDArray, threshold: float) -> tuple[N
 def _replace(values: NDArray, level: NDArray, y: NDArray, x: NDArray, threshold: float) -> None:
     """Set, in place, the pixels of the 3 x 3 neighbourhoods about (y, x) (K,) that stand more
     than ``threshold`` over the level to their neighbourhood's median."""
-    h, w = values.shape
-    ys = np.clip(y[:, None] + NEIGHBOURS_3X3[:, 0], 0, h - 1)
-    xs = np.clip(x[:, None] + NEIGHBOURS_3X3[:, 1], 0, w - 1)
+    ys, xs = neighbourhoods_3x3(values.shape, y, x)
     window = values[ys, xs]  # (K, 9)
     median = np.nanmedian(window, axis=1)
     with np.errstate(invalid="ignore"):

@@ -147,7 +147,7 @@ def detect_frame(cfg: DetectionSettings, image: NDArray, dark: NDArray | None) -
     regions, k_sigma = find_regions(cfg, frame, det)
     found = with_hot_tests(frame, measure_regions(frame, regions))
     if hot_pixels_dominate(*require(found.hot_tests, "the hot-pixel tests"), cfg.max_peak_fraction):
-        frame, det = frame_of(cfg, without_hot_spots(cfg, frame), skewed, x_offset)
+        frame, det = frame_of(cfg, with_hot_pixels_replaced(cfg, frame), skewed, x_offset)
         regions, k_sigma = find_regions(cfg, frame, det)
         found = measure_regions(frame, regions)
     kept = with_fine_pass(cfg, frame, filter_spots(cfg, frame, found), regions, k_sigma)
@@ -169,7 +169,7 @@ def frame_of(cfg: DetectionSettings, prepared: PreparedImage, skewed: bool, x_of
     return Frame(prepared, model, skewed, noise_px, binning, x_offset, snr), det
 
 
-def without_hot_spots(cfg: DetectionSettings, frame: Frame) -> PreparedImage:
+def with_hot_pixels_replaced(cfg: DetectionSettings, frame: Frame) -> PreparedImage:
     """The frame's plane with its hot pixels replaced (:func:`.hot_pixels.without_hot_pixels`,
     against the interpolated background level and the pixel noise)."""
     data = frame.prepared.data
