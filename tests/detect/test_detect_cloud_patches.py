@@ -4,9 +4,9 @@ Three things failed where bright, noisy cloud covered much of a frame in patches
 
 - No tile's noise is taken below 0.7 times the clean sky's (``MIN_NOISE_RATIO``), and the clean
   sky's noise was the lower quartile of the tile noises *after* their 3 x 3 median, which grows
-  every noisy patch by a tile on each side. Where clean sky was a third of the frame in blocks of
-  3 x 3 tiles, the median left a fifth of it, the quartile fell in the cloud, and every clean
-  tile's noise was raised to 0.7 times the cloud's. The floor now takes the quartile of the
+  every noisy patch by a tile on each side. Where clean sky was 36 % of the frame in blocks of
+  3 x 3 tiles, the median left 24.9 % of the tiles clean, the quartile fell in the cloud, and
+  every clean tile's noise was raised to 0.7 times the cloud's. The floor now takes the quartile of the
   tiles' own noises when that is lower (``background.tile_noise_floor``).
 - The fine pass (full resolution, for sharp stars) runs when the frame's significant spots are
   sharp, by their median core size: two cloud blobs beside two stars made the median theirs. Only
