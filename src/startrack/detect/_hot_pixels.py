@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ._filters import HOT_PIXELS_ABOUND, hot_pixel_ok, neighbourhoods_3x3, peak_fractions
+from ._filters import hot_pixel_ok, hot_pixels_abound, neighbourhoods_3x3, peak_fractions
 
 HOT_SIGMA = 5.0
 """A local maximum is replaced when it stands this many times the pixel noise over the level
@@ -47,12 +47,12 @@ def refused(single: NDArray, cluster: NDArray, max_peak_fraction: float) -> NDAr
 def hot_pixels_dominate(single: NDArray, cluster: NDArray, max_peak_fraction: float | None) -> bool:
     """Whether hot pixels, alone or in clusters, are at least half of a frame's N spots (peak
     fractions ``single`` and cluster measures ``cluster``, shape (N,) each) and at least
-    :data:`._filters.HOT_PIXELS_ABOUND` of them (never when the test is off, ``max_peak_fraction``
-    None)."""
+    :data:`._filters.HOT_PIXELS_ABOUND` of them: :func:`._filters.hot_pixels_abound` against the
+    other spots (never when the test is off, ``max_peak_fraction`` None)."""
     if max_peak_fraction is None:
         return False
-    n_hot = int(np.count_nonzero(refused(single, cluster, max_peak_fraction)))
-    return n_hot >= max(HOT_PIXELS_ABOUND, single.size - n_hot)
+    hot = refused(single, cluster, max_peak_fraction)
+    return hot_pixels_abound(hot, ~hot)
 
 
 def without_hot_pixels(data: NDArray, level: NDArray, noise_px: float,

@@ -363,19 +363,25 @@ def measure_regions(frame: Frame, regions: Regions) -> MeasuredRegions:
     return MeasuredRegions(regions, raw, signal, spots, peak_level, frame.noise_px * peak_noise / model.noise)
 
 
-def with_hot_tests(frame: Frame, found: MeasuredRegions) -> MeasuredRegions:
-    """``found`` with the spots' hot-pixel measures (:func:`._filters.peak_fractions`)."""
+def hot_measures(frame: Frame, found: MeasuredRegions) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The spots' peak fractions and cluster measures (:func:`._filters.peak_fractions`): those
+    ``found`` carries, else measured."""
+    if found.hot_tests is not None:
+        return found.hot_tests
     spots = found.spots
-    tests = filters.peak_fractions(frame.prepared.data, found.peak_level, spots.peak_x, spots.peak_y)
-    return replace(found, hot_tests=tests)
+    return filters.peak_fractions(frame.prepared.data, found.peak_level, spots.peak_x, spots.peak_y)
+
+
+def with_hot_tests(frame: Frame, found: MeasuredRegions) -> MeasuredRegions:
+    """``found`` carrying its spots' hot-pixel measures (:func:`hot_measures`)."""
+    return replace(found, hot_tests=hot_measures(frame, found))
 
 
 def filter_spots(cfg: DetectionSettings, frame: Frame, found: MeasuredRegions) -> MeasuredRegions:
     """The regions that pass every spot filter (:func:`spot_filters`)."""
     if len(found) == 0:
         return found
-    return found.take(spot_filters(cfg, frame, found.regions, found.spots, found.local_noise, found.peak_level,
-                                   found.hot_tests))
+    return found.take(spot_filters(cfg, frame, found))
 
 
 def measure(cfg: DetectionSettings, frame: Frame, kept: MeasuredRegions, k_sigma: float,
@@ -389,13 +395,11 @@ def measure(cfg: DetectionSettings, frame: Frame, kept: MeasuredRegions, k_sigma
     return pack(cfg, frame, inputs, k_sigma, full_width, quality)
 
 
-def spot_filters(cfg: DetectionSettings, frame: Frame, regions: Regions, spots: SpotMeasurements,
-                 local_noise: NDArray, peak_level: NDArray,
-                 hot_tests: tuple[NDArray, NDArray] | None = None) -> NDArray[np.bool_]:
-    """The AND of all spot filters (see :mod:`._filters`, :mod:`._prefilters`, :mod:`._shape`);
-    ``hot_tests``: the spots' peak fractions and cluster measures, when measured already."""
-    data = frame.prepared.data
-    fraction, clusters = hot_tests or filters.peak_fractions(data, peak_level, spots.peak_x, spots.peak_y)
+def spot_filters(cfg: DetectionSettings, frame: Frame, found: MeasuredRegions) -> NDArray[np.bool_]:
+    """The AND of all spot filters on the measured regions (see :mod:`._filters`,
+    :mod:`._prefilters`, :mod:`._shape`; the hot-pixel measures by :func:`hot_measures`)."""
+    regions, spots, local_noise = found.regions, found.spots, found.local_noise
+    fraction, clusters = hot_measures(frame, found)
     keep = np.isfinite(spots.x) & (spots.flux > 0)
     keep &= filters.area_ok(spots.area_px, cfg.min_area_px, cfg.max_area_px)
     keep &= filters.peak_ok(spots.peak / local_noise, cfg.min_peak_snr)
