@@ -33,9 +33,14 @@ MUST_SOLVE = {
     "nvertex-5": CLEAN | NARROW,
     "van-bezooijen": {"pleiades.jpg"},
 }
-"""Images each matcher solved when the test was written (2 s limit per solve)."""
+"""Images each matcher solved when the test was written (2 s limit per solve on a fast machine)."""
 
 TIMEOUT_S = 2.0
+"""Time limit of a solve on an image the matcher need not solve (s): it only must not be wrong."""
+MUST_SOLVE_TIMEOUT_S = 20.0
+"""Time limit of a solve on an image in ``MUST_SOLVE`` (s). Generous: this test is about what is
+solved, not how fast (speed is in benchmarks/); the angle matcher takes 0.4-0.8 s on img4.png on a
+2-core machine, and more than 2 s on a slower one."""
 NARROW_FOV_DEG = 8.0
 
 
@@ -67,8 +72,9 @@ def test_matcher_on_the_real_images(method, detected):
         fov = float(row["fov_w_pinhole_deg"])
         if method.startswith("triangle") and fov < NARROW_FOV_DEG:
             continue
+        timeout_s = MUST_SOLVE_TIMEOUT_S if name in MUST_SOLVE[method] else TIMEOUT_S
         solution = solve_stars(found.x, found.y, flux=found.flux, width=width, height=height, fov_deg=fov,
-                               method=method, options=options_for(method, timeout_s=TIMEOUT_S))
+                               method=method, options=options_for(method, timeout_s=timeout_s))
         if not solution.solved:
             continue
         assert _boresight_error_px(solution, row, width, height) < 2.0, f"{method} solved {name} wrongly"

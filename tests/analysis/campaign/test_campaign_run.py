@@ -195,9 +195,12 @@ def test_nothing_is_left_behind_when_a_run_cannot_start(tmp_path):
     assert not (tmp_path / "x" / "manifest.json").exists()
 
 
-def test_a_refused_scheduler_or_chunk_size_leaves_no_folder(tmp_path):
+def test_a_refused_scheduler_or_chunk_size_leaves_no_folder(tmp_path, monkeypatch):
     """Before: --chunk-size 0 was checked after OUT/trials/ was made, and a scheduler that could
     not be reached left an empty OUT/."""
+    from startrack.analysis.campaign import _engine as engine
+
+    monkeypatch.setattr(engine, "CONNECT_S", 2.0)  # Dask retries a refused connection until then
     with pytest.raises(InvalidInputError, match="--chunk-size"):
         run_campaign(SPEC, tmp_path / "a", chunk_size=0, report=False)
     with pytest.raises(InvalidInputError, match="tcp://127.0.0.1:1"):
