@@ -1,6 +1,7 @@
 """Every refusal of the server, through a real server: 400, 403, 404, 413 (while streaming), 415
-(from the content), 422 (options, absurd dimensions from the header), and the server keeps
-serving after each one (429 and 409 are in test_runner.py, with the queue they need)."""
+(from the content), 416 (a Range past a result file's end), 422 (options, absurd dimensions from the
+header), and the server keeps serving after each one (429 and 409 are in test_runner.py, with the
+queue they need)."""
 
 from __future__ import annotations
 
@@ -175,6 +176,27 @@ def test_404_for_file_names_outside_the_job(server, real_images):
         assert response.status_code == 404, name
         assert "error" in response.json()
     assert server.client.get(f"/api/jobs/{job_id}/files/annotated.png").status_code == 200
+    still_serving(server)
+
+
+def test_range_requests_on_a_result_file(server, real_images):
+    """Before: Starlette answered another unit or a backwards range with a plain-text 400, and a
+    set with one range past the end with an empty 416; now they are ignored, served in part or
+    refused in JSON."""
+    job_id = server.submit(real_images["crappy.jpg"]).json()["id"]
+    server.wait_job(job_id)
+    url = f"/api/jobs/{job_id}/files/detections.csv"
+    whole = server.client.get(url).content
+    size = len(whole)
+    for value in ("items=0-5", "bytes=5-2", "bytes=abc"):
+        response = server.client.get(url, headers={"Range": value})
+        assert response.status_code == 200 and response.content == whole, value
+    part = server.client.get(url, headers={"Range": f"bytes=0-9,{size + 10}-"})
+    assert part.status_code == 206 and part.content == whole[:10]
+    assert part.headers["content-range"] == f"bytes 0-9/{size}"
+    refused = server.client.get(url, headers={"Range": f"bytes={size}-"})
+    assert refused.status_code == 416 and refused.headers["content-range"] == f"bytes */{size}"
+    assert refused.json()["field"] == "Range" and f"{size} bytes long" in refused.json()["error"]
     still_serving(server)
 
 

@@ -31,7 +31,8 @@ from .. import __version__
 from . import _json_text as json_text
 from ._jobs import STATES
 from ._options import OptionError, parse_options
-from ._refusals import Refusal
+from ._ranges import settle_range
+from ._refusals import Refusal, not_found
 from ._schema import openapi_document
 from ._service import Service, option_refusal
 from ._uploads import read_form
@@ -128,9 +129,16 @@ async def get_job(request: Request) -> JSONResponse:
 async def get_file(request: Request) -> FileResponse:
     service = service_of(request)
     path = service.jobs.file_path(request.path_params["job_id"], request.path_params["name"])
-    return FileResponse(path, media_type=CONTENT_TYPES.get(path.suffix, "application/octet-stream"),
-                        filename=path.name, content_disposition_type="inline" if path.suffix == ".png" else
-                        "attachment")
+    try:
+        stat = path.stat()
+    except FileNotFoundError:  # deleted since it was listed
+        raise not_found(f"job {request.path_params['job_id']} has no file {path.name!r}") from None
+    response = FileResponse(path, media_type=CONTENT_TYPES.get(path.suffix, "application/octet-stream"),
+                            filename=path.name, stat_result=stat,
+                            content_disposition_type="inline" if path.suffix == ".png" else "attachment")
+    validators = tuple(response.headers.get(k, "") for k in ("etag", "last-modified"))
+    settle_range(request.scope, stat.st_size, validators, path.name)
+    return response
 
 
 async def delete_job(request: Request) -> JSONResponse:
