@@ -10,8 +10,10 @@ along 8 directions, a matched filter for a streak at least that long), threshold
 with enough signal (``min_snr``) gives a candidate: its intensity centroid, major axis and the
 length ``sqrt(12 (var_along - var_across))`` of its second moments (a uniform segment of length
 L has variance L^2 / 12 along), the first guess of the fit. Background and noise are the median
-and the MAD of every eighth pixel in each direction (a star field's light is a small share); a
-frame whose MAD is 0 (constant, or noise-free) has nothing to set the threshold by and gives no
+and the MAD of every eighth pixel in each direction (a star field's light is a small share);
+where the sky slopes (:func:`._streak_sky.sloped_sky`: stray light, glow, vignetting), the blocks
+are taken about its level under them (32 px tiles), and the noise is the MAD about that level.
+A frame whose MAD is 0 (constant, or noise-free) has nothing to set the threshold by and gives no
 candidate.
 """
 
@@ -26,6 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
 
 from ..errors import InvalidInputError
+from ._streak_sky import sloped_sky
 
 BIN_PX = 4
 LINE_BINS = 7
@@ -79,6 +82,9 @@ class StreakCandidates:
         outer edges).
     flux, snr : ndarray, shape (K,)
         Background-subtracted sum over the blob (image units) and its signal-to-noise ratio.
+    sky : ndarray, shape (K,)
+        The sky level under each candidate's centroid, per pixel (image units): ``background``
+        unless the sky slopes (module docstring).
     """
 
     background: float
@@ -93,6 +99,7 @@ class StreakCandidates:
     extent_px: NDArray[np.float64]
     flux: NDArray[np.float64]
     snr: NDArray[np.float64]
+    sky: NDArray[np.float64]
 
     def __len__(self) -> int:
         return int(self.label.shape[0])
@@ -163,7 +170,7 @@ def find_streak_candidates(image: ArrayLike, *, bin_px: int = BIN_PX, line_bins:
     if noise == 0:  # a constant frame, or a noise-free one mostly at its background: no threshold to set
         empty_labels = np.zeros((img.shape[0] // bin_px, img.shape[1] // bin_px), dtype=np.int32)
         return _empty(background, ROUNDING_SIGMA, empty_labels, bin_px)
-    blocks = binned(img, bin_px) - background * bin_px**2
+    blocks, noise, sky = _above_sky(img, bin_px, background, noise)
     filtered = np.empty_like(blocks)
     kernel().line_filter(blocks, line_bins, ORIENTATIONS, filtered)
     centre, spread = _median_sigma(filtered, 2)
@@ -182,7 +189,28 @@ def find_streak_candidates(image: ArrayLike, *, bin_px: int = BIN_PX, line_bins:
         return _empty(background, noise, labels, bin_px)
     index, table = keep[good], table[good]
     return StreakCandidates(background, noise, labels, bin_px, (index + 1).astype(np.int32), table[:, 0:2],
-                            table[:, 2:4], table[:, 4], table[:, 5], table[:, 6:8], total[index], snr[index])
+                            table[:, 2:4], table[:, 4], table[:, 5], table[:, 6:8], total[index], snr[index],
+                            _sky_at(sky, table[:, 0:2], bin_px, background))
+
+
+def _above_sky(img: NDArray, bin_px: int, background: float, noise: float) -> tuple[NDArray, float, NDArray | None]:
+    """The frame's block sums above the sky (counts per block), the pixel noise about it, and the
+    sky level per block where it slopes (None where it is flat: ``background`` and ``noise`` hold)."""
+    sums = binned(img, bin_px)
+    sky = sloped_sky(sums, noise * bin_px)
+    if sky is None:
+        return sums - background * bin_px**2, noise, None
+    return sums - sky, _sky_noise(img, sky, bin_px, noise), sky
+
+
+def _sky_at(sky: NDArray | None, xy: NDArray, bin_px: int, background: float) -> NDArray[np.float64]:
+    """The sky level per pixel (K,) at the points ``xy`` (K, 2; px) from the per-block ``sky``, or
+    ``background`` everywhere when the sky is flat (``sky`` None)."""
+    if sky is None:
+        return np.full(xy.shape[0], float(background))
+    col = np.clip((xy[:, 0] // bin_px).astype(np.intp), 0, sky.shape[1] - 1)
+    row = np.clip((xy[:, 1] // bin_px).astype(np.intp), 0, sky.shape[0] - 1)
+    return sky[row, col] / bin_px**2
 
 
 def _candidates(blocks: NDArray, labels: NDArray, wanted: NDArray, bin_px: int) -> tuple[NDArray, NDArray]:
@@ -220,6 +248,16 @@ def _candidates(blocks: NDArray, labels: NDArray, wanted: NDArray, bin_px: int) 
     return table, good
 
 
+def _sky_noise(img: NDArray, sky: NDArray, bin_px: int, fallback: float) -> float:
+    """MAD-based sigma of every eighth pixel in each direction about its block's sky level
+    (``sky``, per block, from :func:`._streak_sky.block_sky`): the noise without the sky's slopes;
+    ``fallback`` (the frame's own) when that is 0."""
+    rows, cols = np.arange(0, sky.shape[0] * bin_px, 8), np.arange(0, sky.shape[1] * bin_px, 8)
+    sample = img[np.ix_(rows, cols)].astype(np.float64) - sky[np.ix_(rows // bin_px, cols // bin_px)] / bin_px**2
+    sigma = float(1.4826 * np.median(np.abs(sample - np.median(sample))))
+    return sigma if sigma > 0 else fallback
+
+
 def _checked_frame(image: ArrayLike, bin_px: int, line_bins: int) -> tuple[NDArray, float, float]:
     """The frame as an array with its background and robust noise (counts), after the checks of
     :func:`find_streak_candidates` (its Raises)."""
@@ -237,4 +275,5 @@ def _checked_frame(image: ArrayLike, bin_px: int, line_bins: int) -> tuple[NDArr
 
 def _empty(background: float, noise: float, labels: NDArray, bin_px: int) -> StreakCandidates:
     return StreakCandidates(background, noise, labels, bin_px, np.zeros(0, dtype=np.int32), np.zeros((0, 2)),
-                            np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros((0, 2)), np.zeros(0), np.zeros(0))
+                            np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros((0, 2)), np.zeros(0), np.zeros(0),
+                            np.zeros(0))

@@ -186,7 +186,7 @@ def first_guesses(image: NDArray, candidates: StreakCandidates, psf_sigma_px: fl
     light per pixel of length is above half its plateau) give the ends to within a pixel or two;
     a blob of collinear streaks joined by the segmentation gives one guess per run (each one's
     window stops short of the next run). The amplitude comes from the plateau, the background
-    is the frame's."""
+    is the sky's under the candidate (``StreakCandidates.sky``)."""
     rows, owners, reaches, bands = [], [], [], []
     runs = np.zeros((MAX_RUNS, 3))
     s0 = float(psf_sigma_px)
@@ -196,13 +196,13 @@ def first_guesses(image: NDArray, candidates: StreakCandidates, psf_sigma_px: fl
         lo, hi = candidates.extent_px[k]
         band = 2.5 * s0 + 0.5 + min(0.015 * (hi - lo), 4.0)
         found = kernel().profile_runs(img, c[0], c[1], u[0], u[1], lo - 4.0 * s0, hi + 4.0 * s0, band,
-                                      candidates.background, _smoothing(candidates, k, band), MIN_RUN_PX, runs)
+                                      candidates.sky[k], _smoothing(candidates, k, band), MIN_RUN_PX, runs)
         pieces = runs[:found].copy() if found else np.array([[lo + 2.0 * s0, hi - 2.0 * s0, np.nan]])
         for j, (t1, t2, plateau) in enumerate(pieces):
             half = max(0.5 * (t2 - t1), 1.0)
             density = plateau if np.isfinite(plateau) else candidates.flux[k] / max(2.0 * half, 1.0)
             rows.append([c[0] + 0.5 * (t1 + t2) * u[0], c[1] + 0.5 * (t1 + t2) * u[1], half * u[0], half * u[1], 0.0,
-                         max(density, 0.0) / (np.sqrt(2.0 * np.pi) * s0), 0.0, candidates.background, s0])
+                         max(density, 0.0) / (np.sqrt(2.0 * np.pi) * s0), 0.0, candidates.sky[k], s0])
             before = pieces[j][0] - pieces[j - 1][1] if j else np.inf
             after = pieces[j + 1][0] - t2 if j + 1 < found else np.inf
             gaps = [before, after]
