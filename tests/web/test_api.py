@@ -98,6 +98,19 @@ def test_detections_csv_rerun_json_and_solution_json(idle_server, roof_job, real
     assert png.headers["content-type"] == "image/png" and png.content.startswith(b"\x89PNG")
 
 
+def test_a_current_copy_of_a_result_file_is_answered_304(idle_server, roof_job):
+    """Before: the whole file again (200) for an If-None-Match naming its ETag."""
+    client, url = idle_server.client, roof_job["files"]["annotated.png"]
+    first = client.get(url)
+    etag, modified = first.headers["etag"], first.headers["last-modified"]
+    for headers in ({"If-None-Match": etag}, {"If-Modified-Since": modified}):
+        again = client.get(url, headers=headers)
+        assert again.status_code == 304 and again.content == b"" and again.headers["etag"] == etag, headers
+    assert client.head(url, headers={"If-None-Match": etag}).status_code == 304
+    changed = client.get(url, headers={"If-None-Match": '"another"', "If-Modified-Since": modified})
+    assert changed.status_code == 200 and changed.content == first.content  # If-None-Match decides
+
+
 def test_the_listing_the_page_and_deleting_a_finished_job(idle_server, real_images):
     client = idle_server.client
     job_id = idle_server.submit(real_images["crappy.jpg"]).json()["id"]

@@ -1,9 +1,11 @@
-"""The Range header of a result file, settled before Starlette serves it (startrack.web._ranges)."""
+"""The Range and conditional headers of a result file, settled before Starlette serves it
+(startrack.web._ranges, startrack.web._conditional)."""
 
 from __future__ import annotations
 
 import pytest
 
+from startrack.web._conditional import not_modified
 from startrack.web._ranges import byte_ranges, settle_range
 from startrack.web._refusals import Refusal
 
@@ -53,3 +55,22 @@ def test_a_set_past_the_end_is_a_416_naming_the_size():
         settle_range(scope_with(("range", "bytes=1000-")), SIZE, ("", ""), "x.csv")
     assert info.value.status == 416 and info.value.headers == {"Content-Range": "bytes */1000"}
     assert "x.csv" in info.value.message and "1000 bytes" in info.value.message and "0 to 999" in info.value.message
+
+
+ETAG, MODIFIED = '"abc"', "Mon, 07 Dec 2026 06:00:00 GMT"
+
+
+@pytest.mark.parametrize(("headers", "expected"), [
+    ({}, False),
+    ({"if-none-match": '"abc"'}, True),
+    ({"if-none-match": 'W/"abc", "x"'}, True),  # weak comparison
+    ({"if-none-match": "*"}, True),
+    ({"if-none-match": '"other"', "if-modified-since": MODIFIED}, False),  # If-None-Match decides
+    ({"if-modified-since": MODIFIED}, True),
+    ({"if-modified-since": "Tue, 08 Dec 2026 06:00:00 GMT"}, True),
+    ({"if-modified-since": "Sun, 06 Dec 2026 06:00:00 GMT"}, False),
+    ({"if-modified-since": "yesterday"}, False),  # an unreadable date is ignored
+    ({"if-modified-since": "Mon, 07 Dec 2026 06:00:00"}, False),  # no zone: not an HTTP date
+])
+def test_a_current_copy_is_not_sent_again(headers, expected):
+    assert not_modified(headers, ETAG, MODIFIED) is expected

@@ -8,7 +8,8 @@
                                          ``simulate`` (JSON) without a file -> 201 ``{id, state}``
 ``GET /api/jobs``                        every job, newest first (``?state=done`` filters)
 ``GET /api/jobs/{id}``                   state, stage, progress, error, result, files
-``GET /api/jobs/{id}/files/{name}``      a result file
+``GET /api/jobs/{id}/files/{name}``      a result file (byte ranges, :mod:`._ranges`; 304 for a
+                                         current copy, :mod:`._conditional`)
 ``DELETE /api/jobs/{id}``                cancel a queued or running job; remove a finished one
 ``POST /api/batches``                    multipart: several ``file`` parts, or ``folder`` (under
                                          ``--root``); optional ``options``, ``name``
@@ -24,11 +25,12 @@ from __future__ import annotations
 from typing import Any
 
 from starlette.requests import Request
-from starlette.responses import FileResponse, JSONResponse
+from starlette.responses import FileResponse, JSONResponse, Response
 from starlette.routing import Route
 
 from .. import __version__
 from . import _json_text as json_text
+from ._conditional import not_modified
 from ._jobs import STATES
 from ._options import OptionError, parse_options
 from ._ranges import settle_range
@@ -126,7 +128,7 @@ async def get_job(request: Request) -> JSONResponse:
     return JSONResponse(service_of(request).job_view(request.path_params["job_id"]))
 
 
-async def get_file(request: Request) -> FileResponse:
+async def get_file(request: Request) -> Response:
     service = service_of(request)
     path = service.jobs.file_path(request.path_params["job_id"], request.path_params["name"])
     try:
@@ -136,8 +138,10 @@ async def get_file(request: Request) -> FileResponse:
     response = FileResponse(path, media_type=CONTENT_TYPES.get(path.suffix, "application/octet-stream"),
                             filename=path.name, stat_result=stat,
                             content_disposition_type="inline" if path.suffix == ".png" else "attachment")
-    validators = tuple(response.headers.get(k, "") for k in ("etag", "last-modified"))
-    settle_range(request.scope, stat.st_size, validators, path.name)
+    etag, modified = (response.headers.get(k, "") for k in ("etag", "last-modified"))
+    if not_modified(request.headers, etag, modified):  # the router lets GET and HEAD in only
+        return Response(status_code=304, headers={"ETag": etag, "Last-Modified": modified})
+    settle_range(request.scope, stat.st_size, (etag, modified), path.name)
     return response
 
 
