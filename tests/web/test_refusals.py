@@ -317,6 +317,8 @@ def test_400_for_an_unknown_job_state_in_the_listing(server):
     assert response.status_code == 400 and response.json()["field"] == "state"
     assert "queued, running, done, failed, cancelled" in response.json()["error"]
     assert server.client.get("/api/jobs", params={"state": "done"}).status_code == 200
+    twice = server.client.get("/api/jobs?state=done&state=failed")  # before: the last one, silently
+    assert twice.status_code == 400 and twice.json()["field"] == "state" and "2 times" in twice.json()["error"]
     still_serving(server)
 
 

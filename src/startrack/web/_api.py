@@ -115,7 +115,11 @@ def _json_field(fields: dict[str, list[str]], name: str) -> Any:
 
 async def list_jobs(request: Request) -> JSONResponse:
     service = service_of(request)
-    wanted = request.query_params.get("state")
+    asked = request.query_params.getlist("state")
+    if len(asked) > 1:
+        raise Refusal(400, f"state is given {len(asked)} times ({', '.join(map(repr, asked))}); give one of "
+                           f"{', '.join(STATES)}, or none for every job", "state")
+    wanted = asked[0] if asked else None
     if wanted and wanted not in STATES:
         raise Refusal(400, f"no job state {wanted!r}; valid states: {', '.join(STATES)}", "state")
     jobs = [service.job_summary(j) for j in reversed(service.jobs.ids())]
