@@ -73,15 +73,17 @@ def ensure_browser() -> None:
 
 
 def _parallel(rest: list[str]) -> list[str]:
-    """pytest-xdist's worker count: one per usable CPU, at most four, unless the caller gave ``-n``.
+    """pytest-xdist's workers: one per usable CPU, at most four, unless the caller gave ``-n``;
+    each test file whole in one worker, in its order (``--dist loadfile``: some tests build on the
+    jobs an earlier test of their file left on the session's server).
 
     The suite waits on sub-processes, Dask clusters and a browser as much as it computes: two
-    workers on the 2-core reference machine took it from 470-560 s to 277 s of wall time.
+    workers on the 2-core reference machine took it from 470-560 s to 237-277 s of wall time.
     """
     if any(arg.startswith(("-n", "--numprocesses")) for arg in rest):
         return []
     cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    return ["-n", str(min(cpus, 4))]
+    return ["-n", str(min(cpus, 4)), "--dist", "loadfile"]
 
 
 def main(argv: list[str]) -> int:
