@@ -6,9 +6,11 @@ and lit foreground on a photograph. There they raise the threshold's robust sigm
 wide patches, while the streaks elsewhere stay under it (a trailed photograph under a sky
 gradient gave no candidate at all). Here the level is the median of each tile of
 :data:`SKY_TILE_BLOCKS` x :data:`SKY_TILE_BLOCKS` blocks, interpolated bilinearly between the
-tiles' centres and extrapolated beyond the outer ones. A streak covers a few of a tile's 64
-blocks, which the median passes over. A frame whose level spans less than
-:data:`FLAT_SPAN_NOISES` block noises over larger tiles keeps the one level (:func:`sloped_sky`).
+tiles' centres and extrapolated beyond the outer ones (half tiles along the edges:
+:func:`edged_levels`), then taken again with the blocks :data:`CLIP_NOISES` block noises above it
+set to it. A streak covers a few of a tile's 64 blocks, which the median passes over. A frame
+whose level spans less than :data:`FLAT_SPAN_NOISES` block noises over larger tiles keeps the one
+level (:func:`sloped_sky`).
 """
 
 from __future__ import annotations
@@ -31,8 +33,6 @@ of a 12 deg field, smeared, with or without 200 e- of flat stray light, span 0.4
 of 256 medians of 256 blocks: 0.08 block noises each); the same frames under a ramp of 50 or
 200 e- across span 9.8-10.2, and the eight real photographs of ../shared/realdata, trailed over
 20 px, 4.4-30."""
-
-
 CLIP_NOISES = 2.0
 """Blocks this many block noises above the first level are set to it before the level is taken
 again: the light of streaks and stars, which would raise their tiles' medians."""

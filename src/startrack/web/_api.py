@@ -117,8 +117,9 @@ async def list_jobs(request: Request) -> JSONResponse:
     service = service_of(request)
     asked = request.query_params.getlist("state")
     if len(asked) > 1:
-        raise Refusal(400, f"state is given {len(asked)} times ({', '.join(map(repr, asked))}); give one of "
-                           f"{', '.join(STATES)}, or none for every job", "state")
+        given = ", ".join(repr(a[:40]) for a in asked[:5])
+        raise Refusal(400, f"state is given {len(asked)} times ({given}); give one of {', '.join(STATES)}, "
+                           "or none for every job", "state")
     wanted = asked[0] if asked else None
     if wanted and wanted not in STATES:
         raise Refusal(400, f"no job state {wanted!r}; valid states: {', '.join(STATES)}", "state")
