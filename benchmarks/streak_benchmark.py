@@ -35,7 +35,7 @@ and results: ``docs/seed_tables_sease_samaan.md``.
 Usage::
 
     python benchmarks/streak_benchmark.py [--parts 1,2,3,4,5,6,7] [--frames 6] [--rso-trials 1]
-        [--smear-images 30] [--streak-frames 100] [--seed S] [--workers 2 | --sync] [--out DIR]
+        [--smear-images 30] [--streak-frames 100] [--seed S] [--slew-glow E] [--workers 2 | --sync] [--out DIR]
         [--json PATH]
 
 ``--frames`` sets the frames per cell of parts 1 and 2, ``--rso-trials`` the star fields per
@@ -150,8 +150,10 @@ def slew_rate(t_s):
     return speed[:, None] * axis[None, :]
 
 
-def run_slew() -> dict:
-    """Part 6: the Tracker through the slew (module docstring); prints a row per frame and the switches."""
+def run_slew(glow_e: float = 0.0) -> dict:
+    """Part 6: the Tracker through the slew (module docstring); prints a row per frame and the
+    switches. ``glow_e``: a limb's glow added to every frame with its shot noise, that many
+    electrons at the bottom edge falling by e over 150 px (``--slew-glow``)."""
     import numpy as np
     from scipy.spatial.transform import Rotation
 
@@ -162,8 +164,9 @@ def run_slew() -> dict:
     from startrack.units import ARCSEC, DEG
 
     print(f"\npart {SLEW_PART}: the Tracker through a slew to {SLEW['peak_deg_s']:g} deg/s and back "
-          f"({', '.join(f'{k} {v:g}' for k, v in SLEW.items())})", flush=True)
-    size = SLEW["size_px"]
+          f"({', '.join(f'{k} {v:g}' for k, v in SLEW.items())}, limb glow {glow_e:g} e-)", flush=True)
+    size, rng = SLEW["size_px"], np.random.default_rng(0)
+    glow = glow_e * np.exp(-(size - 1 - np.arange(size, dtype=float)[:, None]) / 150.0) * np.ones(size)
     camera = Camera.from_fov(size, size, SLEW["fov_deg"])
     profile = VaryingRate(Rotation.from_euler("zyx", [40, 20, 10], degrees=True), slew_rate)
     n = int(round((2 * (SLEW["rest_s"] + SLEW["ramp_s"]) + SLEW["hold_s"]) * SLEW["frame_rate_hz"])) + 1
@@ -177,7 +180,8 @@ def run_slew() -> dict:
     rows, switches = [], []
     for k, sim in enumerate(frames):
         t = sim.truth.t_mid_s
-        step = tracker.update_image(sim.image, t, streak_exposure_s=SLEW["exposure_s"])
+        image = np.clip(sim.image + rng.poisson(glow), 0, 65535).astype(sim.image.dtype) if glow_e else sim.image
+        step = tracker.update_image(image, t, streak_exposure_s=SLEW["exposure_s"])
         true = slew_rate([t])[0]
         speed = float(np.linalg.norm(true))
         err = attitude_error(sim.truth.rot_cam_from_icrs, step.rot_cam_from_icrs) / ARCSEC if step.status \
@@ -267,7 +271,7 @@ def run_end_speed() -> dict:
 def run_any(part: int, args: argparse.Namespace) -> dict:
     """One part: a spec (1-5), the slew (6) or the speed of the ends (7)."""
     if part == SLEW_PART:
-        return run_slew()
+        return run_slew(args.slew_glow)
     if part == SPEED_PART:
         return run_end_speed()
     return run_part(part, args)
@@ -281,6 +285,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--smear-images", type=int, default=30, help="images per cell of part 4 (seed: 100)")
     parser.add_argument("--streak-frames", type=int, default=100, help="frames per condition of part 5")
     parser.add_argument("--seed", type=int, default=None, help="campaign seed of every part (default: the specs')")
+    parser.add_argument("--slew-glow", type=float, default=0.0,
+                        help="part 6: a limb's glow added to every frame, e- at the bottom edge (default 0)")
     parser.add_argument("--json", type=Path, default=None, help="where to save the tables (default: results/)")
     add_run_arguments(parser)
     args = parser.parse_args(argv)
