@@ -78,7 +78,7 @@ def _parallel(rest: list[str]) -> list[str]:
     jobs an earlier test of their file left on the session's server).
 
     The suite waits on sub-processes, Dask clusters and a browser as much as it computes: two
-    workers on the 2-core reference machine took it from 470-560 s to 237-277 s of wall time.
+    workers on the 2-core reference machine took it from 470-560 s to 227-277 s of wall time.
     """
     if any(arg.startswith(("-n", "--numprocesses")) for arg in rest):
         return []

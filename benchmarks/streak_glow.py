@@ -2,7 +2,8 @@
 
 Simulated catalog frames of a 12 deg, 1024 x 1024 generic-cmos camera (stars to V 7.5, 0.2 s
 exposures at 2 deg/s about random axes: streaks of about 33 px) at random attitudes, with light
-added in electrons and its shot noise: none, flat, a ramp across the frame (0 at the left edge),
+added in electrons and its shot noise (the sensor's gain is 1 e- per ADU, so straight onto the
+counts): none, flat, a ramp across the frame (0 at the left edge),
 or a limb's glow at the bottom edge falling by e over 150 px. Each condition gets the same frames,
 axes and noise draws, so a change of the streak search is compared frame for frame. A frame is
 solved right when its mid-exposure attitude is within 5 pixels of the truth.

@@ -29,7 +29,8 @@ def smeared():
 
 
 def with_light(frame, light: np.ndarray) -> np.ndarray:
-    """The frame with stray light ``light`` (e- per pixel, shape of the frame) and its shot noise."""
+    """The frame with stray light ``light`` (e- per pixel, shape of the frame) and its shot noise
+    (generic-cmos: 1 e- per ADU, so added to the counts as they are)."""
     return np.clip(frame.image + np.random.default_rng(2).poisson(light), 0, 65535).astype(frame.image.dtype)
 
 
