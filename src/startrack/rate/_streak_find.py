@@ -115,7 +115,11 @@ def robust_level(image: NDArray, step: int = 8) -> tuple[float, float]:
 
 def _median_sigma(image: NDArray, step: int) -> tuple[float, float]:
     """Median and MAD-based sigma (as measured, 0 included) of every ``step``-th pixel in each direction."""
-    sample = np.asarray(image[::step, ::step], dtype=np.float64)
+    return _centre_sigma(np.asarray(image[::step, ::step], dtype=np.float64))
+
+
+def _centre_sigma(sample: NDArray[np.float64]) -> tuple[float, float]:
+    """Median and MAD-based sigma (0 included) of the values of ``sample``."""
     centre = float(np.median(sample))
     return centre, float(1.4826 * np.median(np.abs(sample - centre)))
 
@@ -254,7 +258,7 @@ def _sky_noise(img: NDArray, sky: NDArray, bin_px: int, fallback: float) -> floa
     ``fallback`` (the frame's own) when that is 0."""
     rows, cols = np.arange(0, sky.shape[0] * bin_px, 8), np.arange(0, sky.shape[1] * bin_px, 8)
     sample = img[np.ix_(rows, cols)].astype(np.float64) - sky[np.ix_(rows // bin_px, cols // bin_px)] / bin_px**2
-    sigma = float(1.4826 * np.median(np.abs(sample - np.median(sample))))
+    sigma = _centre_sigma(sample)[1]
     return sigma if sigma > 0 else fallback
 
 
