@@ -165,8 +165,10 @@ def run_slew(glow_e: float = 0.0) -> dict:
 
     print(f"\npart {SLEW_PART}: the Tracker through a slew to {SLEW['peak_deg_s']:g} deg/s and back "
           f"({', '.join(f'{k} {v:g}' for k, v in SLEW.items())}, limb glow {glow_e:g} e-)", flush=True)
+    from streak_glow import glow as added_light
+
     size, rng = SLEW["size_px"], np.random.default_rng(0)
-    glow = glow_e * np.exp(-(size - 1 - np.arange(size, dtype=float)[:, None]) / 150.0) * np.ones(size)
+    glow = added_light("limb", glow_e, (size, size))
     camera = Camera.from_fov(size, size, SLEW["fov_deg"])
     profile = VaryingRate(Rotation.from_euler("zyx", [40, 20, 10], degrees=True), slew_rate)
     n = int(round((2 * (SLEW["rest_s"] + SLEW["ramp_s"]) + SLEW["hold_s"]) * SLEW["frame_rate_hz"])) + 1

@@ -49,11 +49,11 @@ def run(kind: str, electrons: float, frames: int, seed: int) -> tuple[int, float
     rng = np.random.default_rng(seed)
     sensor = get_sensor_preset("generic-cmos").with_exposure(0.2)
     solved, candidates = 0, []
+    light = glow(kind, electrons, (CAMERA.height, CAMERA.width))
     for i, rot in enumerate(random_rotations(frames, rng)):
         axis = rng.normal(size=3)
         frame = simulate_frame(CAMERA, rot, max_mag=7.5, epoch_jyear=2025.0, sensor=sensor, rng=100 + i,
                                rate_rad_s=2.0 * DEG * axis / np.linalg.norm(axis))
-        light = glow(kind, electrons, frame.image.shape)
         image = np.clip(frame.image + rng.poisson(light), 0, np.iinfo(frame.image.dtype).max).astype(frame.image.dtype)
         solution = solve_streaked(image, fov_deg=12.0, epoch=2025.0)
         solved += bool(solution.solved and attitude_error(frame.truth.rot_cam_from_icrs, solution.rot_cam_from_icrs)
