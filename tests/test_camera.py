@@ -278,6 +278,13 @@ def test_a_field_that_is_not_a_number_is_refused_by_name(key, value):
     assert type(value).__name__ in str(info.value)
 
 
+@pytest.mark.parametrize(("key", "value"), [("name", None), ("name", []), ("source", {"a": 1}), ("source", 3)])
+def test_a_label_that_is_not_a_string_is_refused_by_name(key, value):
+    # a rig or camera JSON file with "name": [] made a Camera whose name was a list
+    with pytest.raises(InvalidInputError, match=re.escape(f"camera {key} must be a string, got {value!r}")):
+        Camera(width=100, height=100, fx=500.0, **{key: value})
+
+
 def test_numpy_and_integer_fields_are_stored_as_floats():
     cam = Camera(width=100, height=100, fx=np.float32(500.0), fy=510, cx=np.int64(50), k1=np.float64(-0.1))
     assert all(type(getattr(cam, key)) is float for key in ("fx", "fy", "cx", "cy", "k1", "k2"))

@@ -115,6 +115,9 @@ class Camera:
         if not isinstance(self.mirrored, bool | np.bool_):
             raise InvalidInputError(f"camera mirrored must be True or False, got {self.mirrored!r}")
         object.__setattr__(self, "mirrored", bool(self.mirrored))
+        for key in ("name", "source"):
+            if not isinstance(getattr(self, key), str):
+                raise InvalidInputError(f"camera {key} must be a string, got {getattr(self, key)!r}")
         pitch = self.pixel_pitch_um
         number = isinstance(pitch, int | float | np.number) and not isinstance(pitch, bool)
         if pitch is not None and not (number and math.isfinite(pitch) and pitch > 0):

@@ -38,7 +38,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from .camera import PRESETS, Camera, get_preset, preset_key
-from .errors import InvalidInputError
+from .errors import InvalidInputError, is_real_number
 
 ROTATION_TOLERANCE = 1e-6
 """A mounting given as a quaternion or a matrix must be a rotation to this tolerance (unit norm;
@@ -161,11 +161,11 @@ class RigHead:
             raise InvalidInputError(f"{label}: camera must be a startrack Camera, got {type(self.camera).__name__}")
         object.__setattr__(self, "rot_cam_from_body", as_rotation(self.rot_cam_from_body,
                                                                   f"{label}: rot_cam_from_body"))
-        sigma = float(self.centroid_sigma_px)
-        if not (math.isfinite(sigma) and sigma > 0.0):
+        sigma = self.centroid_sigma_px
+        if not (is_real_number(sigma) and math.isfinite(sigma) and sigma > 0.0):
             raise InvalidInputError(f"{label}: centroid_sigma_px must be a positive number of px, got "
                                     f"{self.centroid_sigma_px!r}")
-        object.__setattr__(self, "centroid_sigma_px", sigma)
+        object.__setattr__(self, "centroid_sigma_px", float(sigma))
         if self.detector is not None:
             _check_name(self.detector, f"{label}: detector")
         if self.psf is not None and not isinstance(self.psf, PsfShape):
@@ -230,7 +230,7 @@ class CameraRig:
         self.heads = heads
         self._by_name = {h.name: h for h in heads}
         self.reference = heads[0].name if reference is None else reference
-        if self.reference not in self._by_name:
+        if not isinstance(self.reference, str) or self.reference not in self._by_name:
             raise InvalidInputError(f"reference head {self.reference!r} is not in the rig "
                                     f"(heads: {', '.join(self.names)})")
         self._detectors = self._group_detectors()
@@ -308,13 +308,10 @@ class CameraRig:
     @classmethod
     def load(cls, path: str | os.PathLike) -> CameraRig:
         """Read a rig JSON file; InvalidInputError naming the file and the problem."""
+        from .io import read_json_file
+
         path = Path(path)
-        try:
-            data = json.loads(path.read_text())
-        except OSError as exc:
-            raise InvalidInputError(f"cannot read rig file {path}: {exc.strerror or exc}") from None
-        except json.JSONDecodeError as exc:
-            raise InvalidInputError(f"rig file {path} is not valid JSON: {exc}") from None
+        data = read_json_file(path, "rig file")
         try:
             return cls.from_dict(data, base_dir=path.parent)
         except InvalidInputError as exc:
@@ -390,8 +387,8 @@ def _camera_from(value: Any, label: str, base: Path) -> Camera:
             return get_preset(value)
         path = Path(value) if Path(value).is_absolute() else base / value
         try:
-            value = json.loads(path.read_text())
-        except (OSError, json.JSONDecodeError) as exc:
+            value = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:  # ValueError: not UTF-8 (UnicodeDecodeError) or not JSON
             raise InvalidInputError(f"{label}: camera {value!r} is neither a preset ({', '.join(sorted(PRESETS))}) "
                                     f"nor a readable camera JSON file ({exc})") from None
     if not isinstance(value, Mapping):

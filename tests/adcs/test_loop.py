@@ -103,6 +103,17 @@ def test_config_refusals():
         StarTrackerSetup(frame_rate_hz=20.0)
     with pytest.raises(InvalidInputError, match="last target"):
         Scenario(q2_start=0.4, n_steps=7)
+    with pytest.raises(InvalidInputError, match="seed must be an integer >= 0"):
+        LoopConfig(seed=-1)
+    with pytest.raises(InvalidInputError, match="seed must be an integer >= 0"):
+        StarTrackerSetup(seed=-1)
+
+
+@pytest.mark.parametrize("duration_s", [1e-300, 0.02, 250_000.025, 1e300])
+def test_a_run_holds_one_to_ten_million_ticks(duration_s):
+    with pytest.raises(InvalidInputError, match="duration_s must hold 1 to 10,000,000 control ticks of 0.025 s"):
+        Scenario(duration_s=duration_s)
+    assert Scenario(duration_s=0.025).n_ticks == 1 and Scenario(duration_s=250_000.0).n_ticks == 10_000_000
 
 
 @pytest.mark.parametrize("rate_hz", [2.0, 3.0, 10.0])

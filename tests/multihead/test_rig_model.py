@@ -63,6 +63,18 @@ def test_other_bad_heads_and_rigs():
         Exclusion(sun_deg=-1.0)
 
 
+@pytest.mark.parametrize("value", [None, "x", [], {}, True])
+def test_a_centroid_sigma_that_is_not_a_number_is_refused_by_name(value):
+    with pytest.raises(InvalidInputError, match="head 'a': centroid_sigma_px must be a positive number"):
+        RigHead("a", CAMERA, Rotation.identity(), centroid_sigma_px=value)
+
+
+@pytest.mark.parametrize("reference", [[], {}, 1])
+def test_a_reference_that_is_not_a_head_name_is_refused(reference):
+    with pytest.raises(InvalidInputError, match="reference head .* is not in the rig"):
+        CameraRig([RigHead("a", CAMERA, Rotation.identity())], reference=reference)
+
+
 def test_rig_access():
     rig = split_rig()
     assert rig.names == ("left", "right") and len(rig) == 2 and "left" in rig
@@ -111,4 +123,7 @@ def test_bad_rig_files_name_the_file_and_the_head(tmp_path, edit, words):
     assert words in str(info.value)
     path.write_text("{not json")
     with pytest.raises(InvalidInputError, match="not valid JSON"):
+        CameraRig.load(path)
+    path.write_bytes(b"SIMPLE  =                    T \x80\xff")  # an image given as the rig
+    with pytest.raises(InvalidInputError, match="is not JSON text: byte 31 is not UTF-8"):
         CameraRig.load(path)

@@ -122,3 +122,18 @@ def test_same_seed_is_bit_identical_and_another_seed_differs():
 def test_misuse_raises(kwargs):
     with pytest.raises(InvalidInputError):
         read_out(sensor=sensor(), **kwargs)
+
+
+@pytest.mark.parametrize("exposure_s, prnu", [(1e300, 0.0), (1e16, 0.0), (2.0, 1e300)])
+def test_a_charge_beyond_the_poisson_draw_names_the_settings(exposure_s, prnu):
+    # a sky of 1e3 e-/s: 1e19 e- at 1e16 s, past the 1e18 e- a pixel may expect; a PRNU of 1e300 scales it too
+    s = dataclasses.replace(sensor(prnu_rms=prnu), exposure_s=exposure_s)
+    with pytest.raises(InvalidInputError, match="a pixel expects .* electrons in the exposure, more than the 1e"
+                                               "\\+18 the simulator can draw: shorten the exposure"):
+        read_out(np.zeros(SHAPE), s, background_e=1e3 * exposure_s, rng=1)
+
+
+def test_a_sky_too_bright_for_a_table_is_drawn_pixel_by_pixel():
+    # 1e16 e-: a read-out table would span 2.6e9 charges (27 GB); the pixels are drawn one by one instead
+    image = read_out(np.zeros((4, 4)), sensor(), background_e=1e16, noise=with_(shot=True, quantize=True), rng=1)
+    assert image.dtype == np.uint16 and np.all(image == 2**14 - 1)

@@ -63,4 +63,4 @@ def test_track_prints_the_smear_limits_and_the_mode_switches(tmp_path, capsys, s
 def test_track_refuses_a_bad_exposure(tmp_path, capsys):
     write_png(tmp_path / "frame000.png", np.zeros((64, 64), dtype=np.uint16))
     assert main(["track", str(tmp_path), "--fov-deg", "12", "--exposure-s", "-1"]) == 2
-    assert "--exposure-s must be a positive, finite number of seconds" in capsys.readouterr().err
+    assert "--exposure-s must be 0.0001 to 3600 s, got -1" in capsys.readouterr().err  # as startrack rate's

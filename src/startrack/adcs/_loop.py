@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import InvalidInputError, require
+from ..errors import InvalidInputError, check_int, require
 from ._actuation import allocate
 from ._control import tracking_law
 from ._cubesat import CubeSat
@@ -80,6 +80,7 @@ class LoopConfig:
         for name, valid in (("feedback", FEEDBACKS), ("plant", PLANTS), ("b_field", FIELDS)):
             if getattr(self, name) not in valid:
                 raise InvalidInputError(f"{name} must be one of {', '.join(valid)}, got {getattr(self, name)!r}")
+        check_int(self, ("seed",), 0)
         if self.feedback == "tracker-model" and self.noise_model is None:
             raise InvalidInputError("feedback 'tracker-model' needs a noise_model (fitted from a tracker run)")
         if self.plant == "single-axis" and self.b_field != "helmholtz":

@@ -14,6 +14,10 @@ import numpy as np
 
 from ..errors import InvalidInputError
 
+MAX_TICKS = 10_000_000
+"""The most control ticks a run takes (69 h at 40 Hz): a run keeps 15 values of 8 bytes per tick
+(its time and the series of :data:`startrack.adcs._loop.RECORDED`), 1.2 GB at this length."""
+
 
 @dataclass(frozen=True)
 class Scenario:
@@ -32,6 +36,10 @@ class Scenario:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise InvalidInputError(f"{name} must be positive, got {value!r}")
+        if not 1 <= self.duration_s * self.control_rate_hz <= MAX_TICKS:
+            raise InvalidInputError(f"duration_s must hold 1 to {MAX_TICKS:,} control ticks of {self.dt_s:g} s "
+                                    f"({self.dt_s:g} to {MAX_TICKS * self.dt_s:,.0f} s; a run keeps every tick "
+                                    f"in memory), got {self.duration_s!r}")
         if not (isinstance(self.n_steps, int | np.integer) and self.n_steps >= 1):
             raise InvalidInputError(f"n_steps must be a whole number >= 1, got {self.n_steps!r}")
         last = self.q2_start + self.n_steps * self.step_q2

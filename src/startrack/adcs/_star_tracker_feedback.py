@@ -34,7 +34,7 @@ from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
 from ..detect import StarDetector
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, check_int
 from ..frames import rotation_from_radec_roll
 from ..simulate import Sensor, frame_rng, get_sensor_preset, simulate_frame
 from ..track import Tracker, TrackerOptions
@@ -94,6 +94,7 @@ class StarTrackerSetup:
         if self.sensor.exposure_s > 1.0 / self.frame_rate_hz:
             raise InvalidInputError(f"the exposure ({self.sensor.exposure_s:g} s) does not fit in a frame period "
                                     f"of {1 / self.frame_rate_hz:g} s; lower frame_rate_hz")
+        check_int(self, ("seed",), 0)
         if self.latency_s is not None and not (math.isfinite(self.latency_s) and self.latency_s >= 0):
             raise InvalidInputError(f"latency_s must be None or >= 0 s, got {self.latency_s!r}")
 

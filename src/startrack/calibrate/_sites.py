@@ -90,7 +90,7 @@ def load_sites() -> dict[str, Site]:
     path = sites_file()
     if path.is_file():
         try:
-            data = json.loads(path.read_text())
+            data = json.loads(path.read_text(encoding="utf-8"))
             sites.update({entry["name"]: Site(**entry) for entry in data.get("sites", [])})
         except (ValueError, TypeError, KeyError) as exc:
             raise InvalidInputError(f"{path} is not a valid sites file: {exc}") from exc

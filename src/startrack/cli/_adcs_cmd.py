@@ -12,7 +12,6 @@ and summary.json (and, with the tracker, frames.csv and tracker_noise.json, whic
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from ..adcs import (
@@ -34,6 +33,7 @@ from ..adcs import (
     write_files,
 )
 from ..errors import InvalidInputError
+from ..io import read_json_file
 from ._common import exit_status_epilog, print_json
 from ._progress import ProgressBar, ensure_database_for
 
@@ -81,7 +81,7 @@ def _config(args: argparse.Namespace) -> LoopConfig:
                                 "written by a --feedback tracker run)")
     noise = None
     if args.noise_model:
-        noise = TrackerNoiseModel.from_dict(json.loads(Path(args.noise_model).read_text()))
+        noise = TrackerNoiseModel.from_dict(read_json_file(args.noise_model, "tracker noise model"))
     if args.plant == "single-axis" and args.field != "helmholtz":
         raise InvalidInputError("--field dipole needs --plant three-axis")
     tracker = StarTrackerSetup(frame_rate_hz=args.frame_rate_hz, latency_s=args.latency_s, seed=args.seed)

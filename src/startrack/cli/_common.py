@@ -202,6 +202,22 @@ def epoch_option(args: argparse.Namespace) -> float | None:
         raise InvalidInputError(f"--epoch must be a Julian year such as 2025.5, got {args.epoch:g}") from None
 
 
+EXPOSURE_RANGE_S = (1e-4, 3600.0)
+"""Valid exposure times and frame intervals (--exposure-s, |--dt-s|), s: 0.1 ms to an hour."""
+
+
+def check_time_option(value: float | None, option: str, what: str, *, signed: bool = False) -> float:
+    """``value`` if it is a time within :data:`EXPOSURE_RANGE_S` (in magnitude when ``signed``), else
+    an InvalidInputError naming ``option`` and the valid range."""
+    lo, hi = EXPOSURE_RANGE_S
+    valid = f"{lo:g} to {hi:g} s" + (f", or -{hi:g} to -{lo:g} s" if signed else "")
+    if value is None:
+        raise InvalidInputError(f"{what} needs {option} ({valid})")
+    if not lo <= (abs(value) if signed else value) <= hi:
+        raise InvalidInputError(f"{option} must be {valid}, got {value:g}")
+    return value
+
+
 def _option_name(dest: str) -> str:
     return "--" + dest.replace("_", "-")
 

@@ -86,7 +86,7 @@ def _run(name: str, argv: list[str]) -> int:
     except MemoryError as exc:
         print(f"startrack {name}: error: {memory_message(exc)}", file=sys.stderr)
         return 2
-    except (StartrackError, ValueError, OSError) as exc:
+    except (StartrackError, OSError) as exc:
         print(f"startrack {name}: error: {one_line(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

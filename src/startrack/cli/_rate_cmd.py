@@ -35,6 +35,7 @@ from ._common import (
     add_max_pixels_option,
     apply_max_pixels_option,
     check_finite_options,
+    check_time_option,
     exit_status_epilog,
     print_json,
 )
@@ -49,8 +50,6 @@ the same as an object.
 """ + exit_status_epilog("0 rate found; 1 not found (the status and reason are printed); 2 misuse, with one line "
                          "'startrack rate: error: ...' on standard error;")
 
-EXPOSURE_RANGE_S = (1e-4, 3600.0)
-"""Valid --exposure-s and |--dt-s|: 0.1 ms to an hour."""
 MAX_BIAS_PX = 10.0
 """Largest |--bias-px|: a corner detector pulls the ends in by about a PSF width (0.6-2.3 px)."""
 MAX_MOTION_DEG = 90.0
@@ -98,18 +97,6 @@ def _rate_fields(rate: RateEstimate) -> dict:
             "sigma_deg_s": sigma.tolist() if rate.ok and np.all(np.isfinite(sigma)) else None, "method": rate.method}
 
 
-def _check_time(value: float | None, option: str, what: str, *, signed: bool = False) -> float:
-    """``value`` if it is a time within :data:`EXPOSURE_RANGE_S` (in magnitude when ``signed``), else
-    an InvalidInputError naming ``option`` and the valid range."""
-    lo, hi = EXPOSURE_RANGE_S
-    valid = f"{lo:g} to {hi:g} s" + (f", or -{hi:g} to -{lo:g} s" if signed else "")
-    if value is None:
-        raise InvalidInputError(f"{what} needs {option} ({valid})")
-    if not lo <= (abs(value) if signed else value) <= hi:
-        raise InvalidInputError(f"{option} must be {valid}, got {value:g}")
-    return value
-
-
 def _check_options(args) -> None:
     """Refuse NaN / infinite numbers and values out of their sensible ranges (stated in the message)."""
     check_finite_options(args)
@@ -124,7 +111,7 @@ def _check_options(args) -> None:
 
 
 def _one_image(args, image) -> tuple[dict, RateEstimate]:
-    _check_time(args.exposure_s, "--exposure-s", "one image")
+    check_time_option(args.exposure_s, "--exposure-s", "one image")
     camera = _camera(args, image.shape[1], image.shape[0])
     prior = None if args.prior_rate_deg_s is None else np.array(args.prior_rate_deg_s) * DEG
     result: StreakRate = streak_rate(image, camera, args.exposure_s, detector=args.detector, bias_px=args.bias_px,
@@ -143,7 +130,7 @@ def _centroids(image) -> np.ndarray:
 
 
 def _two_images(args, first, second) -> tuple[dict, RateEstimate]:
-    _check_time(args.dt_s, "--dt-s", "two images", signed=True)
+    check_time_option(args.dt_s, "--dt-s", "two images", signed=True)
     if first.shape != second.shape:
         raise InvalidInputError(f"the two images differ in size: {first.shape} and {second.shape}")
     camera = _camera(args, first.shape[1], first.shape[0])

@@ -35,6 +35,7 @@ from ._common import (
     add_epoch_option,
     add_fov_options,
     add_max_pixels_option,
+    check_time_option,
     epoch_option,
     exit_status_epilog,
     fov_kwargs,
@@ -127,7 +128,7 @@ class _Sequence:
         if step.extra.get("switched"):
             other = "streak" if self._tracker.mode == "point" else "point"
             self.notes.append(f"frame {k} ({name}, t = {step.t_s:g} s): {other} -> {self._tracker.mode} mode "
-                              f"(smear {step.extra['streak_px']:.1f} px)")
+                              f"(smear {step.extra['streak_px']:.6g} px)")
 
     @property
     def _tracker(self) -> Tracker:
@@ -176,9 +177,8 @@ def main(argv: list[str]) -> int:
 
 
 def _exposure_option(exposure_s: float | None) -> float | None:
-    if exposure_s is not None and not (math.isfinite(exposure_s) and exposure_s > 0):
-        raise InvalidInputError(f"--exposure-s must be a positive, finite number of seconds, got {exposure_s:g}")
-    return exposure_s
+    """--exposure-s when it is given, checked against :data:`._common.EXPOSURE_RANGE_S`, else None."""
+    return None if exposure_s is None else check_time_option(exposure_s, "--exposure-s", "")
 
 
 def _is_stdout(out: str) -> bool:

@@ -59,6 +59,17 @@ def config_from(args: argparse.Namespace) -> WebConfig:
         raise InvalidInputError(f"--{name.replace('_', '-')} {rest}") from None
 
 
+def _make_data_dir(folder: Path) -> None:
+    """Create the data folder (and its parents) if missing; InvalidInputError naming --data-dir when it
+    is a file or cannot be made."""
+    if folder.exists() and not folder.is_dir():
+        raise InvalidInputError(f"--data-dir {folder} is a file; give a folder (it is created if missing)")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InvalidInputError(f"cannot create --data-dir {folder}: {exc.strerror or exc}") from None
+
+
 def main(argv: list[str]) -> int:
     """Run the server until interrupted."""
     import socket
@@ -69,7 +80,7 @@ def main(argv: list[str]) -> int:
 
     args = _parser().parse_args(argv)
     config = config_from(args)
-    config.data_dir.mkdir(parents=True, exist_ok=True)
+    _make_data_dir(config.data_dir)
     sock = socket.socket(socket.AF_INET6 if ":" in args.host else socket.AF_INET)
     sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
     try:

@@ -35,6 +35,10 @@ MIN_PREDICTED_SNR = 20.0
 CONTAMINATION_SNR = 5.0
 """Stars at least this bright (expected SNR) count as neighbours that crowd a predicted streak."""
 PREDICTED_MAX_ITER = 10
+MAX_PREDICTED_TURN_RAD = math.pi
+"""No streak is predicted when the camera turns more than half a turn in the exposure (a wrong
+exposure time, or rate): a star's path then folds back on itself or crosses the whole sky, and no
+single streak of it can be fitted; beyond about 1e300 s the arithmetic overflows."""
 """Iterations of a one-pass fit from a close prediction (within a pixel or so). On 40 profiling
 frames 92 % of such fits converged within this many; the others, mostly faint or blended streaks
 whose ends creep along the arc (the chi-square falling by about 0.1 a step), took 42 % of the
@@ -136,7 +140,10 @@ def fit_predicted(image: NDArray, camera: Camera, stars_icrs: NDArray, rot_mid: 
     :func:`.streak_fit.fit_streaks`: one from a close prediction, which stays in the window
     around it, two from a rough one, which may move its window), each fit's ``ok`` also requiring
     it to agree with the prediction within ``tolerance_px``. ``saturation`` is
-    :func:`.streak_fit.fit_streaks`'s (None: from ``image``)."""
+    :func:`.streak_fit.fit_streaks`'s (None: from ``image``). Nothing is fitted when the camera
+    turns more than :data:`MAX_PREDICTED_TURN_RAD` in the exposure."""
+    if not float(np.linalg.norm(omega)) * timing.exposure_s <= MAX_PREDICTED_TURN_RAD:
+        return np.zeros(0, dtype=np.intp), None
     predicted = predict(camera, rot_mid, omega, alpha, stars_icrs, timing)
     use = inside(predicted, camera, EDGE_PX + 3.0 * blur_px)
     if wanted is not None:

@@ -47,6 +47,11 @@ TABLE_MAX_ENTRIES = 4_000_000
 """Largest (charges x ADU values) table computed for the fast path; larger levels go pixel by pixel."""
 _TAIL_SIGMAS = 13.0
 
+MAX_EXPECTED_E = 1e18
+"""The largest charge a pixel may expect in one exposure (electrons). numpy draws Poisson counts up to
+about 9.2e18; real full wells hold under 1e7 e-, so only a mistaken setting (an exposure of years, an
+aperture of square kilometres, a PRNU of thousands) expects more."""
+
 
 @dataclass(frozen=True)
 class NoiseModel:
@@ -231,7 +236,18 @@ def _irregular_pixels(signal: NDArray, maps: PixelMaps) -> NDArray[np.intp]:
     return np.flatnonzero(mask)
 
 
+def check_expected_charge(peak_e: float) -> None:
+    """Raise InvalidInputError when a pixel expects more than :data:`MAX_EXPECTED_E` electrons
+    (``peak_e``, the largest expectation; NaN and inf too), naming the settings that make it."""
+    if not peak_e <= MAX_EXPECTED_E:
+        raise InvalidInputError(
+            f"a pixel expects {peak_e:.3g} electrons in the exposure, more than the {MAX_EXPECTED_E:.0e} the "
+            "simulator can draw: shorten the exposure or lower the aperture, the sky, the stray light, the dark "
+            "current or the PRNU")
+
+
 def _table_or_none(level_e: float, det: Detector, model: NoiseModel):
+    check_expected_charge(level_e)
     try:
         return readout_table(level_e, det, model)
     except InvalidInputError:  # too bright a level for a table: pixel by pixel
@@ -252,6 +268,7 @@ def _read_out_table(signal, table, irregular, background, sensor, maps, model, r
 def _read_out_pixels(electrons: NDArray[np.float64], det: Detector, model: NoiseModel,
                      rng: np.random.Generator, bloom_ok: bool = False) -> NDArray:
     """Steps 2-6 on an array of expected electrons (any shape; 2-D for blooming); in place."""
+    check_expected_charge(float(electrons.max(initial=0.0)))
     if model.shot:
         electrons = rng.poisson(electrons).astype(float)
     if model.saturate:
@@ -292,6 +309,8 @@ def _charge_distribution(level_e: float, det: Detector, model: NoiseModel
         prob = np.ones(1)
     else:
         spread = _TAIL_SIGMAS * np.sqrt(level_e) + 30.0
+        if 2.0 * spread > TABLE_MAX_ENTRIES:  # before np.arange allocates it
+            raise InvalidInputError(f"read-out table for {level_e:g} e- would be too large")
         charge = np.arange(max(0.0, np.floor(level_e - spread)), np.ceil(level_e + spread) + 1.0)
         prob = poisson.pmf(charge, level_e)
     if model.saturate:

@@ -1,0 +1,60 @@
+"""Values that reached the libraries unchecked (a probe of every command's options with -1, 0, nan,
+inf, 1e300, 1e-300, words and wrong files): each now ends in one line naming the option and what is
+valid, exit status 2. Before, they ended as "unexpected" errors (exit 3), or as a bare library message."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+
+import numpy as np
+import pytest
+
+from startrack.cli import main
+from startrack.io import write_fits
+
+
+def run(*argv) -> tuple[int, str, str]:
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main([str(a) for a in argv])
+    return code, out.getvalue(), err.getvalue()
+
+
+@pytest.fixture
+def files(tmp_path):
+    """A folder holding one small frame, a binary file and a FITS file where JSON is asked for."""
+    (tmp_path / "frames").mkdir()
+    write_fits(tmp_path / "frames" / "f0.fits", np.zeros((64, 64), np.uint16))
+    (tmp_path / "binary.json").write_bytes(b"\x89PNG\r\n\x1a\n\x00\xff\xfe")
+    (tmp_path / "afile").write_text("not a folder")
+    return tmp_path
+
+
+@pytest.mark.parametrize("argv, words", [
+    # 1e300 s of sky overflowed the Poisson draw ("zero-size array to reduction operation minimum")
+    (["simulate", "--seed", 3, "--exposure-s", 1e300, "--out", "{d}/x.fits"],
+     "startrack simulate: error: a pixel expects 2e+301 electrons in the exposure, more than the 1e+18"),
+    (["simulate", "--seed", 3, "--prnu", 1e300, "--out", "{d}/x.fits"], "shorten the exposure or lower the aperture"),
+    # the ZeroDivisionError of the streak fit, exit 3
+    (["track", "{d}/frames", "--exposure-s", 1e300], "startrack track: error: --exposure-s must be 0.0001 to 3600 s"),
+    # "Maximum allowed size exceeded" and "zero-size array", exit 3
+    (["adcs-demo", "--duration-s", 1e300], "duration_s must hold 1 to 10,000,000 control ticks of 0.025 s"),
+    (["adcs-demo", "--duration-s", 1e-300], "duration_s must hold 1 to 10,000,000 control ticks"),
+    # numpy's "expected non-negative integer", exit 3
+    (["adcs-demo", "--duration-s", 20, "--seed", -1], "seed must be an integer >= 0, got -1"),
+    # JSONDecodeError, exit 3
+    (["adcs-demo", "--duration-s", 20, "--noise-model", "{d}/binary.json"],
+     "tracker noise model {d}/binary.json is not JSON text: byte 0 is not UTF-8"),
+    (["adcs-demo", "--duration-s", 20, "--noise-model", "{d}/none.json"],
+     "cannot read tracker noise model {d}/none.json: No such file or directory"),
+    # a UnicodeDecodeError (exit 2, but the codec's words)
+    (["simulate", "--rig", "{d}/binary.json", "--out", "{d}/sim"], "rig file {d}/binary.json is not JSON text"),
+    # "[Errno 17] File exists: 'afile'"
+    (["web", "--data-dir", "{d}/afile"], "--data-dir {d}/afile is a file; give a folder"),
+])
+def test_a_bad_value_is_one_line_and_exit_2(files, argv, words):
+    code, out, err = run(*[str(a).format(d=files) for a in argv])
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and words.format(d=files) in err, err
+    assert not (files / "x.fits").exists() and not (files / "sim").exists()
