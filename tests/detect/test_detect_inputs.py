@@ -16,6 +16,7 @@ from startrack.detect import DetectionSettings, StarDetector, detect, to_single_
 from startrack.detect._blocks import detect_in_strips
 from startrack.detect._pipeline import detect_frame
 from startrack.detect._predictive import measure_windows
+from startrack.detect._settings import UPPER_LIMITS
 from startrack.errors import InvalidInputError
 from startrack.results import Detections
 from startrack.units import PIXEL
@@ -125,6 +126,19 @@ def test_bad_input_raises_invalid_input_error(bad):
 def test_bad_settings_raise_once_at_construction(settings):
     with pytest.raises(InvalidInputError, match=next(iter(settings))):
         StarDetector(**settings)
+
+
+@pytest.mark.parametrize("settings, largest", [
+    ({"kernel_px": 1_000_001}, "51"), ({"window_half_px": 200_001}, "100"), ({"denoise_sigma_px": 1e6}, "50"),
+    ({"diffusion_iterations": 100_000}, "1000"),
+])
+def test_settings_whose_cost_has_no_end_have_a_largest_value(settings, largest):
+    # before: the kernel ran for more than 30 s (then stopped by hand), the window asked for more memory than
+    # exists (MemoryError), the Gaussian hung in scipy and the iterations took about half an hour
+    (name, value), = settings.items()
+    with pytest.raises(InvalidInputError, match=f"{name} must be at most {largest}, got {value!r}"):
+        StarDetector(**settings)
+    StarDetector(**{name: type(value)(UPPER_LIMITS[name])})  # the limit itself is valid
 
 
 def test_detect_with_settings_equals_configured_detector(field):

@@ -29,6 +29,13 @@ BACKGROUND_MODES: tuple[str, ...] = get_args(BackgroundMode)
 THRESHOLDS: tuple[str, ...] = get_args(ThresholdMethod)
 GROUPINGS: tuple[str, ...] = get_args(GroupingMethod)
 DEFAULT_MAX_BLOCK_PX = 1 << 24
+UPPER_LIMITS: dict[str, float] = {"kernel_px": 51, "window_half_px": 100, "denoise_sigma_px": 50.0,
+                                  "diffusion_iterations": 1000}
+"""The largest values of the settings whose cost grows with them without end: a smoothing kernel of 51
+px, a centroid window of 201 x 201 px and a denoising Gaussian of sd 50 px (0.4 s on a 1 MP frame) hold
+defocused stars many times wider than a star tracker's; 1000 diffusion iterations take about 20 s on a
+1 MP frame (0.37 s for 20). Past them one detection ran for hours (a kernel of 1,000,001 px) or asked
+for more memory than exists (a window of 200,001 px)."""
 
 
 @dataclass(frozen=True)
@@ -161,6 +168,10 @@ class DetectionSettings:
         if not isinstance(self.mag_zero_point, int | float) or not np.isfinite(self.mag_zero_point):
             raise InvalidInputError(f"mag_zero_point must be a finite number, got "
                                     f"{self.mag_zero_point!r}")
+        for name, high in UPPER_LIMITS.items():
+            value = getattr(self, name)
+            if value is not None and value > high:
+                raise InvalidInputError(f"{name} must be at most {high:g}, got {value!r}")
         if self.kernel_px % 2 == 0:
             raise InvalidInputError(
                 f"kernel_px must be an odd integer (1, 3, 5...), got {self.kernel_px}")
