@@ -300,3 +300,13 @@ def test_with_focal_and_with_distortion_name_a_value_that_is_not_a_number():
     with pytest.raises(InvalidInputError, match=r"camera k2 must be a real number"):
         cam.with_distortion(k1=-0.1, k2="0.01")
     assert cam.with_distortion(k1=np.float32(-0.25)).k1 == -0.25
+
+
+@pytest.mark.parametrize("name", [np.zeros(3), ["far-mst"], 3, None])
+def test_a_preset_name_that_is_not_a_string_is_refused(name):
+    # before: AttributeError ("object has no attribute 'strip'")
+    from startrack.simulate import get_sensor_preset
+
+    for lookup in (get_preset, get_sensor_preset):
+        with pytest.raises(InvalidInputError, match=re.escape(f"a preset name must be a string, got {name!r}")):
+            lookup(name)

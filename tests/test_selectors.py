@@ -63,6 +63,15 @@ def test_a_wrong_matcher_name_is_refused_by_check_method_and_the_entry_points():
         _names_all(str(err.value), "method", "quad", METHOD_NAMES)
 
 
+@pytest.mark.parametrize("value", [np.zeros(3), np.array(["quads", "angle"]), ["quads"], 1])
+def test_a_selector_that_is_not_a_string_is_refused_not_compared(value):
+    # an array compared with each name made "the truth value of an array ... is ambiguous", a bare ValueError
+    for entry in (lambda: solve_stars([1.0, 2.0], [1.0, 2.0], width=10, height=10, method=value),
+                  lambda: solve_stars([1.0, 2.0], [1.0, 2.0], width=10, height=10, parity=value)):
+        with pytest.raises(InvalidInputError, match="must be one of"):
+            entry()
+
+
 @pytest.mark.parametrize("method", METHOD_NAMES)
 def test_every_matcher_name_passes_with_its_own_options_class(method):
     assert check_method(method) == method

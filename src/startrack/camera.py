@@ -47,6 +47,13 @@ def fov_from_focal_px(size_px: float, focal_px: float) -> float:
     return 2.0 * math.atan(size_px / (2.0 * focal_px))
 
 
+def _check_size(key: str, value: object) -> int:
+    """``value`` when it is an image side (an integer of at least 2 px), else InvalidInputError naming ``key``."""
+    if not (isinstance(value, int | np.integer) and value >= 2):
+        raise InvalidInputError(f"camera {key} must be an integer of at least 2 px, got {value!r}")
+    return int(value)
+
+
 @dataclass(frozen=True)
 class Camera:
     """A star camera: image size, focal lengths, principal point and lens distortion.
@@ -94,9 +101,7 @@ class Camera:
 
     def __post_init__(self) -> None:
         for key in ("width", "height"):
-            value = getattr(self, key)
-            if not (isinstance(value, int | np.integer) and value >= 2):
-                raise InvalidInputError(f"camera {key} must be an integer of at least 2 px, got {value!r}")
+            _check_size(key, getattr(self, key))
         if self.fy is None:
             object.__setattr__(self, "fy", self.fx)
         if self.cx is None:
@@ -136,7 +141,7 @@ class Camera:
         if not 0.0 < fov < 180.0:
             raise InvalidInputError(f"fov_deg must be between 0 and 180 deg, got {fov_deg!r}")
         aspect = _checked_aspect(pixel_aspect)
-        fx = focal_px_from_fov(width, math.radians(fov))
+        fx = focal_px_from_fov(_check_size("width", width), math.radians(fov))
         return cls(width=width, height=height, fx=fx, fy=fx / aspect, **kwargs)
 
     def with_pixel_aspect(self, pixel_aspect: float) -> Camera:
@@ -444,7 +449,9 @@ PRESETS: dict[str, Camera] = {
 
 def preset_key(name: str) -> str:
     """The key of :data:`PRESETS` a preset name stands for: case, surrounding blanks and ``_`` for
-    ``-`` do not matter (``" Droid_X2"`` is ``"droid-x2"``)."""
+    ``-`` do not matter (``" Droid_X2"`` is ``"droid-x2"``). InvalidInputError if it is not a string."""
+    if not isinstance(name, str):
+        raise InvalidInputError(f"a preset name must be a string, got {name!r}")
     return name.strip().lower().replace("_", "-")
 
 

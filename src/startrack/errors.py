@@ -56,7 +56,7 @@ def check_choice(value: object, choices: tuple[_S, ...], what: str) -> _S:
     """``value`` as the one of ``choices`` it equals (a ``Literal`` selector's names, from
     ``typing.get_args``); an InvalidInputError naming ``what``, the valid names and the value if none."""
     for choice in choices:
-        if value == choice:
+        if isinstance(value, str) and value == choice:  # not an array, whose == would be an array
             return choice
     raise InvalidInputError(f"{what} must be one of {', '.join(choices)}, got {value!r}")
 

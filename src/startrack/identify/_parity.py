@@ -53,7 +53,7 @@ def check_parity(parity: object, camera: Camera | None, default: Parity) -> tupl
     InvalidInputError
         An unknown parity, or one that contradicts a mirrored camera.
     """
-    if parity is not None and parity not in PARITIES:
+    if parity is not None and not (isinstance(parity, str) and parity in PARITIES):
         raise InvalidInputError(f"parity must be one of {', '.join(map(repr, PARITIES))} or None, got {parity!r}")
     if camera is not None and camera.mirrored:
         if parity not in (None, "mirrored"):

@@ -31,10 +31,27 @@ def fraction(name: str, value: float) -> float:
     return v
 
 
+def float_array(name: str, value: ArrayLike) -> NDArray[np.float64]:
+    """``value`` as a float64 array; InvalidInputError naming ``name`` if it does not hold numbers."""
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{name} must be a number or an array of numbers, got {value!r}") from None
+
+
+def generator(rng: object) -> np.random.Generator:
+    """``numpy.random.default_rng(rng)``; InvalidInputError if ``rng`` is not one of what it takes."""
+    try:
+        return np.random.default_rng(rng)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise InvalidInputError("rng must be a numpy Generator, a seed (an integer >= 0, or a sequence of them) "
+                                f"or None, got {rng!r}") from None
+
+
 def finite_array(name: str, value: ArrayLike,
                  shape: tuple[int | None, ...]) -> NDArray[np.float64]:
     """``value`` as a finite float64 array of the given shape (None = any length); else raise."""
-    arr = np.asarray(value, dtype=float)
+    arr = float_array(name, value)
     wrong = arr.ndim != len(shape) or any(
         s is not None and s != n for s, n in zip(shape, arr.shape, strict=True))
     if wrong:

@@ -111,7 +111,7 @@ class NoiseModel:
 
 
 def _checked_background(background_e: ArrayLike, shape: tuple[int, ...]) -> NDArray[np.float64]:
-    background = np.asarray(background_e, dtype=float)
+    background = _checks.float_array("background_e", background_e)
     if not _checks.finite_nonnegative(background):
         raise InvalidInputError("background_e must be finite and >= 0 electrons per pixel")
     try:
@@ -202,7 +202,7 @@ def read_out(signal_e: ArrayLike, sensor: Sensor, *, background_e: ArrayLike = 0
     background = _checked_background(background_e, signal.shape)
     if not model.background:
         background = np.zeros(())
-    rng = np.random.default_rng(rng)
+    rng = _checks.generator(rng)
     maps = _active_maps(sensor.detector, signal.shape, model)
     level = _common_level(background, sensor, maps, model)
     table = None if level is None else _table_or_none(level, sensor.detector, model)

@@ -40,6 +40,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..camera import preset_key
 from ..errors import InvalidInputError
 from . import _checks
 from ._passband import Passband
@@ -352,7 +353,7 @@ SENSOR_PRESETS: dict[str, Sensor] = {
 
 def get_sensor_preset(name: str) -> Sensor:
     """A named sensor from the seeds (see :data:`SENSOR_PRESETS` for names and sources)."""
-    key = name.strip().lower().replace("_", "-")
+    key = preset_key(name)
     if key not in SENSOR_PRESETS:
         raise InvalidInputError(
             f"unknown sensor preset {name!r}; valid presets: {', '.join(sorted(SENSOR_PRESETS))}")

@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, check_instance
 from ..frames import boresight, random_rotations
 from . import _checks
 from ._background import SkyBackground
@@ -136,7 +136,8 @@ def attitude_profile(attitude: Rotation | AttitudeProfile,
     if isinstance(attitude, Rotation):
         if not attitude.single:
             raise InvalidInputError("rot_cam_from_icrs must be a single scipy Rotation (not a stack)")
-        profile = ConstantRate(attitude, np.zeros(3) if rate_rad_s is None else np.asarray(rate_rad_s, dtype=float))
+        rate = np.zeros(3) if rate_rad_s is None else _checks.float_array("rate_rad_s", rate_rad_s)
+        profile = ConstantRate(attitude, rate)
         return profile, not profile.static
     if not (hasattr(attitude, "attitudes") and hasattr(attitude, "rates")):
         raise InvalidInputError("the attitude must be a single scipy Rotation or an attitude profile "
@@ -200,13 +201,12 @@ def render_stars(camera: Camera, rot_cam_from_icrs: Rotation | AttitudeProfile, 
     SimulatedImage
         The image in ADU and the truth of every star that put light on it, brightest first.
     """
-    sensor = DEFAULT_SENSOR if sensor is None else sensor
+    sensor, timing, radius_sigmas = checked_render_inputs(camera, sensor, timing, radius_sigmas)
     vectors, mags, ids = star_arrays(star_vectors_icrs, mags, ids)
     colours = _colours(b_v, len(ids))
     profile, moving = attitude_profile(rot_cam_from_icrs, rate_rad_s)
-    timing = FrameTiming() if timing is None else timing
     shutter = timing.shutter(sensor.exposure_s, camera.height)
-    radius = psf_radius_px(camera, sensor, _checks.positive("radius_sigmas", radius_sigmas))
+    radius = psf_radius_px(camera, sensor, radius_sigmas)
     max_off_axis = field_radius_rad(camera, radius)
     paths = sample_sources(camera, profile, shutter, FixedDirections(vectors), radius, timing.substep_px,
                            max_off_axis, moving)
@@ -238,6 +238,25 @@ def render_stars(camera: Camera, rot_cam_from_icrs: Rotation | AttitudeProfile, 
                   bright_bodies=None if snapshot is None else snapshot.bright_bodies(boresight(rot_mid), camera),
                   substeps=int(paths.samples.x.shape[1]))
     return SimulatedImage(image=image, truth=truth)
+
+
+MAX_RADIUS_SIGMAS = 50.0
+"""The widest PSF stamp, in PSF sigmas (the default is 5): the stamps' cost grows with its square."""
+
+
+def checked_render_inputs(camera: Camera, sensor: Sensor | None, timing: FrameTiming | None, radius_sigmas: float
+                          ) -> tuple[Sensor, FrameTiming, float]:
+    """The camera, sensor (None: :data:`DEFAULT_SENSOR`), timing (None: a global shutter at t = 0) and
+    PSF stamp radius (sigmas, up to :data:`MAX_RADIUS_SIGMAS`) of a rendering, each checked for its
+    type or range; InvalidInputError naming the first that is wrong."""
+    check_instance(camera, Camera, "camera")
+    sensor = DEFAULT_SENSOR if sensor is None else check_instance(sensor, Sensor, "sensor")
+    timing = FrameTiming() if timing is None else check_instance(timing, FrameTiming, "timing")
+    radius = _checks.positive("radius_sigmas", radius_sigmas)
+    if radius > MAX_RADIUS_SIGMAS:
+        raise InvalidInputError(f"radius_sigmas must be at most {MAX_RADIUS_SIGMAS:g} PSF sigmas, "
+                                f"got {radius_sigmas!r}")
+    return sensor, timing, radius
 
 
 def optics_position(paths: SourcePaths) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

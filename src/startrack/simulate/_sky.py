@@ -21,8 +21,9 @@ from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
 from ..catalog import epoch_jyear as checked_jyear
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, check_instance
 from ..frames import angle_between, boresight
+from . import _checks
 from ._background import SkyBackground
 from ._motion import AttitudeProfile
 from ._noise import NoiseModel
@@ -30,10 +31,10 @@ from ._psf import DEFAULT_RADIUS_SIGMAS
 from ._radiometry import Sensor
 from ._rso import OrbitalScene, Snapshot
 from ._scene import (
-    DEFAULT_SENSOR,
     FrameTiming,
     SimulatedImage,
     attitude_profile,
+    checked_render_inputs,
     field_radius_rad,
     psf_radius_px,
     render_stars,
@@ -130,7 +131,7 @@ class SkyModel:
         lo, hi = (float(v) for v in mag_range)
         if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
             raise InvalidInputError(f"mag_range must be (faint >= bright) finite magnitudes, got {mag_range!r}")
-        rng = np.random.default_rng(rng)
+        rng = _checks.generator(rng)
         vectors = rng.standard_normal((count, 3))
         vectors /= np.linalg.norm(vectors, axis=1, keepdims=True)
         return SkyModel(vectors_icrs=np.concatenate([self.vectors_icrs, vectors]),
@@ -197,12 +198,13 @@ def simulate_frame(camera: Camera, rot_cam_from_icrs: Rotation | AttitudeProfile
     SimulatedImage
         Image in ADU and its truth (HIP numbers, true pixel positions, brightest first).
     """
-    sensor = DEFAULT_SENSOR if sensor is None else sensor
+    sensor, frame_timing, radius_sigmas = checked_render_inputs(camera, sensor, timing, radius_sigmas)
     if sky is None:
         epoch = None if epoch_jyear is None else checked_jyear(epoch_jyear, "epoch_jyear")
         sky = _default_sky(_max_mag(max_mag), epoch, "v")
+    check_instance(sky, SkyModel, "sky")
     profile, moving = attitude_profile(rot_cam_from_icrs, rate_rad_s)
-    shutter = (FrameTiming() if timing is None else timing).shutter(sensor.exposure_s, camera.height)
+    shutter = frame_timing.shutter(sensor.exposure_s, camera.height)
     centre, extra = _swept_cone(profile, shutter, camera.height, moving)
     margin = float(psf_radius_px(camera, sensor, radius_sigmas))
     idx = sky.cone(centre, field_radius_rad(camera, margin) + extra)
