@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from numbers import Integral, Real
-from typing import TypeVar
+from typing import Any, TypeVar
 
 _T = TypeVar("_T")
 _S = TypeVar("_S", bound=str)
@@ -67,6 +67,24 @@ def check_instance(value: object, cls: type[_T], what: str) -> _T:
     if not isinstance(value, cls):
         raise InvalidInputError(f"{what} must be a {public_name(cls)}, got a {type(value).__name__}")
     return value
+
+
+def as_float_array(value: object, what: str) -> Any:
+    """``numpy.asarray(value, dtype=float)``, or an InvalidInputError naming ``what`` when ``value`` does not
+    hold numbers (a word, a dict, ragged lists) instead of numpy's ValueError or TypeError. Shape and
+    finiteness are the caller's to check."""
+    import numpy as np  # here: this module is imported before numpy is needed
+
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{what} must be a number or an array of numbers, got {_short(value)}") from None
+
+
+def _short(value: object) -> str:
+    """``repr(value)``, cut to 80 characters."""
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 def is_real_number(value: object) -> bool:

@@ -92,6 +92,10 @@ GOOD = np.array([X, Y, Z])
         ({"sigma_rad": [1e-5, 0.0, 1e-5]}, "positive"),
         ({"sigma_rad": np.ones((2, 3))}, "sigma_rad must be a scalar or have shape"),
         ({"method": "triad-ish"}, "method must be one of quest, qmethod"),
+        # these three reached numpy: "could not convert string to float", TypeError, "Eigenvalues did not converge"
+        ({"observed": "x"}, "observed must be a number or an array of numbers, got 'x'"),
+        ({"weights": {}}, "weights must be a number or an array of numbers, got {}"),
+        ({"sigma_rad": 1e-300}, "sigma_rad must be at least 1e-150 rad"),
     ],
 )
 def test_bad_input_raises_invalid_input_error(kwargs, words):

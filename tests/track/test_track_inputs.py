@@ -50,6 +50,21 @@ def test_update_image_refuses_non_finite_times_and_rates(bad):
                              streak_bias_px=0.5)
 
 
+@pytest.mark.parametrize("exposure", ["x", [], np.zeros(3), 0.0, -1.0, np.nan, True])
+def test_update_image_refuses_an_exposure_that_is_not_a_positive_number(exposure):
+    # before: TypeError ("'>' not supported between 'str' and 'int'") or numpy's "truth value ... ambiguous"
+    with pytest.raises(InvalidInputError, match=r"^streak_exposure_s must be None or a finite number of seconds > 0"):
+        Tracker(camera=CAMERA).update_image(np.zeros((256, 256)), 0.0, streak_exposure_s=exposure)
+
+
+def test_update_image_refuses_a_detector_that_is_not_one_and_a_flux_of_words():
+    # before: AttributeError ("'float' object has no attribute 'detect'"), ValueError from numpy
+    with pytest.raises(InvalidInputError, match=r"^detector must be a startrack.detect.StarDetector, got a float"):
+        Tracker(camera=CAMERA).update_image(np.zeros((256, 256)), 0.0, detector=5.0)
+    with pytest.raises(InvalidInputError, match=r"^flux must be a number or an array of numbers, got 'x'"):
+        Tracker(camera=CAMERA).update(*XY, 0.0, flux="x")
+
+
 def test_empty_star_list_is_an_expected_failure_not_an_error():
     step = Tracker(camera=CAMERA).update(np.zeros(0), np.zeros(0), 0.0)
     assert not step.status and step.reason

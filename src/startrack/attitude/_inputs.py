@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, as_float_array
 from ._linalg import cross
 
 MIN_SEPARATION_RAD: float = 1e-6
@@ -29,7 +29,7 @@ def as_vector_batch(name: str, value: ArrayLike) -> tuple[NDArray[np.float64], b
 
     Raises InvalidInputError for another shape, non-finite entries or zero-length vectors.
     """
-    arr = np.asarray(value, dtype=float)
+    arr = as_float_array(value, name)
     if arr.ndim not in (2, 3) or arr.shape[-1] != 3:
         raise InvalidInputError(
             f"{name} must have shape (N, 3) or (M, N, 3) (unit vectors, components last), "
@@ -71,7 +71,7 @@ def as_per_vector(
     Accepts a scalar, an (N,) array (the same for every problem) or an (M, N) array. Entries must
     be finite and positive (``allow_zero`` also admits zeros).
     """
-    arr = np.asarray(value, dtype=float)
+    arr = as_float_array(value, name)
     m, n = shape
     if arr.shape not in ((), (n,), (m, n)):
         raise InvalidInputError(

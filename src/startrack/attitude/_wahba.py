@@ -185,6 +185,10 @@ def wahba_loss(
     return 0.5 * np.einsum("mn,mni,mni->m", weights, residual, residual)
 
 
+MIN_SIGMA_RAD = 1e-150
+"""The smallest 1-sigma direction error accepted (rad): 1 / sigma^2 of a smaller one overflows float64."""
+
+
 def _checked_inputs(observed, reference, weights, sigma_rad):
     """Batched unit vectors (M, N, 3), raw weights (M, N), sigma (M, N) or None, and batched."""
     obs, ref, batched = as_vector_pair(observed, reference)
@@ -192,6 +196,9 @@ def _checked_inputs(observed, reference, weights, sigma_rad):
     sigma = None
     if sigma_rad is not None:
         sigma = as_per_vector("sigma_rad", sigma_rad, shape, allow_zero=False)
+        if np.any(sigma < MIN_SIGMA_RAD):
+            raise InvalidInputError(f"sigma_rad must be at least {MIN_SIGMA_RAD:g} rad: the weights 1 / sigma^2 of "
+                                    f"smaller ones overflow, got {float(sigma.min()):g}")
     if weights is not None:
         w = as_per_vector("weights", weights, shape, allow_zero=True)
     elif sigma is not None:

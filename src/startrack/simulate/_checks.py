@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, as_float_array
 
 
 def positive(name: str, value: float, *, allow_zero: bool = False) -> float:
@@ -31,14 +31,6 @@ def fraction(name: str, value: float) -> float:
     return v
 
 
-def float_array(name: str, value: ArrayLike) -> NDArray[np.float64]:
-    """``value`` as a float64 array; InvalidInputError naming ``name`` if it does not hold numbers."""
-    try:
-        return np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InvalidInputError(f"{name} must be a number or an array of numbers, got {value!r}") from None
-
-
 def generator(rng: object) -> np.random.Generator:
     """``numpy.random.default_rng(rng)``; InvalidInputError if ``rng`` is not one of what it takes."""
     try:
@@ -51,7 +43,7 @@ def generator(rng: object) -> np.random.Generator:
 def finite_array(name: str, value: ArrayLike,
                  shape: tuple[int | None, ...]) -> NDArray[np.float64]:
     """``value`` as a finite float64 array of the given shape (None = any length); else raise."""
-    arr = float_array(name, value)
+    arr = as_float_array(value, name)
     wrong = arr.ndim != len(shape) or any(
         s is not None and s != n for s, n in zip(shape, arr.shape, strict=True))
     if wrong:

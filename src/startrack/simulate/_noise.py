@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.stats import norm, poisson
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, as_float_array
 from . import _checks
 from ._detector import PixelMaps, bloom, pixel_maps
 from ._radiometry import Detector, Sensor
@@ -111,7 +111,7 @@ class NoiseModel:
 
 
 def _checked_background(background_e: ArrayLike, shape: tuple[int, ...]) -> NDArray[np.float64]:
-    background = _checks.float_array("background_e", background_e)
+    background = as_float_array(background_e, "background_e")
     if not _checks.finite_nonnegative(background):
         raise InvalidInputError("background_e must be finite and >= 0 electrons per pixel")
     try:

@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
-from ..errors import InvalidInputError, check_instance
+from ..errors import InvalidInputError, as_float_array, check_instance
 from ..frames import boresight, random_rotations
 from . import _checks
 from ._background import SkyBackground
@@ -136,7 +136,7 @@ def attitude_profile(attitude: Rotation | AttitudeProfile,
     if isinstance(attitude, Rotation):
         if not attitude.single:
             raise InvalidInputError("rot_cam_from_icrs must be a single scipy Rotation (not a stack)")
-        rate = np.zeros(3) if rate_rad_s is None else _checks.float_array("rate_rad_s", rate_rad_s)
+        rate = np.zeros(3) if rate_rad_s is None else as_float_array(rate_rad_s, "rate_rad_s")
         profile = ConstantRate(attitude, rate)
         return profile, not profile.static
     if not (hasattr(attitude, "attitudes") and hasattr(attitude, "rates")):

@@ -1,15 +1,16 @@
-"""The Tracker's checks of what a frame brings (star positions, fluxes, time, gyro rate):
+"""The Tracker's checks of what a frame brings (star positions, fluxes, time, gyro rate, exposure):
 finite numbers of the right shape, or an :class:`~startrack.errors.InvalidInputError` naming the
 parameter."""
 
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, as_float_array, is_real_number
 
 
 def checked_rate(rate_rad_s: ArrayLike, frame: str = "camera", name: str = "gyro_rate_rad_s") -> NDArray[np.float64]:
@@ -52,9 +53,20 @@ def checked_stars(x: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDAr
 
 def checked_flux(flux: ArrayLike, shape: tuple[int, ...]) -> NDArray[np.float64]:
     """Star fluxes of the stars' shape, finite."""
-    values = np.asarray(flux, dtype=float)
+    values = as_float_array(flux, "flux")
     if values.shape != shape:
         raise InvalidInputError(f"flux must have one entry per star, shape {shape}, got {values.shape}")
     if not np.all(np.isfinite(values)):
         raise InvalidInputError("flux must be finite numbers (NaN or infinity given)")
     return values
+
+
+def checked_exposure(exposure_s: object) -> float | None:
+    """A frame's exposure time (s) as a float, or None; a number that is not finite and positive, or
+    anything that is not a number, is refused naming ``streak_exposure_s``."""
+    if exposure_s is None:
+        return None
+    value = float(cast(float, exposure_s)) if is_real_number(exposure_s) else math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise InvalidInputError(f"streak_exposure_s must be None or a finite number of seconds > 0, got {exposure_s!r}")
+    return value

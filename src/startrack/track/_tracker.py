@@ -60,7 +60,7 @@ from ..identify import field_stars
 from ..rate import SmearLimits, image_smear_px, usable_for_prediction
 from ..results import Status
 from ..solve import epoch_jyear, solve_stars
-from ._inputs import checked_flux, checked_rate, checked_stars, checked_time
+from ._inputs import checked_exposure, checked_flux, checked_rate, checked_stars, checked_time
 from ._quaternions import Quat, quat_conjugate, quat_matrix, quat_product, quat_rotvec, rotvec_quat
 from ._windows import WindowMatcher
 
@@ -277,10 +277,13 @@ class Tracker:
         None uses the default k-sigma threshold, a number the dynamic threshold that adapts to
         reach that many stars (Huffman 2006 §8.2.3).
         """
+        from ..detect import StarDetector
         from ..io import read_image
         from ..rate import header_exposure_s
 
-        t_s = checked_time(t_s)
+        t_s, streak_exposure_s = checked_time(t_s), checked_exposure(streak_exposure_s)
+        if detector is not None:
+            check_instance(detector, StarDetector, "detector")
         if gyro_rate_rad_s is not None:
             gyro_rate_rad_s = checked_rate(gyro_rate_rad_s)
         img = read_image(image)
