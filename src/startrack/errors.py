@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from numbers import Integral, Real
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 
 _T = TypeVar("_T")
 _S = TypeVar("_S", bound=str)
@@ -79,6 +79,33 @@ def as_float_array(value: object, what: str) -> Any:
         return np.asarray(value, dtype=float)
     except (TypeError, ValueError):
         raise InvalidInputError(f"{what} must be a number or an array of numbers, got {_short(value)}") from None
+
+
+def checked_number(value: object, what: str, *, low: float = -math.inf, high: float = math.inf,
+                   above_low: bool = False) -> float:
+    """``value`` as a float when it is a real number (not a bool) in [low, high] (low excluded with
+    ``above_low``; infinities and NaN never pass); else an InvalidInputError naming ``what``, the range
+    and the value. For a function's scalar argument (:func:`check_positive` checks an object's fields)."""
+    try:
+        number = float(cast(float, value)) if is_real_number(value) else math.nan
+    except OverflowError:  # an integer beyond float64
+        number = math.inf
+    inside = math.isfinite(number) and (number > low if above_low else number >= low) and number <= high
+    if not inside:
+        bounds = ("> " if above_low else ">= ") + f"{low:g}" if math.isfinite(low) else ""
+        bounds = " and ".join(b for b in (bounds, f"<= {high:g}" if math.isfinite(high) else "") if b)
+        raise InvalidInputError(f"{what} must be a finite number{' ' + bounds if bounds else ''}, got {_short(value)}")
+    return number
+
+
+def checked_count(value: object, what: str, low: int, high: int | None = None) -> int:
+    """``value`` as an int when it is an integer (not a bool) in [low, high]; else an InvalidInputError
+    naming ``what``, the range and the value."""
+    if not (isinstance(value, Integral) and not isinstance(value, bool) and low <= int(value)
+            and (high is None or int(value) <= high)):
+        upper = "" if high is None else f" and <= {high}"
+        raise InvalidInputError(f"{what} must be an integer >= {low}{upper}, got {_short(value)}")
+    return int(value)
 
 
 def _short(value: object) -> str:

@@ -19,7 +19,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, as_float_array, checked_number
 from ..frames import angle_between
 
 
@@ -57,14 +57,21 @@ def focal_from_stars(x: ArrayLike, y: ArrayLike, vectors: ArrayLike, cx: float, 
     min_separation_px : float
         Pairs closer than this on the image are skipped (their angle is mostly centroid noise).
     """
-    x, y = np.asarray(x, float) - cx, np.asarray(y, float) - cy
-    vectors = np.asarray(vectors, float)
-    i, j = np.triu_indices(x.size, k=1)
-    keep = np.hypot(x[i] - x[j], y[i] - y[j]) >= min_separation_px
+    cx, cy = checked_number(cx, "cx"), checked_number(cy, "cy")
+    min_separation_px = checked_number(min_separation_px, "min_separation_px", low=0.0)
+    xs, ys = as_float_array(x, "x") - cx, as_float_array(y, "y") - cy
+    vecs = as_float_array(vectors, "vectors")
+    if xs.ndim != 1 or ys.shape != xs.shape or vecs.shape != (xs.size, 3):
+        raise InvalidInputError(f"x and y must be (K,) and vectors (K, 3), got shapes {xs.shape}, {ys.shape}, "
+                                f"{vecs.shape}")
+    if not (np.all(np.isfinite(xs)) and np.all(np.isfinite(ys)) and np.all(np.isfinite(vecs))):
+        raise InvalidInputError("x, y and vectors must be finite")
+    i, j = np.triu_indices(xs.size, k=1)
+    keep = np.hypot(xs[i] - xs[j], ys[i] - ys[j]) >= min_separation_px
     i, j = i[keep], j[keep]
     if i.size == 0:
-        raise InvalidInputError(f"need at least two stars {min_separation_px} px apart, got {x.size} stars")
-    f = focal_from_pair(x[i], y[i], x[j], y[j], angle_between(vectors[i], vectors[j]))
+        raise InvalidInputError(f"need at least two stars {min_separation_px} px apart, got {xs.size} stars")
+    f = focal_from_pair(xs[i], ys[i], xs[j], ys[j], angle_between(vecs[i], vecs[j]))
     f = f[np.isfinite(f)]
     med = float(np.median(f))
     return med, float(1.4826 * np.median(np.abs(f - med)))

@@ -23,9 +23,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..attitude import olae_gibbs, olae_residuals
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, as_float_array, checked_count, checked_number
 from ..results import Status
-from ._estimate import RateEstimate, failed
+from ._estimate import RateEstimate, checked_exposure, failed
 
 METHOD = "catalog-free OLAE"
 K_SIGMA = 2.5
@@ -86,17 +86,24 @@ def catalog_free_rate(
     CatalogFreeRate
         The rate is for the A -> B order; TOO_FEW_STARS status with fewer than 2 streaks.
     """
-    a, b = np.asarray(vectors_a, dtype=float), np.asarray(vectors_b, dtype=float)
+    a, b = as_float_array(vectors_a, "vectors_a"), as_float_array(vectors_b, "vectors_b")
     if a.shape != b.shape or a.ndim != 2 or a.shape[1:] != (3,):
         raise InvalidInputError(f"vectors_a and vectors_b must both have shape (N, 3), got {a.shape}, {b.shape}")
-    if not (np.isfinite(exposure_s) and exposure_s > 0):
-        raise InvalidInputError(f"exposure_s must be positive seconds, got {exposure_s!r}")
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
+        raise InvalidInputError("vectors_a and vectors_b must be finite")
+    checked_exposure(exposure_s)
+    checked_number(k_sigma, "k_sigma", low=0.0, above_low=True)
+    checked_number(floor_rad, "floor_rad", low=0.0)
+    checked_count(max_rounds, "max_rounds", 1, 1000)
+    checked_count(min_streaks, "min_streaks", 2)
     a = a / np.linalg.norm(a, axis=1, keepdims=True)
     b = b / np.linalg.norm(b, axis=1, keepdims=True)
     if len(a) < 2:
         return CatalogFreeRate(failed(Status.TOO_FEW_STARS, "fewer than two streaks", METHOD),
                                np.full(len(a), np.nan), np.full(3, np.nan))
     used = np.ones(len(a), dtype=bool) if initial_used is None else np.asarray(initial_used, dtype=bool).copy()
+    if used.shape != (len(a),):
+        raise InvalidInputError(f"initial_used must be {len(a)} booleans, one per streak, got shape {used.shape}")
     if used.sum() < 2:
         return CatalogFreeRate(failed(Status.TOO_FEW_STARS, "fewer than two streaks", METHOD),
                                np.full(len(a), np.nan), np.full(3, np.nan))

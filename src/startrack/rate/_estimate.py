@@ -11,10 +11,32 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
+from ..errors import InvalidInputError, as_float_array, checked_number
 from ..results import Status
 from ..units import DEG
+
+MIN_EXPOSURE_S, MAX_EXPOSURE_S = 1e-6, 1e6
+"""The shortest and longest exposures a streak's rate is measured over (s; 1 us and 11.6 days): a
+rate is the streak's length over the exposure, which overflows beyond them; no camera smears stars
+into streaks that fast or that slowly."""
+
+
+def checked_exposure(exposure_s: object) -> float:
+    """``exposure_s`` as a float in [:data:`MIN_EXPOSURE_S`, :data:`MAX_EXPOSURE_S`] s, else an
+    InvalidInputError naming it and the range."""
+    return checked_number(exposure_s, "exposure_s (seconds)", low=MIN_EXPOSURE_S, high=MAX_EXPOSURE_S)
+
+
+def checked_prior(prior: ArrayLike | None) -> NDArray[np.float64] | None:
+    """A prior rate (3,), rad/s, finite, or None; else an InvalidInputError naming ``prior_omega_rad_s``."""
+    if prior is None:
+        return None
+    w = as_float_array(prior, "prior_omega_rad_s")
+    if w.shape != (3,) or not np.all(np.isfinite(w)):
+        raise InvalidInputError(f"prior_omega_rad_s must be 3 finite numbers (rad/s), got {prior!r}")
+    return w
 
 
 def _nan3() -> NDArray[np.float64]:

@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage, signal
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, as_float_array, checked_count, checked_number
 from ._segment_fit import line_kernel
 
 RULES = ("robust", "mean")
@@ -108,6 +108,20 @@ def _region(image, labels, index, box, background, margin) -> StreakRegion:
     return StreakRegion(rows, cols, area, float(weights.sum()), centroid, length, float(np.sqrt(var[1])), direction)
 
 
+MAX_SMOOTH_PX = 50.0
+"""The widest smoothing and line filter of the streak search (px): their cost grows with the width."""
+
+
+def _check_search(threshold_sigma, smooth_sigma_px, min_area_px, margin_px, line_filter_px, min_snr) -> None:
+    """The streak search's settings in their ranges (InvalidInputError naming the first that is not)."""
+    checked_number(threshold_sigma, "threshold_sigma", low=0.0, above_low=True)
+    checked_number(smooth_sigma_px, "smooth_sigma_px", low=0.0, high=MAX_SMOOTH_PX)
+    checked_number(line_filter_px, "line_filter_px", low=0.0, high=MAX_SMOOTH_PX)
+    checked_number(min_snr, "min_snr", low=0.0)
+    checked_count(min_area_px, "min_area_px", 1)
+    checked_count(margin_px, "margin_px", 0)
+
+
 def find_streaks(
     image: ArrayLike,
     *,
@@ -149,10 +163,11 @@ def find_streaks(
     StreakField
         Regions sorted by decreasing flux.
     """
-    img = np.asarray(image, dtype=float)
+    img = as_float_array(image, "image")
     if img.ndim != 2 or not np.all(np.isfinite(img)):
         raise InvalidInputError(f"image must be a finite 2-D array, got shape {img.shape}")
-    if rule not in RULES:
+    _check_search(threshold_sigma, smooth_sigma_px, min_area_px, margin_px, line_filter_px, min_snr)
+    if not (isinstance(rule, str) and rule in RULES):
         raise InvalidInputError(f"rule must be one of {', '.join(RULES)}, got {rule!r}")
     background, noise = robust_background(img)
     smooth = ndimage.gaussian_filter(img, smooth_sigma_px) if smooth_sigma_px > 0 else img

@@ -35,11 +35,20 @@ from scipy.spatial.transform import Rotation
 
 from ..attitude import WahbaMethod, solve_wahba
 from ..camera import Camera
-from ..errors import InvalidInputError, check_choice, is_real_number, require
+from ..errors import (
+    InvalidInputError,
+    as_float_array,
+    check_choice,
+    check_instance,
+    checked_count,
+    checked_number,
+    is_real_number,
+    require,
+)
 from ..results import AttitudeSolution, Status
 from ._catalog_free import CatalogFreeRate, catalog_free_rate, consensus, regroup
 from ._endpoints import CornerDetector, EndpointBias, locate_endpoints
-from ._estimate import RateEstimate, failed
+from ._estimate import RateEstimate, checked_exposure, checked_prior, failed
 from ._from_attitudes import rate_between
 from ._grouping import CentreOfRotation, centre_of_rotation, group_endpoints
 from ._rso import RsoIndicators, rso_indicators
@@ -195,7 +204,7 @@ def measure_streaks(
     """
     detector = check_endpoint_method(detector)
     _check_bias(bias_px)
-    img = np.asarray(image, dtype=float)
+    img = as_float_array(image, "image")
     defaults = SEGMENT_FIND_OPTIONS if detector == SEGMENT else {}
     found = find_streaks(img, **(defaults | (find_options or {})))
     if detector == SEGMENT:
@@ -281,25 +290,24 @@ def _check_bias(bias_px: float | EndpointBias) -> float | EndpointBias:
         if not np.all(np.isfinite(bias_px.coeffs)):
             raise InvalidInputError("bias_px must have finite coefficients (an EndpointBias from calibrate_bias_model)")
         return bias_px
-    if not (is_real_number(bias_px) and np.isfinite(bias_px)):
+    if not is_real_number(bias_px):
         raise InvalidInputError(f"bias_px must be a finite number of pixels or an EndpointBias, got {bias_px!r}")
-    return bias_px
+    return checked_number(bias_px, "bias_px (pixels, or an EndpointBias)")
 
 
-def _check_rate_inputs(exposure_s: float, prior: ArrayLike | None, k_sigma: float, endpoint_sigma_px) -> None:
-    """Refuse a non-positive or non-finite exposure, a prior rate that is not a finite vector (3,),
-    and non-positive thresholds."""
-    if not (is_real_number(exposure_s) and np.isfinite(exposure_s) and exposure_s > 0):
-        raise InvalidInputError(f"exposure_s must be a positive, finite number of seconds, got {exposure_s!r}")
-    if prior is not None:
-        w = np.asarray(prior, dtype=float)
-        if w.shape != (3,) or not np.all(np.isfinite(w)):
-            raise InvalidInputError(f"prior_omega_rad_s must be a finite rate of shape (3,) rad/s, got {prior!r}")
-    if not (is_real_number(k_sigma) and np.isfinite(k_sigma) and k_sigma > 0):
-        raise InvalidInputError(f"k_sigma must be a positive number, got {k_sigma!r}")
-    if endpoint_sigma_px is not None and not (is_real_number(endpoint_sigma_px) and 0 < endpoint_sigma_px < np.inf):
-        raise InvalidInputError(f"endpoint_sigma_px must be a positive number of pixels or None, "
-                                f"got {endpoint_sigma_px!r}")
+def _check_rate_inputs(camera: Camera, exposure_s: float, prior: ArrayLike | None, k_sigma: float,
+                       endpoint_sigma_px, measurement: StreakMeasurement | None) -> None:
+    """Refuse a camera or measurement of another type, an exposure outside the range of
+    :func:`._estimate.checked_exposure`, a prior rate that is not a finite vector (3,), and
+    non-positive thresholds."""
+    check_instance(camera, Camera, "camera")
+    if measurement is not None:
+        check_instance(measurement, StreakMeasurement, "measurement")
+    checked_exposure(exposure_s)
+    checked_prior(prior)
+    checked_number(k_sigma, "k_sigma", low=0.0, above_low=True)
+    if endpoint_sigma_px is not None:
+        checked_number(endpoint_sigma_px, "endpoint_sigma_px (or None)", low=0.0, above_low=True)
 
 
 def _ordered(omega: NDArray, prior: ArrayLike | None) -> tuple[bool, bool]:
@@ -351,7 +359,7 @@ def streak_rate(
         Reuse an earlier :func:`measure_streaks` of this image.
     """
     detector = check_endpoint_method(detector)
-    _check_rate_inputs(exposure_s, prior_omega_rad_s, k_sigma, endpoint_sigma_px)
+    _check_rate_inputs(camera, exposure_s, prior_omega_rad_s, k_sigma, endpoint_sigma_px, measurement)
     meas = measurement or measure_streaks(image, camera, detector=detector, bias_px=bias_px)
     if meas.status is not Status.OK:
         return StreakRate(failed(meas.status, meas.reason, "catalog-free OLAE"), meas)
@@ -473,7 +481,11 @@ class ModeDecision:
 def choose_mode(image: ArrayLike, *, min_streak_fraction: float = MIN_STREAK_FRACTION,
                 brightest: int = 20) -> ModeDecision:
     """Point-star or streak processing for an image, from the median length of its brightest blobs."""
-    img = np.asarray(image, dtype=float)
+    img = as_float_array(image, "image")
+    if img.ndim != 2:
+        raise InvalidInputError(f"image must be a 2-D array, got shape {img.shape}")
+    checked_number(min_streak_fraction, "min_streak_fraction", low=0.0, above_low=True, high=1.0)
+    checked_count(brightest, "brightest", 1)
     length_px = median_length_px(img, brightest)
     if np.isnan(length_px):
         return ModeDecision("point", 0.0, "no stars found")

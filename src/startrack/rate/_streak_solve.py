@@ -57,7 +57,7 @@ from ..identify import MethodName, check_method, field_stars
 from ..results import AttitudeSolution, StarMatches, Status
 from ..units import DEG
 from ._catalog_free import consensus
-from ._estimate import RateEstimate, failed
+from ._estimate import RateEstimate, checked_exposure, checked_prior, failed
 from ._streak_find import StreakCandidates, find_streak_candidates
 from ._streak_fit import StreakFits, first_guesses, fit_pixels, fit_streaks
 from ._streak_model import JointFit, Timing, fit_joint, predict
@@ -276,6 +276,9 @@ def solve_streaked(
     method = check_method(method)
     opts = checked_options(options)
     img = np.asarray(image)
+    if img.ndim != 2:
+        raise InvalidInputError(f"image must be a 2-D array (H, W), got shape {img.shape}")
+    prior_omega_rad_s = checked_prior(prior_omega_rad_s)
     clock = Stages()
     timing = _timing(exposure_s, opts.line_time_s, img.shape[0])
     cand = find_streak_candidates(img)
@@ -342,8 +345,7 @@ class Stages:
 def _timing(exposure_s: float | None, line_time_s: float, height: int) -> Timing:
     if exposure_s is None:
         return Timing(1.0, 0.0, height)
-    if not (math.isfinite(exposure_s) and exposure_s > 0):
-        raise InvalidInputError(f"exposure_s must be a positive number of seconds, got {exposure_s!r}")
+    exposure_s = checked_exposure(exposure_s)
     if not (math.isfinite(line_time_s) and line_time_s >= 0):
         raise InvalidInputError(f"line_time_s must be zero or positive seconds, got {line_time_s!r}")
     return Timing(float(exposure_s), float(line_time_s), int(height))
@@ -473,12 +475,10 @@ def _extended(img, saturation, found, cand, joint, timing, opts, epoch_jyear, fi
 
 def _ordered_by(joint: JointFit, prior: ArrayLike | None) -> tuple[NDArray, bool]:
     """(sign, known): the rate's sign that agrees with a prior rate."""
-    if prior is None:
+    w = checked_prior(prior)
+    if w is None:
         return np.ones(1), False
-    prior = np.asarray(prior, dtype=float)
-    if prior.shape != (3,) or not np.all(np.isfinite(prior)):
-        raise InvalidInputError(f"prior_omega_rad_s must be 3 finite numbers (rad/s), got {prior!r}")
-    return np.array([1.0 if np.dot(joint.omega_rad_s, prior) >= 0 else -1.0]), True
+    return np.array([1.0 if np.dot(joint.omega_rad_s, w) >= 0 else -1.0]), True
 
 
 def relative_rate_sigma3(joint: JointFit) -> float:
