@@ -23,6 +23,7 @@ from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
+from ..errors import InvalidInputError, as_float_array
 from ._candidate import Candidate
 from ._refine import fit_pose, predicted_pairs, warm_up_pose
 from ._verify import TEST_RADIUS_FRACTIONS, SkyBands, false_match_bound_counts, false_match_probability, field_cone
@@ -210,12 +211,12 @@ def _attitude(rot: Rotation | NDArray) -> NDArray[np.float64]:
     quaternion (4,) or a matrix (3, 3)."""
     if isinstance(rot, Rotation):
         return rot.as_matrix()
-    values = np.asarray(rot, dtype=np.float64)
+    values = as_float_array(rot, "rot")
     if values.shape == (3, 3):
         return values
     if values.shape != (4,):
-        raise ValueError(f"rot must be a Rotation, a quaternion (4,) or a rotation matrix (3, 3), "
-                         f"got shape {values.shape}")
+        raise InvalidInputError(f"rot must be a Rotation, a quaternion (4,) or a rotation matrix (3, 3), "
+                                f"got shape {values.shape}")
     x, y, z, w = values.tolist()
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],

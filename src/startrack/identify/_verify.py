@@ -33,6 +33,7 @@ from scipy.special import bdtrc
 
 from ..camera import Camera
 from ..catalog import chord_from_angle
+from ..errors import InvalidInputError, as_float_array
 
 
 @dataclass(frozen=True)
@@ -76,9 +77,9 @@ class SkyBands:
     unit vector, the same set as ``cKDTree.query_ball_point`` (up to rounding at the chord)."""
 
     def __init__(self, vectors: NDArray[np.float64]):
-        vectors = np.asarray(vectors, dtype=np.float64)
+        vectors = as_float_array(vectors, "vectors")
         if vectors.ndim != 2 or vectors.shape[1] != 3:
-            raise ValueError(f"vectors must have shape (S, 3), got {vectors.shape}")
+            raise InvalidInputError(f"vectors must have shape (S, 3), got {vectors.shape}")
         self.vectors = np.ascontiguousarray(vectors)
         lon = np.arctan2(vectors[:, 1], vectors[:, 0])
         sector = np.minimum((np.floor((lon + math.pi) / (2.0 * math.pi) * SKY_SECTORS)).astype(np.int64),
