@@ -8,7 +8,10 @@ from __future__ import annotations
 
 import math
 from numbers import Integral, Real
-from typing import Any, TypeVar, cast
+from typing import TYPE_CHECKING, Any, TypeVar, cast
+
+if TYPE_CHECKING:  # numpy is imported where it is needed, not with this module
+    import numpy as np
 
 _T = TypeVar("_T")
 _S = TypeVar("_S", bound=str)
@@ -106,6 +109,18 @@ def checked_count(value: object, what: str, low: int, high: int | None = None) -
         upper = "" if high is None else f" and <= {high}"
         raise InvalidInputError(f"{what} must be an integer >= {low}{upper}, got {_short(value)}")
     return int(value)
+
+
+def checked_rng(rng: object) -> np.random.Generator:
+    """``numpy.random.default_rng(rng)`` (a Generator); an InvalidInputError if ``rng`` is not one of what
+    it takes (a Generator, a seed: an integer >= 0 or a sequence of them, or None)."""
+    import numpy as np  # here: this module is imported before numpy is needed
+
+    try:
+        return np.random.default_rng(rng)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise InvalidInputError("rng must be a numpy Generator, a seed (an integer >= 0, or a sequence of them) "
+                                f"or None, got {_short(rng)}") from None
 
 
 def _short(value: object) -> str:

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, as_float_array
 
 
 def average_quaternions(quaternions: ArrayLike, weights: ArrayLike | None = None) -> NDArray[np.float64]:
@@ -35,14 +35,14 @@ def average_quaternions(quaternions: ArrayLike, weights: ArrayLike | None = None
     ndarray, shape (..., 4)
         The average, scalar last, with a non-negative scalar part.
     """
-    quat = np.asarray(quaternions, dtype=float)
+    quat = as_float_array(quaternions, "quaternions")
     if quat.ndim < 2 or quat.shape[-1] != 4 or quat.shape[-2] == 0 or not np.all(np.isfinite(quat)):
         raise InvalidInputError(f"quaternions must be finite with shape (..., K, 4), K >= 1, got {quat.shape}")
     norm = np.linalg.norm(quat, axis=-1, keepdims=True)
     if np.any(norm == 0.0):
         raise InvalidInputError("quaternions must not be zero")
     quat = quat / norm
-    w = np.ones(quat.shape[:-1]) if weights is None else np.asarray(weights, dtype=float)
+    w = np.ones(quat.shape[:-1]) if weights is None else as_float_array(weights, "weights")
     try:
         w = np.broadcast_to(w, quat.shape[:-1])
     except ValueError:

@@ -25,14 +25,20 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, as_float_array, check_choice, check_instance
 from ._linalg import quat_product
 
 FRAMES = ("camera", "icrs")
 
 
+MAX_TURN_RAD = 1e9
+"""The largest angle a propagation turns through (rad): float64's spacing at 1e9 rad is 1.2e-7 rad,
+so the attitude keeps a sub-microradian accuracy up to it (160 million turns); beyond about 1e300
+the rotation vector overflows."""
+
+
 def _omega(value: ArrayLike, name: str = "omega_rad_s") -> NDArray[np.float64]:
-    arr = np.asarray(value, dtype=float)
+    arr = as_float_array(value, name)
     if arr.shape[-1:] != (3,) or not np.all(np.isfinite(arr)):
         raise InvalidInputError(f"{name} must be finite with shape (3,) or (K, 3) (rad/s), got {arr.shape}")
     return arr
@@ -59,12 +65,16 @@ def propagate(
     Rotation
         ``exp(-[omega x] dt) A`` (camera) or ``A exp(-[omega x] dt)`` (icrs).
     """
+    check_instance(rot_cam_from_icrs, Rotation, "rot_cam_from_icrs")
     omega = _omega(omega_rad_s)
-    dt = np.asarray(dt_s, dtype=float)
+    dt = as_float_array(dt_s, "dt_s")
     if not np.all(np.isfinite(dt)) or dt.ndim > 1:
         raise InvalidInputError(f"dt_s must be a finite number or 1-D array of seconds, got {dt_s!r}")
-    if frame not in FRAMES:
-        raise InvalidInputError(f"frame must be one of {', '.join(FRAMES)}, got {frame!r}")
+    frame = check_choice(frame, FRAMES, "frame")
+    angle = float(np.max(np.linalg.norm(omega) * np.abs(dt), initial=0.0))
+    if not angle <= MAX_TURN_RAD:
+        raise InvalidInputError(f"omega_rad_s * dt_s turns through {angle:.3g} rad, more than the {MAX_TURN_RAD:g} "
+                                "rad whose remainder modulo a turn float64 still holds to a microradian")
     turn = Rotation.from_rotvec(-omega * dt[..., None])
     return turn * rot_cam_from_icrs if frame == "camera" else rot_cam_from_icrs * turn
 

@@ -26,15 +26,17 @@ The Jacobian is analytic for the Brown-Conrady model, central differences for ot
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, as_float_array, check_instance
 from ..results import AttitudeSolution, Status
 from ._lens_models import BrownConradyModel
+from ._tilted_ccd import TiltedCcdModel
 
 DEFAULT_FIT: tuple[str, ...] = ("f", "aspect", "cx", "cy", "k1", "k2", "p1", "p2")
 NEVER_PRUNED = ("f",)
@@ -62,8 +64,9 @@ class CalibrationFrame:
     rot_cam_from_icrs: Rotation
 
     def __post_init__(self) -> None:
-        x, y = np.asarray(self.x, float).ravel(), np.asarray(self.y, float).ravel()
-        v = np.asarray(self.vectors_icrs, float)
+        x, y = as_float_array(self.x, "x").ravel(), as_float_array(self.y, "y").ravel()
+        v = as_float_array(self.vectors_icrs, "vectors_icrs")
+        check_instance(self.rot_cam_from_icrs, Rotation, "rot_cam_from_icrs")
         if x.shape != y.shape or v.shape != (x.size, 3):
             raise InvalidInputError(f"x, y must be (K,) and vectors_icrs (K, 3); got {x.shape}, {y.shape}, {v.shape}")
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y)) and np.all(np.isfinite(v))):
@@ -323,6 +326,22 @@ def _covariance(normal: NDArray, res: NDArray) -> NDArray:
     return np.linalg.pinv(normal) * (float(res @ res) / dof)
 
 
+def _checked_setup(frames: object, camera: Camera, fit: object, model: object) -> tuple[list[CalibrationFrame], Any]:
+    """The frames as a list and the lens model (default Brown-Conrady about ``camera``), each of its
+    type, and ``fit`` a tuple or list of names; else an InvalidInputError naming the argument."""
+    check_instance(camera, Camera, "camera")
+    listed = [frames] if isinstance(frames, CalibrationFrame) else frames
+    if not (isinstance(listed, list | tuple) and all(isinstance(f, CalibrationFrame) for f in listed)):
+        raise InvalidInputError(f"frames must be a CalibrationFrame or a list of them, got a {type(frames).__name__}")
+    if not (isinstance(fit, tuple | list) and fit and all(isinstance(name, str) for name in fit)):
+        raise InvalidInputError(f"fit must be a tuple of one or more parameter names, got {fit!r}")
+    model = BrownConradyModel(camera) if model is None else model
+    if not isinstance(model, BrownConradyModel | TiltedCcdModel):
+        raise InvalidInputError(f"model must be a BrownConradyModel, a TiltedCcdModel or None, got a "
+                                f"{type(model).__name__}")
+    return list(listed), model
+
+
 def calibrate_from_stars(frames: list[CalibrationFrame] | CalibrationFrame, camera: Camera, *,
                          fit: tuple[str, ...] = DEFAULT_FIT, model=None, loss: str = "soft_l1",
                          f_scale_px: float = 0.5, reject_sigma: float = 4.0, min_reject_px: float = 0.3,
@@ -354,8 +373,7 @@ def calibrate_from_stars(frames: list[CalibrationFrame] | CalibrationFrame, came
     -------
     CalibrationResult
     """
-    frames = [frames] if isinstance(frames, CalibrationFrame) else list(frames)
-    model = BrownConradyModel(camera) if model is None else model
+    frames, model = _checked_setup(frames, camera, fit, model)
     unknown = set(fit) - set(model.names)
     if not frames or unknown:
         raise InvalidInputError(f"fit must name parameters among {model.names} (got unknown {sorted(unknown)}) "

@@ -12,7 +12,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, is_real_number
 
 
 def chord_from_angle(theta_rad: float, name: str = "theta_rad", allow_zero: bool = False) -> float:
@@ -32,7 +32,7 @@ def chord_from_angle(theta_rad: float, name: str = "theta_rad", allow_zero: bool
     InvalidInputError
         Naming ``name`` and the valid interval, for any other angle (NaN included).
     """
-    theta = float(theta_rad)
+    theta = float(theta_rad) if is_real_number(theta_rad) else math.nan  # a word, None, a list: refused below
     low_ok = theta >= 0.0 if allow_zero else theta > 0.0
     if not (low_ok and theta <= math.pi):
         interval = "[0, pi]" if allow_zero else "(0, pi]"

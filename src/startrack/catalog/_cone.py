@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, check_instance
 from ..frames import checked_unit_vectors
 from ._chord import chord_from_angle
 from ._star_catalog import StarCatalog
@@ -90,6 +90,7 @@ def cone_search(catalog: StarCatalog, center_vec: ArrayLike, radius_rad: float,
     single query is a vectorised chord test over all N stars (no tree to build); use
     :class:`ConeIndex` for many queries on the same stars.
     """
+    check_instance(catalog, StarCatalog, "catalog")
     c = checked_unit_vectors(center_vec, "center_vec", "(3,)")
     if c.shape != (3,):
         raise InvalidInputError(f"center_vec must have shape (3,), got {c.shape}")

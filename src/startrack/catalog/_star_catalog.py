@@ -121,7 +121,7 @@ class StarCatalog:
 
     def magnitudes(self, band: str = "v") -> NDArray[np.float64]:
         """Magnitudes (N,) in ``band``: "v" (estimated Johnson V) or "hp" (Hipparcos Hp)."""
-        if band not in _BANDS:
+        if not (isinstance(band, str) and band in _BANDS):
             raise InvalidInputError(f"band must be one of {_BANDS}, got {band!r}")
         return self.v_mag if band == "v" else self.hp_mag
 

@@ -30,7 +30,7 @@ from scipy.spatial import cKDTree
 
 from ..analysis._availability import CHUNK, _count_chunk
 from ..catalog import load_catalog
-from ..errors import InvalidInputError
+from ..errors import check_instance, checked_count, checked_number, checked_rng
 from ..frames import random_rotations
 from ..rig import CameraRig
 from ._exclusion import BrightBodies, blinded_mask
@@ -85,6 +85,11 @@ class RigAvailability:
                               "mean_stars": float(np.mean(self.counts[n]))} for n in self.counts}}
 
 
+MAX_POINTINGS = 10**8
+"""The most pointings of one availability run: it keeps a count and a flag per pointing and head
+(9 bytes each), 0.9 GB a head at this number."""
+
+
 def rig_availability(rig: CameraRig, max_mag: float, n_pointings: int, rng: np.random.Generator | int | None = None,
                      *, bodies: BrightBodies | None = None, min_stars: int = 4, min_joint_stars: int = 6,
                      progress: Callable[[int, int], None] | None = None) -> RigAvailability:
@@ -103,14 +108,16 @@ def rig_availability(rig: CameraRig, max_mag: float, n_pointings: int, rng: np.r
     min_stars, min_joint_stars : int
     progress : callable(done, total), optional
     """
-    if not (isinstance(n_pointings, int | np.integer) and n_pointings >= 1):
-        raise InvalidInputError(f"n_pointings must be a positive whole number, got {n_pointings!r}")
-    if min_stars < 1 or min_joint_stars < PATTERN_STARS:
-        raise InvalidInputError(f"min_stars must be >= 1 and min_joint_stars >= {PATTERN_STARS}, got "
-                                f"{min_stars} and {min_joint_stars}")
+    check_instance(rig, CameraRig, "rig")
+    if bodies is not None:
+        check_instance(bodies, BrightBodies, "bodies")
+    checked_count(n_pointings, "n_pointings", 1, MAX_POINTINGS)
+    checked_count(min_stars, "min_stars", 1)
+    checked_count(min_joint_stars, "min_joint_stars", PATTERN_STARS)
+    max_mag = checked_number(max_mag, "max_mag (V)", low=-2.0, high=20.0)
     vectors = load_catalog().brighter_than(max_mag).vectors()
     tree = cKDTree(vectors)
-    rng = np.random.default_rng(rng)
+    rng = checked_rng(rng)
     counts = {h.name: np.zeros(n_pointings, dtype=np.int64) for h in rig}
     blinded = {h.name: np.zeros(n_pointings, dtype=bool) for h in rig}
     for start in range(0, n_pointings, CHUNK):

@@ -35,7 +35,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..catalog import load_catalog
-from ..errors import check_choice, require
+from ..errors import check_choice, check_instance, require
 from ..frames import angle_between
 from ..identify import MethodName, field_stars
 from ..results import AttitudeSolution, StarMatches, Status
@@ -124,8 +124,8 @@ def solve_rig(stars: Mapping[str, tuple], rig: CameraRig, *, epoch: Time | float
         A star list for a head that is not in the rig, a malformed list (naming the head), an
         unknown ``method``.
     """
-    return solve_head_stars(rig_stars(stars, rig), rig, epoch_jyear(epoch), check_method(method),
-                            options or RigOptions())
+    options = RigOptions() if options is None else check_instance(options, RigOptions, "options")
+    return solve_head_stars(rig_stars(stars, rig), rig, epoch_jyear(epoch), check_method(method), options)
 
 
 RIG_METHODS: tuple[MethodName, ...] = tuple(m for m in get_args(MethodName) if m != "overlay")

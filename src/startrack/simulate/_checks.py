@@ -31,15 +31,6 @@ def fraction(name: str, value: float) -> float:
     return v
 
 
-def generator(rng: object) -> np.random.Generator:
-    """``numpy.random.default_rng(rng)``; InvalidInputError if ``rng`` is not one of what it takes."""
-    try:
-        return np.random.default_rng(rng)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise InvalidInputError("rng must be a numpy Generator, a seed (an integer >= 0, or a sequence of them) "
-                                f"or None, got {rng!r}") from None
-
-
 def finite_array(name: str, value: ArrayLike,
                  shape: tuple[int | None, ...]) -> NDArray[np.float64]:
     """``value`` as a finite float64 array of the given shape (None = any length); else raise."""

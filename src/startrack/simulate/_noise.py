@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.stats import norm, poisson
 
-from ..errors import InvalidInputError, as_float_array
+from ..errors import InvalidInputError, as_float_array, checked_rng
 from . import _checks
 from ._detector import PixelMaps, bloom, pixel_maps
 from ._radiometry import Detector, Sensor
@@ -202,7 +202,7 @@ def read_out(signal_e: ArrayLike, sensor: Sensor, *, background_e: ArrayLike = 0
     background = _checked_background(background_e, signal.shape)
     if not model.background:
         background = np.zeros(())
-    rng = _checks.generator(rng)
+    rng = checked_rng(rng)
     maps = _active_maps(sensor.detector, signal.shape, model)
     level = _common_level(background, sensor, maps, model)
     table = None if level is None else _table_or_none(level, sensor.detector, model)

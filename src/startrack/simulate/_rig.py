@@ -25,9 +25,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, checked_rng
 from ..rig import CameraRig, RigHead
-from . import _checks
 from ._noise import NoiseModel
 from ._radiometry import Sensor
 from ._scene import DEFAULT_SENSOR, FrameTiming, SimulatedImage
@@ -127,7 +126,7 @@ def rig_star_lists(rig: CameraRig, rot_body_from_icrs: Rotation, *, max_mag: flo
     """
     from ..multihead import blinded_by
 
-    rng = _checks.generator(rng)
+    rng = checked_rng(rng)
     sky = rig_sky(max_mag, epoch_jyear)
     out = {}
     for head in rig:
@@ -199,7 +198,7 @@ def simulate_rig(rig: CameraRig, rot_body_from_icrs: Rotation, *, rate_body_rad_
     blinded = {h.name: blinded_by(h, bodies, h.rot_cam_from_icrs(rot_body_from_icrs).inv().apply([0, 0, 1.0]))
                for h in rig}
     detectors = rig.detectors
-    streams = dict(zip(detectors, _checks.generator(rng).spawn(len(detectors)), strict=True))
+    streams = dict(zip(detectors, checked_rng(rng).spawn(len(detectors)), strict=True))
     frames: dict[str, SimulatedImage | SplitFieldFrame] = {}
     for name, heads in detectors.items():
         det_sensor = _sensor_for(sensor, name)

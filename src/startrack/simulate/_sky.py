@@ -21,9 +21,8 @@ from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
 from ..catalog import epoch_jyear as checked_jyear
-from ..errors import InvalidInputError, check_instance
+from ..errors import InvalidInputError, check_instance, checked_rng
 from ..frames import angle_between, boresight
-from . import _checks
 from ._background import SkyBackground
 from ._motion import AttitudeProfile
 from ._noise import NoiseModel
@@ -131,7 +130,7 @@ class SkyModel:
         lo, hi = (float(v) for v in mag_range)
         if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
             raise InvalidInputError(f"mag_range must be (faint >= bright) finite magnitudes, got {mag_range!r}")
-        rng = _checks.generator(rng)
+        rng = checked_rng(rng)
         vectors = rng.standard_normal((count, 3))
         vectors /= np.linalg.norm(vectors, axis=1, keepdims=True)
         return SkyModel(vectors_icrs=np.concatenate([self.vectors_icrs, vectors]),
