@@ -1,5 +1,5 @@
 """Arguments of the wrong type or out of range, refused by name before any work. A probe of the public
-functions of startrack.multihead, .calibrate, .attitude and .catalog with numbers, words, lists, dicts and
+functions of startrack.multihead, .calibrate, .attitude, .catalog and .detect with numbers, words, lists, dicts and
 arrays in the wrong places found AttributeError ("'int' object has no attribute 'names'"), TypeError
 ("'int' object is not iterable"), ZeroDivisionError and numpy's ValueError; each case below raised one
 of them before."""
@@ -17,6 +17,7 @@ from startrack import Camera
 from startrack.attitude import average_quaternions, propagate
 from startrack.calibrate import CalibrationFrame, calibrate_from_stars
 from startrack.catalog import cone_search, load_catalog, thin_uniform
+from startrack.detect import calibrate_zero_point, flux_for_snr, instrument_magnitude
 from startrack.errors import InvalidInputError, checked_rng
 from startrack.multihead import rig_availability, solve_rig
 
@@ -47,6 +48,9 @@ FRAME = CalibrationFrame(*XY, VECTORS, Rotation.identity())
     (lambda: thin_uniform(load_catalog(), 5, 1e-300), "region_radius_rad (radians) must be a finite number >= 0.001"),
     (lambda: thin_uniform(load_catalog(), None, 0.1), "max_per_region must be an integer >= 1, got None"),
     (lambda: thin_uniform(load_catalog(), 5, 0.1, band=np.zeros(3)), "band must be one of"),
+    (lambda: instrument_magnitude([1.0, 2.0], zero_point="x"), "zero_point (mag) must be a finite number, got 'x'"),
+    (lambda: calibrate_zero_point("x", [1.0]), "flux must be a number or an array of numbers, got 'x'"),
+    (lambda: flux_for_snr({}, 1.5, 100.0, 5.0), "snr must be a number or an array of numbers, got {}"),
     (lambda: checked_rng("x"), "rng must be a numpy Generator, a seed (an integer >= 0, or a sequence of them)"),
 ])
 def test_a_wrong_argument_is_refused_by_name(call, words):

@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import erf
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, as_float_array
 
 _SQRT2 = math.sqrt(2.0)
 _INV_SQRT_2PI = 1.0 / math.sqrt(2.0 * math.pi)
@@ -64,9 +64,9 @@ def integrated_snr(flux_e: ArrayLike, psf_sigma_px: ArrayLike, background_e: Arr
 def flux_for_snr(snr: ArrayLike, psf_sigma_px: ArrayLike, background_e: ArrayLike = 0.0,
                  read_noise_e: ArrayLike = 0.0) -> NDArray[np.float64]:
     """Star electrons that give :func:`integrated_snr` equal to ``snr`` (its inverse)."""
-    s2 = np.asarray(snr, dtype=float) ** 2
-    a = noise_equivalent_area(psf_sigma_px) * (np.asarray(background_e, dtype=float)
-                                               + np.asarray(read_noise_e, dtype=float) ** 2)
+    s2 = as_float_array(snr, "snr") ** 2
+    a = noise_equivalent_area(as_float_array(psf_sigma_px, "psf_sigma_px")) * (
+        as_float_array(background_e, "background_e") + as_float_array(read_noise_e, "read_noise_e") ** 2)
     return 0.5 * (s2 + np.sqrt(s2 * s2 + 4.0 * s2 * a))
 
 

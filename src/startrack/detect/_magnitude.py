@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, as_float_array, checked_number
 
 MAG_PER_DEX = 2.5
 JACOBS1995_K_AREA = 2.0
@@ -29,7 +29,8 @@ JACOBS1995_K_AREA = 2.0
 
 def instrument_magnitude(flux: ArrayLike, zero_point: float = 0.0) -> NDArray[np.float64]:
     """``zero_point - 2.5 log10(flux)``; NaN where the flux is not positive."""
-    f = np.asarray(flux, dtype=np.float64)
+    f = as_float_array(flux, "flux")
+    zero_point = checked_number(zero_point, "zero_point (mag)")
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(f > 0, zero_point - MAG_PER_DEX * np.log10(f), np.nan)
 
@@ -55,8 +56,7 @@ def calibrate_zero_point(flux: ArrayLike, catalog_mag: ArrayLike) -> tuple[float
     InvalidInputError
         Shapes differ, or no pair has a positive flux and a finite magnitude.
     """
-    f = np.asarray(flux, dtype=np.float64)
-    m = np.asarray(catalog_mag, dtype=np.float64)
+    f, m = as_float_array(flux, "flux"), as_float_array(catalog_mag, "catalog_mag")
     if f.shape != m.shape or f.ndim != 1:
         raise InvalidInputError(
             f"flux and catalog_mag must be 1-D arrays of one length, got {f.shape} and {m.shape}")
