@@ -19,8 +19,6 @@ import argparse
 import math
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from ..errors import InvalidInputError
 from ..io import ENV_VAR, resolve_max_pixels
 from ._scene_options import DEFAULT_SIZE_PX, render_sensor, scene_camera
@@ -60,7 +58,7 @@ def _check_motion(args: argparse.Namespace, exposure_s: float, rows: int) -> Non
     if rate is None:
         return
     span_s = exposure_s + (rows - 1) * (getattr(args, "line_time_s", None) or 0.0)
-    turn = float(np.linalg.norm(rate)) * span_s
+    turn = math.hypot(*rate) * span_s  # without numpy's overflow warning at 1e300 deg/s
     if turn > MAX_TURN_PER_FRAME_DEG:
         raise InvalidInputError(
             f"--rate-deg-s turns the camera {turn:.3g} deg during one frame ({span_s:.3g} s); at most "

@@ -30,12 +30,14 @@ THRESHOLDS: tuple[str, ...] = get_args(ThresholdMethod)
 GROUPINGS: tuple[str, ...] = get_args(GroupingMethod)
 DEFAULT_MAX_BLOCK_PX = 1 << 24
 UPPER_LIMITS: dict[str, float] = {"kernel_px": 51, "window_half_px": 100, "denoise_sigma_px": 50.0,
-                                  "diffusion_iterations": 1000}
+                                  "diffusion_iterations": 1000, "sigma": 1e6, "grow_sigma": 1e6,
+                                  "pixel_sigma": 1e6, "max_sigma": 1e6}
 """The largest values of the settings whose cost grows with them without end: a smoothing kernel of 51
 px, a centroid window of 201 x 201 px and a denoising Gaussian of sd 50 px (0.4 s on a 1 MP frame) hold
 defocused stars many times wider than a star tracker's; 1000 diffusion iterations take about 20 s on a
 1 MP frame (0.37 s for 20). Past them one detection ran for hours (a kernel of 1,000,001 px) or asked
-for more memory than exists (a window of 200,001 px)."""
+for more memory than exists (a window of 200,001 px). Thresholds stop at a million noise units: a
+threshold of 1e300 overflowed the detection image's float32."""
 
 
 @dataclass(frozen=True)
