@@ -204,3 +204,20 @@ def test_davenport_matrix_pairs_with_scipy_quaternions():
     for rot in Rotation.random(20, random_state=rng):
         q = rot.as_quat()
         assert q @ k @ q == pytest.approx(np.trace(rot.as_matrix() @ profile.T), abs=1e-14)
+
+
+def test_olae_gibbs_gives_nan_to_a_singular_problem_and_solves_the_others():
+    # a batch with one pair of coincident directions raised LinAlgError ("Singular matrix") for the whole
+    # batch: `startrack rate IMAGE --fov-deg 1e-300` ended as a fault of ours
+    from startrack.attitude._olae import olae_gibbs
+
+    turn = Rotation.from_rotvec([0.0, 0.0, 0.01])
+    good = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    coincident = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]])
+    observed = np.stack([coincident, turn.apply(good)])
+    reference = np.stack([coincident, good])
+    gibbs = olae_gibbs(observed, reference, np.full((2, 2), 0.5))
+    assert np.all(np.isnan(gibbs[0]))
+    # the Gibbs vector of a turn by 0.01 rad about z is tan(0.005) z (rotation of reference onto observed,
+    # up to the sign convention of OLAE's Gibbs vector): 1e-12 of it is rounding
+    np.testing.assert_allclose(np.abs(gibbs[1]), [0.0, 0.0, np.tan(0.005)], atol=1e-12)

@@ -54,9 +54,19 @@ def olae_system(
 def olae_gibbs(
     observed: NDArray[np.float64], reference: NDArray[np.float64], weights: NDArray[np.float64]
 ) -> NDArray[np.float64]:
-    """One OLAE solve: the Gibbs vectors g (..., 3) (no frame turn; singular at 180 degrees)."""
+    """One OLAE solve: the Gibbs vectors g (..., 3) (no frame turn; singular at 180 degrees).
+
+    A problem whose normal matrix is exactly singular (its directions coincide, e.g. a camera of a
+    1e-300 deg field) gets NaN, and the others their solution; numpy raised LinAlgError for the batch.
+    """
     matrix, rhs = olae_system(observed, reference, weights)
-    return np.asarray(np.linalg.solve(matrix, rhs[..., None])[..., 0], dtype=np.float64)
+    try:
+        solved = np.linalg.solve(matrix, rhs[..., None])[..., 0]
+    except np.linalg.LinAlgError:  # LU met a zero pivot, so det (the same LU) is exactly 0 there
+        singular = np.linalg.det(matrix) == 0.0
+        solved = np.linalg.solve(np.where(singular[..., None, None], np.eye(3), matrix), rhs[..., None])[..., 0]
+        solved[singular] = np.nan
+    return np.asarray(solved, dtype=np.float64)
 
 
 def olae_residuals(
