@@ -53,7 +53,8 @@ def test_update_image_refuses_non_finite_times_and_rates(bad):
 @pytest.mark.parametrize("exposure", ["x", [], np.zeros(3), 0.0, -1.0, np.nan, True])
 def test_update_image_refuses_an_exposure_that_is_not_a_positive_number(exposure):
     # before: TypeError ("'>' not supported between 'str' and 'int'") or numpy's "truth value ... ambiguous"
-    with pytest.raises(InvalidInputError, match=r"^streak_exposure_s must be None or a finite number of seconds > 0"):
+    words = r"^streak_exposure_s \(seconds, or None\) must be a finite number > 0, got "
+    with pytest.raises(InvalidInputError, match=words):
         Tracker(camera=CAMERA).update_image(np.zeros((256, 256)), 0.0, streak_exposure_s=exposure)
 
 

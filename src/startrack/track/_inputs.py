@@ -5,12 +5,11 @@ parameter."""
 from __future__ import annotations
 
 import math
-from typing import cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import InvalidInputError, as_float_array, is_real_number
+from ..errors import InvalidInputError, as_float_array, checked_number
 
 
 def checked_rate(rate_rad_s: ArrayLike, frame: str = "camera", name: str = "gyro_rate_rad_s") -> NDArray[np.float64]:
@@ -66,7 +65,4 @@ def checked_exposure(exposure_s: object) -> float | None:
     anything that is not a number, is refused naming ``streak_exposure_s``."""
     if exposure_s is None:
         return None
-    value = float(cast(float, exposure_s)) if is_real_number(exposure_s) else math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise InvalidInputError(f"streak_exposure_s must be None or a finite number of seconds > 0, got {exposure_s!r}")
-    return value
+    return checked_number(exposure_s, "streak_exposure_s (seconds, or None)", low=0.0, above_low=True)
