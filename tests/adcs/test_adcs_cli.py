@@ -55,3 +55,27 @@ def test_misuse_exits_2_with_one_line(capsys, tmp_path, argv, words):
     code, out, err = run(capsys, "adcs-demo", "--out", str(tmp_path), *argv)
     assert code == 2 and out == ""
     assert len(err.strip().splitlines()) == 1 and err.startswith("startrack adcs-demo: error: ") and words in err
+
+
+def test_the_tracker_model_prints_its_table_without_a_processing_time(capsys, tmp_path):
+    # the modelled tracker measures no processing time, and the text table multiplied its None by 1e3:
+    # every `--feedback tracker-model` run without --json ended as an unexpected TypeError (exit 3)
+    model = {"theta_bias_rad": 0.0, "theta_sigma_rad": 1e-3, "rate_sigma_rad_s": 1e-3, "rate_delay_s": 0.1,
+             "latency_s": 0.1, "valid_fraction": 1.0, "frames": 10}
+    (tmp_path / "noise.json").write_text(json.dumps(model))
+    code, out, err = run(capsys, "adcs-demo", "--feedback", "tracker-model", "--noise-model",
+                         str(tmp_path / "noise.json"), "--duration-s", "5", "--out", str(tmp_path / "run"))
+    assert code in (0, 1) and "error" not in err
+    assert "frames tracked; latency median 100 ms (95 % 100 ms), processing n/a;" in out
+
+
+@pytest.mark.parametrize("field, value", [("theta_sigma_rad", "x"), ("theta_sigma_rad", -1.0), ("latency_s", None),
+                                          ("valid_fraction", 2.0), ("frames", 0)])
+def test_a_noise_model_out_of_range_is_refused_naming_the_field(capsys, tmp_path, field, value):
+    # before: TypeError or scipy's "zero norm quaternions" inside the loop (exit 3)
+    model = {"theta_bias_rad": 0.0, "theta_sigma_rad": 1e-3, "rate_sigma_rad_s": 1e-3, "rate_delay_s": 0.1,
+             "latency_s": 0.1, "valid_fraction": 1.0, "frames": 10} | {field: value}
+    (tmp_path / "noise.json").write_text(json.dumps(model))
+    code, _, err = run(capsys, "adcs-demo", "--feedback", "tracker-model", "--noise-model",
+                       str(tmp_path / "noise.json"), "--duration-s", "5", "--out", str(tmp_path / "run"))
+    assert code == 2 and f"startrack adcs-demo: error: noise model {field} must be" in err

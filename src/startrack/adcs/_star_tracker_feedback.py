@@ -34,7 +34,7 @@ from scipy.spatial.transform import Rotation
 
 from ..camera import Camera
 from ..detect import StarDetector
-from ..errors import InvalidInputError, check_int
+from ..errors import InvalidInputError, check_int, checked_count, checked_number
 from ..frames import rotation_from_radec_roll
 from ..simulate import Sensor, frame_rng, get_sensor_preset, simulate_frame
 from ..track import Tracker, TrackerOptions
@@ -239,6 +239,13 @@ class StarTrackerFeedback(_FramedFeedback):
         return t_s - step * (0.5 + (1.0 - gain) / gain), self.setup.rot_cam_from_body.inv().apply(rate_cam)
 
 
+NOISE_MODEL_RANGES: tuple[tuple[str, float, float], ...] = (
+    ("theta_bias_rad", -math.pi, math.pi), ("theta_sigma_rad", 0.0, math.pi), ("rate_sigma_rad_s", 0.0, 10.0),
+    ("rate_delay_s", 0.0, 60.0), ("latency_s", 0.0, 60.0), ("valid_fraction", 0.0, 1.0))
+"""The valid range of each float field of :class:`TrackerNoiseModel` (rad, rad/s, s, fraction): angles
+within half a turn, rates to 10 rad/s (573 deg/s), delays to a minute."""
+
+
 @dataclass(frozen=True)
 class TrackerNoiseModel:
     """The tracker's errors about y, fitted from a run: Gaussian angle and rate errors, latency, validity.
@@ -266,6 +273,14 @@ class TrackerNoiseModel:
     latency_s: float
     valid_fraction: float
     frames: int
+
+    def __post_init__(self) -> None:
+        """Each field in its range (a file of another run, or edited by hand, may hold anything);
+        InvalidInputError naming the first that is not."""
+        for name, low, high in NOISE_MODEL_RANGES:
+            value = checked_number(getattr(self, name), f"noise model {name}", low=low, high=high)
+            object.__setattr__(self, name, value)
+        object.__setattr__(self, "frames", checked_count(self.frames, "noise model frames", 1))
 
     def to_dict(self) -> dict:
         return asdict(self)

@@ -111,6 +111,11 @@ def main(argv: list[str]) -> int:
     return 0 if data["meets_table_5_3"] else 1
 
 
+def _ms(seconds: float | None) -> str:
+    """A time in ms for the table, or "n/a" when no frame was tracked (the summary holds None)."""
+    return "n/a" if seconds is None else f"{1e3 * seconds:.0f} ms"
+
+
 def _print_text(config: LoopConfig, data: dict) -> None:
     sat = config.cubesat
     print(f"{data['feedback']} feedback, {data['law'].upper()} law, {data['plant']} plant, J22 {sat.j22:.3g} kg m^2: "
@@ -119,8 +124,8 @@ def _print_text(config: LoopConfig, data: dict) -> None:
     tr = data.get("tracker")
     if tr:
         print(f"\ntracker     {tr['tracked']} of {tr['frames']} frames tracked; latency median "
-              f"{1e3 * tr['latency_median_s']:.0f} ms (95 % {1e3 * tr['latency_p95_s']:.0f} ms), processing "
-              f"{1e3 * tr['processing_median_s']:.0f} ms; y-angle error {tr.get('theta_error_rms_arcsec', 0):.1f} "
+              f"{_ms(tr['latency_median_s'])} (95 % {_ms(tr['latency_p95_s'])}), processing "
+              f"{_ms(tr['processing_median_s'])}; y-angle error {tr.get('theta_error_rms_arcsec', 0):.1f} "
               f"arcsec rms, rate {tr.get('rate_error_sigma_arcsec_s', 0):.1f} arcsec/s")
     verdict = "meets" if data["meets_table_5_3"] else "does not meet"
     print(f"\n{verdict} the seed's Table 5.3; files: {', '.join(data['files'])}")
