@@ -386,9 +386,11 @@ def _camera_from(value: Any, label: str, base: Path) -> Camera:
         if preset_key(value) in PRESETS:
             return get_preset(value)
         path = Path(value) if Path(value).is_absolute() else base / value
+        from .io import read_json_file
+
         try:
-            value = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:  # ValueError: not UTF-8 (UnicodeDecodeError) or not JSON
+            value = read_json_file(path, "camera file")
+        except InvalidInputError as exc:
             raise InvalidInputError(f"{label}: camera {value!r} is neither a preset ({', '.join(sorted(PRESETS))}) "
                                     f"nor a readable camera JSON file ({exc})") from None
     if not isinstance(value, Mapping):

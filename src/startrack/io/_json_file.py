@@ -1,4 +1,4 @@
-"""Reading a user's JSON file (a rig, a tracker noise model) with one clear error.
+"""Reading a user's JSON file (a rig, a rig's camera file, a tracker noise model) with one clear error.
 
 JSON is UTF-8 (RFC 8259 §8.1), so the file is decoded as UTF-8 whatever the locale says. A file that
 is missing, unreadable, not UTF-8 text (an image given where JSON was asked for) or not JSON raises

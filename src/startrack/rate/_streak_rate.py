@@ -42,7 +42,6 @@ from ..errors import (
     check_instance,
     checked_count,
     checked_number,
-    is_real_number,
     require,
 )
 from ..results import AttitudeSolution, Status
@@ -290,8 +289,6 @@ def _check_bias(bias_px: float | EndpointBias) -> float | EndpointBias:
         if not np.all(np.isfinite(bias_px.coeffs)):
             raise InvalidInputError("bias_px must have finite coefficients (an EndpointBias from calibrate_bias_model)")
         return bias_px
-    if not is_real_number(bias_px):
-        raise InvalidInputError(f"bias_px must be a finite number of pixels or an EndpointBias, got {bias_px!r}")
     return checked_number(bias_px, "bias_px (pixels, or an EndpointBias)")
 
 
