@@ -31,7 +31,9 @@ calibrations of particular lenses.) Printed per camera: solved within 2 px (the 
 displacement of the image centre and corners between the true and solved attitudes, through the
 true camera), solved farther off (false), not solved, the median and 95th-percentile time of
 detection and identification, and the median of identification alone (that time less the
-detector's on the same frame, timed apart).
+detector's on the same frame, timed apart). With ``--wide``, the same for ultra-wide frames
+beyond the default search (:data:`WIDE_CAMERAS`: 110, 120, 135 and 150 deg, 1800 x 1200 px,
+k1 = -0.005), solved with their field of view given and with 90-150 deg searched.
 
 Part 3 (``--lens-term``), the lens term of the pattern tolerance measured: star lists (the 60
 brightest catalog stars to V 7.5 through the lens, 0.3 px centroid noise, 0.2 mag of magnitude
@@ -47,7 +49,7 @@ direction, and every solve of it counted as false, 2 px off or not: they were 0.
 Usage::
 
     .venv/bin/python benchmarks/realdata_benchmark.py [--frames 20] [--seed 1] [--no-real] [--no-sim]
-                                                      [--lens-term] [--lists 30]
+                                                      [--wide] [--lens-term] [--lists 30]
 """
 
 from __future__ import annotations
@@ -99,6 +101,11 @@ SIM_CAMERAS = (
     SimCamera("70 deg", 1920, 1080, 70.0, -0.06, 0.01, 6.5),
     SimCamera("90 deg", 1600, 1200, 90.0, -0.05, 0.0, 6.0),
 )
+
+WIDE_CAMERAS = tuple(SimCamera(f"{fov:.0f} deg", 1800, 1200, fov, -0.005, 0.0, 6.0)
+                     for fov in (110.0, 120.0, 135.0, 150.0))
+"""``--wide``: ultra-wide rectilinear lenses (a 12-14 mm lens on a full-frame camera, a phone's
+ultra-wide) with a mild barrel (k1 = -0.005, 2-4 % at the corners), beyond the default search."""
 
 
 # --- part 1: the real images ------------------------------------------------------------------
@@ -203,8 +210,9 @@ def error_px(truth, solution, camera: Camera) -> float:
     return float(np.max(np.hypot(px - x, py - y)))
 
 
-def sim_camera_run(spec: SimCamera, frames: int, seed: int) -> dict:
-    """Render and solve ``frames`` frames of one simulated camera."""
+def sim_camera_run(spec: SimCamera, frames: int, seed: int, hint: dict | None = None) -> dict:
+    """Render and solve ``frames`` frames of one simulated camera, with the ``solve_image`` keyword
+    arguments ``hint`` (none: the default search)."""
     camera, sensor = spec.camera(), get_sensor_preset("generic-cmos")
     rng = np.random.default_rng([seed, int(spec.fov_deg)])
     ok = false = 0
@@ -212,7 +220,7 @@ def sim_camera_run(spec: SimCamera, frames: int, seed: int) -> dict:
     for truth in random_rotations(frames, rng=rng):
         sim = simulate_frame(camera, truth, max_mag=spec.max_mag, sensor=sensor, epoch_jyear=2000.0, rng=rng)
         detect_s = _detect_s(sim.image)
-        solution = solve_image(sim.image)
+        solution = solve_image(sim.image, **(hint or {}))
         times.append(solution.solve_time_s)
         identify.append(solution.solve_time_s - detect_s)
         if solution.solved:
@@ -225,14 +233,22 @@ def sim_camera_run(spec: SimCamera, frames: int, seed: int) -> dict:
             "identify_median_ms": float(np.median(identify)) * 1e3}
 
 
-def print_sim(rows: list[dict]) -> None:
-    print("\nSimulated frames, no hint (default search 3-100 deg), lens not calibrated")
+def print_sim(rows: list[dict], label: str = "no hint (default search 3-100 deg)") -> None:
+    print(f"\nSimulated frames, {label}, lens not calibrated")
     print(f"{'camera':<8} {'frames':>6} {'within 2 px':>11} {'false':>5} {'unsolved':>8} {'median err px':>13} "
           f"{'median ms':>9} {'p95 ms':>8} {'identify ms':>11}")
     for r in rows:
         print(f"{r['camera']:<8} {r['frames']:>6d} {r['ok']:>11d} {r['false']:>5d} {r['unsolved']:>8d} "
               f"{r['median_err_px']:>13.3f} {r['median_ms']:>9.1f} {r['p95_ms']:>8.1f} "
               f"{r['identify_median_ms']:>11.1f}")
+
+
+def print_wide(frames: int, seed: int) -> None:
+    """``--wide``: the frames of :data:`WIDE_CAMERAS`, their field of view given, then searched."""
+    print_sim([sim_camera_run(spec, frames, seed, {"fov_deg": spec.fov_deg}) for spec in WIDE_CAMERAS],
+              "ultra-wide, the field of view given")
+    print_sim([sim_camera_run(spec, frames, seed, {"fov_range_deg": (90.0, 150.0)}) for spec in WIDE_CAMERAS],
+              "ultra-wide, 90-150 deg searched")
 
 
 # --- part 3: the lens term, on star lists ----------------------------------------------------
@@ -302,6 +318,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--no-real", action="store_true", help="skip the real images")
     parser.add_argument("--no-sim", action="store_true", help="skip the simulated frames")
     parser.add_argument("--lens-term", action="store_true", help="also measure the lens term on star lists")
+    parser.add_argument("--wide", action="store_true", help="also solve ultra-wide frames (110-150 deg), their "
+                        "field of view given or a range of 90-150 deg searched")
     parser.add_argument("--lists", type=int, default=30, help="star lists per lens of --lens-term (default 30)")
     args = parser.parse_args(argv)
     load = os.getloadavg()[0]
@@ -320,6 +338,8 @@ def main(argv: list[str] | None = None) -> int:
                        "no hint, with the stars the solution predicts measured (guided=True)")
     if not args.no_sim:
         print_sim([sim_camera_run(spec, args.frames, args.seed) for spec in SIM_CAMERAS])
+    if args.wide:
+        print_wide(args.frames, args.seed)
     if args.lens_term:
         print_lens_term(lens_term_rows(args.lists, args.seed))
     print(f"\nwall {time.perf_counter() - t0:.0f} s; load average {load:.2f} before, {os.getloadavg()[0]:.2f} after "

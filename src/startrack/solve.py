@@ -25,6 +25,8 @@ from .identify import (
     DEFAULT_EPOCH_JYEAR,
     DEFAULT_FOV_RANGE_DEG,
     FOV_DEG_TOLERANCE,
+    MAX_FOV_DEG,
+    MIN_FOV_DEG,
     Candidate,
     FieldStars,
     MatcherOptionsBase,
@@ -40,9 +42,10 @@ from .identify import (
     resolve_epoch,
     settle_matches,
     solution_terms,
+    stated_search_range,
 )
 from .identify import star_arrays as _star_arrays  # noqa: F401 (startrack.multihead checks heads with it)
-from .results import AttitudeSolution, StarMatches, Status
+from .results import AttitudeSolution, Detections, StarMatches, Status
 from .units import ARCSEC
 
 if TYPE_CHECKING:
@@ -50,8 +53,8 @@ if TYPE_CHECKING:
 
     from .io import Image
 
-__all__ = ["DEFAULT_EPOCH_JYEAR", "DEFAULT_FOV_RANGE_DEG", "FOV_DEG_TOLERANCE", "check_fov_deg", "epoch_jyear",
-           "solve_image", "solve_stars"]
+__all__ = ["DEFAULT_EPOCH_JYEAR", "DEFAULT_FOV_RANGE_DEG", "FOV_DEG_TOLERANCE", "MAX_FOV_DEG", "MIN_FOV_DEG",
+           "check_fov_deg", "epoch_jyear", "solve_image", "solve_stars"]
 
 
 def _solution(problem: SolveRequest, stars: FieldStars, cand: Candidate, t0: float) -> AttitudeSolution:
@@ -152,9 +155,11 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
     width, height : int
         Image size in pixels (taken from ``camera`` when one is given).
     fov_deg : float, optional
-        Horizontal field of view, trusted to +-3 % and refined.
+        Horizontal field of view (deg, :data:`MIN_FOV_DEG` to :data:`MAX_FOV_DEG`: 0.5 to 150),
+        trusted to +-3 % and refined.
     fov_range_deg : (float, float), optional
-        Range of horizontal fields of view to search; default (3, 100) when neither is given.
+        Range of horizontal fields of view to search (deg, within the same limits); default
+        (3, 100) when neither is given.
     camera : Camera, optional
         A calibrated camera (focal lengths, principal point, distortion): the focal length is
         then fixed.
@@ -277,7 +282,10 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
     image : path, ndarray or startrack.io.Image
         A FITS, PNG, JPEG or TIFF file, or a 2-D (or colour) array in counts.
     fov_deg, fov_range_deg, camera, method, options, pixel_aspect
-        As in :func:`solve_stars`.
+        As in :func:`solve_stars`. When none of the first three is given and the image's header
+        states a field the default search does not reach (an ultra-wide lens's EXIF focal length,
+        a telescope's FITS ``FOCALLEN`` and ``XPIXSZ``; :mod:`startrack.identify._image_fov`),
+        that field is searched first, then the default range.
     epoch : astropy.time.Time or float, optional
         Catalog epoch; default: the time the image's header states (FITS ``CATEPOCH``,
         ``DATE-OBS``, ``MJD-OBS``, EXIF ``DateTimeOriginal``; :mod:`startrack.identify._image_epoch`),
@@ -338,18 +346,45 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
     elongation = smeared_image.smear_elongation(found)
     if elongation >= smeared_image.SMEARED_ELONGATION and (streaked := smeared()).solved:
         return smeared_image.image_solution(streaked, found, detect_s, when.source)
-    order = search_order(found)
-    request = build_request(found.x[order], found.y[order], width=width, height=height, fov_deg=fov_deg,
-                            fov_range_deg=fov_range_deg, camera=camera, flux=None, epoch=when,
-                            pixel_aspect=pixel_aspect, parity=parity,
+    solution = _point_solve(found, _fov_searches(img.header, width, height, fov_deg, fov_range_deg, camera),
+                            method, options, width=width, height=height, fov_deg=fov_deg, camera=camera,
+                            flux=None, epoch=when, pixel_aspect=pixel_aspect, parity=parity,
                             default_parity="either" if method == "quads" else "normal")
-    _check_parity_method(request, method)
-    solution = _run(replace(request, rows=order[request.rows]), method, options)
     if not solution.solved and smeared_image.SOME_ELONGATION <= elongation < smeared_image.SMEARED_ELONGATION \
             and (streaked := smeared()).solved:
         return smeared_image.image_solution(streaked, found, detect_s, when.source)
     solution = replace(solution, solve_time_s=detect_s + solution.solve_time_s, detections=found)
     return _with_guided(img.data, solution, detector) if guided and solution.solved else solution
+
+
+def _fov_searches(header, width: int, height: int, fov_deg: float | None, fov_range_deg: tuple[float, float] | None,
+                  camera: Camera | None) -> list[tuple[float, float] | None]:
+    """The ``fov_range_deg`` of each point solve to try, in turn: the one given; when nothing is
+    given about the field, first the range the image's header states if the default search does
+    not reach it (:func:`.identify.stated_search_range`: an ultra-wide lens's EXIF, a telescope's
+    FITS focal length), then the default search."""
+    if fov_deg is None and fov_range_deg is None and camera is None:
+        stated = stated_search_range(header, width, height)
+        if stated is not None:
+            return [stated, None]
+    return [fov_range_deg]
+
+
+def _point_solve(found: Detections, searches: list[tuple[float, float] | None], method: MethodName,
+                 options: MatcherOptionsBase | None, **request_args) -> AttitudeSolution:
+    """Solve the detected spots (:func:`search_order`) with :func:`build_request`'s ``request_args``
+    and each ``fov_range_deg`` of ``searches`` in turn until one solves; ``solve_time_s`` counts
+    every attempt."""
+    order = search_order(found)
+    spent = 0.0
+    for fov_range_deg in searches:
+        request = build_request(found.x[order], found.y[order], fov_range_deg=fov_range_deg, **request_args)
+        _check_parity_method(request, method)
+        solution = _run(replace(request, rows=order[request.rows]), method, options)
+        spent += solution.solve_time_s
+        if solution.solved:
+            break
+    return replace(solution, solve_time_s=spent)
 
 
 def _with_guided(data: NDArray, solution: AttitudeSolution, detector) -> AttitudeSolution:

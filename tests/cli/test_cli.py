@@ -407,7 +407,7 @@ def test_solve_stars_bad_list_is_misuse(bad_lists, name, words):
 
 
 @pytest.mark.parametrize(("fov", "words"), [
-    (("--fov-deg", -5), ("--fov-deg", "-5", "0.5 and 100")),
+    (("--fov-deg", -5), ("--fov-deg", "-5", "0.5 and 150")),
     (("--fov-deg", 500), ("--fov-deg", "500")),
     (("--fov-deg", "nan"), ("--fov-deg", "nan")),
     (("--fov-range-deg", 30, 10), ("--fov-range-deg", "LO <= HI", "30 10")),

@@ -8,8 +8,11 @@ import numpy as np
 import pytest
 
 from startrack import Camera, Status, solve_stars
+from startrack.errors import InvalidInputError
 from startrack.frames import attitude_error, random_rotations
+from startrack.identify import database_settings_for
 from startrack.identify._field_stars import field_stars
+from startrack.identify._refine import fit_pose
 from startrack.units import ARCSEC
 
 WIDE = Camera.from_fov(3000, 600, 10.0)
@@ -56,3 +59,53 @@ def test_a_wide_lens_is_fitted_as_wide_whichever_way_the_image_is_held(held):
     assert solution.status is Status.OK, solution.reason
     assert len(solution.matches.hip) >= 0.95 * x.size  # every star but a close pair or two
     assert solution.camera.k1 == pytest.approx(camera.k1, abs=0.005)  # k1, unitless: 10 % of the lens's
+
+
+def _ultra_wide(fov_deg: float) -> Camera:
+    """A 3:2 rectilinear lens of ``fov_deg`` horizontally with a realistic barrel (k1 = -0.005: 2-4 %
+    at the corners of 120-150 deg), uncalibrated."""
+    return Camera.from_fov(1800, 1200, fov_deg).with_distortion(k1=-0.005)
+
+
+@pytest.mark.parametrize(("fov_deg", "given"), [(120.0, {"fov_deg": 120.0}), (150.0, {"fov_deg": 150.0}),
+                                                 (135.0, {"fov_range_deg": (90.0, 150.0)})])
+def test_an_ultra_wide_lens_solves_when_its_field_is_given(fov_deg, given):
+    """Before: a field of view over 100 deg was refused ("must be a field of view between 0.5 and
+    100 deg"), so a photo of a 12-14 mm lens could not be solved at all."""
+    camera = _ultra_wide(fov_deg)
+    x, y, truth = _wide_list(5, sigma_px=0.2, max_mag=5.5, camera=camera, min_cos=0.15)
+    solution = solve_stars(x[:60], y[:60], width=camera.width, height=camera.height, **given)
+    assert solution.status is Status.OK, solution.reason
+    # within a pixel's angle at the centre (0.12-0.28 deg across these fields)
+    assert attitude_error(solution.rot_cam_from_icrs, truth) < camera.pixel_scale_arcsec * ARCSEC
+    assert solution.fov_deg == pytest.approx(fov_deg, rel=0.01)
+
+
+@pytest.mark.parametrize("fov", [150.5, 179.0])
+def test_a_field_wider_than_the_widest_is_refused_by_name(fov):
+    with pytest.raises(InvalidInputError, match=r"fov_deg must be a field of view between 0.5 and 150 deg"):
+        solve_stars(np.arange(10.0), np.arange(10.0), width=100, height=100, fov_deg=fov)
+
+
+def test_searches_beyond_the_default_range_share_one_wide_database():
+    """Each distinct range used to get a database of its own (a few seconds to build, each time a
+    photo's lens differed); ranges at and above 70 deg share one that reaches the widest field."""
+    shared = database_settings_for((95.0, 115.0))
+    assert database_settings_for((140.0, 154.5)) == shared
+    assert shared.fov_min_deg <= 70.0 and shared.fov_max_deg >= 154.5 * 1.03  # the given 150 deg, with margins
+    assert database_settings_for((50.0, 120.0)) != shared  # starts below the wide fields: its own
+
+
+def test_a_fit_refuses_a_step_that_scales_the_focal_length_tenfold():
+    """The fit's divergence guard (``_pose_kernel.MAX_LN_FOCAL_STEP``): started 30 times too short,
+    the first step would scale the focal length past the guard, and the fit keeps its start
+    (before: such steps from a folding trial lens drove the focal length to zero, a
+    ZeroDivisionError); started 2 times too short, it converges to the truth."""
+    camera = _ultra_wide(120.0)
+    x, y, truth = _wide_list(6, sigma_px=0.0, max_mag=5.0, camera=camera, min_cos=0.3)
+    ref = truth.inv().apply(camera.pixel_to_vector(x, y))
+    for factor, expected_fx in ((30.0, camera.fx / 30.0), (2.0, camera.fx)):
+        start = camera.with_focal(camera.fx / factor, camera.fy / factor)
+        matrix, fitted, residual = fit_pose(truth.as_matrix(), start, ref, x, y, fit_focal=True)
+        assert np.all(np.isfinite(matrix)) and np.all(np.isfinite(residual))
+        assert fitted.fx == pytest.approx(expected_fx, rel=1e-6)

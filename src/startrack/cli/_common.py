@@ -25,7 +25,7 @@ from ..errors import InvalidInputError, require
 from ..identify import MATCHERS
 from ..io import solution_to_dict, streak_fields
 from ..results import AttitudeSolution, Detections
-from ..solve import check_fov_deg, epoch_jyear
+from ..solve import MAX_FOV_DEG, MIN_FOV_DEG, check_fov_deg, epoch_jyear
 from ._main import DEBUG_ENV, INTERNAL_ERROR
 
 FAULT_EXIT_STATUS = (f"{INTERNAL_ERROR} an unexpected error, a fault of startrack's (please report it), with one "
@@ -121,7 +121,7 @@ def add_fov_options(parser: argparse.ArgumentParser) -> None:
     """--fov-deg, --fov-range-deg, --camera (mutually exclusive)."""
     group = parser.add_mutually_exclusive_group()
     group.add_argument("--fov-deg", type=float, metavar="F",
-                       help="horizontal field of view in deg (0.5 to 100), trusted to +-3 %%")
+                       help=f"horizontal field of view in deg ({MIN_FOV_DEG:g} to {MAX_FOV_DEG:g}), trusted to +-3 %%")
     group.add_argument("--fov-range-deg", type=float, nargs=2, metavar=("LO", "HI"),
                        help="range of horizontal fields of view to search, deg (default 3 100, the default "
                             "database's range)")
@@ -171,7 +171,8 @@ def fov_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     Raises
     ------
     InvalidInputError
-        Naming the option: a FOV outside 0.5..100 deg or not a number, LO > HI, an unknown preset.
+        Naming the option: a FOV outside MIN_FOV_DEG..MAX_FOV_DEG (0.5..150 deg) or not a number, LO > HI,
+        an unknown preset.
     """
     camera: Camera | None = get_preset(args.camera) if args.camera else None
     if args.fov_deg is not None:

@@ -31,6 +31,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._final_fit import settle_matches
     from ._guided import GuidedStars, guided_stars, with_guided_stars
     from ._image_epoch import DEFAULT_EPOCH_JYEAR, epoch_from_header, epoch_jyear, parse_utc, resolve_epoch
+    from ._image_fov import stated_fov_deg, stated_search_range
     from ._kvector import KVector
     from ._match_groups import (
         GroupProblem,
@@ -60,7 +61,16 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
         options_for,
         prepare_matcher,
     )
-    from ._request import FOV_DEG_TOLERANCE, SolveRequest, build_request, check_fov_deg, check_pixel_aspect, star_arrays
+    from ._request import (
+        FOV_DEG_TOLERANCE,
+        MAX_FOV_DEG,
+        MIN_FOV_DEG,
+        SolveRequest,
+        build_request,
+        check_fov_deg,
+        check_pixel_aspect,
+        star_arrays,
+    )
     from ._star_order import ordered_star_sets
     from ._triangles import TriangleOptions, match_triangles
     from ._verify import closest_pairs_first, match_nearest

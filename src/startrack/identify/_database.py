@@ -52,8 +52,9 @@ DB_VERSION = 4
 masks widened when needed; 4: the key index (:attr:`PatternDatabase.keys`, ``cell_starts``)
 stored, not recomputed at each load."""
 
-DB_MAX_FOV_DEG = 120.0
-"""Widest level a database may reach: a 100 deg camera's short side plus the search margin."""
+DB_MAX_FOV_DEG = 160.0
+"""Widest level a database may reach: the widest field a solve takes (``_request.MAX_FOV_DEG``,
+150 deg) with the tolerance of a given FOV and the database's margin (3 % each)."""
 
 
 @dataclass(frozen=True)

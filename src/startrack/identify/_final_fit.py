@@ -340,6 +340,14 @@ K1_SCAN = np.linspace(-0.3, 0.3, 25)
 in steps of 0.025: each moves the corner of a 90 deg field by about 2 % of its radius from the
 next, inside the re-match radius of a fit that then frees k1."""
 
+K1_SCAN_REACH2 = 2.0 * math.tan(math.radians(50.0)) ** 2
+"""The squared pinhole radius (2.84) of a square 100 deg field's corner, the widest of the default
+search. A wider field's scan is :data:`K1_SCAN` scaled by this over its own corner's: the same
+steps of the corner's displacement. Unscaled, the steps of 0.025 moved the corner of a 120 deg
+field by 11 % of its radius, of a 150 deg field by 50 %: none came within the re-match radius
+of a lens of k1 = -0.005, and the fit settled on k1 -0.015 and k2 +0.0036 instead, with a
+quarter of its 241 matches wrong and its centre 12 px off."""
+
 
 def _scan_k1(field: _Field, matrix: NDArray, camera: Camera, img: NDArray,
              ref: NDArray) -> tuple[NDArray, Camera, tuple[NDArray, NDArray, NDArray]]:
@@ -347,11 +355,16 @@ def _scan_k1(field: _Field, matrix: NDArray, camera: Camera, img: NDArray,
     vectors ``ref``), refitted, re-match the most image stars: (attitude matrix, camera, and
     the re-match (image index, catalog row, ICRS vector)). A wide lens bends its far side by
     tens of pixels, so a candidate verified near the centre with a pinhole fit re-matches only
-    there, too few stars to fit k1 from; the scan finds the bend first (smallest |k1| on a tie)."""
+    there, too few stars to fit k1 from; the scan finds the bend first (smallest |k1| on a tie).
+    A k1 whose lens folds before some of the image's stars is passed over: beyond 100 deg the
+    scan's strongest barrels fold inside the frame (k1 = -0.3 folds 47 deg off axis)."""
     best = (-1, matrix, camera, (img, np.zeros(0, np.int64), ref))
     catalog = _Catalog.whole_field(field, matrix, camera)
-    for k1 in K1_SCAN[np.argsort(np.abs(K1_SCAN), kind="stable")]:
+    reach2 = (camera.width / (2.0 * camera.fx)) ** 2 + (camera.height / (2.0 * camera.fy)) ** 2
+    for k1 in K1_SCAN[np.argsort(np.abs(K1_SCAN), kind="stable")] * min(1.0, K1_SCAN_REACH2 / reach2):
         trial = camera.with_distortion(k1=float(k1), k2=0.0)
+        if lens_folds(trial, field.x, field.y):  # no lens: stars of the frame beyond its fold
+            continue
         m, trial, _ = fit_pose(matrix, trial, ref, field.x[img], field.y[img], fit_focal=field.fit_focal)
         found = rematch(field, catalog, m, trial)
         if found[0].size > best[0]:

@@ -246,6 +246,23 @@ def _apply_step(delta, free, fx, fy, dist):
     return fx, fy
 
 
+MAX_LN_FOCAL_STEP = math.log(10.0)
+"""A Gauss-Newton step that scales the focal length by more than 10 (or holds a NaN) diverges: a
+solve's fits start from a verified candidate's focal length, a few per cent from the truth. Such
+steps came from the trial lenses of a 130 deg field (k1 = -0.3, folding inside the frame), and
+step after step drove the focal length to zero (a ZeroDivisionError)."""
+
+
+@njit(cache=True)
+def _diverging(delta, free):
+    """Whether the step ``delta`` (p,) is not finite or scales the focal length (when
+    ``free[FREE_FOCAL]``) by more than a factor exp(:data:`MAX_LN_FOCAL_STEP`)."""
+    for value in delta:
+        if not math.isfinite(value):
+            return True
+    return bool(free[FREE_FOCAL]) and abs(delta[3]) > MAX_LN_FOCAL_STEP
+
+
 @njit(cache=True)
 def fit(matrix, ref, x, y, fx, fy, cx, cy, dist, free, corner, max_iter, converged_px):
     """Gauss-Newton fit of an attitude and the parameters flagged in ``free`` (4,: ln f,
@@ -255,7 +272,8 @@ def fit(matrix, ref, x, y, fx, fy, cx, cy, dist, free, corner, max_iter, converg
     vectors of the stars, ``x``, ``y`` (K,) their detected positions (pixels); the camera has
     focal lengths ``fx``, ``fy`` and principal point ``cx``, ``cy`` (pixels) and distortion
     coefficients ``dist`` (5,). Iterates at most ``max_iter`` times, stopping when
-    :func:`_moved_px` of a step is below ``converged_px``.
+    :func:`_moved_px` of a step is below ``converged_px``, or before a step that diverges
+    (:func:`_diverging`: the state is then the last one before it).
     Returns (matrix (3, 3), fx, fy, k1, k2, residual distance (K,) in pixels).
     """
     matrix, dist = matrix.copy(), dist.copy()
@@ -270,6 +288,8 @@ def fit(matrix, ref, x, y, fx, fy, cx, cy, dist, free, corner, max_iter, converg
         _rotate(matrix, ref, cam_vec)
         fill_system(cam_vec, offset, fx, fy, dist, free, system)
         _step(system, delta)
+        if _diverging(delta, free):
+            break
         _turn(delta, matrix)
         fx, fy = _apply_step(delta, free, fx, fy, dist)
         if _moved_px(delta, free, fx, corner) < converged_px:

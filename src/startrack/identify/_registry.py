@@ -39,6 +39,12 @@ DEFAULT_FOV_RANGE_DEG: tuple[float, float] = (3.0, 100.0)
 """Searched when no field of view is given: telescopes' finder fields, star trackers, camera
 lenses, phones and webcams (the range of the default pattern database)."""
 
+WIDE_MIN_FOV_DEG = 70.0
+"""A search whose range lies at or above this field (deg) and reaches past the default range (a wide
+lens's field given, or an EXIF hint of one) is served by one database of the fields from here to
+the widest (:data:`._database.DB_MAX_FOV_DEG`), built once, rather than one of its own for each
+such range."""
+
 NARROW_MAX_MAG = 12.5
 """A database reaching below the default range (fields under 3 deg, given with a hint or a
 camera) takes every Hipparcos star (the catalog ends near V 12): a 1 deg field holds three of
@@ -104,12 +110,15 @@ def database_settings_for(fov_range_deg: tuple[float, float] = DEFAULT_FOV_RANGE
     The default database covers :data:`DEFAULT_FOV_RANGE_DEG`; a range reaching outside it
     gets a database of its own that covers just that range, 3 % wider on each side (built on
     first use; below 3 deg it takes every Hipparcos star, :data:`NARROW_MAX_MAG`, and still the
-    stars thin out and so do the patterns).
+    stars thin out and so do the patterns), except a range of wide fields beyond the default's
+    (:data:`WIDE_MIN_FOV_DEG`), which shares one.
     """
     lo, hi = fov_range_deg
     default = DatabaseSettings()
     if default.fov_min_deg <= lo and hi <= default.fov_max_deg:
         return default
+    if lo >= WIDE_MIN_FOV_DEG:
+        return DatabaseSettings(fov_min_deg=WIDE_MIN_FOV_DEG * 0.97, fov_max_deg=DB_MAX_FOV_DEG)
     max_mag = NARROW_MAX_MAG if lo < default.fov_min_deg else default.max_mag
     return DatabaseSettings(fov_min_deg=max(lo * 0.97, 0.4), fov_max_deg=min(hi * 1.03, DB_MAX_FOV_DEG),
                             max_mag=max_mag)

@@ -30,6 +30,18 @@ from ._image_epoch import Epoch
 from ._parity import Parity, check_parity
 from ._registry import DEFAULT_FOV_RANGE_DEG
 
+MIN_FOV_DEG = 0.5
+"""The narrowest horizontal field of view (deg) a solve may be given or may search: a small
+telescope's (below it Hipparcos has too few stars)."""
+
+MAX_FOV_DEG = 150.0
+"""The widest horizontal field of view (deg) a solve may be given or may search: the widest
+rectilinear lenses' (a 12 mm lens on a full-frame camera spans 113 deg, a phone's ultra-wide about
+110). A pinhole image of 150 deg reaches 78 deg off axis in its 3:2 corners. Simulated frames of
+110-150 deg with such lenses' barrel solve within 2 px in most cases, a few with a poor fit of the
+lens (``benchmarks/realdata_benchmark.py --wide``, docs/identification.md); at 160 deg some
+frames did not solve."""
+
 FOV_DEG_TOLERANCE = 0.03
 """A given ``fov_deg`` is trusted to this fraction; the solve refines it."""
 
@@ -84,14 +96,15 @@ class SolveRequest:
 
 
 def check_fov_deg(fov: float, name: str) -> float:
-    """``fov`` as a float if it is a field of view startrack can solve (0.5 to 100 deg); else an
-    InvalidInputError naming ``name``."""
+    """``fov`` as a float if it is a field of view startrack can solve (:data:`MIN_FOV_DEG` to
+    :data:`MAX_FOV_DEG`); else an InvalidInputError naming ``name``."""
     try:
         fov = float(fov)
     except (TypeError, ValueError):
         raise InvalidInputError(f"{name} must be a field of view in deg (a number), got {fov!r}") from None
-    if not (math.isfinite(fov) and 0.5 <= fov <= 100.0):
-        raise InvalidInputError(f"{name} must be a field of view between 0.5 and 100 deg, got {fov:g}")
+    if not (math.isfinite(fov) and MIN_FOV_DEG <= fov <= MAX_FOV_DEG):
+        raise InvalidInputError(f"{name} must be a field of view between {MIN_FOV_DEG:g} and {MAX_FOV_DEG:g} deg, "
+                                f"got {fov:g}")
     return fov
 
 

@@ -3,8 +3,8 @@
 ``options`` is a JSON object; every key is optional:
 
 =======================  ======================================================================
-``fov_deg``              horizontal field of view, deg (0.5 to 100), trusted to 3 %
-``fov_range_deg``        ``[low, high]`` to search, deg (default the solver's, 3 to 100)
+``fov_deg``              horizontal field of view, deg (0.5 to 150), trusted to 3 %
+``fov_range_deg``        ``[low, high]`` to search, deg (0.5 to 150; default the solver's, 3 to 100)
 ``camera``               a camera preset (:data:`startrack.camera.PRESETS`) or a saved profile
 ``epoch``                catalog epoch, Julian year (default: from ``time``, else J2000.0)
 ``time``                 UTC time of the exposure, ISO 8601 (default: from the file's header)

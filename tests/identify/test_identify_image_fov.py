@@ -1,0 +1,100 @@
+"""The field of view an image's header states (:mod:`startrack.identify._image_fov`), and the
+solve that searches it first when the default search does not reach it."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from startrack import Camera, Status, solve_image
+from startrack.frames import attitude_error
+from startrack.identify import stated_fov_deg, stated_search_range
+from startrack.io import Image
+from startrack.simulate import get_sensor_preset, random_attitude, simulate_frame
+from startrack.units import ARCSEC
+
+
+def _deg_atan2(opposite: float, adjacent: float) -> float:
+    return math.degrees(2.0 * math.atan(opposite / adjacent))
+
+
+@pytest.mark.parametrize("focal_35mm", [12, 14, 24, 50, 200])
+def test_a_3_to_2_photo_spans_a_full_frame_cameras_width_at_its_35mm_focal_length(focal_35mm):
+    """A 3:2 image has the full frame's shape: its width is the 36 mm frame's whatever the scaling."""
+    fov = stated_fov_deg({"FocalLengthIn35mmFilm": focal_35mm}, 6000, 4000)
+    assert fov == pytest.approx(_deg_atan2(18.0, focal_35mm), abs=1e-9)  # deg
+
+
+def test_a_portrait_photo_takes_the_same_diagonal_with_its_own_width():
+    landscape = stated_fov_deg({"FocalLengthIn35mmFilm": 26}, 4032, 3024)
+    portrait = stated_fov_deg({"FocalLengthIn35mmFilm": 26}, 3024, 4032)
+    diagonal = math.atan(math.hypot(36.0, 24.0) / 52.0)
+    assert landscape == pytest.approx(math.degrees(2 * math.atan(math.tan(diagonal) * 0.8)), abs=1e-9)
+    assert portrait == pytest.approx(math.degrees(2 * math.atan(math.tan(diagonal) * 0.6)), abs=1e-9)
+
+
+def test_the_focal_plane_resolution_gives_the_sensor_when_there_is_no_35mm_focal_length():
+    """An APS-C sensor of 23.5 x 15.6 mm behind a 10 mm lens, its resolution in pixels per inch."""
+    header = {"FocalLength": 10.0, "ExifImageWidth": 6000, "ExifImageHeight": 4000, "FocalPlaneResolutionUnit": 2,
+              "FocalPlaneXResolution": 6000 / (23.5 / 25.4), "FocalPlaneYResolution": 4000 / (15.6 / 25.4)}
+    diagonal_tan = math.hypot(23.5, 15.6) / 20.0
+    expected = math.degrees(2 * math.atan(diagonal_tan * 6000 / math.hypot(6000, 4000)))
+    assert stated_fov_deg(header, 6000, 4000) == pytest.approx(expected, abs=1e-9)  # deg, 99.0
+
+
+def test_a_fits_header_gives_a_telescopes_field_from_its_focal_length_and_pixel_size():
+    header = {"FOCALLEN": 500.0, "XPIXSZ": 3.76}  # a 500 mm refractor, a 3.76 um camera
+    assert stated_fov_deg(header, 6248, 4176) == pytest.approx(_deg_atan2(6248 * 3.76e-3 / 2, 500.0), abs=1e-9)
+    lo, hi = stated_search_range(header, 6248, 4176)
+    assert (lo, hi) == pytest.approx((0.9 * 2.6917, 1.1 * 2.6917), rel=1e-3)  # deg: below the default search
+
+
+@pytest.mark.parametrize("value", ["x", -14, 0, None, True, float("nan"), float("inf"), [14]])
+def test_a_focal_length_that_is_not_a_positive_number_is_passed_over(value):
+    assert stated_fov_deg({"FocalLengthIn35mmFilm": value}, 6000, 4000) is None
+    assert stated_fov_deg({"FOCALLEN": value, "XPIXSZ": 3.76}, 6000, 4000) is None
+
+
+def test_a_field_outside_what_a_solve_takes_is_no_statement():
+    assert stated_fov_deg({"FocalLengthIn35mmFilm": 5}, 6000, 4000) == pytest.approx(148.95, abs=0.01)  # deg: kept
+    assert stated_fov_deg({"FocalLengthIn35mmFilm": 4}, 6000, 4000) is None  # 154.9 deg, past the widest
+    assert stated_fov_deg({}, 6000, 4000) is None and stated_fov_deg(None, 6000, 4000) is None
+
+
+def test_only_a_field_beyond_the_default_search_is_searched_first():
+    """An ultra-wide lens's range reaches from the wide fields' database's start (a crop narrows
+    the field) to 10 % past the stated field; a field the default search covers changes nothing."""
+    assert stated_search_range({"FocalLengthIn35mmFilm": 14}, 6000, 4000) == pytest.approx(
+        (70.0, 1.1 * _deg_atan2(18.0, 14.0)))
+    assert stated_search_range({"FocalLengthIn35mmFilm": 24}, 6000, 4000) is None
+
+
+CAMERA = Camera.from_fov(1500, 1000, 110.0).with_distortion(k1=-0.005)
+"""An ultra-wide 3:2 lens: EXIF would state a 35 mm focal length of 18 / tan(55 deg) = 12.6 mm."""
+
+
+def _frame(camera: Camera, seed: int):
+    truth = random_attitude(np.random.default_rng(seed))
+    sim = simulate_frame(camera, truth, max_mag=6.0, sensor=get_sensor_preset("generic-cmos"), rng=seed)
+    return sim.image, truth
+
+
+def test_an_ultra_wide_photo_solves_from_its_exif_focal_length_alone():
+    """Before: with no field given, the default search (to 100 deg) could not solve it."""
+    data, truth = _frame(CAMERA, 3)
+    photo = Image(data=data, header={"FocalLengthIn35mmFilm": 18.0 / math.tan(math.radians(55.0))})
+    solution = solve_image(photo)
+    assert solution.status is Status.OK, solution.reason
+    assert attitude_error(solution.rot_cam_from_icrs, truth) < CAMERA.pixel_scale_arcsec * ARCSEC  # a pixel
+    assert solve_image(Image(data=data)).status is not Status.OK  # the default search alone
+
+
+def test_a_photo_whose_exif_states_a_wider_field_than_its_own_falls_back_on_the_default_search():
+    """A crop keeps its camera's EXIF: the stated range fails, the default search solves it."""
+    camera = Camera.from_fov(1200, 800, 40.0)
+    data, truth = _frame(camera, 4)
+    solution = solve_image(Image(data=data, header={"FocalLengthIn35mmFilm": 13}))
+    assert solution.status is Status.OK, solution.reason
+    assert attitude_error(solution.rot_cam_from_icrs, truth) < camera.pixel_scale_arcsec * ARCSEC
