@@ -20,13 +20,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from PIL import Image as PILImage
 from scipy.spatial.transform import Rotation
 
+from startrack.camera import Camera
 from startrack.cli import SUBCOMMANDS, main
 from startrack.cli._progress import ensure_database
 from startrack.frames import angle_between, attitude_error, boresight, rotation_from_radec_roll
 from startrack.io import read_image, write_fits, write_png
-from startrack.units import DEG, PIXEL
+from startrack.simulate import get_sensor_preset, simulate_frame
+from startrack.units import ARCSEC, DEG, PIXEL
 
 SEED = 1
 SIM_SIZE_PX = 1024
@@ -490,3 +493,24 @@ def test_counts_take_whole_numbers_in_any_notation():
     for text in ("1.5", "inf", "nan", "abc", "0", "-3"):
         with pytest.raises(argparse.ArgumentTypeError):
             positive_count(text)
+
+
+def test_solve_searches_the_field_an_ultra_wide_photos_exif_states_first(tmp_path):
+    """A 110 deg JPEG whose EXIF gives a 35 mm focal length of 13 mm (108 deg): solved with no
+    option, the command saying on stderr which field it searched first."""
+    camera = Camera.from_fov(1500, 1000, 110.0).with_distortion(k1=-0.005)
+    truth = rotation_from_radec_roll(250 * DEG, -60 * DEG, 30 * DEG)
+    sim = simulate_frame(camera, truth, max_mag=6.0, sensor=get_sensor_preset("generic-cmos"), rng=3)
+    counts = sim.image.astype(np.float64)
+    pixels = np.clip((counts - np.median(counts)) * 2 + 20, 0, 255).astype(np.uint8)
+    exif = PILImage.Exif()
+    exif.get_ifd(0x8769)[0xA405] = 13  # FocalLengthIn35mmFilm, in the Exif IFD
+    path = tmp_path / "ultra_wide.jpg"
+    PILImage.fromarray(pixels).save(path, quality=95, exif=exif)
+    code, out, err = run("solve", path, "--json")
+    assert code == 0, err
+    assert "states a field of view of 108.3 deg: searching 70.0-119.2 deg first" in err
+    solution = json.loads(out)
+    assert solution["fov_deg"] == pytest.approx(110.0, rel=0.01)
+    solved = rotation_from_radec_roll(solution["ra_deg"] * DEG, solution["dec_deg"] * DEG, solution["roll_deg"] * DEG)
+    assert attitude_error(solved, truth) < camera.pixel_scale_arcsec * ARCSEC  # within a pixel's angle

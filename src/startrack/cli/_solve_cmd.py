@@ -13,12 +13,13 @@ time_order_known)."""
 from __future__ import annotations
 
 import argparse
+import sys
 from dataclasses import replace
 
 import numpy as np
 
 from ..errors import InvalidInputError, require
-from ..identify import resolve_epoch
+from ..identify import resolve_epoch, stated_fov_deg, stated_search_range
 from ..io import Image, read_image
 from ..results import AttitudeSolution, Detections, Status
 from ..solve import solve_image
@@ -102,6 +103,7 @@ def main(argv: list[str]) -> int:
     args.image = args.image[0]
     image = read_image(args.image, channel=args.channel)
     ensure_database_for(**fov_options)
+    _announce_stated_field(image, fov_options)
     site = _site(args)
     # the compiled kernels loaded (or compiled, with a message) outside the solve time, and the catalog stars
     # of the image's epoch prepared
@@ -137,6 +139,21 @@ def _batch(args: argparse.Namespace, solver_options: dict, fov_options: dict) ->
     warm_up(**fov_options, every_detection=True)  # the images' types are not known yet
     return run_batch(solve_spec(solver_options, args.channel), args.image, as_json=args.json,
                      csv_out=args.csv, jobs=args.jobs)
+
+
+def _announce_stated_field(image: Image, fov_options: dict) -> None:
+    """With no field of view given and one stated by the image's header beyond the default search
+    (:func:`startrack.identify.stated_search_range`): say on standard error that it is searched
+    first, and build its pattern database now (with a progress bar the first time)."""
+    if any(value is not None for value in fov_options.values()):
+        return
+    height, width = image.data.shape[:2]
+    stated = stated_search_range(image.header, width, height)
+    if stated is None:
+        return
+    sys.stderr.write(f"the image's header states a field of view of {stated_fov_deg(image.header, width, height):.1f} "
+                     f"deg: searching {stated[0]:.1f}-{stated[1]:.1f} deg first\n")
+    ensure_database_for(fov_range_deg=stated)
 
 
 def _image_epoch(image: Image, epoch) -> float | None:
