@@ -137,6 +137,9 @@ def test_status_options_and_openapi(idle_server):
     assert "night" in options["folders"] and "link_dir" not in options["folders"]
     assert any(c["name"] == "aptina-mt9p031" and c["distortion"] for c in options["cameras"])
     assert {a["name"] for a in options["analyses"]} >= {"histograms", "radial", "compare", "sweep"}
+    assert options["limits"]["fov_deg"] == [0.5, 150.0]  # deg: a 12 mm lens's 113 deg is given (was 100 at most)
+    assert options["limits"]["default_fov_range_deg"] == [3.0, 100.0]
+    assert 'name="fov_deg" step="any" min="0.5" max="150"' in client.get("/").text
     analyses = client.get("/api/analyses").json()["analyses"]
     assert analyses == options["analyses"] and analyses[0]["params"] is not None
     doc = client.get("/api/openapi.json").json()

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from ..camera import PRESETS as CAMERA_PRESETS
+from ..solve import DEFAULT_FOV_RANGE_DEG, MAX_FOV_DEG, MIN_FOV_DEG
 from ._batches import list_folders
 from ._config import MAX_SIDE_PX, MIN_SIDE_PX
 from ._options import KEYS, METHODS, load_camera, profile_names
@@ -55,4 +56,5 @@ def options_view(service) -> dict[str, Any]:
             "folders": list_folders(config.root), "simulate_defaults": SIMULATION_DEFAULTS,
             "limits": {"max_upload_mb": config.max_upload_mb, "max_pixels": config.max_pixels,
                        "min_side_px": MIN_SIDE_PX, "max_side_px": MAX_SIDE_PX, "time_limit_s": config.time_limit_s,
-                       "max_queued": config.max_queued, "workers": config.workers}}
+                       "max_queued": config.max_queued, "workers": config.workers,
+                       "fov_deg": [MIN_FOV_DEG, MAX_FOV_DEG], "default_fov_range_deg": list(DEFAULT_FOV_RANGE_DEG)}}
