@@ -344,9 +344,9 @@ K1_SCAN_REACH2 = 2.0 * math.tan(math.radians(50.0)) ** 2
 """The squared pinhole radius (2.84) of a square 100 deg field's corner, the widest of the default
 search. A wider field's scan is :data:`K1_SCAN` scaled by this over its own corner's: the same
 steps of the corner's displacement. Unscaled, the steps of 0.025 moved the corner of a 120 deg
-field by 11 % of its radius, of a 150 deg field by 50 %: none came within the re-match radius
-of a lens of k1 = -0.005, and the fit settled on k1 -0.015 and k2 +0.0036 instead, with a
-quarter of its 241 matches wrong and its centre 12 px off."""
+3:2 field by 11 % of its radius, of a 150 deg one by 50 %, and 2 of 10 simulated 150 deg frames
+(k1 = -0.005) settled on a lens that left their corners 2-62 px off; scaled, none of 80 (two seeds,
+both modes of ``benchmarks/realdata_benchmark.py --wide``)."""
 
 
 def _scan_k1(field: _Field, matrix: NDArray, camera: Camera, img: NDArray,
