@@ -33,7 +33,8 @@ true camera), solved farther off (false), not solved, the median and 95th-percen
 detection and identification, and the median of identification alone (that time less the
 detector's on the same frame, timed apart). With ``--wide``, the same for ultra-wide frames
 beyond the default search (:data:`WIDE_CAMERAS`: 110, 120, 135 and 150 deg, 1800 x 1200 px,
-k1 = -0.005), solved with their field of view given and with 90-150 deg searched.
+k1 = -0.005), solved with their field of view given, with 90-150 deg searched, and with no hint
+(``solve_image`` then searches 90-150 deg after the default search finds nothing).
 
 Part 3 (``--lens-term``), the lens term of the pattern tolerance measured: star lists (the 60
 brightest catalog stars to V 7.5 through the lens, 0.3 px centroid noise, 0.2 mag of magnitude
@@ -244,11 +245,14 @@ def print_sim(rows: list[dict], label: str = "no hint (default search 3-100 deg)
 
 
 def print_wide(frames: int, seed: int) -> None:
-    """``--wide``: the frames of :data:`WIDE_CAMERAS`, their field of view given, then searched."""
+    """``--wide``: the frames of :data:`WIDE_CAMERAS`, their field of view given, searched over
+    90-150 deg, and with no hint."""
     print_sim([sim_camera_run(spec, frames, seed, {"fov_deg": spec.fov_deg}) for spec in WIDE_CAMERAS],
               "ultra-wide, the field of view given")
     print_sim([sim_camera_run(spec, frames, seed, {"fov_range_deg": (90.0, 150.0)}) for spec in WIDE_CAMERAS],
               "ultra-wide, 90-150 deg searched")
+    print_sim([sim_camera_run(spec, frames, seed) for spec in WIDE_CAMERAS],
+              "ultra-wide, no hint (the default search, then 90-150 deg)")
 
 
 # --- part 3: the lens term, on star lists ----------------------------------------------------

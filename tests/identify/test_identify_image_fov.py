@@ -13,6 +13,7 @@ from startrack.frames import attitude_error
 from startrack.identify import stated_fov_deg, stated_search_range
 from startrack.io import Image
 from startrack.simulate import get_sensor_preset, random_attitude, simulate_frame
+from startrack.solve import WIDE_RETRY_FOV_RANGE_DEG, _fov_searches
 from startrack.units import ARCSEC
 
 
@@ -81,14 +82,40 @@ def _frame(camera: Camera, seed: int):
     return sim.image, truth
 
 
-def test_an_ultra_wide_photo_solves_from_its_exif_focal_length_alone():
-    """Before: with no field given, the default search (to 100 deg) could not solve it."""
+@pytest.mark.parametrize("header", [{"FocalLengthIn35mmFilm": 18.0 / math.tan(math.radians(55.0))}, {}])
+def test_an_ultra_wide_photo_solves_with_no_field_given(header):
+    """Before: with no field given, the default search (to 100 deg) could not solve it. With its EXIF
+    focal length the stated field is searched first; without, the wide fields after the default."""
     data, truth = _frame(CAMERA, 3)
-    photo = Image(data=data, header={"FocalLengthIn35mmFilm": 18.0 / math.tan(math.radians(55.0))})
-    solution = solve_image(photo)
+    solution = solve_image(Image(data=data, header=header))
     assert solution.status is Status.OK, solution.reason
     assert attitude_error(solution.rot_cam_from_icrs, truth) < CAMERA.pixel_scale_arcsec * ARCSEC  # a pixel
-    assert solve_image(Image(data=data)).status is not Status.OK  # the default search alone
+
+
+def test_the_fields_searched_in_turn():
+    """Given anything about the field: that alone. Else the header's field first when the default
+    search does not reach it, then the default; with no such header, the default, then the
+    ultra-wide fields (the quads matcher only: the others would build tables for them)."""
+    wide = {"FocalLengthIn35mmFilm": 13}  # 108 deg on a 3:2 image
+    camera = Camera.from_fov(600, 400, 20.0)
+    assert _fov_searches(wide, 600, 400, 20.0, None, None, "quads") == [None]
+    assert _fov_searches(wide, 600, 400, None, (5.0, 30.0), None, "quads") == [(5.0, 30.0)]
+    assert _fov_searches(wide, 600, 400, None, None, camera, "quads") == [None]
+    assert _fov_searches(wide, 600, 400, None, None, None, "quads") == [stated_search_range(wide, 600, 400), None]
+    assert _fov_searches({}, 600, 400, None, None, None, "quads") == [None, WIDE_RETRY_FOV_RANGE_DEG]
+    assert _fov_searches({"FocalLengthIn35mmFilm": 50}, 600, 400, None, None, None, "pyramid") == [None]
+
+
+def test_a_photo_that_matches_nothing_says_which_fields_were_searched():
+    """12 random spots: no match in the default search nor in the ultra-wide one, both named."""
+    rng = np.random.default_rng(0)
+    rows, cols = np.mgrid[:600, :800]
+    data = rng.normal(100.0, 5.0, rows.shape)
+    for x, y in rng.uniform([30, 20], [770, 580], (12, 2)):
+        data += 500.0 * np.exp(-((cols - x) ** 2 + (rows - y) ** 2) / 4.0)
+    solution = solve_image(data)
+    assert solution.status is Status.NO_MATCH
+    assert solution.reason.endswith("(fields of view searched: 3-100 deg, then 90-150 deg)"), solution.reason
 
 
 def test_a_photo_whose_exif_states_a_wider_field_than_its_own_falls_back_on_the_default_search():
