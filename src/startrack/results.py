@@ -161,6 +161,12 @@ class AttitudeSolution:
         Where that epoch came from: "given", an image header card ("CATEPOCH", "DATE-OBS",
         "MJD-OBS", "DateTimeOriginal") or "default" (J2000.0, nothing said when); empty when not
         recorded. See :mod:`startrack.identify._image_epoch`.
+    fov_source : str
+        Which field of view the solve searched last, the one it found the solution in when solved: "given"
+        (``fov_deg`` or ``fov_range_deg``), "camera" (a calibrated camera), "header" (the field the
+        image's EXIF or FITS header states), "default" (the default search, 3-100 deg) or "wide"
+        (the search of 90-150 deg after the default found nothing); empty when not recorded. See
+        :func:`startrack.solve.solve_image`.
     guided_stars : int
         How many of the matched stars were measured where the solution predicted them, after
         identification (``solve_image(guided=True)``, :mod:`startrack.identify._guided`): the
@@ -183,6 +189,7 @@ class AttitudeSolution:
     detections: Detections | None = None
     epoch_jyear: float = float("nan")
     epoch_source: str = ""
+    fov_source: str = ""
     guided_stars: int = 0
 
     @property

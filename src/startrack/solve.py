@@ -217,7 +217,7 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
     _check_parity_method(request, method)
     if prior_rot_cam_from_icrs is not None or sigma != request.prior_sigma_deg:  # else the defaults hold
         request = replace(request, prior_rot=prior_rot_cam_from_icrs, prior_sigma_deg=sigma)
-    return _run(request, method, options)
+    return replace(_run(request, method, options), fov_source=_given_fov_source(fov_deg, fov_range_deg, camera))
 
 
 SEARCH_CELLS, SPOTS_PER_TURN = 6, 2
@@ -365,32 +365,42 @@ screenshot, an export, a web upload), 100-150 deg. It costs a search that fails 
 40 random spots, after the default's 0.8 s)."""
 
 
+def _given_fov_source(fov_deg: float | None, fov_range_deg: tuple[float, float] | None, camera: Camera | None) -> str:
+    """:attr:`AttitudeSolution.fov_source` of a solve with these options: "camera", "given" or "default"."""
+    if camera is not None:
+        return "camera"
+    return "default" if fov_deg is None and fov_range_deg is None else "given"
+
+
 def _fov_searches(header, width: int, height: int, fov_deg: float | None, fov_range_deg: tuple[float, float] | None,
-                  camera: Camera | None, method: MethodName) -> list[tuple[float, float] | None]:
-    """The ``fov_range_deg`` of each point solve to try, in turn: the one given; when nothing is
-    given about the field, first the range the image's header states if the default search does
-    not reach it (:func:`.identify.stated_search_range`: an ultra-wide lens's EXIF, a telescope's
-    FITS focal length), then the default search; when the header states none, the default search
-    and then, for the quads matcher, :data:`WIDE_RETRY_FOV_RANGE_DEG`."""
-    if fov_deg is not None or fov_range_deg is not None or camera is not None:
-        return [fov_range_deg]
+                  camera: Camera | None, method: MethodName) -> list[tuple[tuple[float, float] | None, str]]:
+    """The ``fov_range_deg`` of each point solve to try, in turn, with its
+    :attr:`AttitudeSolution.fov_source`: the one given; when nothing is given about the field,
+    first the range the image's header states if the default search does not reach it
+    (:func:`.identify.stated_search_range`: an ultra-wide lens's EXIF, a telescope's FITS focal
+    length), then the default search; when the header states none, the default search and then,
+    for the quads matcher, :data:`WIDE_RETRY_FOV_RANGE_DEG`."""
+    source = _given_fov_source(fov_deg, fov_range_deg, camera)
+    if source != "default":
+        return [(fov_range_deg, source)]
     stated = stated_search_range(header, width, height)
     if stated is not None:
-        return [stated, None]
-    return [None, WIDE_RETRY_FOV_RANGE_DEG] if method == "quads" else [None]
+        return [(stated, "header"), (None, "default")]
+    return [(None, "default"), (WIDE_RETRY_FOV_RANGE_DEG, "wide")] if method == "quads" else [(None, "default")]
 
 
-def _point_solve(found: Detections, searches: list[tuple[float, float] | None], method: MethodName,
+def _point_solve(found: Detections, searches: list[tuple[tuple[float, float] | None, str]], method: MethodName,
                  options: MatcherOptionsBase | None, **request_args) -> AttitudeSolution:
     """Solve the detected spots (:func:`search_order`) with :func:`build_request`'s ``request_args``
-    and each ``fov_range_deg`` of ``searches`` in turn while the last found no match; the result's
-    ``solve_time_s`` counts every attempt, and a failure's ``reason`` names the ranges searched."""
+    and each (``fov_range_deg``, source) of ``searches`` in turn while the last found no match; the
+    result's ``solve_time_s`` counts every attempt, and a failure's ``reason`` names the ranges
+    searched."""
     order = search_order(found)
     spent, searched = 0.0, list[tuple[float, float]]()
-    for fov_range_deg in searches:
+    for fov_range_deg, source in searches:
         request = build_request(found.x[order], found.y[order], fov_range_deg=fov_range_deg, **request_args)
         _check_parity_method(request, method)
-        solution = _run(replace(request, rows=order[request.rows]), method, options)
+        solution = replace(_run(replace(request, rows=order[request.rows]), method, options), fov_source=source)
         spent, searched = spent + solution.solve_time_s, [*searched, request.fov_range_deg]
         if solution.status is not Status.NO_MATCH:
             break

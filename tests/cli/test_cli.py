@@ -511,6 +511,6 @@ def test_solve_searches_the_field_an_ultra_wide_photos_exif_states_first(tmp_pat
     assert code == 0, err
     assert "states a field of view of 108.3 deg: searching 70.0-119.2 deg first" in err
     solution = json.loads(out)
-    assert solution["fov_deg"] == pytest.approx(110.0, rel=0.01)
+    assert solution["fov_deg"] == pytest.approx(110.0, rel=0.01) and solution["fov_source"] == "header"
     solved = rotation_from_radec_roll(solution["ra_deg"] * DEG, solution["dec_deg"] * DEG, solution["roll_deg"] * DEG)
     assert attitude_error(solved, truth) < camera.pixel_scale_arcsec * ARCSEC  # within a pixel's angle

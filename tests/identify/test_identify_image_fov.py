@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from startrack import Camera, Status, solve_image
+from startrack import Camera, Status, solve_image, solve_stars
 from startrack.frames import attitude_error
 from startrack.identify import stated_fov_deg, stated_search_range
 from startrack.io import Image
@@ -76,10 +76,23 @@ CAMERA = Camera.from_fov(1500, 1000, 110.0).with_distortion(k1=-0.005)
 """An ultra-wide 3:2 lens: EXIF would state a 35 mm focal length of 18 / tan(55 deg) = 12.6 mm."""
 
 
-def _frame(camera: Camera, seed: int):
+def _simulated(camera: Camera, seed: int):
     truth = random_attitude(np.random.default_rng(seed))
-    sim = simulate_frame(camera, truth, max_mag=6.0, sensor=get_sensor_preset("generic-cmos"), rng=seed)
+    return simulate_frame(camera, truth, max_mag=6.0, sensor=get_sensor_preset("generic-cmos"), rng=seed), truth
+
+
+def _frame(camera: Camera, seed: int):
+    """A simulated frame (V <= 6, the generic CMOS sensor) at a random attitude, and the attitude."""
+    sim, truth = _simulated(camera, seed)
     return sim.image, truth
+
+
+def _frame_stars(camera: Camera, seed: int):
+    """The true pixel positions (x, y) of the stars of :func:`_frame` on the image, brightest first
+    (the truth lists those whose light reaches it too)."""
+    sim, _ = _simulated(camera, seed)
+    inside = camera.in_image(sim.truth.x, sim.truth.y)
+    return sim.truth.x[inside], sim.truth.y[inside]
 
 
 @pytest.mark.parametrize("header", [{"FocalLengthIn35mmFilm": 18.0 / math.tan(math.radians(55.0))}, {}])
@@ -90,6 +103,19 @@ def test_an_ultra_wide_photo_solves_with_no_field_given(header):
     solution = solve_image(Image(data=data, header=header))
     assert solution.status is Status.OK, solution.reason
     assert attitude_error(solution.rot_cam_from_icrs, truth) < CAMERA.pixel_scale_arcsec * ARCSEC  # a pixel
+    assert solution.fov_source == ("header" if header else "wide")
+
+
+@pytest.mark.parametrize(("given", "source"), [({}, "default"), ({"fov_deg": 40.0}, "given"),
+                                               ({"fov_range_deg": (30.0, 50.0)}, "given"),
+                                               ({"camera": True}, "camera")])
+def test_a_solve_says_which_field_of_view_it_searched(given, source):
+    camera = Camera.from_fov(1200, 800, 40.0)
+    data, _ = _frame(camera, 4)
+    given = {"camera": camera} if "camera" in given else given
+    assert solve_image(data, **given).fov_source == source
+    x, y = _frame_stars(camera, 4)
+    assert solve_stars(x, y, width=camera.width, height=camera.height, **given).fov_source == source
 
 
 def test_the_fields_searched_in_turn():
@@ -98,12 +124,14 @@ def test_the_fields_searched_in_turn():
     ultra-wide fields (the quads matcher only: the others would build tables for them)."""
     wide = {"FocalLengthIn35mmFilm": 13}  # 108 deg on a 3:2 image
     camera = Camera.from_fov(600, 400, 20.0)
-    assert _fov_searches(wide, 600, 400, 20.0, None, None, "quads") == [None]
-    assert _fov_searches(wide, 600, 400, None, (5.0, 30.0), None, "quads") == [(5.0, 30.0)]
-    assert _fov_searches(wide, 600, 400, None, None, camera, "quads") == [None]
-    assert _fov_searches(wide, 600, 400, None, None, None, "quads") == [stated_search_range(wide, 600, 400), None]
-    assert _fov_searches({}, 600, 400, None, None, None, "quads") == [None, WIDE_RETRY_FOV_RANGE_DEG]
-    assert _fov_searches({"FocalLengthIn35mmFilm": 50}, 600, 400, None, None, None, "pyramid") == [None]
+    assert _fov_searches(wide, 600, 400, 20.0, None, None, "quads") == [(None, "given")]
+    assert _fov_searches(wide, 600, 400, None, (5.0, 30.0), None, "quads") == [((5.0, 30.0), "given")]
+    assert _fov_searches(wide, 600, 400, None, None, camera, "quads") == [(None, "camera")]
+    assert _fov_searches(wide, 600, 400, None, None, None, "quads") == [(stated_search_range(wide, 600, 400), "header"),
+                                                                        (None, "default")]
+    assert _fov_searches({}, 600, 400, None, None, None, "quads") == [(None, "default"),
+                                                                      (WIDE_RETRY_FOV_RANGE_DEG, "wide")]
+    assert _fov_searches({"FocalLengthIn35mmFilm": 50}, 600, 400, None, None, None, "pyramid") == [(None, "default")]
 
 
 def test_a_photo_that_matches_nothing_says_which_fields_were_searched():

@@ -76,6 +76,7 @@ def test_the_solution_on_disk_rebuilds_the_analysis_record(auto_job):
     assert record.settings["detector"]["sigma"] == pytest.approx(result["auto"]["sigma"])
     assert record.camera is not None and record.camera.fx == pytest.approx(result["focal_px"])
     assert extra["epoch_jyear"] == 2000.0
+    assert solution.fov_source == result["fov_source"] == "camera"  # the last solve, with the camera it fitted
 
 
 def test_a_mirror_image_is_solved_and_said_to_be(server, real_images, tmp_path):

@@ -25,7 +25,14 @@ from ..errors import InvalidInputError, require
 from ..identify import MATCHERS
 from ..io import solution_to_dict, streak_fields
 from ..results import AttitudeSolution, Detections
-from ..solve import MAX_FOV_DEG, MIN_FOV_DEG, check_fov_deg, epoch_jyear
+from ..solve import (
+    DEFAULT_FOV_RANGE_DEG,
+    MAX_FOV_DEG,
+    MIN_FOV_DEG,
+    WIDE_RETRY_FOV_RANGE_DEG,
+    check_fov_deg,
+    epoch_jyear,
+)
 from ._main import DEBUG_ENV, INTERNAL_ERROR
 
 FAULT_EXIT_STATUS = (f"{INTERNAL_ERROR} an unexpected error, a fault of startrack's (please report it), with one "
@@ -79,12 +86,21 @@ def exit_status_epilog(statuses: str, note: str = "") -> str:
     return "exit status\n" + wrap_help(f"{statuses} {FAULT_EXIT_STATUS} {note}")
 
 
+FOV_SOURCE_WORDS = {"given": "the field or range given", "camera": "the camera's",
+                    "header": "found from the field the image's header states",
+                    "default": "found in the default search, {:g}-{:g} deg".format(*DEFAULT_FOV_RANGE_DEG),
+                    "wide": "found in the search of {:g}-{:g} deg".format(*WIDE_RETRY_FOV_RANGE_DEG)}
+"""How the table's FOV row names :attr:`startrack.results.AttitudeSolution.fov_source`."""
+
 SOLUTION_FORMATS = """\
 output (table, the default)
   status       solved, or the status of a failure (too_few_stars, no_match, timeout)
   RA, Dec      boresight in ICRS, deg
   roll         deg, the startrack.frames definition (equal to tetra3 / cedar-solve roll)
-  FOV          horizontal field of view, deg, and the focal length, px
+  FOV          horizontal field of view, deg, the focal length, px, and where the search for it
+               started: the field given, the camera's, the field the header states (EXIF
+               focal length, FITS FOCALLEN and XPIXSZ), the default search (3-100 deg) or the
+               search of 90-150 deg after the default found nothing
   parity       (only for a mirror image of the sky: a star diagonal, a flipped file) mirrored
   stars        stars matched (of those detected, for an image; with --guided, how many of them
                were measured where the solution predicts them)
@@ -106,7 +122,8 @@ output (--json)
   its camera's pixel x runs against the camera frame's x axis), sigma_cross_boresight_arcsec,
   sigma_roll_arcsec, residual_rms_arcsec, false_match_prob, guided_stars (how many of the
   matches were measured where the solution predicts them: solve --guided; they are the last
-  matches and detections), epoch_jyear and epoch_source (as the table's epoch), and
+  matches and detections), epoch_jyear and epoch_source (as the table's epoch), fov_source
+  (given, camera, header, default or wide: as the table's FOV), and
   matches: a list of
   {index, hip, residual_arcsec[, x, y]} (index into the detections or star list; x, y in
   0-based pixels). Values that are undefined are null. With a ground site (solve --site or
@@ -310,7 +327,8 @@ def solution_table(solution: AttitudeSolution, detections: Detections | None = N
         ("status", "solved"),
         ("RA, Dec", f"{solution.ra_deg:.5f} deg, {solution.dec_deg:+.5f} deg (boresight, ICRS)"),
         ("roll", f"{solution.roll_deg:.4f} deg"),
-        ("FOV", f"{solution.fov_deg:.4f} deg horizontal (focal length {camera.fx:.1f} px)"),
+        ("FOV", f"{solution.fov_deg:.4f} deg horizontal (focal length {camera.fx:.1f} px)"
+                + (f"; {FOV_SOURCE_WORDS[solution.fov_source]}" if solution.fov_source in FOV_SOURCE_WORDS else "")),
         *([("parity", "mirrored: the image is a mirror image of the sky")] if camera.mirrored else []),
         ("stars", f"{len(solution.matches)} matched{n_det}" + _guided_note(solution)),
         ("residual", f"{rms:.2f} arcsec rms"),

@@ -37,6 +37,7 @@ def solution_to_dict(solution: AttitudeSolution, detections: Detections | None =
             "false_match_prob": _num(solution.false_match_prob),
             "guided_stars": int(solution.guided_stars),
             "epoch_jyear": _num(solution.epoch_jyear), "epoch_source": solution.epoch_source or None,
+            "fov_source": solution.fov_source or None,
             "matches": _matches(solution, detections),
         })
     out["solve_time_s"] = _num(solution.solve_time_s)

@@ -67,6 +67,7 @@ def result_dict(solution: AttitudeSolution, times_s: dict[str, float], extra: di
                            "failure": failure_words(solution, n_det), "n_detected": n_det,
                            "n_matched": len(solution.matches) if solution.solved else 0,
                            "epoch_jyear": num(solution.epoch_jyear), "epoch_source": solution.epoch_source,
+                           "fov_source": solution.fov_source,
                            "guided_stars": int(solution.guided_stars)}
     keys = ("ra_deg", "dec_deg", "roll_deg", "fov_deg", "qx", "qy", "qz", "qw", "false_match_prob",
             "residual_arcsec", "sigma_cross_boresight_arcsec", "sigma_roll_arcsec", "focal_px", "mirrored")

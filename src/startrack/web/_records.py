@@ -50,6 +50,7 @@ def save_solution(path: Path, solution: AttitudeSolution, extra: dict[str, Any] 
     meta = {"version": FORMAT_VERSION, "status": solution.status.value, "reason": solution.reason,
             "matches_status": m.status.value, "matches_reason": m.reason, "matches_fmp": m.false_match_prob,
             "has_detections": solution.detections is not None, "epoch_source": solution.epoch_source,
+            "fov_source": solution.fov_source,
             "guided_stars": int(solution.guided_stars), "detections": {k: float(getattr(det, k)) for k in _DET_SCALARS},
             "camera": None if solution.camera is None else _camera_fields(solution.camera),
             **{k: _plain(getattr(solution, k)) for k in _SCALARS}, "extra": extra or {}}
@@ -88,6 +89,7 @@ def load_solution(path: Path) -> tuple[AttitudeSolution, dict[str, Any]]:
         **{k: _nan(meta.get(k)) for k in _SCALARS},
         camera=None if meta["camera"] is None else Camera(**meta["camera"]), matches=matches,
         residuals_arcsec=arrays["residuals_arcsec"], epoch_source=meta.get("epoch_source", ""),
+        fov_source=meta.get("fov_source", ""),
         guided_stars=int(meta.get("guided_stars", 0)), detections=detections if meta["has_detections"] else None)
     return solution, meta["extra"]
 
