@@ -59,7 +59,7 @@ def _with(text: str, old: str, new: str) -> str:
 
 @pytest.mark.parametrize(("old", "new", "words"), [
     ("fov_deg = 15.0", "fov_deg = \"wide\"", ["[base] fov_deg", "must be a number"]),
-    ("fov_deg = 15.0", "fov_deg = 400.0", ["[base] fov_deg", "[0.5, 100]"]),
+    ("fov_deg = 15.0", "fov_deg = 400.0", ["[base] fov_deg", "[0.5, 150]"]),
     ("false_stars = 0", "false_stars = 1.5", ["[base] false_stars", "whole number"]),
     ("fov_known = true", "fov_known = 1", ["[base] fov_known", "true or false"]),
     ("mag_sigma = 0.1", "mag_sigmaa = 0.1", ["[base] mag_sigmaa", "unknown parameter", "mag_sigma"]),

@@ -5,12 +5,12 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from ....identify import MATCHERS
+from ....identify import MATCHERS, MAX_FOV_DEG, MIN_FOV_DEG
 from .._params import Param, SpecError
 
 CAMERA_PARAMS = (
     Param("fov_deg", "float", 15.0, "horizontal field of view of the pinhole camera, edge to edge (deg)",
-          lo=0.5, hi=100.0),
+          lo=MIN_FOV_DEG, hi=MAX_FOV_DEG),
     Param("width", "int", 1024, "image width (px)", lo=16, hi=20000),
     Param("height", "int", 1024, "image height (px)", lo=16, hi=20000),
 )
@@ -18,7 +18,7 @@ CAMERA_PARAMS = (
 SOLVER_PARAMS = (
     Param("fov_known", "bool", True, "true: solve with fov_deg given (trusted to 3 %); false: search fov_range_deg"),
     Param("fov_range_deg", "floats", (5.0, 35.0), "FOV range searched when fov_known is false (deg)",
-          lo=0.5, hi=100.0, length=2),
+          lo=MIN_FOV_DEG, hi=MAX_FOV_DEG, length=2),
     Param("method", "str", "quads", "the lost-in-space matcher (docs/identification.md)",
           choices=tuple(name for name in MATCHERS if name != "overlay")),
     Param("epoch_jyear", "float", 2025.0, "epoch of the star positions, scene and solver (Julian year, TDB)",
