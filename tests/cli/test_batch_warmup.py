@@ -61,3 +61,20 @@ def test_warm_up_command():
     assert code == 0, err
     assert out.startswith("startrack is ready: database and compiled kernels loaded in ")
     assert run("warm-up", "--fov-range-deg", 35, 5)[0] == 2  # LO > HI is misuse
+
+
+def test_warm_up_builds_the_databases_a_solve_with_no_field_searches(monkeypatch):
+    """The default range and the ultra-wide one searched after it (``WIDE_RETRY_FOV_RANGE_DEG``),
+    so that no first ultra-wide photo waits for its database; a range given builds that one only."""
+    from test_cli import run
+
+    import startrack.cli._batch_warmup as warmup
+
+    built = []
+    monkeypatch.setattr("startrack.cli._progress.ensure_database_for", lambda **kw: built.append(kw["fov_range_deg"]))
+    monkeypatch.setattr(warmup, "warm_up", lambda **kw: None)
+    assert run("warm-up")[0] == 0
+    assert built == [None, (90.0, 150.0)]
+    built.clear()
+    assert run("warm-up", "--fov-range-deg", 5, 35)[0] == 0
+    assert built == [(5.0, 35.0)]

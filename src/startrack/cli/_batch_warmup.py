@@ -119,7 +119,8 @@ def _parser() -> argparse.ArgumentParser:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--fov-range-deg", type=float, nargs=2, metavar=("LO", "HI"),
                         help="also build the database for this range of fields of view, deg "
-                             "(default: the range a solve with no field of view searches)")
+                             "(default: the ranges a solve with no field of view searches, 3-100 deg and, "
+                             "when that finds nothing in an image, 90-150 deg)")
     return parser
 
 
@@ -132,6 +133,10 @@ def main(argv: list[str]) -> int:
     options = fov_kwargs(args)
     t0 = time.perf_counter()
     ensure_database_for(**options)
+    if args.fov_range_deg is None:  # the ultra-wide search after a default one that found nothing
+        from ..solve import WIDE_RETRY_FOV_RANGE_DEG
+
+        ensure_database_for(fov_range_deg=WIDE_RETRY_FOV_RANGE_DEG)
     warm_up(**options, every_detection=True)
     print(f"startrack is ready: database and compiled kernels loaded in {time.perf_counter() - t0:.1f} s")
     return 0
