@@ -50,10 +50,11 @@ def test_update_image_refuses_non_finite_times_and_rates(bad):
                              streak_bias_px=0.5)
 
 
-@pytest.mark.parametrize("exposure", ["x", [], np.zeros(3), 0.0, -1.0, np.nan, True])
+@pytest.mark.parametrize("exposure", ["x", [], np.zeros(3), 0.0, -1.0, np.nan, True, 1e-7, 1.1e6, 1e300])
 def test_update_image_refuses_an_exposure_that_is_not_a_positive_number(exposure):
-    # before: TypeError ("'>' not supported between 'str' and 'int'") or numpy's "truth value ... ambiguous"
-    words = r"^streak_exposure_s \(seconds, or None\) must be a finite number > 0, got "
+    # before: TypeError ("'>' not supported between 'str' and 'int'") or numpy's "truth value ... ambiguous";
+    # 1e-7 s and 1e300 s were taken, where the rate functions refuse them (one range since)
+    words = r"^streak_exposure_s \(seconds, or None\) must be a finite number >= 1e-06 and <= 1e\+06, got "
     with pytest.raises(InvalidInputError, match=words):
         Tracker(camera=CAMERA).update_image(np.zeros((256, 256)), 0.0, streak_exposure_s=exposure)
 

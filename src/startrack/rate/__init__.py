@@ -24,7 +24,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
         check_detector,
         streak_path,
     )
-    from ._estimate import RateEstimate, axis_error_rad
+    from ._estimate import MAX_EXPOSURE_S, MIN_EXPOSURE_S, RateEstimate, axis_error_rad
     from ._filter import FilterState, RateFilter
     from ._frame_match import FrameRate, match_frames, rate_from_frames
     from ._from_attitudes import rate_between, rate_from_attitudes

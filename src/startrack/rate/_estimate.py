@@ -17,10 +17,13 @@ from ..errors import InvalidInputError, as_float_array, checked_number
 from ..results import Status
 from ..units import DEG
 
-MIN_EXPOSURE_S, MAX_EXPOSURE_S = 1e-6, 1e6
-"""The shortest and longest exposures a streak's rate is measured over (s; 1 us and 11.6 days): a
-rate is the streak's length over the exposure, which overflows beyond them; no camera smears stars
-into streaks that fast or that slowly."""
+MIN_EXPOSURE_S = 1e-6
+"""The shortest exposure a streak's rate is measured over (s, 1 us): a rate is the streak's length
+over the exposure, which overflows beyond it; no camera smears stars into streaks that fast."""
+
+MAX_EXPOSURE_S = 1e6
+"""The longest exposure a streak's rate is measured over (s, 11.6 days), for the same reason; no
+camera smears stars into streaks that slowly."""
 
 
 def checked_exposure(exposure_s: object) -> float:

@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidInputError, as_float_array, checked_number
+from ..rate import MAX_EXPOSURE_S, MIN_EXPOSURE_S
 
 
 def checked_rate(rate_rad_s: ArrayLike, frame: str = "camera", name: str = "gyro_rate_rad_s") -> NDArray[np.float64]:
@@ -61,8 +62,9 @@ def checked_flux(flux: ArrayLike, shape: tuple[int, ...]) -> NDArray[np.float64]
 
 
 def checked_exposure(exposure_s: object) -> float | None:
-    """A frame's exposure time (s) as a float, or None; a number that is not finite and positive, or
-    anything that is not a number, is refused naming ``streak_exposure_s``."""
+    """A frame's exposure time (s) as a float, or None; a number outside the exposures the streak
+    rate is measured over (:data:`startrack.rate.MIN_EXPOSURE_S` to ``MAX_EXPOSURE_S``: 1 us to
+    11.6 days), or anything that is not a number, is refused naming ``streak_exposure_s``."""
     if exposure_s is None:
         return None
-    return checked_number(exposure_s, "streak_exposure_s (seconds, or None)", low=0.0, above_low=True)
+    return checked_number(exposure_s, "streak_exposure_s (seconds, or None)", low=MIN_EXPOSURE_S, high=MAX_EXPOSURE_S)
