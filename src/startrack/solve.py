@@ -11,8 +11,9 @@ import functools
 import math
 import os
 import time
+from collections.abc import Mapping
 from dataclasses import replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -360,9 +361,9 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
 
 WIDE_RETRY_FOV_RANGE_DEG = (90.0, MAX_FOV_DEG)
 """With nothing said about the field, an image whose stars match nothing in the default search is
-searched again over these fields (deg): an ultra-wide lens's photo whose EXIF is gone (a
-screenshot, an export, a web upload), 100-150 deg. It costs a search that fails (about 0.5 s on
-40 random spots, after the default's 0.8 s)."""
+searched again over these fields (deg; from 90, overlapping the default's top): an ultra-wide
+lens's photo of 100-150 deg whose EXIF is gone (a screenshot, an export, a web upload). It costs a
+search that fails (about 0.5 s on 40 random spots, after the default's 0.8 s)."""
 
 
 def _given_fov_source(fov_deg: float | None, fov_range_deg: tuple[float, float] | None, camera: Camera | None) -> str:
@@ -372,8 +373,9 @@ def _given_fov_source(fov_deg: float | None, fov_range_deg: tuple[float, float] 
     return "default" if fov_deg is None and fov_range_deg is None else "given"
 
 
-def _fov_searches(header, width: int, height: int, fov_deg: float | None, fov_range_deg: tuple[float, float] | None,
-                  camera: Camera | None, method: MethodName) -> list[tuple[tuple[float, float] | None, str]]:
+def _fov_searches(header: Mapping[str, Any], width: int, height: int, fov_deg: float | None,
+                  fov_range_deg: tuple[float, float] | None, camera: Camera | None,
+                  method: MethodName) -> list[tuple[tuple[float, float] | None, str]]:
     """The ``fov_range_deg`` of each point solve to try, in turn, with its
     :attr:`AttitudeSolution.fov_source`: the one given; when nothing is given about the field,
     first the range the image's header states if the default search does not reach it

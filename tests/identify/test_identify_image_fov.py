@@ -58,6 +58,14 @@ def test_a_focal_length_that_is_not_a_positive_number_is_passed_over(value):
     assert stated_fov_deg({"FOCALLEN": value, "XPIXSZ": 3.76}, 6000, 4000) is None
 
 
+@pytest.mark.parametrize("unit", [[2], "inch", None, 1, 7])
+def test_a_focal_plane_unit_that_is_not_one_of_exifs_is_passed_over(unit):
+    """1 is EXIF's "no unit"; before, a list (a header a caller built) raised TypeError (unhashable)."""
+    header = {"FocalLength": 10.0, "ExifImageWidth": 6000, "ExifImageHeight": 4000,
+              "FocalPlaneXResolution": 6485.1, "FocalPlaneYResolution": 6512.8, "FocalPlaneResolutionUnit": unit}
+    assert stated_fov_deg(header, 6000, 4000) is None
+
+
 def test_a_field_outside_what_a_solve_takes_is_no_statement():
     assert stated_fov_deg({"FocalLengthIn35mmFilm": 5}, 6000, 4000) == pytest.approx(148.95, abs=0.01)  # deg: kept
     assert stated_fov_deg({"FocalLengthIn35mmFilm": 4}, 6000, 4000) is None  # 154.9 deg, past the widest

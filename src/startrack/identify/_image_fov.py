@@ -34,7 +34,7 @@ STATED_FOV_TOLERANCE = 0.1
 """A stated field is searched within this fraction: the 4 % between the makers' two scalings, a
 zoom's focal length rounded to a millimetre, and the focus distance's few per cent."""
 
-_MM_PER_UNIT = {2: 25.4, 3: 10.0, 4: 1.0, 5: 1e-3}
+_MM_PER_UNIT: dict[float, float] = {2: 25.4, 3: 10.0, 4: 1.0, 5: 1e-3}
 """Millimetres per ``FocalPlaneResolutionUnit`` (2 inch, 3 cm; 4 mm and 5 um are in later EXIF
 versions' range of values)."""
 
@@ -46,12 +46,9 @@ def stated_fov_deg(header: Mapping[str, Any] | None, width: int, height: int) ->
     block is)."""
     if not header:
         return None
-    tan_half_diagonal = _exif_35mm(header)
-    if tan_half_diagonal is None:
-        tan_half_diagonal = _exif_focal_plane(header)
-    tan_half: float | None = _fits_pixel_size(header, width)
-    if tan_half_diagonal is not None:
-        tan_half = tan_half_diagonal * width / math.hypot(width, height)
+    tan_half_diagonal = _exif_35mm(header) or _exif_focal_plane(header)  # positive, or None
+    tan_half = _fits_pixel_size(header, width) if tan_half_diagonal is None else \
+        tan_half_diagonal * width / math.hypot(width, height)
     if tan_half is None:
         return None
     fov = math.degrees(2.0 * math.atan(tan_half))
@@ -68,8 +65,8 @@ def stated_search_range(header: Mapping[str, Any] | None, width: int, height: in
     if fov is None:
         return None
     lo, hi = fov * (1.0 - STATED_FOV_TOLERANCE), min(fov * (1.0 + STATED_FOV_TOLERANCE), MAX_FOV_DEG)
-    if hi > DEFAULT_FOV_RANGE_DEG[1]:
-        return min(WIDE_MIN_FOV_DEG, lo), hi
+    if hi > DEFAULT_FOV_RANGE_DEG[1]:  # then lo > 81.8 deg, above WIDE_MIN_FOV_DEG
+        return WIDE_MIN_FOV_DEG, hi
     if lo < DEFAULT_FOV_RANGE_DEG[0]:
         return max(lo, MIN_FOV_DEG), hi
     return None
@@ -95,7 +92,8 @@ def _exif_35mm(header: Mapping[str, Any]) -> float | None:
 def _exif_focal_plane(header: Mapping[str, Any]) -> float | None:
     """tan of the half diagonal field from ``FocalLength`` and the focal plane's resolution."""
     focal = _positive(header.get("FocalLength"))
-    unit = _MM_PER_UNIT.get(header.get("FocalPlaneResolutionUnit", 2))
+    code = header.get("FocalPlaneResolutionUnit", 2)
+    unit = _MM_PER_UNIT.get(code) if isinstance(code, int | float) else None  # a list is no key
     sizes = [_positive(header.get(key)) for key in ("ExifImageWidth", "ExifImageHeight", "FocalPlaneXResolution",
                                                     "FocalPlaneYResolution")]
     if focal is None or unit is None:
