@@ -249,8 +249,8 @@ def _apply_step(delta, free, fx, fy, dist):
 MAX_LN_FOCAL_STEP = math.log(10.0)
 """A Gauss-Newton step that scales the focal length by more than 10 (or holds a NaN) diverges: a
 solve's fits start from a verified candidate's focal length, a few per cent from the truth. Such
-steps came from the trial lenses of a 130 deg field (k1 = -0.3, folding inside the frame), and
-step after step drove the focal length to zero (a ZeroDivisionError)."""
+steps came from the k1 scan's strongest barrels on a 130 deg field (lenses folding inside the
+frame), and step after step drove the focal length to zero (a ZeroDivisionError)."""
 
 
 @njit(cache=True)

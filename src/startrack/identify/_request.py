@@ -37,7 +37,7 @@ telescope's (below it Hipparcos has too few stars)."""
 MAX_FOV_DEG = 150.0
 """The widest horizontal field of view (deg) a solve may be given or may search: the widest
 rectilinear lenses' (a 12 mm lens on a full-frame camera spans 113 deg, a phone's ultra-wide about
-110). A pinhole image of 150 deg reaches 78 deg off axis in its 3:2 corners. Simulated frames of
+110). A pinhole image of 150 deg reaches 77 deg off axis in its 3:2 corners. Simulated frames of
 110-150 deg with such lenses' barrel solve within 2 px in most cases, a few with a poor fit of the
 lens (``benchmarks/realdata_benchmark.py --wide``, docs/identification.md); at 160 deg some
 frames did not solve."""
