@@ -287,7 +287,7 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
         states a field the default search does not reach (an ultra-wide lens's EXIF focal length,
         a telescope's FITS ``FOCALLEN`` and ``XPIXSZ``; :mod:`startrack.identify._image_fov`),
         that field is searched first, then the default range; when it states none, the default
-        range first, then (quads matcher, no match found) :data:`WIDE_RETRY_FOV_RANGE_DEG`.
+        range first, then (quads matcher, nothing matched) :data:`WIDE_RETRY_FOV_RANGE_DEG`.
     epoch : astropy.time.Time or float, optional
         Catalog epoch; default: the time the image's header states (FITS ``CATEPOCH``,
         ``DATE-OBS``, ``MJD-OBS``, EXIF ``DateTimeOriginal``; :mod:`startrack.identify._image_epoch`),
@@ -360,8 +360,9 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
 
 
 WIDE_RETRY_FOV_RANGE_DEG = (90.0, MAX_FOV_DEG)
-"""With nothing said about the field, an image whose stars match nothing in the default search is
-searched again over these fields (deg; from 90, overlapping the default's top): an ultra-wide
+"""With nothing said about the field, an image whose stars match nothing in the default search
+(no match, or none within the time limit) is searched again over these fields (deg; from 90,
+overlapping the default's top): an ultra-wide
 lens's photo of 100-150 deg whose EXIF is gone (a screenshot, an export, a web upload). It costs a
 search that fails (about 0.5 s on 40 random spots, after the default's 0.8 s)."""
 
@@ -394,9 +395,10 @@ def _fov_searches(header: Mapping[str, Any], width: int, height: int, fov_deg: f
 def _point_solve(found: Detections, searches: list[tuple[tuple[float, float] | None, str]], method: MethodName,
                  options: MatcherOptionsBase | None, **request_args) -> AttitudeSolution:
     """Solve the detected spots (:func:`search_order`) with :func:`build_request`'s ``request_args``
-    and each (``fov_range_deg``, source) of ``searches`` in turn while the last found no match; the
-    result's ``solve_time_s`` counts every attempt, and a failure's ``reason`` names the ranges
-    searched."""
+    and each (``fov_range_deg``, source) of ``searches`` in turn while the last found no match or
+    ran out of time (the default search of an ultra-wide frame took 2.8 s on this machine, past
+    the 5 s limit when it was busy); the result's ``solve_time_s`` counts every attempt, and a
+    failure's ``reason`` names the ranges searched."""
     order = search_order(found)
     spent, searched = 0.0, list[tuple[float, float]]()
     for fov_range_deg, source in searches:
@@ -404,7 +406,7 @@ def _point_solve(found: Detections, searches: list[tuple[tuple[float, float] | N
         _check_parity_method(request, method)
         solution = replace(_run(replace(request, rows=order[request.rows]), method, options), fov_source=source)
         spent, searched = spent + solution.solve_time_s, [*searched, request.fov_range_deg]
-        if solution.status is not Status.NO_MATCH:
+        if solution.status not in (Status.NO_MATCH, Status.TIMEOUT):
             break
     if len(searched) > 1 and not solution.solved:
         ranges = ", then ".join(f"{lo:.3g}-{hi:.3g} deg" for lo, hi in searched)

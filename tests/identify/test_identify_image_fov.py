@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from startrack import Camera, Status, solve_image, solve_stars
+import startrack.solve as solve_module
+from startrack import AttitudeSolution, Camera, Status, solve_image, solve_stars
 from startrack.frames import attitude_error
 from startrack.identify import stated_fov_deg, stated_search_range
 from startrack.io import Image
@@ -161,3 +162,21 @@ def test_a_photo_whose_exif_states_a_wider_field_than_its_own_falls_back_on_the_
     solution = solve_image(Image(data=data, header={"FocalLengthIn35mmFilm": 13}))
     assert solution.status is Status.OK, solution.reason
     assert attitude_error(solution.rot_cam_from_icrs, truth) < camera.pixel_scale_arcsec * ARCSEC
+
+
+def test_a_default_search_that_runs_out_of_time_is_followed_by_the_wide_one(monkeypatch):
+    """The default search of an ultra-wide frame took 2.8 s here, past its 5 s limit when the
+    machine was busy: a timeout, like no match, leads to the next range (not a too-few-stars)."""
+    searched = []
+
+    def timed_out(request, method, options):
+        searched.append(request.fov_range_deg)
+        return AttitudeSolution(status=Status.TIMEOUT, reason="no match within the 5 s time limit", solve_time_s=0.5)
+
+    monkeypatch.setattr(solve_module, "_run", timed_out)
+    camera = Camera.from_fov(600, 400, 40.0)
+    data, _ = _frame(camera, 4)
+    solution = solve_image(data)
+    assert searched == [(3.0, 100.0), WIDE_RETRY_FOV_RANGE_DEG]
+    assert solution.status is Status.TIMEOUT and solution.solve_time_s >= 1.0  # s: both attempts, and detection
+    assert solution.reason.endswith("(fields of view searched: 3-100 deg, then 90-150 deg)")

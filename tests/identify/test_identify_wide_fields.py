@@ -12,6 +12,7 @@ from startrack.errors import InvalidInputError
 from startrack.frames import attitude_error, random_rotations
 from startrack.identify import database_settings_for
 from startrack.identify._field_stars import field_stars
+from startrack.identify._final_fit import REFIT_OUTLIER_PX, _Field, _refit_residuals, _without_refit_outliers
 from startrack.identify._refine import fit_pose
 from startrack.units import ARCSEC
 
@@ -109,3 +110,21 @@ def test_a_fit_refuses_a_step_that_scales_the_focal_length_tenfold():
         matrix, fitted, residual = fit_pose(truth.as_matrix(), start, ref, x, y, fit_focal=True)
         assert np.all(np.isfinite(matrix)) and np.all(np.isfinite(residual))
         assert fitted.fx == pytest.approx(expected_fx, rel=1e-6)
+
+
+def test_a_wide_candidates_wrong_star_is_dropped_before_the_k1_scan():
+    """A 135 deg candidate of 8 stars on the left half, one of them given the direction of a point
+    50 px from its detection: refitting the others puts it farthest (they are pulled by it too, up
+    to 24 px here), it is dropped first (``REFIT_OUTLIER_PX``), and the seven left agree. Before,
+    such a star stayed, and a solution settled 0.6 deg off on a focal length 2.6 % long."""
+    camera = _ultra_wide(135.0)
+    x, y, truth = _wide_list(7, sigma_px=0.1, max_mag=5.0, camera=camera, min_cos=0.2)
+    left = np.flatnonzero((x < 0.45 * camera.width) & (np.abs(y - camera.cy) < 0.35 * camera.height))[:8]
+    ref = truth.inv().apply(camera.pixel_to_vector(x[left], y[left]))
+    ref[3] = truth.inv().apply(camera.pixel_to_vector(x[left[3]] + 40.0, y[left[3]] - 30.0))  # 50 px off
+    field = _Field(x, y, None, fit_focal=True)  # the stars are not read by the refit
+    residual = _refit_residuals(field, truth.as_matrix(), camera, left, ref)
+    assert np.argmax(residual) == 3 and residual[3] == pytest.approx(50.0, abs=0.5)  # px
+    kept, kept_ref = _without_refit_outliers(field, truth.as_matrix(), camera, left, ref)
+    assert kept.tolist() == np.delete(left, 3).tolist() and kept_ref.shape == (7, 3)
+    assert np.all(_refit_residuals(field, truth.as_matrix(), camera, kept, kept_ref) < 0.1 * REFIT_OUTLIER_PX)  # px
