@@ -362,9 +362,10 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
 WIDE_RETRY_FOV_RANGE_DEG = (90.0, MAX_FOV_DEG)
 """With nothing said about the field, an image whose stars match nothing in the default search
 (no match, or none within the time limit) is searched again over these fields (deg; from 90,
-overlapping the default's top): an ultra-wide
-lens's photo of 100-150 deg whose EXIF is gone (a screenshot, an export, a web upload). It costs a
-search that fails (about 0.5 s on 40 random spots, after the default's 0.8 s)."""
+overlapping the default's top): an ultra-wide lens's photo of 100-150 deg whose EXIF is gone (a
+screenshot, an export, a web upload). It costs a search that fails: 0.5 s on a list of 40 random
+spots (after the default's 0.8 s); about 1 s on an image of 40 random spots, whose default search
+ran out of its 5 s (6.72 s in all, 5.67 s before)."""
 
 
 def _given_fov_source(fov_deg: float | None, fov_range_deg: tuple[float, float] | None, camera: Camera | None) -> str:
@@ -397,21 +398,30 @@ def _point_solve(found: Detections, searches: list[tuple[tuple[float, float] | N
     """Solve the detected spots (:func:`search_order`) with :func:`build_request`'s ``request_args``
     and each (``fov_range_deg``, source) of ``searches`` in turn while the last found no match or
     ran out of time (the default search of an ultra-wide frame took 2.8 s on this machine, past
-    the 5 s limit when it was busy); the result's ``solve_time_s`` counts every attempt, and a
-    failure's ``reason`` names the ranges searched."""
+    the 5 s limit when it was busy); the result's ``solve_time_s`` counts every attempt. A failure
+    after several is a timeout if one of them ran out of time (that range was not searched
+    through), and its ``reason`` names the ranges (:func:`_searched_note`)."""
     order = search_order(found)
-    spent, searched = 0.0, list[tuple[float, float]]()
+    spent, tried = 0.0, list[tuple[tuple[float, float], Status]]()
     for fov_range_deg, source in searches:
         request = build_request(found.x[order], found.y[order], fov_range_deg=fov_range_deg, **request_args)
         _check_parity_method(request, method)
         solution = replace(_run(replace(request, rows=order[request.rows]), method, options), fov_source=source)
-        spent, searched = spent + solution.solve_time_s, [*searched, request.fov_range_deg]
+        spent, tried = spent + solution.solve_time_s, [*tried, (request.fov_range_deg, solution.status)]
         if solution.status not in (Status.NO_MATCH, Status.TIMEOUT):
             break
-    if len(searched) > 1 and not solution.solved:
-        ranges = ", then ".join(f"{lo:.3g}-{hi:.3g} deg" for lo, hi in searched)
-        solution = replace(solution, reason=f"{solution.reason} (fields of view searched: {ranges})")
+    if len(tried) > 1 and not solution.solved:
+        status = Status.TIMEOUT if any(s is Status.TIMEOUT for _, s in tried) else solution.status
+        solution = replace(solution, status=status, reason=f"{solution.reason} ({_searched_note(tried)})")
     return replace(solution, solve_time_s=spent)
+
+
+def _searched_note(tried: list[tuple[tuple[float, float], Status]]) -> str:
+    """"fields of view searched: 3-100 deg (out of time), then 90-150 deg" for the (range, status)
+    of each search tried."""
+    ranges = (f"{lo:.3g}-{hi:.3g} deg" + (" (out of time)" if status is Status.TIMEOUT else "")
+              for (lo, hi), status in tried)
+    return "fields of view searched: " + ", then ".join(ranges)
 
 
 def _with_guided(data: NDArray, solution: AttitudeSolution, detector) -> AttitudeSolution:

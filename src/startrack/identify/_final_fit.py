@@ -376,7 +376,7 @@ def _scan_k1(field: _Field, matrix: NDArray, camera: Camera, img: NDArray,
 
 REFIT_OUTLIER_PX = 5.0
 """Before the k1 scan of a field wider than the default search's (:data:`K1_SCAN_REACH2`), a
-candidate's star that a pinhole fit of its other stars puts farther than this (pixels) from its
+candidate's star that a fit of its other stars puts farther than this (pixels) from its
 detection is dropped, worst first, at most :data:`MAX_LEFT_OUT` (:func:`_without_refit_outliers`).
 Such a candidate is verified on part of the frame, where the attitude's tilt and the focal length
 trade: one of a 135 deg frame held 6 stars, one of them 22 px from where the true attitude puts
