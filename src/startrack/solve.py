@@ -417,8 +417,8 @@ def _point_solve(found: Detections, searches: list[tuple[tuple[float, float] | N
 
 
 def _searched_note(tried: list[tuple[tuple[float, float], Status]]) -> str:
-    """"fields of view searched: 3-100 deg (out of time), then 90-150 deg" for the (range, status)
-    of each search tried."""
+    """The note ``fields of view searched: 3-100 deg (out of time), then 90-150 deg`` for the
+    (range, status) of each search tried."""
     ranges = (f"{lo:.3g}-{hi:.3g} deg" + (" (out of time)" if status is Status.TIMEOUT else "")
               for (lo, hi), status in tried)
     return "fields of view searched: " + ", then ".join(ranges)
