@@ -15,6 +15,8 @@
 9. ``jpeg_quality.py``: the real images and simulated frames saved as JPEGs of qualities 40-95,
    solved with the detector's compression noise floor and without;
    ``photo_hazards.py``: the real images with captions, the Moon, hot pixels, trails and clouds;
+   ``bayer_fits.py``: one-shot-colour (Bayer mosaic) FITS frames, read as a grey sensor's and as
+   a mosaic;
 10. ``attitude_benchmark.py``: every Wahba solver batched and one by one, beside scipy and ahrs
    (``benchmarks/.venv-ahrs``, created on first use);
 11. ``streak_benchmark.py``: Sease 2013 Tables 3.1, 4.1, 4.2, 4.4 and Samaan 2002 Table 2;
@@ -39,6 +41,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import attitude_benchmark  # noqa: E402
+import bayer_fits  # noqa: E402
 import calibration_benchmark  # noqa: E402
 import database_report  # noqa: E402
 import detect_accuracy  # noqa: E402
@@ -87,6 +90,7 @@ def main(argv: list[str] | None = None) -> int:
         _run("detect_realdata", detect_realdata.main, []),
         _run("jpeg_quality", jpeg_quality.main, []),
         _run("photo_hazards", photo_hazards.main, []),
+        _run("bayer_fits", bayer_fits.main, []),
         _run("attitude_benchmark", attitude_benchmark.main, []),
         _run("streak_benchmark", streak_benchmark.main, []),
         _run("simulate_benchmark", simulate_benchmark.main, []),

@@ -514,3 +514,31 @@ def test_solve_searches_the_field_an_ultra_wide_photos_exif_states_first(tmp_pat
     assert solution["fov_deg"] == pytest.approx(110.0, rel=0.01) and solution["fov_source"] == "header"
     solved = rotation_from_radec_roll(solution["ra_deg"] * DEG, solution["dec_deg"] * DEG, solution["roll_deg"] * DEG)
     assert attitude_error(solved, truth) < camera.pixel_scale_arcsec * ARCSEC  # within a pixel's angle
+
+
+def test_solve_and_detect_read_a_bayer_mosaic_fits_at_full_resolution(sim, tmp_path):
+    """The simulated frame through an RGGB filter mosaic (R, G, B passing 0.45, 1.0 and 0.6 of the
+    light above the bias), saved with BAYERPAT: both commands say they read a mosaic, the solve keeps
+    the file's pixels (the truth within 2 px) and the stars are found where the grey frame has them."""
+    grey = read_image(sim["fits"])
+    h, w = grey.data.shape
+    response = np.tile(np.array([[0.45, 1.0], [1.0, 0.6]]), (h // 2, w // 2))
+    bias = float(np.percentile(grey.data, 1))
+    mosaic = np.clip((grey.data - bias) * response + bias, 0, 65535).astype(np.uint16)
+    path = write_fits(tmp_path / "osc.fits", mosaic, {**{k: grey.header[k] for k in ("CATEPOCH", "TRUE_RA", "TRUE_DEC",
+                                                                                     "TRUEROLL", "FOCALPX")},
+                                                      "BAYERPAT": "RGGB"})
+    code, out, err = run("solve", path, "--json")
+    assert code == 0, err
+    assert "a colour-filter (Bayer) mosaic (BAYERPAT RGGB): read at full resolution" in err
+    solution = strict_json(out)
+    header = grey.header
+    truth_rot = rotation_from_radec_roll(header["TRUE_RA"] * DEG, header["TRUE_DEC"] * DEG, header["TRUEROLL"] * DEG)
+    assert attitude_error(truth_rot, rotation_from_quaternion(solution)) < 2 * PIXEL / header["FOCALPX"]
+    code, out, err = run("detect", path, "--json")
+    assert code == 0 and "BAYERPAT RGGB" in err
+    stars = strict_json(out)["stars"]
+    code, grey_out, _ = run("detect", sim["fits"], "--json")
+    grey_stars = strict_json(grey_out)["stars"][:10]
+    for star in grey_stars:  # the ten brightest of the grey frame, each found within 0.3 px (full-resolution px)
+        assert min(np.hypot(s["x"] - star["x"], s["y"] - star["y"]) for s in stars) < 0.3

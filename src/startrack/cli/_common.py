@@ -306,6 +306,16 @@ def apply_max_pixels_option(args: argparse.Namespace) -> None:
     set_max_pixels(getattr(args, "max_pixels", None))
 
 
+def announce_mosaic(image) -> None:
+    """Say on standard error that ``image`` (a :class:`startrack.io.Image`) was a colour-filter
+    mosaic read at full resolution (:mod:`startrack.io._mosaic`); nothing for any other image."""
+    if image.mosaic is None:
+        return
+    named = f"BAYERPAT {image.mosaic}" if image.mosaic != "unknown" else "its sites' levels differ; no BAYERPAT card"
+    sys.stderr.write(f"{image.path}: a colour-filter (Bayer) mosaic ({named}): read at full resolution, its colour "
+                     "sites evened out (docs/io.md)\n")
+
+
 def print_json(data: dict[str, Any]) -> None:
     """Standard JSON (no NaN: callers put None for undefined values) on standard output."""
     json.dump(data, sys.stdout, indent=2, allow_nan=False)

@@ -18,6 +18,7 @@ from ._batch import add_batch_options, batch_epilog, is_batch
 from ._batch_warmup import warm_up_detection
 from ._common import (
     add_max_pixels_option,
+    announce_mosaic,
     apply_max_pixels_option,
     exit_status_epilog,
     positive_count,
@@ -79,6 +80,7 @@ def main(argv: list[str]) -> int:
 
         return run_batch(detect_spec(detector), args.image, as_json=args.json, csv_out=args.csv, jobs=args.jobs)
     image = require(image, "the image")
+    announce_mosaic(image)
     detector = detector.for_image(image)  # a JPEG's noise floor, in the settings the JSON records
     details = detector.detect_details(image.data)
     if args.json:

@@ -32,6 +32,7 @@ from ._common import (
     add_max_pixels_option,
     add_method_option,
     add_timeout_option,
+    announce_mosaic,
     apply_max_pixels_option,
     fov_kwargs,
     method_kwargs,
@@ -102,6 +103,7 @@ def main(argv: list[str]) -> int:
         return _batch(args, solver_options, fov_options)
     args.image = args.image[0]
     image = read_image(args.image, channel=args.channel)
+    announce_mosaic(image)
     ensure_database_for(**fov_options)
     _announce_stated_field(image, fov_options)
     site = _site(args)

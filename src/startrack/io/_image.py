@@ -56,12 +56,18 @@ class Image:
         Bits per sample in the source file (1, 8, 16, 32 or 64); for an array, its item size
         in bits.
     colour : bool
-        True if the source had colour channels (RGB or RGBA) that were reduced to one.
+        True if the source had colour channels (RGB or RGBA) that were reduced to one, or was a
+        colour-filter mosaic (:attr:`mosaic`).
     compression_step : float
         For a JPEG, its quantization step at the lowest spatial frequencies
         (:func:`startrack.io._raster.jpeg_step`) in the units of ``data``: three times the
         luminance's when the colour planes are summed. 0.0 for a lossless file or an array.
         Detection raises its noise floor to match (:func:`startrack.detect.compression_noise_floor`).
+    mosaic : str or None
+        For a FITS frame of a colour-filter (Bayer) mosaic, read at full resolution as
+        :mod:`startrack.io._mosaic` says (``data`` is then float32): the pattern of its first cell
+        ("RGGB", ...), or "unknown" when the header names none and the pixels showed it. None for
+        any other image.
     """
 
     data: NDArray
@@ -70,6 +76,7 @@ class Image:
     bit_depth: int | None = None
     colour: bool = False
     compression_step: float = 0.0
+    mosaic: str | None = None
 
     @property
     def height(self) -> int:
@@ -250,11 +257,13 @@ def read_image(
         return read_raw(path, channel=_raw_channel(channel), max_pixels=max_pixels)
     kind = _sniff(path)
     note_input(path)
-    step = 0.0  # a JPEG's quantization step; lossless formats have none
+    step, mosaic = 0.0, None  # a JPEG's quantization step (lossless formats have none); a Bayer mosaic's pattern
     if kind == "FITS":
         from ._fitsfile import read_fits  # astropy.io.fits: loaded only for FITS files
+        from ._mosaic import from_mosaic
 
         data, header, bit_depth = read_fits(path, max_pixels)
+        data, mosaic = from_mosaic(data, header, channel_index(channel))
     elif kind == "HEIF":
         from ._heif import read_heif  # pillow-heif (the "heif" extra): loaded only for HEIF files
 
@@ -265,4 +274,5 @@ def read_image(
     single = to_single_channel(data, channel)
     check_pixel_values(single, path)
     # each colour plane of a JPEG carries its luminance's steps (its chroma planes' own are not counted)
-    return Image(single, path, header, bit_depth, colour, step * planes_summed(data, channel))
+    return Image(single, path, header, bit_depth, colour or mosaic is not None, step * planes_summed(data, channel),
+                 mosaic)
