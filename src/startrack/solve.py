@@ -285,7 +285,7 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
     fov_deg, fov_range_deg, camera, method, options, pixel_aspect
         As in :func:`solve_stars`. When none of the first three is given and the image's header
         states a field the default search does not reach (an ultra-wide lens's EXIF focal length,
-        a telescope's FITS ``FOCALLEN`` and ``XPIXSZ``; :mod:`startrack.identify._image_fov`),
+        a FITS WCS's scale, a telescope's ``FOCALLEN`` and ``XPIXSZ``; :mod:`startrack.identify._image_fov`),
         that field is searched first, then the default range; when it states none, the default
         range first, then (quads matcher, nothing matched) :data:`WIDE_RETRY_FOV_RANGE_DEG`.
     epoch : astropy.time.Time or float, optional

@@ -10,7 +10,7 @@ import pytest
 
 import startrack.solve as solve_module
 from startrack import AttitudeSolution, Camera, Status, solve_image, solve_stars
-from startrack.frames import attitude_error
+from startrack.frames import attitude_error, rotation_from_radec_roll
 from startrack.identify import stated_fov_deg, stated_search_range
 from startrack.io import Image
 from startrack.simulate import get_sensor_preset, random_attitude, simulate_frame
@@ -51,6 +51,43 @@ def test_a_fits_header_gives_a_telescopes_field_from_its_focal_length_and_pixel_
     fov = stated_fov_deg(header, 6248, 4176)
     assert fov == pytest.approx(_deg_atan2(6248 * 3.76e-3 / 2, 500.0), abs=1e-9)  # deg, 2.69: below the default
     assert stated_search_range(header, 6248, 4176) == pytest.approx((0.9 * fov, 1.1 * fov), abs=1e-12)  # deg
+
+
+@pytest.mark.parametrize("fov_deg", [1.2, 2.5, 20.0, 120.0])
+@pytest.mark.parametrize("roll_deg", [0.0, 30.0, 135.0])
+def test_a_celestial_wcs_states_its_field_through_its_scale(fov_deg, roll_deg):
+    """Our own WCS of a pinhole camera, at any roll: its scale gives back the camera's field."""
+    from startrack.io import wcs_header
+
+    camera = Camera.from_fov(3000, 2000, fov_deg)
+    attitude = rotation_from_radec_roll(math.radians(210.0), math.radians(-35.0), math.radians(roll_deg))
+    header = dict(wcs_header(attitude, camera))
+    assert stated_fov_deg(header, 3000, 2000) == pytest.approx(fov_deg, rel=1e-9)
+
+
+def test_a_wcs_of_cdelt_and_pc_and_its_precedence_over_the_focal_length():
+    scale = 1.5 / 3600  # deg per px
+    cos, sin = math.cos(math.radians(40.0)), math.sin(math.radians(40.0))
+    header = {"CTYPE1": "RA---TAN", "CDELT1": -scale, "CDELT2": scale, "PC1_1": cos, "PC2_1": sin}
+    expected = _deg_atan2(4000 * math.radians(scale) / 2, 1.0)  # deg, 1.67
+    assert stated_fov_deg(header, 4000, 3000) == pytest.approx(expected, rel=1e-12)
+    assert stated_fov_deg({"CTYPE1": "RA---TAN", "CDELT1": -scale}, 4000, 3000) == pytest.approx(expected, rel=1e-12)
+    nominal = {"FOCALLEN": 400.0, "XPIXSZ": 3.76}  # 2.15 deg: a WCS measured on the sky comes first
+    assert stated_fov_deg({**nominal, **header}, 4000, 3000) == pytest.approx(expected, rel=1e-12)
+
+
+@pytest.mark.parametrize("header", [
+    {"CTYPE1": "PIXEL", "CD1_1": 1.0, "CD2_1": 0.0},  # not on the sky
+    {"CTYPE1": "RA---TAN", "CD1_1": "x", "CD2_1": 0.0},
+    {"CTYPE1": "RA---TAN", "CD1_1": float("nan"), "CD2_1": 0.0},
+    {"CTYPE1": "RA---TAN", "CD1_1": 0.0, "CD2_1": 0.0},
+    {"CTYPE1": "RA---TAN", "CDELT1": True},
+    {"CTYPE1": "RA---TAN"},
+    {"CTYPE1": 3, "CDELT1": 0.001},
+    {"CDELT1": 0.001},
+])
+def test_a_wcs_that_gives_no_scale_on_the_sky_is_passed_over(header):
+    assert stated_fov_deg(header, 4000, 3000) is None
 
 
 @pytest.mark.parametrize("value", ["x", -14, 0, None, True, float("nan"), float("inf"), [14]])

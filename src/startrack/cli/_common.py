@@ -99,7 +99,7 @@ output (table, the default)
   roll         deg, the startrack.frames definition (equal to tetra3 / cedar-solve roll)
   FOV          horizontal field of view, deg, the focal length, px, and where the search for it
                started: the field given, the camera's, the field the header states (EXIF
-               focal length, FITS FOCALLEN and XPIXSZ), the default search (3-100 deg) or the
+               focal length, a FITS WCS's scale, FOCALLEN and XPIXSZ), the default search (3-100 deg) or the
                search of 90-150 deg after the default found nothing
   parity       (only for a mirror image of the sky: a star diagonal, a flipped file) mirrored
   stars        stars matched (of those detected, for an image; with --guided, how many of them

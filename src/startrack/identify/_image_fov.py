@@ -11,7 +11,10 @@ telescope below it is found only with its field. Cameras write it, in this order
 2. ``FocalLength`` with ``FocalPlaneXResolution``, ``FocalPlaneYResolution`` and
    ``FocalPlaneResolutionUnit`` (EXIF, most interchangeable-lens cameras): the sensor's size is
    the camera's image size (``ExifImageWidth`` x ``ExifImageHeight``) over those resolutions.
-3. ``FOCALLEN`` (mm) with ``XPIXSZ`` (um, the binned pixel's width, MaxIm DL's convention) (FITS,
+3. A celestial FITS WCS (``CTYPE1`` of RA, GLON or ELON; a plate solve's, astrometry.net's or
+   ours): its scale along the image's rows, from ``CD1_1`` and ``CD2_1`` (deg per px), else
+   ``CDELT1`` with ``PC1_1`` and ``PC2_1`` (1 and 0 when missing), through a gnomonic projection.
+4. ``FOCALLEN`` (mm) with ``XPIXSZ`` (um, the binned pixel's width, MaxIm DL's convention) (FITS,
    as N.I.N.A., SharpCap and MaxIm DL write them).
 
 A cropped image keeps its camera's EXIF, so its field is smaller than the stated one: the solve
@@ -47,8 +50,8 @@ def stated_fov_deg(header: Mapping[str, Any] | None, width: int, height: int) ->
     if not header:
         return None
     tan_half_diagonal = _exif_35mm(header) or _exif_focal_plane(header)  # positive, or None
-    tan_half = _fits_pixel_size(header, width) if tan_half_diagonal is None else \
-        tan_half_diagonal * width / math.hypot(width, height)
+    tan_half = (_fits_wcs_scale(header, width) or _fits_pixel_size(header, width)) if tan_half_diagonal is None \
+        else tan_half_diagonal * width / math.hypot(width, height)
     if tan_half is None:
         return None
     fov = math.degrees(2.0 * math.atan(tan_half))
@@ -110,3 +113,41 @@ def _fits_pixel_size(header: Mapping[str, Any], width: int) -> float | None:
     if focal is None or pixel_um is None:
         return None
     return width * pixel_um * 1e-3 / (2.0 * focal)
+
+
+CELESTIAL_AXES = ("RA", "GLON", "ELON")
+"""``CTYPE1`` prefixes of a celestial WCS whose scale :func:`_fits_wcs_scale` reads."""
+
+
+def _fits_wcs_scale(header: Mapping[str, Any], width: int) -> float | None:
+    """tan of the half horizontal field from a celestial FITS WCS's scale along the rows (module
+    docstring), or None when the header has none."""
+    ctype = header.get("CTYPE1")
+    column = _wcs_column(header) if isinstance(ctype, str) and ctype.upper().startswith(CELESTIAL_AXES) else None
+    scale_deg = 0.0 if column is None else math.hypot(*column)
+    return math.radians(scale_deg) * width / 2.0 if scale_deg > 0 else None  # the focal length is 1 / scale
+
+
+def _wcs_column(header: Mapping[str, Any]) -> tuple[float, float] | None:
+    """The change of the two world coordinates along a row, deg per px: (``CD1_1``, ``CD2_1``), else
+    ``CDELT1`` times (``PC1_1``, ``PC2_1``) (1 and 0 when missing); None when a value is not finite."""
+    scale: float | None
+    if "CD1_1" in header or "CD2_1" in header:
+        scale, keys = 1.0, (("CD1_1", 0.0), ("CD2_1", 0.0))
+    else:
+        scale, keys = _finite(header.get("CDELT1")), (("PC1_1", 1.0), ("PC2_1", 0.0))
+    first, second = (_finite(header.get(key, default)) for key, default in keys)
+    if scale is None or first is None or second is None:
+        return None
+    return scale * first, scale * second
+
+
+def _finite(value: Any) -> float | None:
+    """``value`` as a finite float, else None."""
+    if isinstance(value, bool):
+        return None
+    try:
+        number = float(value)
+    except (TypeError, ValueError, OverflowError):
+        return None
+    return number if math.isfinite(number) else None
