@@ -16,7 +16,9 @@ rule. The rule, used by every reader in :mod:`startrack.io` and by the detector:
     one plane, keeping the native dtype (uint8 stays uint8, uint16 stays uint16). Alpha is
     never selectable.
 
-The values are never rescaled (no division by 255 or 65535).
+The values are never rescaled (no division by 255 or 65535). A FITS frame of raw photosites under a
+colour-filter mosaic holds its colour in one plane: :mod:`startrack.io._mosaic` evens it out first
+(and camera RAW files are reduced by cells, :mod:`startrack.io._raw`).
 """
 
 from __future__ import annotations
