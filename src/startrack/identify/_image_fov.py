@@ -77,13 +77,8 @@ def stated_search_range(header: Mapping[str, Any] | None, width: int, height: in
 
 def _positive(value: Any) -> float | None:
     """``value`` as a positive finite float, else None."""
-    if isinstance(value, bool):
-        return None
-    try:
-        number = float(value)
-    except (TypeError, ValueError, OverflowError):
-        return None
-    return number if math.isfinite(number) and number > 0 else None
+    number = _finite(value)
+    return number if number is not None and number > 0 else None
 
 
 def _exif_35mm(header: Mapping[str, Any]) -> float | None:

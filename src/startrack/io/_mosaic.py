@@ -21,7 +21,7 @@ to the file's own pixels. The kernel blurs by 0.71 px (its standard deviation), 
 detector's own smoothing; it does not depend on the pattern nor on the row order (``ROWORDER``).
 Hot pixels are replaced first (:func:`without_hot_sites`), since the kernel would make stars of
 them. Read so, the same frames gave 89 % of the grey sensor's stars, centroids 1.01 and 1.04 times
-its RMS error, and 4.4 false detections per frame with the hot pixels.
+its RMS error, and 4.3 false detections per frame with the hot pixels.
 
 One colour (``channel``) is taken from the sites of that colour alone, interpolated bilinearly in
 between (the same kernel over the masked mosaic, divided by that colour's share of it). That needs
@@ -52,8 +52,11 @@ MIN_SITE_SPREAD_SIGMA = 2.0
 """A FITS frame without ``BAYERPAT`` is read as a mosaic when the levels (medians) of its four
 sites of each 2 x 2 cell span more than this many times the pixel noise."""
 
-SITE_SAMPLE = 65_536
-"""About this many pixels of each site are sampled for :func:`site_levels`."""
+SITE_SAMPLE = 256
+"""About this many 2 x 2 cells are sampled for :func:`site_levels`: the median of 256 noisy values
+is within 0.08 noise sd of its site's level (one sd of the estimate), far below
+:data:`MIN_SITE_SPREAD_SIGMA`; no grey frame of 300 (noise 0.3-20 counts) was taken for a
+mosaic."""
 
 HOT_SIGMA = 5.0
 """A mosaic's pixel is taken for hot (:func:`without_hot_sites`) from this many times the pixel
@@ -102,11 +105,20 @@ def site_levels(data: NDArray) -> tuple[NDArray[np.float64], float]:
     """The median of each site of the 2 x 2 cells of ``data`` (H >= 2, W >= 4), shape (2, 2), and
     the pixel noise: the median absolute difference of neighbouring pixels of one site, scaled to a
     Gaussian's standard deviation (stars and gradients barely move either), NaN when there is none.
-    Over a subsample of about :data:`SITE_SAMPLE` pixels per site."""
-    step = max(1, int(np.sqrt(data.size / 4 / SITE_SAMPLE)))
-    sites = [np.asarray(data[dy::2, dx::2][::step, ::step], dtype=np.float64) for dy in (0, 1) for dx in (0, 1)]
-    levels = np.array([np.nanmedian(site) if np.isfinite(site).any() else np.nan for site in sites])
-    steps = np.concatenate([np.ravel(site[:, 1:] - site[:, :-1]) for site in sites])
+    Over a regular subsample of about :data:`SITE_SAMPLE` cells, whatever the frame's size: every
+    FITS file read pays it (a 1024 x 1024 uint16 file, median of 300 reads: 0.95 ms against 0.68
+    without; the call alone 0.14 ms)."""
+    step = 2 * max(1, int(np.sqrt(data.size / 4 / SITE_SAMPLE)))
+    rows = np.add.outer(np.arange(0, data.shape[0] - 1, step), (0, 1)).ravel()
+    cols = np.add.outer(np.arange(0, data.shape[1] - 1, step), (0, 1)).ravel()
+    cells = np.asarray(data[rows][:, cols], dtype=np.float64).reshape(rows.size // 2, 2, cols.size // 2, 2)
+    sites = cells.transpose(1, 3, 0, 2).reshape(4, -1)  # site (dy, dx) = row 2 dy + dx
+    if np.isnan(sites).any():
+        levels = np.array([float(np.median(site[np.isfinite(site)])) if np.isfinite(site).any() else np.nan
+                           for site in sites])
+    else:
+        levels = np.median(sites, axis=1)
+    steps = np.diff(cells, axis=2).ravel()
     steps = steps[np.isfinite(steps)]
     if steps.size == 0:
         return levels.reshape(2, 2), float("nan")
