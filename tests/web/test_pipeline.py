@@ -109,6 +109,37 @@ def test_the_guided_option_adds_the_stars_the_solution_predicts(server, real_ima
     assert f"{result['guided_stars']} of them measured where the solution predicts them" in page
 
 
+def test_a_bayer_mosaic_fits_is_solved_at_full_resolution_and_said_to_be(server, real_images, tmp_path):
+    """img3.png through an RGGB mosaic (R, G, B passing 0.45, 1.0, 0.6 of the light above the sky),
+    saved as FITS with BAYERPAT: solved, the result and the page name the pattern, and the stars lie
+    where the grey image has them (full resolution, not 2 x 2 cells)."""
+    from astropy.io import fits
+    from PIL import Image
+
+    grey = np.asarray(Image.open(real_images["img3.png"]).convert("L"), dtype=np.float64)
+    h, w = grey.shape
+    sky = float(np.median(grey))
+    mosaic = (grey - sky) * np.tile(np.array([[0.45, 1.0], [1.0, 0.6]]), (h // 2 + 1, w // 2 + 1))[:h, :w] + sky
+    path = tmp_path / "osc.fits"
+    fits.PrimaryHDU(np.clip(mosaic * 16, 0, 65535).astype(np.uint16), fits.Header([("BAYERPAT", "RGGB")])).writeto(path)
+    folder = run_job(server, path)
+    result = read_json(folder / "result.json")
+    assert result["status"] == "ok" and result["mosaic"] == "RGGB"
+    page = server.client.get(f"/jobs/{folder.name}").text
+    assert "a colour-filter (Bayer) mosaic (BAYERPAT RGGB)" in page
+    plain_folder = run_job(server, real_images["img3.png"])
+    assert read_json(plain_folder / "result.json")["mosaic"] is None
+    stars, plain_stars = (_detected_xy(f) for f in (folder, plain_folder))
+    for x, y in plain_stars[:5]:  # the five brightest, where the grey frame has them (full-resolution px)
+        assert np.min(np.hypot(stars[:, 0] - x, stars[:, 1] - y)) < 0.5
+
+
+def _detected_xy(folder) -> np.ndarray:
+    """(x, y) of a job's detections, shape (N, 2), in the order of its detections.csv."""
+    with open(folder / "detections.csv", newline="") as fh:
+        return np.array([(float(r["x"]), float(r["y"])) for r in csv.DictReader(fh)])
+
+
 def test_a_ground_photo_has_the_altitude_and_azimuth_astropy_gives(server, real_images):
     when, site = "2021-02-01T04:00:00", get_site("logan-ut")
     folder = run_job(server, real_images["roof.jpg"], {"site": "logan-ut", "time": when})

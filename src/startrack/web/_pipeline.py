@@ -239,6 +239,7 @@ def _write_files(job: _Job, image: Image, solution, details, rejects, detector, 
     shown = details.detections if solution.detections is None else solution.detections  # + guided stars
     write_annotated(folder / "annotated.png", image.data, solution, shown, rejects, truth_xy)
     result = result_dict(solution, job.times, {**extra, "n_rejected": len(rejects["x"]), "auto": auto,
+                                                "mosaic": image.mosaic,
                                                 "camera_fit": camera_fit, "detection_preset":
                                                 job.options["detection_preset"]})
     write_solution_files(folder, solution, details, rejects, result, None if when is None else when.utc.isot)
