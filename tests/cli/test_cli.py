@@ -542,3 +542,24 @@ def test_solve_and_detect_read_a_bayer_mosaic_fits_at_full_resolution(sim, tmp_p
     grey_stars = strict_json(grey_out)["stars"][:10]
     for star in grey_stars:  # the ten brightest of the grey frame, each found within 0.3 px (full-resolution px)
         assert min(np.hypot(s["x"] - star["x"], s["y"] - star["y"]) for s in stars) < 0.3
+
+
+def test_solve_plot_draws_the_image_solved_or_not(sim, tmp_path):
+    """--plot writes a PNG of the image's size ratio whether or not the image solves, never over the
+    image read, and is refused for a batch."""
+    out = tmp_path / "solved.png"
+    code, _, err = run("solve", sim["fits"], "--plot", out)
+    assert code == 0, err
+    with PILImage.open(out) as png:
+        assert png.format == "PNG" and png.size[0] == png.size[1]  # the simulated frame is square
+    blank = tmp_path / "blank.png"
+    write_png(blank, np.full((120, 160), 200, dtype=np.uint16))
+    code, _, err = run("solve", blank, "--plot", tmp_path / "blank-plot.png")
+    assert code == 1 and (tmp_path / "blank-plot.png").stat().st_size > 0
+    before = blank.read_bytes()
+    code, _, err = run("solve", blank, "--plot", blank)
+    assert code == 2 and "it is one of the inputs of this command" in err
+    assert blank.read_bytes() == before
+    code, _, err = run("solve", sim["png"], sim["tif"], "--plot", tmp_path / "two.png")
+    assert code == 2 and "--plot draws the picture of one image" in err
+    assert not (tmp_path / "two.png").exists()

@@ -49,7 +49,7 @@ def plot_solution(image: np.ndarray, detections: Detections, solution: AttitudeS
     ax.set_xlabel("x (px)")
     ax.set_ylabel("y (px)")
     fig.tight_layout()
-    fig.savefig(path)
+    fig.savefig(path, format="png")  # whatever the name ends with: a command's temporary file
 
 
 def _title(solution: AttitudeSolution) -> str:

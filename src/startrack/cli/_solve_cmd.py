@@ -65,6 +65,10 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--wcs", metavar="OUT",
                         help="when solved, write the image's FITS WCS (TAN-SIP, FITS 1-based pixels) to OUT "
                              "(one image only)")
+    parser.add_argument("--plot", metavar="OUT.png",
+                        help="write a PNG of the image with its detections (grey circles) and, when solved, the "
+                             "identified stars (green, HIP numbers) to OUT.png, solved or not (one image only; "
+                             "needs matplotlib, the plot extra)")
     add_max_pixels_option(parser)
     add_batch_options(parser)
     ground = parser.add_argument_group(
@@ -124,6 +128,8 @@ def main(argv: list[str]) -> int:
         from ..io import write_wcs  # astropy.wcs: loaded only when asked for
 
         write_wcs(args.wcs, solution.rot_cam_from_icrs, require(solution.camera, "the solution's camera"))
+    if args.plot:
+        _write_plot(args.plot, image, solution, detections)
     return report(explain_blank(solution, detections, image), detections, args.json, ground=ground)
 
 
@@ -132,8 +138,9 @@ def _batch(args: argparse.Namespace, solver_options: dict, fov_options: dict) ->
     from ._batch import run_batch
     from ._batch_solve import solve_spec
 
-    if args.wcs:
-        raise InvalidInputError("--wcs writes the WCS of one image; leave it out for a batch")
+    if args.wcs or args.plot:
+        option = "--wcs writes the WCS" if args.wcs else "--plot draws the picture"
+        raise InvalidInputError(f"{option} of one image; leave it out for a batch")
     if args.site or args.latitude_deg is not None or args.longitude_deg is not None:
         raise InvalidInputError("--site, --latitude-deg and --longitude-deg take one image; leave them out "
                                 "for a batch")
@@ -141,6 +148,16 @@ def _batch(args: argparse.Namespace, solver_options: dict, fov_options: dict) ->
     warm_up(**fov_options, every_detection=True)  # the images' types are not known yet
     return run_batch(solve_spec(solver_options, args.channel), args.image, as_json=args.json,
                      csv_out=args.csv, jobs=args.jobs)
+
+
+def _write_plot(path: str, image: Image, solution: AttitudeSolution, detections: Detections) -> None:
+    """``--plot``: :func:`startrack.analysis.plot_solution` of the image, written by the rules of
+    :mod:`startrack.io._atomic` (never over the image read; the whole file or nothing)."""
+    from ..analysis import plot_solution  # matplotlib: loaded only when asked for
+    from ..io import atomic_path
+
+    with atomic_path(path, inputs=[] if image.path is None else [image.path]) as tmp:
+        plot_solution(image.data, detections, solution, tmp)
 
 
 def _announce_stated_field(image: Image, fov_options: dict) -> None:
