@@ -11,6 +11,7 @@ from startrack.io import read_image
 from startrack.io._mosaic import (
     BAYER_PATTERNS,
     bayer_pattern,
+    from_mosaic,
     mosaic_channel,
     mosaic_luminance,
     site_pattern,
@@ -89,6 +90,24 @@ def test_site_pattern_found_in_a_mosaic_not_in_grey_noise():
     step[::2, ::2] = 25.0  # 5 sigma: a sky of another colour than the filters'
     assert site_pattern(grey + step)
     assert not site_pattern(np.zeros((3, 400)))
+
+
+def test_a_steep_gradient_without_noise_is_no_mosaic():
+    """A noise-free ramp of 7 counts per column and 5 per row: its sites sit at different levels,
+    but both diagonals of a cell shift alike."""
+    yy, xx = np.mgrid[0:300, 0:400]
+    assert not site_pattern((1000.0 + 7.0 * xx + 5.0 * yy).astype(np.float32))
+    assert not site_pattern((1000 + 7 * xx + 5 * yy).astype(np.uint16))
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (1, 5), (2, 2), (3, 3), (2, 100), (100, 2), (5, 7)])
+def test_tiny_frames_with_a_pattern_are_read_without_warnings(shape, recwarn):
+    data = np.arange(np.prod(shape), dtype=np.float64).reshape(shape)
+    plane, pattern = from_mosaic(data, {"BAYERPAT": "RGGB"}, None)
+    assert plane.shape == shape and pattern == "RGGB"
+    assert from_mosaic(data, {"BAYERPAT": "RGGB"}, 1)[0].shape == shape
+    assert from_mosaic(data, {}, None)[1] is None
+    assert not recwarn.list
 
 
 def test_no_grey_frame_is_taken_for_a_mosaic_whatever_its_noise():

@@ -28,10 +28,12 @@ between (the same kernel over the masked mosaic, divided by that colour's share 
 the pattern: it is read as starting at the array's first pixel (FITS pixel 1, 1), shifted by
 ``XBAYROFF`` and ``YBAYROFF`` columns and rows when the header gives them.
 
-A FITS file without ``BAYERPAT`` is taken for a mosaic when the four sites of its 2 x 2 cells
-differ in level by more than :data:`MIN_SITE_SPREAD_SIGMA` times the pixel noise and by two counts
-(:func:`site_pattern`): what the sky does on a colour sensor, and what a sensor whose columns or
-rows alternate in offset does (the same kernel evens that out too). Its colour cannot be picked.
+A FITS file without ``BAYERPAT`` is taken for a mosaic when the levels of the four sites of its
+2 x 2 cells form a checkerboard (:func:`site_pattern`): half the difference between the sums of the
+two diagonals (R + B against the two greens) exceeds :data:`MIN_SITE_SPREAD_SIGMA` times the pixel
+noise and two counts. The sky does that on a colour sensor, whose raw green sites take in about
+twice what the red and blue ones do; a gradient across the frame, however steep, does not (it
+shifts both diagonals alike). Its colour cannot be picked.
 """
 
 from __future__ import annotations
@@ -49,8 +51,9 @@ BAYER_PATTERNS = ("RGGB", "BGGR", "GRBG", "GBRG")
 then of its second."""
 
 MIN_SITE_SPREAD_SIGMA = 2.0
-"""A FITS frame without ``BAYERPAT`` is read as a mosaic when the levels (medians) of its four
-sites of each 2 x 2 cell span more than this many times the pixel noise."""
+"""A FITS frame without ``BAYERPAT`` is read as a mosaic when the checkerboard of the levels
+(medians) of the four sites of its 2 x 2 cells (:func:`site_pattern`) exceeds this many times the
+pixel noise."""
 
 SITE_SAMPLE = 256
 """About this many 2 x 2 cells are sampled for :func:`site_levels`: the median of 256 noisy values
@@ -89,16 +92,17 @@ def _offset(value: object) -> int:
 
 
 def site_pattern(data: NDArray) -> bool:
-    """Whether the four sites of the 2 x 2 cells of ``data`` (H, W) sit at different levels: the
-    spread of their medians over a subsample exceeds :data:`MIN_SITE_SPREAD_SIGMA` times the pixel
-    noise (:func:`site_levels`) and two counts."""
+    """Whether the levels (medians, :func:`site_levels`) of the four sites of the 2 x 2 cells of
+    ``data`` (H, W) form a checkerboard: half the difference of the sums of the two diagonals of the
+    cell exceeds :data:`MIN_SITE_SPREAD_SIGMA` times the pixel noise and two counts. A linear
+    gradient adds the same to both sums."""
     if data.ndim != 2 or min(data.shape) < 4:
         return False
     levels, noise = site_levels(data)
     if not (np.isfinite(levels).all() and np.isfinite(noise)):
         return False
-    spread = float(levels.max() - levels.min())
-    return spread > max(MIN_SITE_SPREAD_SIGMA * noise, 2.0)
+    checkerboard = 0.5 * abs(float(levels[0, 0] + levels[1, 1] - levels[0, 1] - levels[1, 0]))
+    return checkerboard > max(MIN_SITE_SPREAD_SIGMA * noise, 2.0)
 
 
 def site_levels(data: NDArray) -> tuple[NDArray[np.float64], float]:
@@ -136,8 +140,10 @@ def without_hot_sites(data: NDArray) -> NDArray[np.float32]:
     its colour (green 0.3 and blue 0.1 of red's, for a red star on a red site) 0.70 and 0.59: such
     stars stay, sharper ones may go."""
     plane = np.asarray(data, dtype=np.float32)
+    if min(plane.shape) < 3:
+        return plane.copy()
     levels, noise = site_levels(plane)
-    if not np.isfinite(noise) or noise <= 0 or min(plane.shape) < 3:
+    if not np.isfinite(noise) or noise <= 0:
         return plane.copy()
     h, w = plane.shape
     excess = plane - np.tile(levels.astype(np.float32), ((h + 1) // 2, (w + 1) // 2))[:h, :w]
