@@ -115,7 +115,7 @@ def site_levels(data: NDArray) -> tuple[NDArray[np.float64], float]:
     step = 2 * max(1, int(np.sqrt(data.size / 4 / SITE_SAMPLE)))
     rows = np.add.outer(np.arange(0, data.shape[0] - 1, step), (0, 1)).ravel()
     cols = np.add.outer(np.arange(0, data.shape[1] - 1, step), (0, 1)).ravel()
-    cells = np.asarray(data[rows][:, cols], dtype=np.float64).reshape(rows.size // 2, 2, cols.size // 2, 2)
+    cells = np.asarray(data[np.ix_(rows, cols)], dtype=np.float64).reshape(rows.size // 2, 2, cols.size // 2, 2)
     sites = cells.transpose(1, 3, 0, 2).reshape(4, -1)  # site (dy, dx) = row 2 dy + dx
     if np.isnan(sites).any():
         levels = np.array([float(np.median(site[np.isfinite(site)])) if np.isfinite(site).any() else np.nan
