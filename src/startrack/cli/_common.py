@@ -23,7 +23,7 @@ import numpy as np
 from ..camera import Camera, get_preset
 from ..errors import InvalidInputError, require
 from ..identify import MATCHERS
-from ..io import solution_to_dict, streak_fields
+from ..io import Image, solution_to_dict, streak_fields
 from ..results import AttitudeSolution, Detections
 from ..solve import (
     DEFAULT_FOV_RANGE_DEG,
@@ -99,8 +99,8 @@ output (table, the default)
   roll         deg, the startrack.frames definition (equal to tetra3 / cedar-solve roll)
   FOV          horizontal field of view, deg, the focal length, px, and where the search for it
                started: the field given, the camera's, the field the header states (EXIF
-               focal length, a FITS WCS's scale, FOCALLEN and XPIXSZ), the default search (3-100 deg) or the
-               search of 90-150 deg after the default found nothing
+               focal length, a FITS WCS's scale, FOCALLEN and XPIXSZ), the default search
+               (3-100 deg) or the search of 90-150 deg after the default found nothing
   parity       (only for a mirror image of the sky: a star diagonal, a flipped file) mirrored
   stars        stars matched (of those detected, for an image; with --guided, how many of them
                were measured where the solution predicts them)
@@ -306,12 +306,13 @@ def apply_max_pixels_option(args: argparse.Namespace) -> None:
     set_max_pixels(getattr(args, "max_pixels", None))
 
 
-def announce_mosaic(image) -> None:
-    """Say on standard error that ``image`` (a :class:`startrack.io.Image`) was a colour-filter
-    mosaic read at full resolution (:mod:`startrack.io._mosaic`); nothing for any other image."""
+def announce_mosaic(image: Image) -> None:
+    """Say on standard error that ``image`` was a colour-filter mosaic read at full resolution
+    (:mod:`startrack.io._mosaic`); nothing for any other image."""
     if image.mosaic is None:
         return
-    named = f"BAYERPAT {image.mosaic}" if image.mosaic != "unknown" else "its sites' levels differ; no BAYERPAT card"
+    named = f"BAYERPAT {image.mosaic}" if image.mosaic != "unknown" else \
+        "no BAYERPAT card; its sites' levels form a checkerboard"
     sys.stderr.write(f"{image.path}: a colour-filter (Bayer) mosaic ({named}): read at full resolution, its colour "
                      "sites evened out (docs/io.md)\n")
 

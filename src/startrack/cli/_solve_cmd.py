@@ -3,12 +3,12 @@ grey or colour). Stars are detected and identified against Hipparcos with no pri
 the field of view if you know it (faster, more robust; 0.5 to 150 deg), else 3 to 100 deg are
 searched, after the field the image's header states when it lies beyond them (an ultra-wide lens's
 EXIF focal length, a FITS WCS's scale, a telescope's FOCALLEN and XPIXSZ), or before 90 to 150 deg
-when the header states none and nothing matched. The catalog epoch is --epoch, else the time of --time, else the
-time the image's header states (FITS CATEPOCH, DATE-OBS or MJD-OBS, EXIF DateTimeOriginal), else
-J2000.0; the solution says which (epoch_jyear, epoch_source). A frame whose stars smear into
-streaks is solved from them without being asked: the output then says mode "streak", the
-mid-exposure time the attitude refers to (t_mid_s, from the header's EXPTIME / EXPOSURE /
-ExposureTime) and the fitted rate (rate_deg_s, rate_status, time_order_known)."""
+when the header states none and nothing matched. The catalog epoch is --epoch, else the time of
+--time, else the time the image's header states (FITS CATEPOCH, DATE-OBS or MJD-OBS, EXIF
+DateTimeOriginal), else J2000.0; the solution says which (epoch_jyear, epoch_source). A frame whose
+stars smear into streaks is solved from them without being asked: the output then says mode
+"streak", the mid-exposure time the attitude refers to (t_mid_s, from the header's EXPTIME /
+EXPOSURE / ExposureTime) and the fitted rate (rate_deg_s, rate_status, time_order_known)."""
 
 from __future__ import annotations
 

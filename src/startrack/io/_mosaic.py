@@ -30,7 +30,7 @@ the pattern: it is read as starting at the array's first pixel (FITS pixel 1, 1)
 
 A FITS file without ``BAYERPAT`` is taken for a mosaic when the levels of the four sites of its
 2 x 2 cells form a checkerboard (:func:`site_pattern`): half the difference between the sums of the
-two diagonals (R + B against the two greens) exceeds :data:`MIN_SITE_SPREAD_SIGMA` times the pixel
+two diagonals (R + B against the two greens) exceeds :data:`MIN_CHECKERBOARD_SIGMA` times the pixel
 noise and two counts. The sky does that on a colour sensor, whose raw green sites take in about
 twice what the red and blue ones do; a gradient across the frame, however steep, does not (it
 shifts both diagonals alike). Its colour cannot be picked.
@@ -50,7 +50,7 @@ BAYER_PATTERNS = ("RGGB", "BGGR", "GRBG", "GBRG")
 """The 2 x 2 colour-filter patterns ``BAYERPAT`` may name: the filters of the cell's first row,
 then of its second."""
 
-MIN_SITE_SPREAD_SIGMA = 2.0
+MIN_CHECKERBOARD_SIGMA = 2.0
 """A FITS frame without ``BAYERPAT`` is read as a mosaic when the checkerboard of the levels
 (medians) of the four sites of its 2 x 2 cells (:func:`site_pattern`) exceeds this many times the
 pixel noise."""
@@ -58,7 +58,7 @@ pixel noise."""
 SITE_SAMPLE = 256
 """About this many 2 x 2 cells are sampled for :func:`site_levels`: the median of 256 noisy values
 is within 0.08 noise sd of its site's level (one sd of the estimate), far below
-:data:`MIN_SITE_SPREAD_SIGMA`; no grey frame of 300 (noise 0.3-20 counts) was taken for a
+:data:`MIN_CHECKERBOARD_SIGMA`; no grey frame of 300 (noise 0.3-20 counts) was taken for a
 mosaic."""
 
 HOT_SIGMA = 5.0
@@ -94,7 +94,7 @@ def _offset(value: object) -> int:
 def site_pattern(data: NDArray) -> bool:
     """Whether the levels (medians, :func:`site_levels`) of the four sites of the 2 x 2 cells of
     ``data`` (H, W) form a checkerboard: half the difference of the sums of the two diagonals of the
-    cell exceeds :data:`MIN_SITE_SPREAD_SIGMA` times the pixel noise and two counts. A linear
+    cell exceeds :data:`MIN_CHECKERBOARD_SIGMA` times the pixel noise and two counts. A linear
     gradient adds the same to both sums."""
     if data.ndim != 2 or min(data.shape) < 4:
         return False
@@ -102,7 +102,7 @@ def site_pattern(data: NDArray) -> bool:
     if not (np.isfinite(levels).all() and np.isfinite(noise)):
         return False
     checkerboard = 0.5 * abs(float(levels[0, 0] + levels[1, 1] - levels[0, 1] - levels[1, 0]))
-    return checkerboard > max(MIN_SITE_SPREAD_SIGMA * noise, 2.0)
+    return checkerboard > max(MIN_CHECKERBOARD_SIGMA * noise, 2.0)
 
 
 def site_levels(data: NDArray) -> tuple[NDArray[np.float64], float]:
