@@ -14,6 +14,7 @@ from startrack.io._mosaic import (
     from_mosaic,
     mosaic_channel,
     mosaic_luminance,
+    mosaic_plane,
     site_pattern,
     without_hot_sites,
 )
@@ -184,3 +185,20 @@ def test_hot_pixels_go_before_the_kernel_spreads_them(tmp_path):
     image = read_image(write(tmp_path / "hot.fits", np.clip(data, 0, 65535).astype(np.uint16), BAYERPAT="RGGB"))
     around = image.data[8:13, 68:73]
     assert np.ptp(around) < 30  # counts: sky noise, no 3 x 3 blob of 3000 / 16 and more
+
+
+@pytest.mark.parametrize("shape", [(3, 40), (29, 31), (64, 50)])
+def test_the_plane_strip_by_strip_is_the_whole_frames(shape, monkeypatch):
+    """Strips of 7 rows (many seams, odd and even starts) give exactly what the whole-frame steps
+    give: hot sites replaced, then the kernel or one colour."""
+    import startrack.io._mosaic as mosaic
+
+    monkeypatch.setattr(mosaic, "STRIP_ROWS", 7)
+    rng = np.random.default_rng(6)
+    data = flat_mosaic("GRBG", shape) + rng.normal(0, 5.0, shape)
+    n = max(1, data.size // 100)
+    data[rng.integers(0, shape[0], n), rng.integers(0, shape[1], n)] += 2000.0
+    np.testing.assert_array_equal(mosaic_plane(data), mosaic_luminance(without_hot_sites(data)))
+    for channel in range(3):
+        np.testing.assert_array_equal(mosaic_plane(data, "GRBG", channel),
+                                      mosaic_channel(without_hot_sites(data), "GRBG", channel))
