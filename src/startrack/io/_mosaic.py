@@ -21,7 +21,8 @@ to the file's own pixels. The kernel blurs by 0.71 px (its standard deviation), 
 detector's own smoothing; it does not depend on the pattern nor on the row order (``ROWORDER``).
 Hot pixels are replaced first (:func:`without_hot_sites`), since the kernel would make stars of
 them. Read so, the same frames gave 89 % of the grey sensor's stars, centroids 1.01 and 1.04 times
-its RMS error, and 4.3 false detections per frame with the hot pixels.
+its RMS error, and 4.3 false detections per frame with the hot pixels. Both steps cost 10.5 ms on
+a 1024 x 1024 frame and 0.47 s on a 6248 x 4176 one (medians of 30 and 3 runs).
 
 One colour (``channel``) is taken from the sites of that colour alone, interpolated bilinearly in
 between (the same kernel over the masked mosaic, divided by that colour's share of it). That needs
