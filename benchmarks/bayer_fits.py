@@ -20,8 +20,10 @@ Read six ways, each solved with ``solve_image`` and no hint:
 * ``FITS, BAYERPAT``: the mosaic in a FITS file naming its pattern (full-resolution luminance);
 * ``FITS, no BAYERPAT``: the same without the card (the pattern found in the pixels);
 * ``FITS, BAYERPAT, green``: ``channel="g"``, the green sites interpolated;
-* ``2 x 2 cell sums``: the cells summed as camera RAW files are (:func:`startrack.io.bayer_cells`,
-  half resolution; positions mapped back with :func:`startrack.io.full_resolution_xy`).
+* ``2 x 2 cell sums``: the cells summed as :func:`startrack.io._raw.read_raw` sums a camera RAW
+  file's (:func:`startrack.io.bayer_cells`, half resolution; positions mapped back with
+  :func:`startrack.io.full_resolution_xy`), which is how ``read_image`` read RAW files before it
+  read them as the FITS mosaics above.
 
 Printed per way and case: rendered stars with a detection within 1.5 px (mean per frame) and
 detections with no rendered star within 1.5 px, the RMS centroid error over the stars every way

@@ -113,5 +113,20 @@ def test_read_image_routes_raw_file_names_through_rawpy(tmp_path):
     path = tmp_path / "frame.dng"
     write_dng(path, mosaic)
     image = read_image(path, channel="g")
-    assert image.data.shape == (32, 48)
-    assert image.header["raw_cells"] is True
+    assert image.data.shape == (64, 96) and image.mosaic == "RGGB"
+    assert "raw_cells" not in image.header
+
+
+@pytest.mark.parametrize("pattern", ["rggb", "gbrg"])
+@pytest.mark.parametrize("channel", [None, "g", "r", "b"])
+def test_read_image_puts_a_raw_files_stars_at_full_resolution_where_they_are(tmp_path, pattern, channel):
+    """The mosaic at full resolution (startrack.io._mosaic): the rendered stars' centroids in the
+    sensor's own pixels, the black levels gone, the pattern named."""
+    x, y = star_field(rng=5)
+    path = write_dng(tmp_path / "stars.dng", bayer_frame(x, y, pattern, rng=6), pattern=pattern, black=BLACK)
+    image = read_image(path, channel=channel)
+    assert image.data.shape == (HEIGHT, WIDTH) and image.mosaic == pattern.upper()
+    assert abs(np.median(image.data)) < 2.0  # counts: noise only, each site's black level (500-530) gone
+    cx, cy = centroids(image.data, x, y, half=6)
+    np.testing.assert_allclose(cx, x, atol=0.02 * PIXEL)
+    np.testing.assert_allclose(cy, y, atol=0.02 * PIXEL)

@@ -126,7 +126,7 @@ def test_a_bayer_mosaic_fits_is_solved_at_full_resolution_and_said_to_be(server,
     result = read_json(folder / "result.json")
     assert result["status"] == "ok" and result["mosaic"] == "RGGB"
     page = server.client.get(f"/jobs/{folder.name}").text
-    assert "a colour-filter (Bayer) mosaic (BAYERPAT RGGB)" in page
+    assert "a colour-filter (Bayer) mosaic (pattern RGGB)" in page
     plain_folder = run_job(server, real_images["img3.png"])
     assert read_json(plain_folder / "result.json")["mosaic"] is None
     stars, plain_stars = (_detected_xy(f) for f in (folder, plain_folder))

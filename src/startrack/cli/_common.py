@@ -311,7 +311,7 @@ def announce_mosaic(image: Image) -> None:
     (:mod:`startrack.io._mosaic`); nothing for any other image."""
     if image.mosaic is None:
         return
-    named = f"BAYERPAT {image.mosaic}" if image.mosaic != "unknown" else \
+    named = f"pattern {image.mosaic}" if image.mosaic != "unknown" else \
         "no BAYERPAT card; its sites' levels form a checkerboard"
     sys.stderr.write(f"{image.path}: a colour-filter (Bayer) mosaic ({named}): read at full resolution, its colour "
                      "sites evened out (docs/io.md)\n")

@@ -18,7 +18,7 @@ rule. The rule, used by every reader in :mod:`startrack.io` and by the detector:
 
 The values are never rescaled (no division by 255 or 65535). A FITS frame of raw photosites under a
 colour-filter mosaic holds its colour in one plane: :mod:`startrack.io._mosaic` evens it out first
-(and camera RAW files are reduced by cells, :mod:`startrack.io._raw`).
+(so does :func:`startrack.io._raw.read_raw_plane` for a camera RAW file).
 """
 
 from __future__ import annotations

@@ -64,10 +64,10 @@ class Image:
         luminance's when the colour planes are summed. 0.0 for a lossless file or an array.
         Detection raises its noise floor to match (:func:`startrack.detect.compression_noise_floor`).
     mosaic : str or None
-        For a FITS frame of a colour-filter (Bayer) mosaic, read at full resolution as
-        :mod:`startrack.io._mosaic` says (``data`` is then float32): the pattern of its first cell
-        ("RGGB", ...), or "unknown" when the header names none and the pixels showed it. None for
-        any other image.
+        For a FITS frame or a camera RAW file of a colour-filter (Bayer) mosaic, read at full
+        resolution as :mod:`startrack.io._mosaic` says (``data`` is then float32): the pattern of
+        its first cell ("RGGB", ...), or "unknown" when a FITS header names none and the pixels
+        showed it. None for any other image.
     """
 
     data: NDArray
@@ -191,8 +191,8 @@ def _check_gzip_holds_fits(path: Path) -> None:
 
 
 RAW_SUFFIXES = frozenset({".dng", ".cr2", ".cr3", ".nef", ".arw", ".raf", ".orf", ".rw2", ".pef", ".srw"})
-"""Camera RAW file names, decoded through rawpy by :func:`startrack.io._raw.read_raw` (Bayer cells
-reduced to one value each: half the resolution, see that module)."""
+"""Camera RAW file names, decoded through rawpy by :func:`startrack.io._raw.read_raw_plane` (the
+Bayer mosaic at full resolution, as :mod:`startrack.io._mosaic` reads a FITS one)."""
 IMAGE_SUFFIXES = frozenset({".fits", ".fit", ".fts", ".png", ".jpg", ".jpeg", ".tif", ".tiff", ".heic", ".heif",
                             *RAW_SUFFIXES})
 """File names that folders of images are searched for (the reader then checks the content)."""
@@ -214,7 +214,7 @@ def read_image(
     source : str, Path or ndarray
         A FITS, PNG, JPEG or TIFF file (8 or 16 bit, grey or colour; float FITS / TIFF), a HEIC /
         HEIF photo (through pillow-heif, :mod:`startrack.io._heif`), a camera RAW file
-        (:data:`RAW_SUFFIXES`, through rawpy, at half resolution), or an array of shape (H, W)
+        (:data:`RAW_SUFFIXES`, through rawpy, at full resolution), or an array of shape (H, W)
         or (H, W, C) with C = 1 (grey), 2 (grey + alpha), 3 (RGB) or 4 (RGBA).
     channel : {None, "r", "g", "b", 0, 1, 2}
         Colour rule: None sums R + G + B in a wider type (uint8 -> uint16, uint16 -> uint32,
@@ -251,10 +251,10 @@ def read_image(
         )
     path = Path(source)
     if path.suffix.lower() in RAW_SUFFIXES:
-        from ._raw import read_raw  # needs rawpy (the "raw" extra); says so if it is missing
+        from ._raw import read_raw_plane  # needs rawpy (the "raw" extra); says so if it is missing
 
         note_input(path)
-        return read_raw(path, channel=_raw_channel(channel), max_pixels=max_pixels)
+        return read_raw_plane(path, channel=_raw_channel(channel), max_pixels=max_pixels)
     kind = _sniff(path)
     note_input(path)
     step, mosaic = 0.0, None  # a JPEG's quantization step (lossless formats have none); a Bayer mosaic's pattern
