@@ -18,8 +18,9 @@ proportions of a whole 2 x 2 cell: every output pixel is the same colour mix, so
 goes, and, the kernel being symmetric, it stays at its pixel's position. Unlike the cell sums of
 :func:`startrack.io._raw.read_raw` the image keeps its size, so pixel positions, the WCS and
 overlays refer to the file's own pixels (camera RAW files are read the same way,
-:func:`startrack.io._raw.read_raw_plane`). The kernel blurs by 0.71 px (its standard deviation), less than the
-detector's own smoothing; it does not depend on the pattern nor on the row order (``ROWORDER``).
+:func:`startrack.io._raw.read_raw_plane`). The kernel blurs by 0.71 px (its standard deviation),
+less than the detector's own smoothing; it does not depend on the pattern nor on the row order
+(``ROWORDER``).
 Hot pixels are replaced first (:func:`without_hot_sites`), since the kernel would make stars of
 them. Read so, the same frames gave 89 % of the grey sensor's stars, centroids 1.01 and 1.04 times
 its RMS error, and 4.3 false detections per frame with the hot pixels. Both steps cost 10.5 ms on

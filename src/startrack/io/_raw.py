@@ -9,17 +9,18 @@ A RAW file holds one count per photosite under a colour filter (the Bayer mosaic
   ``benchmarks/bayer_fits.py`` it finds 43 % and 38 % more stars than the cell sums below (PSF sd
   1.0 and 1.6 px), centroids 0.74 and 0.87 times their RMS error.
 * :func:`read_raw`, for calibration work that wants whole photosites: the mosaic reduced cell by
-  cell: each 2 x 2 cell (R, G, G, B in some
-order) becomes one pixel, either the **sum** of its four counts (the colour rule of
-:mod:`startrack.io._channels`: counts stay counts) or one colour (``"r"``, ``"g"`` = the sum of
-the two greens, ``"b"``; Fowler 2013 used the green channel of its phone, the best SNR). The result
-has half the resolution. Pixel (i, j) of the reduced image samples the full-resolution position
-``(2 i + ox, 2 j + oy)`` (our convention, pixel centres), where the *origin* ``(ox, oy)`` is the
-mean position of the sites used inside their cell: (0.5, 0.5) for the sum and for green (two
-diagonal sites), but the R or B site itself for one of those, e.g. (0, 0) for R in an RGGB
+  cell. Each 2 x 2 cell (R, G, G, B in some order) becomes one pixel, either the **sum** of its
+  four counts (the colour rule of :mod:`startrack.io._channels`: counts stay counts) or one colour
+  (``"r"``, ``"g"`` = the sum of the two greens, ``"b"``; Fowler 2013 used the green channel of
+  its phone, the best SNR).
+
+The cells have half the resolution. Pixel (i, j) of the reduced image samples the full-resolution
+position ``(2 i + ox, 2 j + oy)`` (our convention, pixel centres), where the *origin* ``(ox, oy)``
+is the mean position of the sites used inside their cell: (0.5, 0.5) for the sum and for green
+(two diagonal sites), but the R or B site itself for one of those, e.g. (0, 0) for R in an RGGB
 mosaic - half a full-resolution pixel from the cell centre in x and y. :func:`read_raw` stores it
 in the header as ``raw_origin_xy``; :func:`full_resolution_xy` maps positions back with it. The
-black level of every site is subtracted in both; nothing is scaled.
+black level of every site is subtracted in both readings; nothing is scaled.
 
 ``rawpy`` is imported only when a RAW file is read (``pip install rawpy``).
 """
@@ -33,6 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ImageReadError, InvalidInputError
+from ._channels import channel_index
 from ._image import Image
 from ._limits import check_image_size
 from ._mosaic import BAYER_PATTERNS, _site_tile, mosaic_plane
@@ -134,8 +136,8 @@ def read_raw_plane(path: str | os.PathLike, channel: str | None = None, max_pixe
         the pattern of its first cell ("RGGB", ...), and the header of :func:`read_raw` without
         its cell keys.
     """
+    index = channel_index(channel)  # checked before the file is read
     mosaic, pattern, header = _read_mosaic(path, max_pixels)
-    index = None if channel is None else "rgb".index(str(channel).lower())
     return Image(data=mosaic_plane(mosaic, pattern, index), path=Path(path), header=header, bit_depth=16,
                  colour=True, mosaic=pattern)
 
@@ -154,7 +156,7 @@ def _read_mosaic(path: str | os.PathLike, max_pixels: int | None) -> tuple[NDArr
     try:
         with rawpy.imread(os.fspath(path)) as raw:
             check_image_size(int(raw.sizes.width), int(raw.sizes.height), max_pixels, path)
-            _bayer_pattern(raw, path)
+            _bayer_pattern(raw, path)  # refuses X-Trans and other patterns than 2 x 2
             sites = np.asarray(raw.raw_colors_visible[:2, :2])
             pattern = "".join(chr(raw.color_desc[i]) for i in sites.ravel())  # color_desc: b"RGBG"
             black = np.asarray(raw.black_level_per_channel, dtype=np.float32)[sites]
