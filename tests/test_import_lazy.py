@@ -93,3 +93,13 @@ def test_default_detection_does_not_load_scipy_ndimage():
             "print('scipy.ndimage' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
     assert out.stdout.split()[-1] == "False"
+
+
+@pytest.mark.parametrize("module", ["startrack.cli._solve_stars_cmd", "startrack.cli._campaign_cmd",
+                                    "startrack.cli._availability_cmd"])
+def test_commands_without_images_do_not_load_pillow(module):
+    """A command that reads no image (a star list, a campaign spec) loads neither the image reader
+    nor Pillow: the helpers they share with the image commands import the reader's types only for
+    the type checker."""
+    loaded = _loaded_in_fresh_process(f"import {module}")
+    assert "PIL" not in loaded

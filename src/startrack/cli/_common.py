@@ -16,14 +16,14 @@ import math
 import re
 import sys
 import textwrap
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..camera import Camera, get_preset
 from ..errors import InvalidInputError, require
 from ..identify import MATCHERS
-from ..io import Image, solution_to_dict, streak_fields
+from ..io import solution_to_dict, streak_fields
 from ..results import AttitudeSolution, Detections
 from ..solve import (
     DEFAULT_FOV_RANGE_DEG,
@@ -34,6 +34,9 @@ from ..solve import (
     epoch_jyear,
 )
 from ._main import DEBUG_ENV, INTERNAL_ERROR
+
+if TYPE_CHECKING:  # the reader's module (Pillow and the rest) loads only for the commands that read images
+    from ..io import Image
 
 FAULT_EXIT_STATUS = (f"{INTERNAL_ERROR} an unexpected error, a fault of startrack's (please report it), with one "
                      f"line naming the exception's type on standard error ({DEBUG_ENV}=1 shows its traceback).")
