@@ -111,6 +111,18 @@ def test_tiny_frames_with_a_pattern_are_read_without_warnings(shape, recwarn):
     assert not recwarn.list
 
 
+def test_a_mosaic_scaled_to_0_1_is_found_and_a_grey_one_is_not():
+    """A float frame scaled to 0..1 (as some stacking software saves): no counts, so no two-count
+    floor; the noise alone decides. A noise-free rendering is never a mosaic."""
+    rng = np.random.default_rng(7)
+    mosaic = (flat_mosaic("RGGB", (200, 300)) + rng.normal(0, 3, (200, 300))) / 65535.0
+    assert site_pattern(mosaic.astype(np.float32))
+    grey = (rng.normal(100, 3, (200, 300)).round() / 65535.0).astype(np.float32)
+    assert not site_pattern(grey)
+    yy, xx = np.mgrid[0:200, 0:300]
+    assert not site_pattern(np.sin(xx / 30.0) * np.cos(yy / 20.0))
+
+
 def test_no_grey_frame_is_taken_for_a_mosaic_whatever_its_noise():
     """Integer frames whose noise goes down to 0.3 counts, where the sites' medians fall on whole
     counts and can differ by one: the two-count floor keeps them grey."""

@@ -34,9 +34,10 @@ the pattern: it is read as starting at the array's first pixel (FITS pixel 1, 1)
 A FITS file without ``BAYERPAT`` is taken for a mosaic when the levels of the four sites of its
 2 x 2 cells form a checkerboard (:func:`site_pattern`): half the difference between the sums of the
 two diagonals (R + B against the two greens) exceeds :data:`MIN_CHECKERBOARD_SIGMA` times the pixel
-noise and two counts. The sky does that on a colour sensor, whose raw green sites take in about
-twice what the red and blue ones do; a gradient across the frame, however steep, does not (it
-shifts both diagonals alike). Its colour cannot be picked.
+noise (and two counts, for a frame of whole counts). The sky does that on a colour sensor, whose
+raw green sites take in about twice what the red and blue ones do; a gradient across the frame,
+however steep, does not (it shifts both diagonals alike), nor does a frame without noise. Its
+colour cannot be picked.
 """
 
 from __future__ import annotations
@@ -97,15 +98,27 @@ def _offset(value: object) -> int:
 def site_pattern(data: NDArray) -> bool:
     """Whether the levels (medians, :func:`site_levels`) of the four sites of the 2 x 2 cells of
     ``data`` (H, W) form a checkerboard: half the difference of the sums of the two diagonals of the
-    cell exceeds :data:`MIN_CHECKERBOARD_SIGMA` times the pixel noise and two counts. A linear
-    gradient adds the same to both sums."""
+    cell exceeds :data:`MIN_CHECKERBOARD_SIGMA` times the pixel noise and, for counts (integers,
+    also in a float file), two counts, which the medians of whole counts can differ by. A linear
+    gradient adds the same to both sums; a frame without noise (a rendering) is never taken."""
     if data.ndim != 2 or min(data.shape) < 4:
         return False
     levels, noise = site_levels(data)
-    if not (np.isfinite(levels).all() and np.isfinite(noise)):
+    if not (np.isfinite(levels).all() and np.isfinite(noise)) or noise <= 0:
         return False
     checkerboard = 0.5 * abs(float(levels[0, 0] + levels[1, 1] - levels[0, 1] - levels[1, 0]))
-    return checkerboard > max(MIN_CHECKERBOARD_SIGMA * noise, 2.0)
+    return checkerboard > max(MIN_CHECKERBOARD_SIGMA * noise, 2.0 * _count_step(levels, data))
+
+
+def _count_step(levels: NDArray[np.float64], data: NDArray) -> float:
+    """1.0 when ``data`` holds whole counts (an integer type, or a float one whose site levels and a
+    sample of pixels are whole numbers), else 0.0 (a scaled float frame, e.g. 0 to 1)."""
+    if data.dtype.kind in "iub":
+        return 1.0
+    sample = np.asarray(data[:: max(1, data.shape[0] // 64), :: max(1, data.shape[1] // 64)], dtype=np.float64)
+    sample = sample[np.isfinite(sample)]
+    whole = np.all(levels == np.round(levels)) and np.all(sample == np.round(sample))
+    return 1.0 if whole else 0.0
 
 
 def site_levels(data: NDArray) -> tuple[NDArray[np.float64], float]:
