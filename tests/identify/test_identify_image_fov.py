@@ -72,6 +72,8 @@ def test_a_wcs_of_cdelt_and_pc_and_its_precedence_over_the_focal_length():
     expected = _deg_atan2(4000 * math.radians(scale) / 2, 1.0)  # deg, 1.67
     assert stated_fov_deg(header, 4000, 3000) == pytest.approx(expected, rel=1e-12)
     assert stated_fov_deg({"CTYPE1": "RA---TAN", "CDELT1": -scale}, 4000, 3000) == pytest.approx(expected, rel=1e-12)
+    transposed = {"CTYPE1": "DEC--TAN", "CTYPE2": "RA---TAN", "CD1_1": 0.0, "CD2_1": scale}  # deg per px
+    assert stated_fov_deg(transposed, 4000, 3000) == pytest.approx(expected, rel=1e-12)
     nominal = {"FOCALLEN": 400.0, "XPIXSZ": 3.76}  # 2.15 deg: a WCS measured on the sky comes first
     assert stated_fov_deg({**nominal, **header}, 4000, 3000) == pytest.approx(expected, rel=1e-12)
 

@@ -11,9 +11,10 @@ telescope below it is found only with its field. Cameras write it, in this order
 2. ``FocalLength`` with ``FocalPlaneXResolution``, ``FocalPlaneYResolution`` and
    ``FocalPlaneResolutionUnit`` (EXIF, most interchangeable-lens cameras): the sensor's size is
    the camera's image size (``ExifImageWidth`` x ``ExifImageHeight``) over those resolutions.
-3. A celestial FITS WCS (``CTYPE1`` of RA, GLON or ELON; a plate solve's, astrometry.net's or
-   ours): its scale along the image's rows, from ``CD1_1`` and ``CD2_1`` (deg per px), else
-   ``CDELT1`` with ``PC1_1`` and ``PC2_1`` (1 and 0 when missing), through a gnomonic projection.
+3. A celestial FITS WCS (``CTYPE1`` of RA, DEC, GLON, GLAT, ELON or ELAT; a plate solve's,
+   astrometry.net's or ours): its scale along the image's rows, from ``CD1_1`` and ``CD2_1`` (deg
+   per px), else ``CDELT1`` with ``PC1_1`` and ``PC2_1`` (1 and 0 when missing), through a
+   gnomonic projection.
 4. ``FOCALLEN`` (mm) with ``XPIXSZ`` (um, the binned pixel's width, MaxIm DL's convention) (FITS,
    as N.I.N.A., SharpCap and MaxIm DL write them).
 
@@ -110,8 +111,9 @@ def _fits_pixel_size(header: Mapping[str, Any], width: int) -> float | None:
     return width * pixel_um * 1e-3 / (2.0 * focal)
 
 
-CELESTIAL_AXES = ("RA", "GLON", "ELON")
-"""``CTYPE1`` prefixes of a celestial WCS whose scale :func:`_fits_wcs_scale` reads."""
+CELESTIAL_AXES = ("RA", "DEC", "GLON", "GLAT", "ELON", "ELAT")
+"""``CTYPE1`` prefixes of a celestial WCS whose scale :func:`_fits_wcs_scale` reads (the latitude
+too: a WCS may put it on the first axis, and the scale along the rows is the same)."""
 
 
 def _fits_wcs_scale(header: Mapping[str, Any], width: int) -> float | None:
