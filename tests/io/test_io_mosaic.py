@@ -84,11 +84,11 @@ def test_site_pattern_found_in_a_mosaic_not_in_grey_noise():
     rng = np.random.default_rng(1)
     grey = rng.normal(500.0, 5.0, (300, 400)).round().astype(np.uint16)
     assert not site_pattern(grey)
-    assert not site_pattern(np.full((300, 400), 7, np.uint16))  # flat: no spread at all
-    step = np.zeros((300, 400))
-    step[::2, ::2] = 6.0  # 1.2 sigma: within what noise and stars do
+    assert not site_pattern(np.full((300, 400), 7, np.uint16))  # flat: no noise, never a mosaic
+    step = np.zeros((300, 400))  # one site raised: a checkerboard of half the step
+    step[::2, ::2] = 16.0  # checkerboard 8 counts, under twice the noise (10 counts)
     assert not site_pattern(grey + step)
-    step[::2, ::2] = 25.0  # 5 sigma: a sky of another colour than the filters'
+    step[::2, ::2] = 24.0  # checkerboard 12 counts, over it
     assert site_pattern(grey + step)
     assert not site_pattern(np.zeros((3, 400)))
 

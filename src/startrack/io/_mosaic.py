@@ -172,7 +172,7 @@ def _cleaned(block: NDArray[np.float32], origin: tuple[int, int], levels: NDArra
     if not np.isfinite(noise) or noise <= 0 or not np.isfinite(levels).all():
         return region
     y0, x0 = origin
-    excess = block[1:-1, 1:-1] - _site_tile(levels.astype(np.float32), (y0 - 1, x0 - 1), (h + 2, w + 2))
+    excess = block[1:-1, 1:-1] - site_tile(levels.astype(np.float32), (y0 - 1, x0 - 1), (h + 2, w + 2))
     centre, peak, light = excess[1:-1, 1:-1], np.full((h, w), -np.inf, np.float32), excess[1:-1, 1:-1].copy()
     for dy, dx in ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)):
         neighbour = excess[1 + dy: 1 + dy + h, 1 + dx: 1 + dx + w]
@@ -186,7 +186,7 @@ def _cleaned(block: NDArray[np.float32], origin: tuple[int, int], levels: NDArra
     return region
 
 
-def _site_tile(cell: NDArray, origin: tuple[int, int], shape: tuple[int, int]) -> NDArray:
+def site_tile(cell: NDArray, origin: tuple[int, int], shape: tuple[int, int]) -> NDArray:
     """The 2 x 2 ``cell`` (one value per site, indexed by the image's row and column parity) laid
     over a region of ``shape`` whose first pixel is image pixel ``origin`` = (row, column)."""
     rolled = np.roll(cell, (-origin[0], -origin[1]), axis=(0, 1))
@@ -213,7 +213,7 @@ def mosaic_channel(data: NDArray, pattern: str, channel: int) -> NDArray[np.floa
     bilinearly from them (module docstring). float32 (H, W)."""
     mask = _colour_mask(pattern, channel)
     plane = np.asarray(data, dtype=np.float32)
-    return mosaic_luminance(plane * _site_tile(mask, (0, 0), plane.shape)) / np.float32(mask.mean())
+    return mosaic_luminance(plane * site_tile(mask, (0, 0), plane.shape)) / np.float32(mask.mean())
 
 
 def _colour_mask(pattern: str, channel: int) -> NDArray[np.float32]:
@@ -243,7 +243,7 @@ def mosaic_plane(data: NDArray, pattern: str | None = None, channel: int | None 
         r1 = min(data.shape[0], r0 + STRIP_ROWS)
         cleaned = _cleaned(padded[r0: r1 + 6], (r0 - 1, -1), levels, noise)  # image rows r0 - 1 to r1
         if mask is not None:
-            cleaned *= _site_tile(mask, (r0 - 1, -1), cleaned.shape)
+            cleaned *= site_tile(mask, (r0 - 1, -1), cleaned.shape)
         out[r0:r1] = _kernel(cleaned)
     if mask is not None:
         out /= np.float32(mask.mean())

@@ -37,7 +37,7 @@ from ..errors import ImageReadError, InvalidInputError
 from ._channels import channel_index
 from ._image import Image
 from ._limits import check_image_size
-from ._mosaic import BAYER_PATTERNS, _site_tile, mosaic_plane
+from ._mosaic import BAYER_PATTERNS, mosaic_plane, site_tile
 
 _COLOURS = {"r": (0,), "g": (1, 3), "b": (2,)}
 
@@ -161,7 +161,7 @@ def _read_mosaic(path: str | os.PathLike, max_pixels: int | None) -> tuple[NDArr
             pattern = "".join(chr(raw.color_desc[i]) for i in sites.ravel())  # color_desc: b"RGBG"
             black = np.asarray(raw.black_level_per_channel, dtype=np.float32)[sites]
             mosaic = raw.raw_image_visible.astype(np.float32)
-            mosaic -= _site_tile(black, (0, 0), mosaic.shape)
+            mosaic -= site_tile(black, (0, 0), mosaic.shape)
             header = _exif(raw)
     except (rawpy.LibRawError, OSError) as exc:
         raise ImageReadError(f"{path}: not a readable RAW file ({exc})") from exc
