@@ -25,9 +25,10 @@ Read six ways, each solved with ``solve_image`` and no hint:
   :func:`startrack.io.full_resolution_xy`), which is how ``read_image`` read RAW files before it
   read them as the FITS mosaics above.
 
-Printed per way and case: rendered stars with a detection within 1.5 px (mean per frame) and
-detections with no rendered star within 1.5 px, the RMS centroid error over the stars every way
-found, the frames solved, and the median boresight error against the truth.
+Printed per way and case: rendered stars matched to a detection within 1.5 px (mean per frame; each
+detection matched once, ``detect_frames.match``) and the detections left unmatched, the RMS
+centroid error over the stars every way found, the frames solved, and the median boresight error
+against the truth.
 
     .venv/bin/python benchmarks/bayer_fits.py [--frames 10] [--seed 1]
 """
@@ -43,10 +44,16 @@ from pathlib import Path
 import numpy as np
 from astropy.io import fits
 
-from startrack import solve_image
-from startrack.camera import Camera
-from startrack.io import bayer_cells, full_resolution_xy
-from startrack.simulate import get_sensor_preset, random_attitude, simulate_frame
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from detect_frames import match  # noqa: E402
+
+from startrack import solve_image  # noqa: E402
+from startrack.camera import Camera  # noqa: E402
+from startrack.frames import angle_between, boresight  # noqa: E402
+from startrack.io import bayer_cells, full_resolution_xy  # noqa: E402
+from startrack.simulate import get_sensor_preset, random_attitude, simulate_frame  # noqa: E402
+from startrack.units import ARCSEC  # noqa: E402
 
 CAMERA = Camera.from_fov(2000, 1500, 15.0)
 SHAPE = (CAMERA.height, CAMERA.width)
@@ -115,16 +122,6 @@ def solve_ways(grey: np.ndarray, mosaic: np.ndarray, folder: Path) -> dict[str, 
     return out
 
 
-def nearest(x: np.ndarray, y: np.ndarray, tx: np.ndarray, ty: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """For each point (tx, ty), the distance to the nearest of the points (x, y) (inf when there are
-    none) and that one's index."""
-    if x.size == 0:
-        return np.full(tx.size, np.inf), np.zeros(tx.size, dtype=int)
-    d = np.hypot(tx[:, None] - x[None], ty[:, None] - y[None])
-    j = d.argmin(axis=1)
-    return d[np.arange(tx.size), j], j
-
-
 def frame_rows(psf_sigma_px: float, frames: int, seed: int, hot: float = 0.0) -> dict[str, dict[str, list]]:
     """Per way, per frame: rendered stars found, other detections, the squared centroid errors (px^2)
     of the stars every way found, and the boresight error (arcsec, NaN when not solved)."""
@@ -140,28 +137,32 @@ def frame_rows(psf_sigma_px: float, frames: int, seed: int, hot: float = 0.0) ->
             light = sim.image.astype(float) - sensor.detector.bias_adu
             grey, mosaic = with_hot_pixels((exposed(light, 1.0, GREY_SKY_E, rng), exposed(light, response, sky, rng)),
                                            hot, rng)
-            solved = solve_ways(grey, mosaic, Path(tmp))
             tx, ty = np.asarray(sim.truth.x), np.asarray(sim.truth.y)
-            dist = {way: nearest(x, y, tx, ty) for way, (_, x, y) in solved.items()}
-            everywhere = np.all([d < MATCH_PX for d, _ in dist.values()], axis=0)
-            bore = truth.inv().apply([0.0, 0.0, 1.0])
-            for way, (solution, x, _) in solved.items():
-                d = dist[way][0]
-                found = d < MATCH_PX
-                row = rows[way]
-                row["found"].append(int(found.sum()))
-                row["other"].append(int(np.sum(nearest(tx, ty, x, solved[way][2])[0] >= MATCH_PX)))
-                row["err2"].extend(d[everywhere] ** 2)
-                row["bore"].append(boresight_error_arcsec(solution, bore))
+            add_frame(rows, solve_ways(grey, mosaic, Path(tmp)), tx, ty, truth)
     return rows
 
 
-def boresight_error_arcsec(solution, bore: np.ndarray) -> float:
-    """Angle (arcsec) between the solved boresight and the true one ``bore`` (ICRS unit vector)."""
+def add_frame(rows: dict[str, dict[str, list]], solved: dict[str, tuple], tx: np.ndarray, ty: np.ndarray,
+              truth) -> None:
+    """One frame's figures per way into ``rows``: each rendered star (tx, ty) matched to one
+    detection within :data:`MATCH_PX` (:func:`detect_frames.match`, each detection used once)."""
+    matched = {way: match(tx, ty, x, y, MATCH_PX) for way, (_, x, y) in solved.items()}
+    everywhere = np.all([found for _, found in matched.values()], axis=0)
+    for way, (solution, x, y) in solved.items():
+        index, found = matched[way]
+        row = rows[way]
+        row["found"].append(int(found.sum()))
+        row["other"].append(int(x.size - found.sum()))
+        j = index[everywhere]
+        row["err2"].extend((x[j] - tx[everywhere]) ** 2 + (y[j] - ty[everywhere]) ** 2)
+        row["bore"].append(boresight_error_arcsec(solution, truth))
+
+
+def boresight_error_arcsec(solution, truth) -> float:
+    """Angle (arcsec) between the solved and the true boresight (NaN when not solved)."""
     if not solution.solved:
         return float("nan")
-    solved = solution.rot_cam_from_icrs.inv().apply([0.0, 0.0, 1.0])
-    return float(np.degrees(np.arccos(np.clip(solved @ bore, -1.0, 1.0))) * 3600.0)
+    return float(angle_between(boresight(solution.rot_cam_from_icrs), boresight(truth)) / ARCSEC)
 
 
 def print_rows(psf_sigma_px: float, hot: float, rows: dict[str, dict[str, list]]) -> None:

@@ -6,8 +6,8 @@ A RAW file holds one count per photosite under a colour filter (the Bayer mosaic
   at full resolution, its hot sites replaced and its colours evened out by the colour-neutral
   3 x 3 kernel of :mod:`startrack.io._mosaic`, as for a one-shot-colour camera's FITS frame.
   Positions and a WCS refer to the sensor's pixels. On the simulated frames of
-  ``benchmarks/bayer_fits.py`` it finds 43 % and 38 % more stars than the cell sums below (PSF sd
-  1.0 and 1.6 px), centroids 0.74 and 0.87 times their RMS error.
+  ``benchmarks/bayer_fits.py`` it finds 42 % and 39 % more stars than the cell sums below (PSF sd
+  1.0 and 1.6 px), centroids 0.70 and 0.86 times their RMS error.
 * :func:`read_raw`, for calibration work that wants whole photosites: the mosaic reduced cell by
   cell. Each 2 x 2 cell (R, G, G, B in some order) becomes one pixel, either the **sum** of its
   four counts (the colour rule of :mod:`startrack.io._channels`: counts stay counts) or one colour
