@@ -314,10 +314,12 @@ def announce_mosaic(image: Image) -> None:
     (:mod:`startrack.io._mosaic`); nothing for any other image."""
     if image.mosaic is None:
         return
-    named = f"pattern {image.mosaic}" if image.mosaic != "unknown" else \
-        "no BAYERPAT card; its sites' levels form a checkerboard"
-    sys.stderr.write(f"{image.path}: a colour-filter (Bayer) mosaic ({named}): read at full resolution, its colour "
-                     "sites evened out (docs/io.md)\n")
+    if image.mosaic == "unknown":
+        named = "a colour-filter (Bayer) mosaic (no BAYERPAT card; its sites' levels form a checkerboard)"
+    else:
+        kind = "colour-filter (Bayer) mosaic" if len(image.mosaic) == 4 else "colour-filter mosaic"
+        named = f"a {kind} (pattern {image.mosaic})"
+    sys.stderr.write(f"{image.path}: {named}: read at full resolution, its colour sites evened out (docs/io.md)\n")
 
 
 def print_json(data: dict[str, Any]) -> None:

@@ -64,10 +64,11 @@ class Image:
         luminance's when the colour planes are summed. 0.0 for a lossless file or an array.
         Detection raises its noise floor to match (:func:`startrack.detect.compression_noise_floor`).
     mosaic : str or None
-        For a FITS frame or a camera RAW file of a colour-filter (Bayer) mosaic, read at full
-        resolution as :mod:`startrack.io._mosaic` says (``data`` is then float32): the pattern of
-        its first cell ("RGGB", ...), or "unknown" when a FITS header names none and the pixels
-        showed it. None for any other image.
+        For a FITS frame or a camera RAW file of a colour-filter mosaic, read at full resolution
+        as :mod:`startrack.io._mosaic` (and :mod:`startrack.io._cfa`) says (``data`` is then
+        float32): the pattern of its first cell ("RGGB", ...; the rows of a longer one joined by
+        "/", e.g. an X-Trans sensor's "GGRGGB/GGBGGR/BRGRBG/GGBGGR/GGRGGB/RBGBRG"), or "unknown"
+        when a FITS header names none and the pixels showed it. None for any other image.
     """
 
     data: NDArray
@@ -192,7 +193,7 @@ def _check_gzip_holds_fits(path: Path) -> None:
 
 RAW_SUFFIXES = frozenset({".dng", ".cr2", ".cr3", ".nef", ".arw", ".raf", ".orf", ".rw2", ".pef", ".srw"})
 """Camera RAW file names, decoded through rawpy by :func:`startrack.io._raw.read_raw_plane` (the
-Bayer mosaic at full resolution, as :mod:`startrack.io._mosaic` reads a FITS one)."""
+mosaic at full resolution, as :mod:`startrack.io._mosaic` reads a FITS one)."""
 IMAGE_SUFFIXES = frozenset({".fits", ".fit", ".fts", ".png", ".jpg", ".jpeg", ".tif", ".tiff", ".heic", ".heif",
                             *RAW_SUFFIXES})
 """File names that folders of images are searched for (the reader then checks the content)."""

@@ -172,18 +172,26 @@ def _cleaned(block: NDArray[np.float32], origin: tuple[int, int], levels: NDArra
     if not np.isfinite(noise) or noise <= 0 or not np.isfinite(levels).all():
         return region
     y0, x0 = origin
-    excess = block[1:-1, 1:-1] - site_tile(levels.astype(np.float32), (y0 - 1, x0 - 1), (h + 2, w + 2))
+    hot = hot_sites(block[1:-1, 1:-1] - site_tile(levels.astype(np.float32), (y0 - 1, x0 - 1), (h + 2, w + 2)), noise)
+    if hot.any():
+        same = [block[2 + dy: 2 + dy + h, 2 + dx: 2 + dx + w][hot] for dy, dx in ((-2, 0), (2, 0), (0, -2), (0, 2))]
+        region[hot] = np.median(np.stack(same), axis=0)
+    return region
+
+
+def hot_sites(excess: NDArray[np.float32], noise: float) -> NDArray[np.bool_]:
+    """Which pixels of the inner (h, w) of ``excess`` (h + 2, w + 2: each pixel's value over its
+    site's level) are hot (:func:`without_hot_sites`): at least :data:`HOT_SIGMA` times ``noise``
+    over the level, the largest of their 3 x 3 neighbourhood, with more than
+    :data:`HOT_PEAK_FRACTION` of its light."""
+    h, w = excess.shape[0] - 2, excess.shape[1] - 2
     centre, peak, light = excess[1:-1, 1:-1], np.full((h, w), -np.inf, np.float32), excess[1:-1, 1:-1].copy()
     for dy, dx in ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)):
         neighbour = excess[1 + dy: 1 + dy + h, 1 + dx: 1 + dx + w]
         np.maximum(peak, neighbour, out=peak)
         light += neighbour
     with np.errstate(invalid="ignore"):
-        hot = (centre > HOT_SIGMA * noise) & (centre >= peak) & (centre > HOT_PEAK_FRACTION * light)
-    if hot.any():
-        same = [block[2 + dy: 2 + dy + h, 2 + dx: 2 + dx + w][hot] for dy, dx in ((-2, 0), (2, 0), (0, -2), (0, 2))]
-        region[hot] = np.median(np.stack(same), axis=0)
-    return region
+        return (centre > HOT_SIGMA * noise) & (centre >= peak) & (centre > HOT_PEAK_FRACTION * light)
 
 
 def site_tile(cell: NDArray, origin: tuple[int, int], shape: tuple[int, int]) -> NDArray:

@@ -1,10 +1,13 @@
-"""Camera RAW files (CR2, NEF, ARW, DNG, ...) through ``rawpy`` (LibRaw), without demosaicing.
+"""Camera RAW files (CR2, NEF, ARW, RAF, DNG, ...) through ``rawpy`` (LibRaw), without demosaicing.
 
-A RAW file holds one count per photosite under a colour filter (the Bayer mosaic). Two readings:
+A RAW file holds one count per photosite under a colour filter (a Bayer mosaic, or Fujifilm's
+6 x 6 X-Trans); a few hold a monochrome sensor's counts, or three colour planes already
+interpolated (a linear DNG, as phones write "ProRAW"). Two readings:
 
 * :func:`read_raw_plane`, what :func:`startrack.io.read_image` (and so every solve) does: the mosaic
   at full resolution, its hot sites replaced and its colours evened out by the colour-neutral
-  3 x 3 kernel of :mod:`startrack.io._mosaic`, as for a one-shot-colour camera's FITS frame.
+  3 x 3 kernel of :mod:`startrack.io._mosaic` (or site by site, :mod:`startrack.io._cfa`, for a
+  pattern other than 2 x 2), as for a one-shot-colour camera's FITS frame.
   Positions and a WCS refer to the sensor's pixels. On the simulated frames of
   ``benchmarks/bayer_fits.py`` it finds 42 % and 39 % more stars than the cell sums below (PSF sd
   1.0 and 1.6 px), centroids 0.70 and 0.86 times their RMS error.
@@ -29,15 +32,17 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import ImageReadError, InvalidInputError
-from ._channels import channel_index
+from ..errors import ImageReadError, InvalidInputError, require
+from ._cfa import cfa_plane, pattern_tile
+from ._channels import channel_index, to_single_channel
 from ._image import Image
 from ._limits import check_image_size
-from ._mosaic import BAYER_PATTERNS, mosaic_plane, site_tile
+from ._mosaic import BAYER_PATTERNS, mosaic_plane
 
 _COLOURS = {"r": (0,), "g": (1, 3), "b": (2,)}
 
@@ -111,18 +116,28 @@ def read_raw(path: str | os.PathLike, channel: str | None = None, max_pixels: in
         (:func:`full_resolution_xy`), and when LibRaw reports them ``ExposureTime`` (s) and
         ``DateTimeOriginal`` (EXIF format, the camera clock) for :func:`.ground.time_from_header`.
     """
-    mosaic, pattern, header = _read_mosaic(path, max_pixels)
-    indices = np.array([_LIBRAW_INDEX[c] for c in pattern]).reshape(2, 2)
-    data = bayer_cells(np.rint(mosaic).astype(np.int64), indices, channel)
-    header = {"raw_cells": True, "raw_origin_xy": cell_origin(indices, channel), **header}
+    sensor = _read_sensor(path, max_pixels)
+    if sensor.pattern not in BAYER_PATTERNS:
+        held = "a monochrome sensor or colour planes" if sensor.pattern is None else f"the pattern {sensor.pattern}"
+        raise ImageReadError(f"{path}: cell sums need a 2 x 2 Bayer mosaic, the file holds {held} "
+                             "(read_image reads it at full resolution)")
+    colours = require(sensor.colours, "the mosaic's colours")
+    data = bayer_cells(np.rint(sensor.data).astype(np.int64), colours, channel)
+    header = {"raw_cells": True, "raw_origin_xy": cell_origin(colours, channel), **sensor.header}
     return Image(data=data, path=Path(path), header=header, bit_depth=16, colour=True)
 
 
 def read_raw_plane(path: str | os.PathLike, channel: str | None = None, max_pixels: int | None = None) -> Image:
-    """Read a camera RAW file at full resolution, as :func:`startrack.io.read_image` does: the
-    mosaic above its black levels through :func:`._mosaic.mosaic_plane` (hot sites replaced, then
-    the colour-neutral 3 x 3 kernel, or one colour's sites interpolated), so that positions and a
-    WCS refer to the sensor's own pixels.
+    """Read a camera RAW file at full resolution, as :func:`startrack.io.read_image` does, so that
+    positions and a WCS refer to the sensor's own pixels. By what the sensor recorded:
+
+    * a 2 x 2 Bayer mosaic above its black levels through :func:`._mosaic.mosaic_plane` (hot sites
+      replaced, then the colour-neutral 3 x 3 kernel, or one colour's sites interpolated);
+    * any other filter array of red, green and blue (Fujifilm's 6 x 6 X-Trans) through
+      :func:`._cfa.cfa_plane`, the same colour mix from weights of its own at every site;
+    * a monochrome sensor's counts as they are;
+    * a linear DNG's three colour planes (an already demosaiced file, as phones write "ProRAW"),
+      summed by the colour rule of :mod:`._channels` or one of them.
 
     Parameters
     ----------
@@ -133,22 +148,46 @@ def read_raw_plane(path: str | os.PathLike, channel: str | None = None, max_pixe
     -------
     Image
         ``data`` (H, W) float32 counts above the black level (LibRaw's visible area), ``mosaic``
-        the pattern of its first cell ("RGGB", ...), and the header of :func:`read_raw` without
-        its cell keys.
+        the filter pattern ("RGGB", ...; the rows of a longer one joined by "/", e.g.
+        "GGRGGB/GGBGGR/BRGRBG/GGBGGR/GGRGGB/RBGBRG"; None for a monochrome sensor or a linear
+        DNG), and the header of :func:`read_raw` without its cell keys.
     """
     index = channel_index(channel)  # checked before the file is read
-    mosaic, pattern, header = _read_mosaic(path, max_pixels)
-    return Image(data=mosaic_plane(mosaic, pattern, index), path=Path(path), header=header, bit_depth=16,
-                 colour=True, mosaic=pattern)
+    sensor = _read_sensor(path, max_pixels)
+    if sensor.colours is None:
+        plane = to_single_channel(sensor.data, index).astype(np.float32, copy=False)
+    elif sensor.pattern in BAYER_PATTERNS:
+        plane = mosaic_plane(sensor.data, sensor.pattern, index)
+    else:
+        try:
+            plane = cfa_plane(sensor.data, sensor.colours, index)
+        except InvalidInputError as exc:
+            raise ImageReadError(f"{path}: {exc}") from None
+    return Image(data=plane, path=Path(path), header=sensor.header, bit_depth=16,
+                 colour=sensor.data.ndim == 3 or sensor.pattern is not None, mosaic=sensor.pattern)
 
 
 _LIBRAW_INDEX = {"R": 0, "G": 1, "B": 2}
 """LibRaw's colour index of each filter letter (its second green, 3, is read as 1)."""
 
 
-def _read_mosaic(path: str | os.PathLike, max_pixels: int | None) -> tuple[NDArray[np.float32], str, dict]:
-    """The visible mosaic of a RAW file less each site's black level (float32, (H, W)), the
-    pattern of its first cell ("RGGB", ...) and the header (:func:`_exif`)."""
+class RawSensor(NamedTuple):
+    """What a RAW file's sensor recorded, less each site's black level (float32)."""
+
+    data: NDArray[np.float32]
+    """(H, W) counts of a mosaic or a monochrome sensor, or (H, W, 3) R, G, B planes of a linear
+    DNG."""
+    colours: NDArray[np.intp] | None
+    """(P, Q) colour of each site of one period of the mosaic from its first pixel (0 R, 1 G,
+    2 B); None for a monochrome sensor or colour planes."""
+    pattern: str | None
+    """The pattern's letters, row by row (rows joined by "/" beyond 2 x 2); None with ``colours``."""
+    header: dict
+    """:func:`_exif`."""
+
+
+def _read_sensor(path: str | os.PathLike, max_pixels: int | None) -> RawSensor:
+    """The visible part of what a RAW file's sensor recorded (:class:`RawSensor`)."""
     try:
         import rawpy
     except ImportError:  # pragma: no cover - depends on the environment
@@ -156,25 +195,44 @@ def _read_mosaic(path: str | os.PathLike, max_pixels: int | None) -> tuple[NDArr
     try:
         with rawpy.imread(os.fspath(path)) as raw:
             check_image_size(int(raw.sizes.width), int(raw.sizes.height), max_pixels, path)
-            _bayer_pattern(raw, path)  # refuses X-Trans and other patterns than 2 x 2
-            sites = np.asarray(raw.raw_colors_visible[:2, :2])
-            pattern = "".join(chr(raw.color_desc[i]) for i in sites.ravel())  # color_desc: b"RGBG"
-            black = np.asarray(raw.black_level_per_channel, dtype=np.float32)[sites]
+            if raw.raw_type == rawpy.RawType.Stack:
+                return RawSensor(_colour_planes(raw, path), None, None, _exif(raw))
+            black = np.asarray(raw.black_level_per_channel, dtype=np.float32)
+            if raw.num_colors == 1:
+                return RawSensor(raw.raw_image_visible.astype(np.float32) - black[0], None, None, _exif(raw))
+            colours, pattern = _filter_pattern(raw, path)
+            sites = np.asarray(raw.raw_colors_visible[: colours.shape[0], : colours.shape[1]])
             mosaic = raw.raw_image_visible.astype(np.float32)
-            mosaic -= site_tile(black, (0, 0), mosaic.shape)
-            header = _exif(raw)
+            mosaic -= pattern_tile(black[sites], (0, 0), mosaic.shape)
+            return RawSensor(mosaic, colours, pattern, _exif(raw))
     except (rawpy.LibRawError, OSError) as exc:
         raise ImageReadError(f"{path}: not a readable RAW file ({exc})") from exc
-    if pattern not in BAYER_PATTERNS:
-        raise ImageReadError(f"{path}: not a 2 x 2 Bayer mosaic of R, G and B (its first cell reads {pattern!r})")
-    return mosaic, pattern, header
 
 
-def _bayer_pattern(raw, path) -> NDArray:
-    pattern = raw.raw_pattern
-    if pattern is None or np.shape(pattern) != (2, 2) or sorted(np.ravel(pattern)) not in ([0, 1, 2, 3], [0, 1, 1, 2]):
-        raise ImageReadError(f"{path}: not a 2 x 2 Bayer mosaic (LibRaw pattern {pattern!r})")
-    return np.asarray(pattern)
+def _colour_planes(raw, path) -> NDArray[np.float32]:
+    """A linear DNG's planes (LibRaw's "stack" of one value per colour per pixel) above their
+    black levels, in the order R, G, B: (H, W, 3) float32."""
+    letters = [chr(c) for c in raw.color_desc[: raw.num_colors]]
+    if sorted(letters) != ["B", "G", "R"]:
+        raise ImageReadError(f"{path}: colour planes {''.join(letters)!r}; only red, green and blue are read")
+    order = [letters.index(c) for c in "RGB"]
+    black = np.asarray(raw.black_level_per_channel, dtype=np.float32)[order]
+    return raw.raw_image_visible[..., order].astype(np.float32) - black
+
+
+def _filter_pattern(raw, path) -> tuple[NDArray[np.intp], str]:
+    """The colour (0 R, 1 G, 2 B) of each site of one period of the mosaic from its visible first
+    pixel, (P, Q), and its letters (rows joined by "/" beyond 2 x 2)."""
+    period = np.shape(raw.raw_pattern) if raw.raw_pattern is not None else (0, 0)
+    sites = np.asarray(raw.raw_colors_visible[: period[0], : period[-1]]) if len(period) == 2 else np.zeros((0, 0))
+    letters = np.array([[chr(raw.color_desc[i]) for i in row] for row in sites], dtype="U1").reshape(sites.shape)
+    if sites.shape != period or set(letters.ravel()) != set(_LIBRAW_INDEX):  # red, green, blue and nothing else
+        read = "/".join("".join(row) for row in letters) or "no pattern"
+        raise ImageReadError(f"{path}: its sensor's filters read {read!r}, not red, green and blue; startrack reads "
+                             "mosaics of R, G and B filters (Bayer, X-Trans), monochrome sensors and linear DNGs")
+    colours = np.vectorize(_LIBRAW_INDEX.__getitem__, otypes=[np.intp])(letters)
+    rows = ["".join(row) for row in letters]
+    return colours, "".join(rows) if colours.shape == (2, 2) else "/".join(rows)
 
 
 def _exif(raw) -> dict:

@@ -275,6 +275,6 @@ def _raw_size(path: Path) -> tuple[int, int]:
     try:
         raw.open_file(str(path))
         sizes = raw.sizes
-        return int(sizes.raw_width), int(sizes.raw_height)
+        return int(sizes.width), int(sizes.height)  # the visible area, as the reader checks and reads it
     finally:
         raw.close()
