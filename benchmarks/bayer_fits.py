@@ -1,5 +1,5 @@
-"""One-shot-colour (Bayer mosaic) FITS frames: detected and solved as read, against the same
-frame from a grey sensor.
+"""One-shot-colour (Bayer mosaic) FITS frames, and an X-Trans mosaic: detected and solved as read,
+against the same frame from a grey sensor.
 
 A one-shot-colour astronomy camera saves raw photosites under an RGGB filter mosaic
 (:mod:`startrack.io._mosaic`). Each frame here is the Hipparcos sky (V <= 8.5) through a 2000 x
@@ -10,9 +10,11 @@ star's raw colour) over a light-polluted sky of its own colour (R 250, G 350, B 
 with Poisson and 5 e- read noise and a bias of 100 ADU at 1 e-/ADU. The grey sensor's frame has
 the same stars at a response of 1 and a sky of 350 e-. Three cases: a PSF of 1.0 and of 1.6 px sd,
 and 1.0 px with 0.05 % of the pixels hot (the same pixels in both frames, 300-5000 counts added:
-an uncooled sensor in a long exposure, no dark frame subtracted).
+an uncooled sensor in a long exposure, no dark frame subtracted). The same light also falls on a
+sensor under Fujifilm's 6 x 6 X-Trans filters (the same responses and sky colours; the same hot
+pixels).
 
-Read six ways, each solved with ``solve_image`` and no hint:
+Read eight ways, each solved with ``solve_image`` and no hint:
 
 * ``grey sensor``: the grey frame (the reference);
 * ``mosaic as grey pixels``: the mosaic's array as it is (how a FITS file was read before
@@ -23,7 +25,10 @@ Read six ways, each solved with ``solve_image`` and no hint:
 * ``2 x 2 cell sums``: the cells summed as :func:`startrack.io._raw.read_raw` sums a camera RAW
   file's (:func:`startrack.io.bayer_cells`, half resolution; positions mapped back with
   :func:`startrack.io.full_resolution_xy`), which is how ``read_image`` read RAW files before it
-  read them as the FITS mosaics above.
+  read them as the FITS mosaics above;
+* ``X-Trans as grey pixels``: the X-Trans frame's array as it is;
+* ``X-Trans, site by site``: that frame less its bias through :func:`startrack.io.mosaic_to_plane`
+  (:mod:`startrack.io._cfa`, as ``read_image`` reads such a camera RAW file).
 
 Printed per way and case: rendered stars matched to a detection within 1.5 px (mean per frame; each
 detection matched once, ``detect_frames.match``) and the detections left unmatched, the RMS
@@ -51,13 +56,14 @@ from detect_frames import match  # noqa: E402
 from startrack import solve_image  # noqa: E402
 from startrack.camera import Camera  # noqa: E402
 from startrack.frames import angle_between, boresight  # noqa: E402
-from startrack.io import bayer_cells, full_resolution_xy  # noqa: E402
+from startrack.io import bayer_cells, full_resolution_xy, mosaic_to_plane  # noqa: E402
 from startrack.simulate import get_sensor_preset, random_attitude, simulate_frame  # noqa: E402
 from startrack.units import ARCSEC  # noqa: E402
 
 CAMERA = Camera.from_fov(2000, 1500, 15.0)
 SHAPE = (CAMERA.height, CAMERA.width)
 PATTERN = "RGGB"
+XTRANS = "GGRGGB/GGBGGR/BRGRBG/GGBGGR/GGRGGB/RBGBRG"
 RESPONSE = {"R": 0.45, "G": 1.0, "B": 0.6}
 SKY_E = {"R": 250.0, "G": 350.0, "B": 120.0}
 GREY_SKY_E, BIAS_ADU, READ_NOISE_E, MAX_MAG = 350.0, 100.0, 5.0, 8.5
@@ -65,13 +71,16 @@ MATCH_PX = 1.5
 CASES = ((1.0, 0.0), (1.6, 0.0), (1.0, 0.0005))
 """(PSF sigma px, fraction of the pixels hot) of each table."""
 WAYS = ("grey sensor", "mosaic as grey pixels", "FITS, BAYERPAT", "FITS, no BAYERPAT", "FITS, BAYERPAT, green",
-        "2 x 2 cell sums")
+        "2 x 2 cell sums", "X-Trans as grey pixels", "X-Trans, site by site")
 
 
-def site_map(values: dict[str, float], shape: tuple[int, int]) -> np.ndarray:
-    """The value of each pixel's filter colour, for the :data:`PATTERN` mosaic of ``shape``."""
-    cell = np.array([values[c] for c in PATTERN], dtype=float).reshape(2, 2)
-    return np.tile(cell, (shape[0] // 2 + 1, shape[1] // 2 + 1))[:shape[0], :shape[1]]
+def site_map(values: dict[str, float], shape: tuple[int, int], pattern: str = PATTERN) -> np.ndarray:
+    """The value of each pixel's filter colour, for the mosaic of ``shape`` whose first cell is
+    ``pattern`` (four letters, or rows joined by "/")."""
+    rows = pattern.split("/") if "/" in pattern else [pattern[:2], pattern[2:]]
+    cell = np.array([[values[c] for c in row] for row in rows], dtype=float)
+    reps = (shape[0] // cell.shape[0] + 1, shape[1] // cell.shape[1] + 1)
+    return np.tile(cell, reps)[:shape[0], :shape[1]]
 
 
 def exposed(light_e: np.ndarray, response: np.ndarray | float, sky_e: np.ndarray | float,
@@ -105,7 +114,7 @@ def fits_file(folder: Path, name: str, data: np.ndarray, pattern: str | None) ->
     return path
 
 
-def solve_ways(grey: np.ndarray, mosaic: np.ndarray, folder: Path) -> dict[str, tuple]:
+def solve_ways(grey: np.ndarray, mosaic: np.ndarray, xtrans: np.ndarray, folder: Path) -> dict[str, tuple]:
     """Each way's (solution, detected x, detected y) in full-resolution pixels."""
     with_card, without = fits_file(folder, "card", mosaic, PATTERN), fits_file(folder, "plain", mosaic, None)
     out = {}
@@ -113,7 +122,10 @@ def solve_ways(grey: np.ndarray, mosaic: np.ndarray, folder: Path) -> dict[str, 
                                 ("FITS, BAYERPAT", with_card, {}), ("FITS, no BAYERPAT", without, {}),
                                 ("FITS, BAYERPAT, green", with_card, {"channel": "g"}),
                                 ("2 x 2 cell sums", bayer_cells(mosaic.astype(np.int64) - int(BIAS_ADU),
-                                                                np.array([[0, 1], [3, 2]])), {})):
+                                                                np.array([[0, 1], [3, 2]])), {}),
+                                ("X-Trans as grey pixels", xtrans, {}),
+                                ("X-Trans, site by site", mosaic_to_plane(xtrans.astype(np.float32) - BIAS_ADU, XTRANS),
+                                 {})):
         solution = solve_image(source, **kwargs)
         x, y = solution.detections.x, solution.detections.y
         if way == "2 x 2 cell sums":
@@ -130,15 +142,17 @@ def frame_rows(psf_sigma_px: float, frames: int, seed: int, hot: float = 0.0) ->
     rng = np.random.default_rng([seed, int(psf_sigma_px * 10), int(hot * 1e5)])
     rows: dict[str, dict[str, list]] = {way: {"found": [], "other": [], "err2": [], "bore": []} for way in WAYS}
     response, sky = site_map(RESPONSE, SHAPE), site_map(SKY_E, SHAPE)
+    x_response, x_sky = site_map(RESPONSE, SHAPE, XTRANS), site_map(SKY_E, SHAPE, XTRANS)
     with tempfile.TemporaryDirectory() as tmp:
         for _ in range(frames):
             truth = random_attitude(rng)
             sim = simulate_frame(CAMERA, truth, max_mag=MAX_MAG, sensor=sensor, epoch_jyear=2000.0, noise=False)
             light = sim.image.astype(float) - sensor.detector.bias_adu
-            grey, mosaic = with_hot_pixels((exposed(light, 1.0, GREY_SKY_E, rng), exposed(light, response, sky, rng)),
-                                           hot, rng)
+            frames = (exposed(light, 1.0, GREY_SKY_E, rng), exposed(light, response, sky, rng),
+                      exposed(light, x_response, x_sky, rng))
+            grey, mosaic, xtrans = with_hot_pixels(frames, hot, rng)
             tx, ty = np.asarray(sim.truth.x), np.asarray(sim.truth.y)
-            add_frame(rows, solve_ways(grey, mosaic, Path(tmp)), tx, ty, truth)
+            add_frame(rows, solve_ways(grey, mosaic, xtrans, Path(tmp)), tx, ty, truth)
     return rows
 
 

@@ -123,3 +123,22 @@ def test_colour_levels_and_noise():
     assert noise == pytest.approx(6.0, rel=0.1)
     levels, noise = colour_levels(data[:3, :5], XTRANS)  # smaller than a period: no noise to measure
     assert np.isnan(noise)
+
+
+def test_mosaic_to_plane_reads_a_cameras_array_as_a_file_would_be_read():
+    from startrack.io import mosaic_to_plane
+
+    rng = np.random.default_rng(6)
+    bayer = 400.0 * RESPONSE[colour_map(RGGB, (40, 50))] + rng.normal(0, 3.0, (40, 50))
+    np.testing.assert_array_equal(mosaic_to_plane(bayer, "rggb"), mosaic_plane(bayer, "RGGB"))
+    np.testing.assert_array_equal(mosaic_to_plane(bayer, "RGGB", "b"), mosaic_plane(bayer, "RGGB", 2))
+    xtrans = 400.0 * RESPONSE[colour_map(XTRANS, (40, 50))] + rng.normal(0, 3.0, (40, 50))
+    text = "GGRGGB/GGBGGR/BRGRBG/GGBGGR/GGRGGB/RBGBRG"
+    np.testing.assert_array_equal(mosaic_to_plane(xtrans, text, "g"), cfa_plane(xtrans, XTRANS, 1))
+    for bad in ("RGGX", "RG/G", "RRGG/RRGG", "", "GGRGGB/GGBGG"):
+        with pytest.raises(InvalidInputError, match="a mosaic pattern must be"):
+            mosaic_to_plane(bayer, bad)
+    with pytest.raises(InvalidInputError, match="2-D array"):
+        mosaic_to_plane(bayer[..., None], "RGGB")
+    with pytest.raises(InvalidInputError, match="channel"):
+        mosaic_to_plane(bayer, "RGGB", "alpha")

@@ -6,6 +6,8 @@
   header, before any pixel is decoded (raise the limit with ``max_pixels``).
 * :func:`write_png`, :func:`write_tiff` and :func:`write_fits` write by the rules of
   :mod:`startrack.io._atomic` (never over an input, a complete write or nothing).
+* :func:`mosaic_to_plane` turns a raw colour-filter mosaic (Bayer, X-Trans) from a camera's own
+  software into the plane ``read_image`` would read from its FITS or RAW file.
 * :func:`read_star_list` reads CSV star lists (x, y in our 0-based pixel convention).
 * :func:`in_name_order` orders a folder's images by name, numbers compared as numbers.
 
@@ -24,6 +26,7 @@ from .. import _exports_of, _lazy_exports
 
 if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
     from ._atomic import atomic_path, discard, open_output, remove_stale_temps, temp_name, write_output
+    from ._cfa import mosaic_to_plane
     from ._channels import channel_index, to_single_channel
     from ._file_order import in_name_order, natural_key
     from ._fits_cards import BITPIX_VALUES

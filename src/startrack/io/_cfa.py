@@ -21,10 +21,11 @@ level, with the median of the sites of their colour within two pixels.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidInputError
-from ._mosaic import STRIP_ROWS, hot_sites
+from ._channels import channel_index
+from ._mosaic import BAYER_PATTERNS, STRIP_ROWS, hot_sites, mosaic_plane
 
 NEUTRAL_MIX = np.array([0.25, 0.5, 0.25])
 """The share of red, green and blue in every output pixel of a luminance (the share of each colour
@@ -210,3 +211,52 @@ def cfa_plane(data: NDArray, colours: NDArray[np.integer], channel: int | None =
         cleaned = cleaned_block(padded[r0: r1 + 6], (r0 - 1, -1), colours, levels, noise)  # image rows r0 - 1 to r1
         out[r0:r1] = _correlated(cleaned, (r0, 0), weights)
     return out
+
+
+def mosaic_to_plane(data: ArrayLike, pattern: str, channel: str | int | None = None) -> NDArray[np.float32]:
+    """The full-resolution plane of a raw colour-filter mosaic, as :func:`startrack.io.read_image`
+    reads one from a FITS or camera RAW file: for an array a camera's own software gave.
+
+    Parameters
+    ----------
+    data : array_like, shape (H, W)
+        The photosites' counts (above the bias or black level, if the colours are to be right).
+    pattern : str
+        The filters from the array's first pixel, row by row: four letters for a 2 x 2 Bayer
+        pattern ("RGGB", "BGGR", "GRBG", "GBRG"), or the rows of a longer one joined by "/" (an
+        X-Trans sensor's "GGRGGB/GGBGGR/BRGRBG/GGBGGR/GGRGGB/RBGBRG"); any case.
+    channel : {None, "r", "g", "b", 0, 1, 2}
+        None for the colour-neutral luminance, else that colour's sites interpolated.
+
+    Returns
+    -------
+    ndarray, float32, shape (H, W)
+        Hot sites replaced, in the units of ``data`` (:mod:`._mosaic`, :mod:`._cfa`).
+
+    Raises
+    ------
+    InvalidInputError
+        For a pattern of other letters than R, G, B, rows of unequal length, a pattern missing a
+        colour or leaving one out of some site's 3 x 3 neighbourhood, or an array that is not 2-D.
+    """
+    array = np.asarray(data)
+    if array.ndim != 2:
+        raise InvalidInputError(f"a mosaic must be a 2-D array of photosites, got shape {array.shape}")
+    colours = pattern_colours(pattern)
+    index = channel_index(channel)
+    text = "".join("RGB"[c] for c in colours.ravel())
+    if colours.shape == (2, 2) and text in BAYER_PATTERNS:
+        return mosaic_plane(array, text, index)
+    return cfa_plane(array, colours, index)
+
+
+def pattern_colours(pattern: str) -> NDArray[np.intp]:
+    """The colours (0 R, 1 G, 2 B), shape (P, Q), of a pattern written as :func:`mosaic_to_plane`
+    takes it; InvalidInputError for anything else."""
+    text = str(pattern).strip().upper()
+    rows = text.split("/") if "/" in text else [text[:2], text[2:]] if len(text) == 4 else [text]
+    valid = len({len(row) for row in rows}) == 1 and set("".join(rows)) == set("RGB")
+    if not valid:
+        raise InvalidInputError(f"a mosaic pattern must be four letters of R, G and B (e.g. 'RGGB') or equal rows "
+                                f"of them joined by '/' (e.g. an X-Trans 'GGRGGB/GGBGGR/...'), got {pattern!r}")
+    return np.array([["RGB".index(c) for c in row] for row in rows], dtype=np.intp)

@@ -7,9 +7,9 @@ NINA, SharpCap, ASIAIR, INDI, MaxIm DL). Read as a grey image, such a frame is a
 sky differs from site to site (the filters pass different light, the sky's colour is not the
 stars'), every star is cut into a pattern of bright and dark pixels, and the detector suffers. In
 ``benchmarks/bayer_fits.py`` (simulated 15 deg frames, 10 per case) the mosaic read as grey pixels
-gave 63 % and 50 % of the stars a grey sensor's frame gives (PSF sd 1.0 and 1.6 px), their
-centroids 1.5 and 1.8 times farther off; with 0.05 % of its pixels hot, 170 false detections per
-frame beside 41 stars.
+gave 64 % and 47 % of the stars a grey sensor's frame gives (PSF sd 1.0 and 1.6 px), their
+centroids 1.5 and 1.9 times farther off; with 0.05 % of its pixels hot, 171 false detections per
+frame beside 44 stars.
 
 The mosaic is turned into one plane by correlating it with the 3 x 3 kernel
 [1, 2, 1] x [1, 2, 1] / 16 (:func:`mosaic_luminance`). Whichever site it is centred on, the kernel
@@ -22,8 +22,8 @@ overlays refer to the file's own pixels (camera RAW files are read the same way,
 less than the detector's own smoothing; it does not depend on the pattern nor on the row order
 (``ROWORDER``).
 Hot pixels are replaced first (:func:`without_hot_sites`), since the kernel would make stars of
-them. Read so, the same frames gave 89 % of the grey sensor's stars, centroids 1.03 and 1.08 times
-its RMS error, and 4.3 false detections per frame with the hot pixels. Both steps cost 10.5 ms on
+them. Read so, the same frames gave 88 % and 89 % of the grey sensor's stars, centroids 1.23 and
+1.11 times its RMS error, and 3.8 false detections per frame with the hot pixels. Both steps cost 10.5 ms on
 a 1024 x 1024 frame and 0.47 s on a 6248 x 4176 one (medians of 30 and 3 runs).
 
 One colour (``channel``) is taken from the sites of that colour alone, interpolated bilinearly in
