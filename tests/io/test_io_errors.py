@@ -117,23 +117,6 @@ def test_fits_without_image(tmp_path):
     _expect(path, "no 2-D image")
 
 
-def test_png16_colour_is_refused_rather_than_cut_to_8_bits(tmp_path):
-    import struct
-    import zlib
-
-    def chunk(kind, data):
-        crc = struct.pack(">I", zlib.crc32(kind + data))
-        return struct.pack(">I", len(data)) + kind + data + crc
-
-    rgb16 = (NOISE[:4, :5].astype(">u2") * 257)
-    rows = b"".join(b"\0" + row.tobytes() for row in rgb16)
-    png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 5, 4, 16, 2, 0, 0, 0))
-           + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
-    path = tmp_path / "rgb16.png"
-    path.write_bytes(png)
-    _expect(path, "16-bit colour PNG")
-
-
 def test_real_truncated_png(realdata_dir):
     """median_image.png in the shared real data stops after 64 KiB, inside its image data."""
     path = realdata_dir / "UBNanosatLab-openstartracker" / "median_image.png"

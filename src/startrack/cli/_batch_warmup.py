@@ -109,7 +109,10 @@ def _detection(image: NDArray | None, every_detection: bool) -> None:
     from ..detect import warm_up_detect
 
     if every_detection:
+        from ..io import warm_up_png16
+
         warm_up_detect()
+        warm_up_png16()
     elif image is not None:
         warm_up_detect((image.dtype,), channels=image.shape[2] if image.ndim == 3 else 1)
 

@@ -50,7 +50,7 @@ def png_data_size(width: int, height: int, bit_depth: int, colour_type: int, int
     return total
 
 
-def _png_chunks(fh: BinaryIO):
+def png_chunks(fh: BinaryIO):
     """(type, length) of each chunk of a PNG file, with ``fh`` at the chunk's data; stops at IEND
     or where the file ends."""
     fh.seek(8)
@@ -90,7 +90,7 @@ def png_missing_data(fh: BinaryIO) -> str | None:
     expected = inflated = 0
     inflater = zlib.decompressobj()
     try:
-        for kind, length in _png_chunks(fh):
+        for kind, length in png_chunks(fh):
             if kind == b"IHDR" and length >= 13:
                 width, height, bits, colour, _, _, interlace = struct.unpack(">IIBBBBB", fh.read(13))
                 expected = png_data_size(width, height, bits, colour, interlace == 1)

@@ -18,7 +18,7 @@ Pillow mode            array                   bit depth
 =====================  ======================  =========
 
 Pillow silently keeps only the high byte of 16-bit colour samples, so 16-bit colour TIFFs are
-decoded by :mod:`startrack.io._tiff` and 16-bit colour PNGs are refused. A truncated file raises
+decoded by :mod:`startrack.io._tiff` and 16-bit colour PNGs by :mod:`startrack.io._png16`. A truncated file raises
 :class:`~startrack.errors.ImageReadError` even if ``PIL.ImageFile.LOAD_TRUNCATED_IMAGES`` was
 set elsewhere, and so does a PNG or JPEG whose structure is whole but whose pixel data stop early
 (:mod:`startrack.io._pixel_data`). EXIF orientation is recorded in the header but never applied: the array keeps
@@ -44,6 +44,7 @@ from PIL import Image as PILImage
 from ..errors import ImageReadError
 from ._limits import check_image_size
 from ._pixel_data import JpegLayout, jpeg_layout, png_missing_data, probe_stream
+from ._png16 import is_png16_colour, read_png16_colour
 from ._tiff import is_tiff16_colour, read_tiff16_colour
 
 SUPPORTED_PILLOW_FORMATS = ("PNG", "JPEG", "MPO", "TIFF")
@@ -187,14 +188,6 @@ def _to_array(image: PILImage.Image, declared_bits: int | None) -> tuple[NDArray
     raise ImageReadError(f"Pillow image mode {mode!r} is not supported")
 
 
-def _check_png16_colour(head: bytes, path: Path) -> None:
-    if head[:8] == b"\x89PNG\r\n\x1a\n" and len(head) > 25 and head[24] == 16 and head[25] in (2, 4, 6):
-        raise ImageReadError(
-            f"{path}: 16-bit colour PNG cannot be read without losing the low 8 bits (Pillow "
-            "keeps only the high byte); save it as 16-bit greyscale PNG, 16-bit TIFF or FITS"
-        )
-
-
 def _load(image: PILImage.Image, path: Path, name: str) -> None:
     """Decode ``image``'s pixels (of a ``name`` file) strictly (:func:`_strict_pillow`)."""
     try:
@@ -226,6 +219,8 @@ def _missing_data(image: PILImage.Image, fh: BinaryIO, layout: JpegLayout | None
 def _decode(image: PILImage.Image, head: bytes, fh: BinaryIO, path: Path) -> tuple[NDArray, int]:
     if isinstance(image, TiffImagePlugin.TiffImageFile) and is_tiff16_colour(image.tag_v2):
         return read_tiff16_colour(path, fh, image.tag_v2), 16
+    if image.format == "PNG" and is_png16_colour(head):
+        return read_png16_colour(path, fh), 16
     layout = jpeg_layout(fh) if image.format in _JPEG_FORMATS else None
     with _pixel_source(image, fh, layout, path) as source:
         _load(source, path, str(image.format))
@@ -291,7 +286,6 @@ def read_raster(path: Path, max_pixels: int | None = None, *, kind: str | None =
     with open(path, "rb") as fh:
         head = fh.read(32)
         fh.seek(0)
-        _check_png16_colour(head, path)
         with _open(fh, path, strict_metadata=kind not in ("JPEG", "PNG")) as image:
             if image.format not in SUPPORTED_PILLOW_FORMATS:
                 raise ImageReadError(f"{path}: unsupported image format {image.format}")
