@@ -177,11 +177,9 @@ def add_new_regions(base: Regions, extra: Regions, values: NDArray, unsplit: NDA
         return grow(extra.select(quiet), values.shape, np.ones(int(quiet.sum()), dtype=bool))
     if len(extra) == 0:
         return base
-    owner = np.full(values.shape, -1, dtype=np.int64)
-    owner[base.y, base.x] = base.index
-    overlap = extra.max(owner[extra.y, extra.x])  # a base region touching it, or -1
-    peak = extra.argmax(values[extra.y, extra.x])
-    home = owner[extra.y[peak], extra.x[peak]]
+    owner = owners(base, extra.y, extra.x, values.shape[1])
+    overlap = extra.max(owner)  # a base region touching it, or -1
+    home = owner[extra.argmax(values[extra.y, extra.x])]
     blended = (np.bincount(home[home >= 0], minlength=len(base)) >= 2) & ~unsplit
     from_extra = ((overlap < 0) & quiet) | ((home >= 0) & blended[np.maximum(home, 0)])
     keep_base = ~blended
@@ -190,6 +188,19 @@ def add_new_regions(base: Regions, extra: Regions, values: NDArray, unsplit: NDA
     kept = base.select(keep_base)
     combined = _concat(kept, extra.select(from_extra))
     return grow(combined, values.shape, np.arange(len(combined)) >= len(kept))
+
+
+def owners(regions: Regions, y: NDArray, x: NDArray, width: int) -> NDArray[np.int64]:
+    """The region of ``regions`` (whose pixels are distinct) holding each pixel (y, x) (shape
+    (M,)), -1 for a pixel of none; found among the regions' pixels (sorted by their index in a
+    frame ``width`` pixels wide), not in a frame-sized map (64 MB of int64 for an 8 Mpx strip)."""
+    if len(regions.y) == 0:
+        return np.full(np.shape(y), -1, dtype=np.int64)
+    keys = regions.y.astype(np.int64) * width + regions.x
+    order = np.argsort(keys, kind="stable")
+    query = np.asarray(y, dtype=np.int64) * width + x
+    at = np.minimum(np.searchsorted(keys[order], query), keys.size - 1)
+    return np.where(keys[order][at] == query, regions.index[order][at].astype(np.int64), -1)
 
 
 def ring_noise_ratio(data: NDArray, x: NDArray, y: NDArray, pixel_noise: float,
