@@ -1,5 +1,5 @@
-"""startrack solve IMAGE: lost-in-space attitude of an image (FITS, PNG, JPEG or TIFF, 8 or 16 bit,
-grey or colour). Stars are detected and identified against Hipparcos with no prior attitude; give
+"""startrack solve IMAGE: lost-in-space attitude of an image (FITS, PNG, JPEG, TIFF, 8 or 16 bit,
+grey or colour; HEIC; camera RAW). Stars are detected and identified against Hipparcos with no prior attitude; give
 the field of view if you know it (faster, more robust; 0.5 to 150 deg), else 3 to 100 deg are
 searched, after the field the image's header states when it lies beyond them (an ultra-wide lens's
 EXIF focal length, a FITS WCS's scale, a telescope's FOCALLEN and XPIXSZ), or before 90 to 150 deg
@@ -48,12 +48,12 @@ def _parser() -> argparse.ArgumentParser:
                                      epilog=SOLUTION_FORMATS + "\n" + batch_epilog(),
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("image", nargs="+", metavar="IMAGE",
-                        help="FITS, PNG, JPEG or TIFF file; several files or folders for a batch")
+                        help="FITS, PNG, JPEG, TIFF, HEIC or camera RAW file; several files or folders for a batch")
     add_fov_options(parser)
     add_method_option(parser)
     add_timeout_option(parser)
     parser.add_argument("--channel", choices=("r", "g", "b"),
-                        help="colour channel to use (default: the mean of R, G and B)")
+                        help="colour channel to use (default: the sum R + G + B)")
     add_epoch_option(parser)
     add_aspect_option(parser)
     add_parity_option(parser, "either")
