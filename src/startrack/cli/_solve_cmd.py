@@ -65,6 +65,10 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--wcs", metavar="OUT",
                         help="when solved, write the image's FITS WCS (TAN-SIP, FITS 1-based pixels) to OUT "
                              "(one image only)")
+    parser.add_argument("--new-fits", metavar="OUT.fits",
+                        help="when solved, write the image as startrack solved it, with its FITS WCS, to OUT.fits "
+                             "(astrometry.net's .new; a FITS file's own cards kept, its old WCS replaced; one image "
+                             "only)")
     parser.add_argument("--plot", metavar="OUT.png",
                         help="write a PNG of the image with its detections (grey circles) and, when solved, the "
                              "identified stars (green, HIP numbers) to OUT.png, solved or not (one image only; "
@@ -128,6 +132,10 @@ def main(argv: list[str]) -> int:
         from ..io import write_wcs  # astropy.wcs: loaded only when asked for
 
         write_wcs(args.wcs, solution.rot_cam_from_icrs, require(solution.camera, "the solution's camera"))
+    if args.new_fits and solution.solved:
+        from ..io import write_solved_fits
+
+        write_solved_fits(args.new_fits, image, solution.rot_cam_from_icrs, require(solution.camera, "its camera"))
     if args.plot:
         _write_plot(args.plot, image, solution, detections)
     return report(explain_blank(solution, detections, image), detections, args.json, ground=ground)
@@ -138,8 +146,10 @@ def _batch(args: argparse.Namespace, solver_options: dict, fov_options: dict) ->
     from ._batch import run_batch
     from ._batch_solve import solve_spec
 
-    if args.wcs or args.plot:
-        option = "--wcs writes the WCS" if args.wcs else "--plot draws the picture"
+    single = {"wcs": "--wcs writes the WCS", "new_fits": "--new-fits writes the image",
+              "plot": "--plot draws the picture"}
+    option = next((words for key, words in single.items() if getattr(args, key)), None)
+    if option is not None:
         raise InvalidInputError(f"{option} of one image; leave it out for a batch")
     if args.site or args.latitude_deg is not None or args.longitude_deg is not None:
         raise InvalidInputError("--site, --latitude-deg and --longitude-deg take one image; leave them out "

@@ -45,6 +45,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._png16 import warm_up_png16
     from ._raw import bayer_cells, cell_origin, full_resolution_xy, read_raw
     from ._solution_json import solution_to_dict, streak_fields
+    from ._solved_fits import write_solved_fits
     from ._starlist import read_star_list
     from ._targets import STDOUT, output_target, protect_inputs
     from ._tiff import tiff_bytes
