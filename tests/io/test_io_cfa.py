@@ -6,7 +6,16 @@ import numpy as np
 import pytest
 
 from startrack.errors import InvalidInputError
-from startrack.io._cfa import NEUTRAL_MIX, cfa_plane, colour_levels, pattern_tile, phase_indices, phase_weights
+from startrack.io._cfa import (
+    NEUTRAL_MIX,
+    cfa_plane,
+    cleaned_block,
+    colour_levels,
+    pattern_tile,
+    phase_indices,
+    phase_padded,
+    phase_weights,
+)
 from startrack.io._mosaic import mosaic_luminance, mosaic_plane
 from startrack.simulate import render_gaussian_psf
 from startrack.units import PIXEL
@@ -142,3 +151,19 @@ def test_mosaic_to_plane_reads_a_cameras_array_as_a_file_would_be_read():
         mosaic_to_plane(bayer[..., None], "RGGB")
     with pytest.raises(InvalidInputError, match="channel"):
         mosaic_to_plane(bayer, "RGGB", "alpha")
+
+
+def test_a_hot_site_with_no_finite_neighbour_of_its_colour_takes_its_colours_level():
+    rng = np.random.default_rng(7)
+    shape = (30, 36)
+    data = 200.0 * RESPONSE[colour_map(XTRANS, shape)] + rng.normal(0, 2.0, shape)
+    red = colour_map(XTRANS, shape) == 0
+    y, x = 12, 14
+    assert red[y, x]
+    window = (slice(y - 2, y + 3), slice(x - 2, x + 3))
+    assert red[y - 1: y + 2, x - 1: x + 2].sum() == 1  # no other red site in its 3 x 3
+    data[window] = np.where(red[window], np.nan, data[window])  # every red site within 2 px missing ...
+    data[y, x] = 5000.0  # ... but the hot one
+    levels, noise = colour_levels(data, XTRANS)
+    cleaned = cleaned_block(phase_padded(data, 2, XTRANS.shape), (0, 0), XTRANS, levels, noise)  # no RuntimeWarning
+    assert abs(cleaned[y, x] - 200.0 * RESPONSE[0]) < 10.0  # counts: the red level, not 5000

@@ -150,14 +150,15 @@ def cleaned_block(block: NDArray[np.float32], origin: tuple[int, int], colours: 
     level = np.nan_to_num(levels).astype(np.float32)[pattern_tile(colours, inner, (h + 2, w + 2))]
     hot = hot_sites(block[1:-1, 1:-1] - level, noise)
     if hot.any():
-        region[hot] = _same_colour_median(block, origin, colours, np.nonzero(hot))
+        region[hot] = _same_colour_median(block, origin, colours, np.nonzero(hot), levels)
     return region
 
 
 def _same_colour_median(block: NDArray[np.float32], origin: tuple[int, int], colours: NDArray[np.integer],
-                        where: tuple[NDArray[np.intp], ...]) -> NDArray[np.float32]:
+                        where: tuple[NDArray[np.intp], ...], levels: NDArray[np.float64]) -> NDArray[np.float32]:
     """For the pixels ``where`` (rows, columns of ``block[2:-2, 2:-2]``), the median of the other
-    pixels of their colour in their 5 x 5 neighbourhood in ``block``."""
+    finite pixels of their colour in their 5 x 5 neighbourhood in ``block``; their colour's level
+    (``levels``, shape (3,)) where there is none."""
     p, q = colours.shape
     ys, xs = where
     offsets = [(dy, dx) for dy in range(-2, 3) for dx in range(-2, 3) if dy or dx]
@@ -166,7 +167,10 @@ def _same_colour_median(block: NDArray[np.float32], origin: tuple[int, int], col
     for k, (dy, dx) in enumerate(offsets):
         same = colours[(origin[0] + ys + dy) % p, (origin[1] + xs + dx) % q] == own
         values[same, k] = block[2 + ys[same] + dy, 2 + xs[same] + dx]
-    return np.nanmedian(values, axis=1).astype(np.float32)
+    out = levels[own].astype(np.float32)
+    found = np.isfinite(values).any(axis=1)
+    out[found] = np.nanmedian(values[found], axis=1)
+    return out
 
 
 def _correlated(block: NDArray[np.float32], origin: tuple[int, int], weights: NDArray[np.float32]
