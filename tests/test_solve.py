@@ -80,6 +80,19 @@ def test_only_false_stars_are_refused(seed):
     assert solution.reason
 
 
+@pytest.mark.parametrize("line", ["straight", "bent", "zigzag"])
+def test_stars_along_a_line_are_not_solved(line):
+    """Spots laid along a line (which the false-match test, made for stars strewn over the image,
+    overrates) once gave a "solution" of 1 or 2 matched stars, or of 9 stars 74 px rms off its own
+    attitude; the final fit's checks (solve.MIN_SOLUTION_STARS, MAX_SOLUTION_RESIDUAL_PX) refuse them."""
+    i = np.arange(60.0 if line == "zigzag" else 30.0)
+    x, y = {"straight": (i * 10.0, np.full(i.size, 500.0)), "bent": (i * 30 + 3, 500 + 0.01 * i * i),
+            "zigzag": (i * 10.0, 500.0 + 0.5 * (i % 2))}[line]
+    solution = solve_stars(x, y, flux=10.0 ** (-0.4 * i), width=1024, height=1024)  # mag = i, as the CLI reads it
+    assert not solution.solved, (solution.matches.det_index if solution.matches else None)
+    assert solution.reason
+
+
 def test_too_few_stars_is_a_status_not_an_exception():
     solution = solve_stars([10.0, 20.0, 30.0], [5.0, 50.0, 9.0], width=100, height=100)
     assert solution.status is Status.TOO_FEW_STARS

@@ -28,6 +28,7 @@ from .identify import (
     FOV_DEG_TOLERANCE,
     MAX_FOV_DEG,
     MIN_FOV_DEG,
+    REMATCH_RADIUS_PX,
     Candidate,
     FieldStars,
     MatcherOptionsBase,
@@ -58,6 +59,18 @@ __all__ = ["DEFAULT_EPOCH_JYEAR", "DEFAULT_FOV_RANGE_DEG", "FOV_DEG_TOLERANCE", 
            "check_fov_deg", "epoch_jyear", "solve_image", "solve_stars"]
 
 
+MIN_SOLUTION_STARS = 3
+"""A solution rests on at least this many matched stars after the final fit: two give an exact
+attitude that nothing checks. A verified candidate whose fit keeps fewer (stars laid out along a
+line, which the false-match test, made for stars strewn over the image, overrates) is no match."""
+
+
+MAX_SOLUTION_RESIDUAL_PX = REMATCH_RADIUS_PX
+"""... and they lie within this many pixels rms of where its attitude puts them, the radius within
+which the final fit matched them: a fit that bends its lens to lay any line of stars on the
+catalog (focal length, aspect and k1 free) leaves the rigid attitude tens of pixels off them."""
+
+
 def _solution(problem: SolveRequest, stars: FieldStars, cand: Candidate, t0: float) -> AttitudeSolution:
     """The solution from a verified candidate: refined fit, then the Wahba attitude of all matched
     stars (Davenport's q-method: the same optimum as QUEST) with the QUEST measurement-model
@@ -72,8 +85,15 @@ def _solution(problem: SolveRequest, stars: FieldStars, cand: Candidate, t0: flo
     usable = np.isfinite(observed).all(axis=1)  # a star where a fitted wide lens cannot be inverted: left out
     if not usable.all():
         img, rows, ref, res_px, observed = img[usable], rows[usable], ref[usable], res_px[usable], observed[usable]
+    if len(img) < MIN_SOLUTION_STARS:
+        return _not_held(problem, t0, f"the final fit kept {len(img)} of its stars (at least {MIN_SOLUTION_STARS} "
+                                      "needed)")
     sigma_rad = max(math.sqrt(float(res_px @ res_px) / len(img)), 0.05) / math.sqrt(camera.fx * camera.fy)
     quat, _, residual_rad, covariance, (ra, dec, roll) = solution_terms(observed, ref, sigma_rad)  # >= 3 stars
+    rms_px = math.sqrt(float(np.mean(residual_rad**2)) * camera.fx * camera.fy)
+    if not rms_px <= MAX_SOLUTION_RESIDUAL_PX:
+        return _not_held(problem, t0, f"its {len(img)} stars lie {rms_px:.3g} px rms from where its attitude puts "
+                                      f"them (at most {MAX_SOLUTION_RESIDUAL_PX:g} px)")
     matches = StarMatches(status=Status.OK, det_index=problem.rows[img].astype(np.int64),
                           hip=_hip()[rows].astype(np.int64), cat_vectors=ref,
                           false_match_prob=cand.false_match_prob)
@@ -83,6 +103,13 @@ def _solution(problem: SolveRequest, stars: FieldStars, cand: Candidate, t0: flo
         fov_deg=camera.fov_deg, camera=camera, matches=matches, residuals_arcsec=residual_rad / ARCSEC,
         false_match_prob=cand.false_match_prob, solve_time_s=time.perf_counter() - t0,
         epoch_jyear=problem.epoch.jyear, epoch_source=problem.epoch.source)
+
+
+def _not_held(problem: SolveRequest, t0: float, why: str) -> AttitudeSolution:
+    """No match: the matcher's verified candidate did not survive the final fit, ``why``."""
+    return AttitudeSolution(status=Status.NO_MATCH, reason=f"a verified match did not hold: {why}",
+                            solve_time_s=time.perf_counter() - t0, epoch_jyear=problem.epoch.jyear,
+                            epoch_source=problem.epoch.source)
 
 
 def _hip() -> np.ndarray:

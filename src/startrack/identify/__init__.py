@@ -28,7 +28,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
         load_database,
     )
     from ._field_stars import FieldStars, field_stars
-    from ._final_fit import settle_matches
+    from ._final_fit import REMATCH_RADIUS_PX, settle_matches
     from ._guided import GuidedStars, guided_stars, with_guided_stars
     from ._image_epoch import DEFAULT_EPOCH_JYEAR, epoch_from_header, epoch_jyear, parse_utc, resolve_epoch
     from ._image_fov import stated_fov_deg, stated_search_range
