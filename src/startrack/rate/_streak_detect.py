@@ -24,6 +24,7 @@ from scipy import ndimage, signal
 
 from ..errors import InvalidInputError, as_float_array, checked_count, checked_number
 from ._segment_fit import line_kernel
+from ._streak_find import finite_frame
 
 RULES = ("robust", "mean")
 MIN_SNR = 10.0
@@ -164,8 +165,9 @@ def find_streaks(
         Regions sorted by decreasing flux.
     """
     img = as_float_array(image, "image")
-    if img.ndim != 2 or not np.all(np.isfinite(img)):
-        raise InvalidInputError(f"image must be a finite 2-D array, got shape {img.shape}")
+    if img.ndim != 2:
+        raise InvalidInputError(f"image must be a 2-D array (H, W), got shape {img.shape}")
+    img = finite_frame(img)  # NaN and infinite pixels filled with the median
     _check_search(threshold_sigma, smooth_sigma_px, min_area_px, margin_px, line_filter_px, min_snr)
     if not (isinstance(rule, str) and rule in RULES):
         raise InvalidInputError(f"rule must be one of {', '.join(RULES)}, got {rule!r}")

@@ -262,12 +262,33 @@ def _sky_noise(img: NDArray, sky: NDArray, bin_px: int, fallback: float) -> floa
     return sigma if sigma > 0 else fallback
 
 
+def finite_frame(image: NDArray) -> NDArray:
+    """``image`` itself when every pixel is finite, else a float copy whose NaN and infinite pixels
+    (a file's blank or masked pixels, a dead column) take the median of the finite ones: the streak
+    search and fits have no mask, and one such pixel made their sky statistics NaN.
+
+    Raises
+    ------
+    InvalidInputError
+        If no pixel is finite.
+    """
+    finite = np.isfinite(image)
+    if finite.all():
+        return image
+    if not finite.any():
+        raise InvalidInputError("image has no finite pixel value (every pixel is NaN or infinite)")
+    filled = np.array(image, dtype=np.float64 if image.dtype == np.float64 else np.float32)
+    filled[~finite] = np.median(filled[finite])
+    return filled
+
+
 def _checked_frame(image: ArrayLike, bin_px: int, line_bins: int) -> tuple[NDArray, float, float]:
     """The frame as an array with its background and robust noise (counts), after the checks of
     :func:`find_streak_candidates` (its Raises)."""
     img = np.asarray(image)
     if img.ndim != 2 or min(img.shape) < 8 * bin_px:
         raise InvalidInputError(f"image must be a 2-D frame of at least {8 * bin_px} px a side, got {img.shape}")
+    img = finite_frame(img)
     if line_bins < 1 or line_bins % 2 == 0:
         raise InvalidInputError(f"line_bins must be a positive odd number of blocks, got {line_bins}")
     background, noise = _median_sigma(img, 8)

@@ -58,7 +58,7 @@ from ..results import AttitudeSolution, StarMatches, Status
 from ..units import DEG
 from ._catalog_free import consensus
 from ._estimate import RateEstimate, checked_exposure, checked_prior, failed
-from ._streak_find import StreakCandidates, find_streak_candidates
+from ._streak_find import StreakCandidates, find_streak_candidates, finite_frame
 from ._streak_fit import StreakFits, first_guesses, fit_pixels, fit_streaks
 from ._streak_model import JointFit, Timing, fit_joint, predict
 from ._streak_predict import Field, Identified, concatenated, fit_predicted, v_mags, zero_point
@@ -278,6 +278,7 @@ def solve_streaked(
     img = np.asarray(image)
     if img.ndim != 2:
         raise InvalidInputError(f"image must be a 2-D array (H, W), got shape {img.shape}")
+    img = finite_frame(img)  # NaN and infinite pixels filled: the fits have no mask
     prior_omega_rad_s = checked_prior(prior_omega_rad_s)
     clock = Stages()
     timing = _timing(exposure_s, opts.line_time_s, img.shape[0])
