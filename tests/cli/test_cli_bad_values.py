@@ -58,3 +58,40 @@ def test_a_bad_value_is_one_line_and_exit_2(files, argv, words):
     assert code == 2 and out == ""
     assert err.count("\n") == 1 and words.format(d=files) in err, err
     assert not (files / "x.fits").exists() and not (files / "sim").exists()
+
+
+@pytest.fixture
+def odd_frames(files):
+    """``files`` plus a frame of NaN only and a dark frame of another size than f0.fits."""
+    write_fits(files / "nan.fits", np.full((64, 64), np.nan, np.float32))
+    write_fits(files / "dark32.fits", np.zeros((32, 32), np.float32))
+    return files
+
+
+@pytest.mark.parametrize("argv, words", [
+    # the solver's own words: "give fov_deg or a camera (or use method='quads' with a FOV range)"
+    (["solve", "{d}/frames/f0.fits", "--method", "pyramid"],
+     "--method pyramid needs the field of view to within 5 %: give --fov-deg or --camera"),
+    (["solve", "{d}/frames/f0.fits", "--method", "angle", "--fov-deg", 10, "--pixel-aspect", 0.9, 1.1],
+     "--method angle needs one pixel aspect"),
+    # "dark_frame must have the image's shape (64, 64), got (32, 32)": no file, a parameter's name
+    (["detect", "{d}/frames/f0.fits", "--dark", "{d}/dark32.fits"],
+     "--dark {d}/dark32.fits is 32 x 32 px and {d}/frames/f0.fits 64 x 64 px"),
+    # the image's problem without the image's name
+    (["detect", "{d}/nan.fits"], "startrack detect: error: {d}/nan.fits: image has no finite pixel"),
+    (["calibrate", "{d}/nan.fits"], "startrack calibrate: error: {d}/nan.fits: image has no finite pixel"),
+    # "[Errno 17] File exists", after every image was solved
+    (["analyse", "histograms", "{d}/frames/f0.fits", "--out", "{d}/afile"], "--out {d}/afile is a file; give a folder"),
+    # --fov-deg was silently ignored beside a camera preset
+    (["availability", "--camera", "far-mst", "--fov-deg", 10], "give --camera PRESET or --fov-deg F, not both"),
+])
+def test_fuzzed_inputs_are_one_line_naming_the_file_or_option(odd_frames, argv, words):
+    code, out, err = run(*[str(a).format(d=odd_frames) for a in argv])
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and words.format(d=odd_frames) in err, err
+
+
+@pytest.mark.parametrize("option", ["--wcs", "--new-fits", "--plot", "--camera"])
+def test_an_empty_name_is_refused_not_taken_as_no_option(files, option):
+    code, out, err = run("solve", files / "frames" / "f0.fits", option, "")
+    assert code == 2 and out == "" and f"argument {option}: expected a name, got ''" in err

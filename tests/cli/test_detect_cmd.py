@@ -72,4 +72,4 @@ def test_bad_input_exits_2(tmp_path, png):
     wrong = tmp_path / "wrong.png"
     write_png(wrong, np.zeros((10, 10), dtype=np.uint16))
     code, _, err = _run("detect", png, "--dark", wrong)
-    assert code == 2 and "dark_frame" in err
+    assert code == 2 and "a dark frame must have the image's size" in err

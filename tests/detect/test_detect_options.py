@@ -200,6 +200,18 @@ def test_median_dark_removes_hot_pixels(field):
         detect(frame, dark_frame=np.zeros((5, 5)))
 
 
+def test_a_dark_frames_missing_pixels_leave_those_pixels_out(field):
+    """NaN or infinite dark pixels gave warnings (inf - inf) and an infinite offset before; now the
+    image is NaN there (left out, as its own NaN pixels are) and the stars are found as without them."""
+    image, x, y, _ = field
+    dark_frame = np.full(SHAPE, 50.0)
+    dark_frame[3, 4], dark_frame[10, 20], dark_frame[30:32, :] = np.inf, -np.inf, np.nan
+    out = subtract_dark(image, dark_frame)
+    assert np.isnan(out[3, 4]) and np.isnan(out[31, 7]) and np.isfinite(out[5, 5])
+    np.testing.assert_allclose(out[5, 5], image[5, 5], atol=1e-3)  # counts: the median (50) added back
+    assert _found(detect(image, dark_frame=dark_frame), x, y).all()
+
+
 def test_row_reference_columns_remove_row_offsets(field):
     image, x, y, _ = field
     offsets = np.random.default_rng(9).normal(0, 40.0, SHAPE[0])[:, None]

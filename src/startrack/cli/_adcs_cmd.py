@@ -34,7 +34,7 @@ from ..adcs import (
 )
 from ..errors import InvalidInputError
 from ..io import read_json_file
-from ._common import exit_status_epilog, print_json
+from ._common import check_output_folder, exit_status_epilog, print_json
 from ._progress import ProgressBar, ensure_database_for
 
 EPILOG = """\
@@ -93,8 +93,7 @@ def _config(args: argparse.Namespace) -> LoopConfig:
 def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise InvalidInputError(f"--out {out} is a file; give a folder")
+    check_output_folder(out)
     config = _config(args)
     if config.feedback == "tracker":
         ensure_database_for(camera=config.tracker.camera)

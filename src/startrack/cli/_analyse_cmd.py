@@ -17,6 +17,7 @@ from pathlib import Path
 
 from ..analysis.postprocess import (
     ANALYSES,
+    UNREADABLE,
     AnalysisInfo,
     check_params,
     get_info,
@@ -29,6 +30,7 @@ from ._common import (
     add_fov_options,
     add_max_pixels_option,
     apply_max_pixels_option,
+    check_output_folder,
     exit_status_epilog,
     fov_kwargs,
     utc_offset_hours,
@@ -100,11 +102,13 @@ def main(argv: list[str]) -> int:
     for path in args.paths:
         if not Path(path).exists():
             raise InvalidInputError(f"{path}: no such file or folder")
+    out = Path(args.out) if args.out else Path("startrack-analysis") / info.name
+    check_output_folder(out)  # before the solves, not after them
     options = {**fov_kwargs(args), "channel": args.channel, "utc_offset_hours": args.utc_offset_hours}
     ensure_database_for(options["fov_deg"], options["fov_range_deg"], options["camera"])
     sets = [_solve(path, name, options) for path, name in zip(args.paths, _set_names(args.paths), strict=True)]
     result = run_analysis(info.name, sets, params)
-    written = result.write(Path(args.out) if args.out else Path("startrack-analysis") / info.name)
+    written = result.write(out)
     print(_summary_text(result, sets, written))
     return 0
 
@@ -113,8 +117,11 @@ def _solve(path: str, name: str, options: dict):
     progress = ProgressBar(f"solving {name}") if sys.stderr.isatty() else None
     result = records_from_images([path], solve_options=options, progress=progress, name=name)
     for record in result.records:  # say why an image gives nothing (unreadable, too large, not solved)
-        if not record.solution.solved:
-            print(f"{record.name}: {record.solution.status.name.lower()}: {record.solution.reason}", file=sys.stderr)
+        solution = record.solution
+        if solution.reason.startswith(UNREADABLE):
+            print(f"{record.name}: {solution.reason}", file=sys.stderr)
+        elif not solution.solved:
+            print(f"{record.name}: {solution.status.name.lower()}: {solution.reason}", file=sys.stderr)
     return result
 
 

@@ -22,7 +22,9 @@ from ._progress import ProgressBar
 
 
 def _camera(args) -> Camera:
-    if args.camera:
+    if args.camera is not None:
+        if args.fov_deg is not None:
+            raise InvalidInputError("--camera has its field of view; give --camera PRESET or --fov-deg F, not both")
         return get_preset(args.camera)
     if args.fov_deg is None:
         raise InvalidInputError("give --camera PRESET or --fov-deg F (with --width and --height)")

@@ -10,7 +10,7 @@ import dataclasses
 import json
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -18,6 +18,10 @@ from ..camera import Camera
 from ..errors import InvalidInputError, require
 from ..io import atomic_path, read_image
 from ..solve import solve_image
+
+if TYPE_CHECKING:
+    from ..io import Image
+    from ..results import AttitudeSolution
 from ._common import (
     add_epoch_option,
     add_fov_options,
@@ -115,7 +119,7 @@ def _from_stars(args) -> dict[str, Any]:
     solve_kw = {**fov_kwargs(args), "epoch": epoch_option(args), "parity": "normal"}
     images = [read_image(p, channel=args.channel) for p in args.images]
     _same_size(args.images, [img.data.shape[:2] for img in images])
-    solutions = [solve_image(img, **solve_kw) for img in images]
+    solutions = [_solved(path, img, **solve_kw) for path, img in zip(args.images, images, strict=True)]
     solved = [i for i, s in enumerate(solutions) if s.solved]
     if not solved:
         return {"status": "not_solved", "reason": "no image could be solved", "images": _per_image(args, solutions)}
@@ -124,7 +128,8 @@ def _from_stars(args) -> dict[str, Any]:
     result = _calibrated([solutions[i] for i in solved], start, fit)
     if result.status:  # one self-improving round: re-solve with the calibrated camera, fit again
         calibrated = require(result.camera, "the calibrated camera")
-        again = [solve_image(images[i], camera=calibrated, epoch=solve_kw["epoch"], parity="normal") for i in solved]
+        again = [_solved(args.images[i], images[i], camera=calibrated, epoch=solve_kw["epoch"], parity="normal")
+                 for i in solved]
         if all(s.solved for s in again):
             solutions = [again[solved.index(i)] if i in solved else s for i, s in enumerate(solutions)]
             redo = _calibrated(again, calibrated, fit)
@@ -134,6 +139,14 @@ def _from_stars(args) -> dict[str, Any]:
     camera = require(result.camera, "the calibrated camera")
     return {"status": "ok", "camera": camera_to_dict(camera), "sigma": result.sigma, "pruned": result.pruned,
             "rms_px": result.rms_px, "n_outliers": result.n_outliers, "images": _per_image(args, solutions)}
+
+
+def _solved(path: str, image: Image, **kwargs) -> AttitudeSolution:
+    """:func:`startrack.solve_image` of one image, a problem with its content named by its file."""
+    try:
+        return solve_image(image, **kwargs)
+    except InvalidInputError as exc:  # no finite pixel, too small...
+        raise InvalidInputError(f"{path}: {exc}") from exc
 
 
 def _same_size(paths, shapes) -> None:

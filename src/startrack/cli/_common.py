@@ -16,6 +16,7 @@ import math
 import re
 import sys
 import textwrap
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -145,7 +146,8 @@ def add_fov_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--fov-range-deg", type=float, nargs=2, metavar=("LO", "HI"),
                        help="range of horizontal fields of view to search, deg (default 3 100, the default "
                             "database's range)")
-    group.add_argument("--camera", metavar="PRESET", help="a calibrated camera preset (fixes the focal length)")
+    group.add_argument("--camera", metavar="PRESET", type=non_empty,
+                       help="a calibrated camera preset (fixes the focal length)")
 
 
 def add_method_option(parser: argparse.ArgumentParser) -> None:
@@ -169,8 +171,11 @@ def method_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     Raises
     ------
     InvalidInputError
-        A --timeout-s that is not a positive finite number of seconds.
+        A --timeout-s that is not a positive finite number of seconds; a --method other than quads
+        with no field of view to go by, or with a range of pixel aspects (said in the options'
+        words, before the solver says it in its arguments').
     """
+    _check_method_needs(args)
     if getattr(args, "timeout_s", None) is None:
         return {"method": args.method}
     from ..identify import options_for
@@ -178,6 +183,20 @@ def method_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     if not args.timeout_s > 0:  # NaN and infinities are refused with every float option
         raise InvalidInputError(f"--timeout-s must be a positive number of seconds, got {args.timeout_s:g}")
     return {"method": args.method, "options": options_for(args.method, timeout_s=args.timeout_s)}
+
+
+def _check_method_needs(args: argparse.Namespace) -> None:
+    """The matchers other than quads take a field of view known to a few per cent and one pixel
+    aspect (:mod:`startrack.identify._registry`)."""
+    method = getattr(args, "method", "quads")
+    if method == "quads":
+        return
+    if all(getattr(args, key, None) is None for key in ("fov_deg", "fov_range_deg", "camera")):
+        raise InvalidInputError(f"--method {method} needs the field of view to within 5 %: give --fov-deg or "
+                                "--camera, or leave --method out (quads searches a range of fields)")
+    if len(getattr(args, "pixel_aspect", None) or ()) == 2:
+        raise InvalidInputError(f"--method {method} needs one pixel aspect: give --pixel-aspect one number, or "
+                                "leave --method out (quads searches a range)")
 
 
 def add_epoch_option(parser: argparse.ArgumentParser) -> None:
@@ -309,6 +328,12 @@ def apply_max_pixels_option(args: argparse.Namespace) -> None:
     set_max_pixels(getattr(args, "max_pixels", None))
 
 
+def check_output_folder(folder: str | Path, option: str = "--out") -> None:
+    """Refuse an output folder (created if missing) that is an existing file, naming ``option``."""
+    if Path(folder).exists() and not Path(folder).is_dir():
+        raise InvalidInputError(f"{option} {folder} is a file; give a folder (it is created if missing)")
+
+
 def announce_mosaic(image: Image) -> None:
     """Say on standard error that ``image`` was a colour-filter mosaic read at full resolution
     (:mod:`startrack.io._mosaic`); nothing for any other image."""
@@ -409,6 +434,13 @@ def _streak_rows(streak: dict) -> list[tuple[str, str]]:
 
 def _finite_or_none(value: float) -> float | None:
     return float(value) if np.isfinite(value) else None
+
+
+def non_empty(text: str) -> str:
+    """argparse type: a name or a path that is not empty (an empty one was taken as not given)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"expected a name, got {text!r}")
+    return text
 
 
 def positive_count(text: str) -> int:

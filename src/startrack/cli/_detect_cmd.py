@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 
 from ..detect import CENTROIDERS, THRESHOLDS, DetectionDetails, StarDetector
-from ..errors import require
+from ..errors import InvalidInputError, require
 from ..io import read_image
 from ._batch import add_batch_options, batch_epilog, is_batch
 from ._batch_warmup import warm_up_detection
@@ -81,8 +81,15 @@ def main(argv: list[str]) -> int:
         return run_batch(detect_spec(detector), args.image, as_json=args.json, csv_out=args.csv, jobs=args.jobs)
     image = require(image, "the image")
     announce_mosaic(image)
+    if dark is not None and dark.shape[:2] != image.data.shape:
+        height, width = image.data.shape
+        raise InvalidInputError(f"--dark {args.dark} is {dark.shape[1]} x {dark.shape[0]} px and {args.image[0]} "
+                                f"{width} x {height} px; a dark frame must have the image's size")
     detector = detector.for_image(image)  # a JPEG's noise floor, in the settings the JSON records
-    details = detector.detect_details(image.data)
+    try:
+        details = detector.detect_details(image.data)
+    except InvalidInputError as exc:  # a problem with this image's content (no finite pixel, too small)
+        raise InvalidInputError(f"{args.image[0]}: {exc}") from exc
     if args.json:
         print_json(json_record(args.image[0], details, detector))
     else:

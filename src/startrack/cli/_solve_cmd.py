@@ -36,6 +36,7 @@ from ._common import (
     apply_max_pixels_option,
     fov_kwargs,
     method_kwargs,
+    non_empty,
     report,
     utc_offset_hours,
 )
@@ -62,14 +63,14 @@ def _parser() -> argparse.ArgumentParser:
                              "detected, keep those that stand above the image's own sky (0.1 wrong ones expected "
                              "per image) and refit the attitude on them too")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    parser.add_argument("--wcs", metavar="OUT",
+    parser.add_argument("--wcs", metavar="OUT", type=non_empty,
                         help="when solved, write the image's FITS WCS (TAN-SIP, FITS 1-based pixels) to OUT "
                              "(one image only)")
-    parser.add_argument("--new-fits", metavar="OUT.fits",
+    parser.add_argument("--new-fits", metavar="OUT.fits", type=non_empty,
                         help="when solved, write the image as startrack solved it, with its FITS WCS, to OUT.fits "
                              "(astrometry.net's .new; a FITS file's own cards kept, its old WCS replaced; one image "
                              "only)")
-    parser.add_argument("--plot", metavar="OUT.png",
+    parser.add_argument("--plot", metavar="OUT.png", type=non_empty,
                         help="write a PNG of the image with its detections (grey circles) and, when solved, the "
                              "identified stars (green, HIP numbers) to OUT.png, solved or not (one image only; "
                              "needs matplotlib, the plot extra)")

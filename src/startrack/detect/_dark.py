@@ -34,7 +34,8 @@ def median_frame(frames) -> NDArray[np.float32]:
 
 
 def subtract_dark(image: NDArray, dark: NDArray) -> NDArray[np.float32]:
-    """``image - dark + median(dark)`` as float32 (module docstring).
+    """``image - dark + median(dark)`` as float32 (module docstring); NaN where the dark frame is
+    NaN or infinite (the detector leaves such pixels out), the median over its finite pixels.
 
     Raises
     ------
@@ -49,7 +50,10 @@ def subtract_dark(image: NDArray, dark: NDArray) -> NDArray[np.float32]:
         raise InvalidInputError(
             f"dark_frame must have the image's shape {image.shape}, got {dark.shape}")
     dark = dark.astype(np.float32)
-    offset = np.float32(np.nanmedian(dark))
+    finite = np.isfinite(dark)
+    if not finite.all():  # a NaN or infinite dark pixel leaves that pixel out (NaN), as a NaN pixel of the image
+        dark = np.where(finite, dark, np.float32(np.nan))
+    offset = np.float32(np.median(dark[finite])) if finite.any() else np.float32(0.0)
     out = image.astype(np.float32)
     out -= dark
     out += offset

@@ -17,9 +17,9 @@ run again), and one module per analysis: :mod:`._histograms`, :mod:`._gallery`, 
 from ._core import AnalysisInfo, AnalysisResult, ResultSet, check_params, csv_cell, parse_param
 from ._corrections import pinhole
 from ._ground import error_arcsec
-from ._records_io import image_paths, record_pixels, records_from_images, true_rotation_from_file
+from ._records_io import UNREADABLE, image_paths, record_pixels, records_from_images, true_rotation_from_file
 from ._registry import ANALYSES, get_info, run_analysis
 
-__all__ = ["ANALYSES", "AnalysisInfo", "AnalysisResult", "ResultSet", "check_params", "csv_cell", "error_arcsec",
-           "get_info", "image_paths", "parse_param", "pinhole", "record_pixels", "records_from_images", "run_analysis",
-           "true_rotation_from_file"]
+__all__ = ["ANALYSES", "UNREADABLE", "AnalysisInfo", "AnalysisResult", "ResultSet", "check_params", "csv_cell",
+           "error_arcsec", "get_info", "image_paths", "parse_param", "pinhole", "record_pixels", "records_from_images",
+           "run_analysis", "true_rotation_from_file"]

@@ -50,6 +50,7 @@ from ._core import ResultSet
 KEEP_PIXELS_MAX = 64_000_000
 """Pixels of a set kept in memory (about 128 MB of 16-bit images); the rest are re-read."""
 UNREADABLE = "unreadable image: "
+"""How the reason of a record whose image could not be read (or was refused) begins."""
 _OPTION_KEYS = ("fov_deg", "fov_range_deg", "camera", "method", "epoch", "channel", "utc_offset_hours",
                 "site", "detector")
 _DETECTOR_FIELDS = tuple(f.name for f in fields(StarDetector))
