@@ -95,3 +95,14 @@ def test_fuzzed_inputs_are_one_line_naming_the_file_or_option(odd_frames, argv, 
 def test_an_empty_name_is_refused_not_taken_as_no_option(files, option):
     code, out, err = run("solve", files / "frames" / "f0.fits", option, "")
     assert code == 2 and out == "" and f"argument {option}: expected a name, got ''" in err
+
+
+@pytest.mark.parametrize("argv, words", [
+    # the run went to its end, then the noise model refused "latency_s ... <= 60"
+    (["adcs-demo", "--feedback", "tracker", "--duration-s", 2, "--latency-s", 1e9], "--latency-s must be 0 to 30 s"),
+    # --square-mm without --checkerboard was ignored
+    (["calibrate", "{d}/frames/f0.fits", "--square-mm", 30], "give it with --checkerboard"),
+])
+def test_options_checked_before_the_work(files, argv, words):
+    code, out, err = run(*[str(a).format(d=files) for a in argv])
+    assert code == 2 and out == "" and err.count("\n") == 1 and words in err, err

@@ -40,7 +40,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._plots import save_run_plots
     from ._report import summary, table, write_files
     from ._scenario import Scenario
-    from ._star_tracker_feedback import StarTrackerSetup, TrackerNoiseModel, fit_noise_model
+    from ._star_tracker_feedback import MAX_LATENCY_S, StarTrackerSetup, TrackerNoiseModel, fit_noise_model
 
 _EXPORTS = _exports_of(__file__)
 

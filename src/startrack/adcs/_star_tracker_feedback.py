@@ -95,8 +95,9 @@ class StarTrackerSetup:
             raise InvalidInputError(f"the exposure ({self.sensor.exposure_s:g} s) does not fit in a frame period "
                                     f"of {1 / self.frame_rate_hz:g} s; lower frame_rate_hz")
         check_int(self, ("seed",), 0)
-        if self.latency_s is not None and not (math.isfinite(self.latency_s) and self.latency_s >= 0):
-            raise InvalidInputError(f"latency_s must be None or >= 0 s, got {self.latency_s!r}")
+        if self.latency_s is not None and not (math.isfinite(self.latency_s) and 0 <= self.latency_s <= MAX_LATENCY_S):
+            raise InvalidInputError(f"latency_s must be None or 0 to {MAX_LATENCY_S:g} s, got {self.latency_s!r} (the "
+                                    "noise model fitted from the run holds latencies to a minute)")
 
     @property
     def exposure_s(self) -> float:
@@ -238,6 +239,10 @@ class StarTrackerFeedback(_FramedFeedback):
         step = t_s - self._last_ok_t
         return t_s - step * (0.5 + (1.0 - gain) / gain), self.setup.rot_cam_from_body.inv().apply(rate_cam)
 
+
+MAX_LATENCY_S = 30.0
+"""The longest fixed processing latency a tracker setup takes, s: with up to half an exposure (a
+frame period, itself under 60 s) added, the noise model's latency stays within its minute."""
 
 NOISE_MODEL_RANGES: tuple[tuple[str, float, float], ...] = (
     ("theta_bias_rad", -math.pi, math.pi), ("theta_sigma_rad", 0.0, math.pi), ("rate_sigma_rad_s", 0.0, 10.0),

@@ -18,6 +18,7 @@ from ..adcs import (
     FEEDBACKS,
     FIELDS,
     HORIZONS,
+    MAX_LATENCY_S,
     PLANTS,
     CubeSat,
     GuidanceOptions,
@@ -84,6 +85,8 @@ def _config(args: argparse.Namespace) -> LoopConfig:
         noise = TrackerNoiseModel.from_dict(read_json_file(args.noise_model, "tracker noise model"))
     if args.plant == "single-axis" and args.field != "helmholtz":
         raise InvalidInputError("--field dipole needs --plant three-axis")
+    if args.latency_s is not None and not 0 <= args.latency_s <= MAX_LATENCY_S:  # before the run, in its words
+        raise InvalidInputError(f"--latency-s must be 0 to {MAX_LATENCY_S:g} s, got {args.latency_s:g}")
     tracker = StarTrackerSetup(frame_rate_hz=args.frame_rate_hz, latency_s=args.latency_s, seed=args.seed)
     return LoopConfig(cubesat=CubeSat().with_j22(args.j22_kg_m2), scenario=Scenario(duration_s=args.duration_s),
                       guidance=GuidanceOptions(horizon=args.horizon), feedback=args.feedback, law=args.law,

@@ -64,7 +64,7 @@ def _parser() -> argparse.ArgumentParser:
                         help="comma-separated parameters to fit, from " + ",".join(PARAMETERS) +
                              " (default %(default)s); insignificant ones are fixed at zero")
     parser.add_argument("--checkerboard", metavar="COLSxROWS", help="inner corners of a checkerboard, e.g. 9x6")
-    parser.add_argument("--square-mm", type=float, default=25.0, help="checkerboard square size (default 25)")
+    parser.add_argument("--square-mm", type=float, help="checkerboard square size (default 25; with --checkerboard)")
     parser.add_argument("--out", metavar="CAMERA.json", help="write the calibrated camera as JSON")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     add_max_pixels_option(parser)
@@ -169,6 +169,10 @@ def _per_image(args, solutions) -> list[dict[str, Any]]:
     return out
 
 
+DEFAULT_SQUARE_MM = 25.0
+"""A checkerboard's square size when --square-mm is not given, mm."""
+
+
 def _from_checkerboard(args) -> dict[str, Any]:
     from ..calibrate import Checkerboard, calibrate_checkerboard, find_corners
 
@@ -177,7 +181,7 @@ def _from_checkerboard(args) -> dict[str, Any]:
     except ValueError:
         raise InvalidInputError(f"--checkerboard must be COLSxROWS inner corners, e.g. 9x6, got "
                                 f"{args.checkerboard!r}") from None
-    board = Checkerboard(cols, rows, args.square_mm)
+    board = Checkerboard(cols, rows, DEFAULT_SQUARE_MM if args.square_mm is None else args.square_mm)
     images = [read_image(p, channel=args.channel).data for p in args.images]
     _same_size(args.images, [img.shape for img in images])
     height, width = images[0].shape
@@ -196,7 +200,8 @@ def _table(report: dict[str, Any]) -> str:
     else:
         cam, sig = report["camera"], report["sigma"]
         sigma_f = sig.get("f", sig.get("fx", math.nan))
-        lines.append(f"focal       fx {cam['fx']:.2f} px, fy {cam['fy']:.2f} px (1-sigma {sigma_f:.2f} px)")
+        spread = f"1-sigma {sigma_f:.2f} px" if math.isfinite(sigma_f) else "1-sigma not estimated"
+        lines.append(f"focal       fx {cam['fx']:.2f} px, fy {cam['fy']:.2f} px ({spread})")
         lines.append(f"centre      cx {cam['cx']:.2f} px, cy {cam['cy']:.2f} px")
         lines.append("distortion  " + ", ".join(f"{k} {cam[k]:+.6g}" for k in ("k1", "k2", "k3", "p1", "p2")))
         lines.append(f"pruned      {', '.join(report['pruned']) or 'none'} (3-sigma rule)")
@@ -222,6 +227,8 @@ def main(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
     apply_max_pixels_option(args)
     _each_once(args.images)
+    if args.square_mm is not None and not args.checkerboard:
+        raise InvalidInputError("--square-mm is the size of a checkerboard's squares; give it with --checkerboard")
     report = _from_checkerboard(args) if args.checkerboard else _from_stars(args)
     if args.out and report["status"] == "ok":
         with atomic_path(args.out) as tmp:
