@@ -11,7 +11,6 @@ column.
 from __future__ import annotations
 
 import csv
-import json
 import math
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
@@ -19,14 +18,11 @@ from typing import Any
 
 import numpy as np
 import pyarrow as pa
-import pyarrow.parquet as pq
 
-from ...errors import InvalidInputError
 from ...io import atomic_path
+from ._folder import load_manifest, read_parts
 from ._stats import PERCENTILES, percentiles, rate_upper_bound, wilson_interval
 
-FORMAT = "startrack-campaign/1"
-"""The output-folder format this module reads (docs/campaigns.md)."""
 FAILED = ("ERROR", "LOST")
 """Statuses of trials that did not run to an answer (the trial raised; its worker died)."""
 SIGNED = ("err_x", "err_y", "err_roll")
@@ -43,20 +39,11 @@ def read_campaign(out: str | Path) -> tuple[dict[str, Any], pa.Table]:
     Raises
     ------
     InvalidInputError
-        If ``out`` has no readable ``manifest.json`` or no finished trial part.
+        If ``out`` has no readable ``manifest.json``, one not of the manifest's shape, no finished
+        trial part or a damaged one (:mod:`._folder`).
     """
     out = Path(out)
-    try:
-        manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise InvalidInputError(f"{out} is not a campaign output folder (no readable manifest.json: {exc})") from None
-    if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
-        found = manifest.get("format") if isinstance(manifest, dict) else type(manifest).__name__
-        raise InvalidInputError(f"{out / 'manifest.json'}: format {found!r}, expected {FORMAT!r}")
-    if not any((out / "trials").glob("part-*.parquet")):
-        raise InvalidInputError(f"{out}: no finished trials yet (trials/ holds no part-*.parquet)")
-    trials = pq.read_table(out / "trials")
-    return manifest, trials.sort_by([("cell", "ascending"), ("trial", "ascending")])
+    return load_manifest(out), read_parts(out)
 
 
 def as_columns(trials: pa.Table) -> dict[str, np.ndarray]:

@@ -235,8 +235,7 @@ def _remove_stale(out: Path, written: set[str]) -> None:
                 path.unlink(missing_ok=True)
 
 
-def _figures(out: Path, trials: pa.Table, manifest: Mapping[str, Any], written: set[str]) -> str:
-    drawn, notes = report_figures(trials, manifest)
+def _figures(out: Path, drawn: list[ReportFigure], notes: list[str], written: set[str]) -> str:
     parts = ["<h2>Figures</h2>", *(f"<p>{esc(note)}</p>" for note in notes)]
     for fig in drawn:
         png, csvs = save_figure(fig, out)
@@ -245,8 +244,7 @@ def _figures(out: Path, trials: pa.Table, manifest: Mapping[str, Any], written: 
     return "".join(parts)
 
 
-def _reference_section(out: Path, trials: pa.Table, manifest: Mapping[str, Any], written: set[str]) -> str:
-    refs = reference_tables(trials, manifest, strict=False)
+def _reference_section(out: Path, refs: list[ReferenceTable], written: set[str]) -> str:
     csvs = [None if r.error else f"data/reference-{i}.csv" for i, r in enumerate(refs)]
     for ref, csv in zip(refs, csvs, strict=True):
         if csv is not None:
@@ -260,24 +258,30 @@ def write_report(out: str | Path) -> Path:
 
     Writes ``cells.csv``, ``figures/*.png``, ``data/*.csv`` (the numbers behind every figure and
     table) and ``report.html`` (module docstring), each atomically, the page last; then removes
-    the files of an earlier report that this one no longer has (:data:`OWN_FILES`).
+    the files of an earlier report that this one no longer has (:data:`OWN_FILES`). Every table
+    and figure is computed before the first file is written, so a folder that cannot be reported
+    is left as it was.
 
     Raises
     ------
     InvalidInputError
-        If ``out`` is not a campaign folder or holds no finished trial.
+        If ``out`` is not a campaign folder, a damaged one (its manifest, a trial part), or holds
+        no finished trial; nothing is written then.
     """
     out = Path(out)
     manifest, trials = read_campaign(out)
-    for sub in ("figures", "data"):
-        (out / sub).mkdir(exist_ok=True)
     cells, status = cell_table(trials, manifest), status_table(trials, manifest)
+    drawn, notes = report_figures(trials, manifest)
+    refs = reference_tables(trials, manifest, strict=False)
+    head = [_head(manifest, trials), _cells(cells), _status(status)]
+    tail = [_worst(trials, manifest, out), _provenance(manifest)]
+    for sub in ("figures", "data"):  # the first write: everything above only reads
+        (out / sub).mkdir(exist_ok=True)
     write_csv(cells, out / "cells.csv")
     write_csv(status, out / "data" / "status.csv")
     written = {"cells.csv", "data/status.csv"}
-    body = [_head(manifest, trials), _cells(cells), _status(status), _figures(out, trials, manifest, written),
-            _reference_section(out, trials, manifest, written), *_extra_sections(manifest, trials, out),
-            _worst(trials, manifest, out), _provenance(manifest)]
+    body = [*head, _figures(out, drawn, notes, written), _reference_section(out, refs, written),
+            *_extra_sections(manifest, trials, out), *tail]
     page = (f"<!DOCTYPE html><html lang=en><head><meta charset=utf-8><title>{esc(manifest.get('name', ''))}: "
             f"campaign report</title><style>{CSS}</style></head><body>{''.join(body)}</body></html>\n")
     path = out / "report.html"

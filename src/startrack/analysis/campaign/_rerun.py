@@ -16,6 +16,7 @@ from typing import Any
 
 from ...errors import InvalidInputError
 from ...io import atomic_path
+from ._folder import part_paths
 from ._spec import parse_spec
 from ._store import CampaignStore
 from ._trials import run_trial
@@ -48,7 +49,7 @@ def rows_agree(fresh: dict[str, Any], stored: dict[str, Any]) -> bool:
 
 
 def _stored_row(store: CampaignStore, cell: int, trial: int) -> dict[str, Any] | None:
-    if not any(store.trials_dir.glob("part-*.parquet")):
+    if not part_paths(store.trials_dir):
         return None
     import pyarrow.compute as pc
 
@@ -81,7 +82,8 @@ def rerun_trial(out: str | Path, cell: int, trial: int, *, save_dir: str | Path 
     Raises
     ------
     InvalidInputError
-        If ``out`` is not a campaign folder, or the cell or trial is out of range.
+        If ``out`` is not a campaign folder or a damaged one (its manifest, a trial part: checked
+        before the trial runs), or the cell or trial is out of range.
     """
     store = CampaignStore(Path(out))
     manifest = store.read_manifest()
@@ -91,8 +93,8 @@ def rerun_trial(out: str | Path, cell: int, trial: int, *, save_dir: str | Path 
         raise InvalidInputError(f"--cell must be in 0..{len(cells) - 1} for this campaign, got {cell}")
     if not 0 <= trial < spec.trials:
         raise InvalidInputError(f"--trial must be in 0..{spec.trials - 1} for this campaign, got {trial}")
-    fresh = run_trial(spec, cells[cell], trial)
     stored = _stored_row(store, cell, trial)
+    fresh = run_trial(spec, cells[cell], trial)
     files = _save(fresh, Path(save_dir), f"cell{cell}-trial{trial}") if save_dir is not None else ()
     same = None if stored is None else rows_agree(fresh.row, stored)
     return Rerun(fresh.row, stored, same, files)

@@ -17,9 +17,10 @@ import pyarrow as pa
 
 from ...errors import InvalidInputError
 from ._engine import Progress, dask_client, run_dask, run_sync, workers_info
+from ._folder import FORMAT
 from ._provenance import provenance
 from ._spec import CampaignSpec, load_spec, parse_spec
-from ._store import FORMAT, CampaignStore, open_store, utc_now
+from ._store import CampaignStore, open_store, utc_now
 from ._trials import Chunk, plan_chunks
 
 CORRECT_DEFINITION = ("solved with the attitude within {tol:g} pixel angles at the image corner: "
@@ -154,6 +155,7 @@ def _execute(spec: CampaignSpec, store: CampaignStore, manifest: dict[str, Any],
     run.update(finished_utc=utc_now(), wall_s=round(time.perf_counter() - t0, 3))
     manifest["runs"] = [*manifest.get("runs", []), run]
     manifest["finished_utc"] = run["finished_utc"]
-    manifest["hosts"] = sorted({h for r in manifest["runs"] for h in r.get("hosts", [manifest["driver_host"]])})
+    driver = manifest.get("driver_host", "unknown")
+    manifest["hosts"] = sorted({h for r in manifest["runs"] for h in r.get("hosts", [driver])})
     manifest["workers"] = run["workers"]
     store.write_manifest(manifest)

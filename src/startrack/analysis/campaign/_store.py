@@ -4,7 +4,8 @@ Each finished chunk is written at once as ``trials/part-CCCCC-KKKKKK.parquet`` (
 trial K) through a temporary file and a rename, so an interrupted run leaves only whole parts,
 and ``pyarrow.parquet.read_table(OUT / "trials")`` reads them all as one table (it skips the
 dot-named temporary files). ``--resume`` runs only the chunks whose part is missing, with the
-chunk size recorded in the manifest, and refuses a folder that holds another campaign.
+chunk size recorded in the manifest, and refuses a folder that holds another campaign, or one whose
+manifest or parts are damaged (:mod:`._folder`), before any trial runs.
 """
 
 from __future__ import annotations
@@ -21,10 +22,9 @@ import pyarrow.parquet as pq
 
 from ...errors import InvalidInputError
 from ...io import atomic_path
+from ._folder import load_manifest, part_key, part_paths, read_parts
 from ._spec import CampaignSpec
 from ._trials import Chunk
-
-FORMAT = "startrack-campaign/1"
 
 
 def utc_now() -> str:
@@ -59,11 +59,7 @@ class CampaignStore:
 
     def done_keys(self) -> set[tuple[int, int]]:
         """(cell, first trial) of every chunk whose part is on disk."""
-        keys = set()
-        for path in self.trials_dir.glob("part-*-*.parquet"):
-            _, cell, start = path.stem.split("-")
-            keys.add((int(cell), int(start)))
-        return keys
+        return {part_key(path) for path in part_paths(self.trials_dir)}
 
     def write_part(self, chunk: Chunk, table: pa.Table) -> Path:
         path = self.part_path(chunk.key)
@@ -72,14 +68,8 @@ class CampaignStore:
         return path
 
     def read_manifest(self) -> dict[str, Any]:
-        try:
-            manifest = json.loads(self.manifest_path.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
-            raise InvalidInputError(f"{self.out} is not a campaign output folder (no readable manifest.json: "
-                                    f"{exc})") from None
-        if manifest.get("format") != FORMAT:
-            raise InvalidInputError(f"{self.manifest_path}: format {manifest.get('format')!r}, expected {FORMAT!r}")
-        return manifest
+        """The checked manifest (:func:`._folder.load_manifest`: an InvalidInputError if damaged)."""
+        return load_manifest(self.out)
 
     def write_manifest(self, manifest: dict[str, Any]) -> None:
         write_json(self.manifest_path, manifest)
@@ -94,11 +84,9 @@ class CampaignStore:
                 self.out.rmdir()
 
     def read_trials(self) -> pa.Table:
-        """Every trial row on disk, sorted by cell and trial."""
-        if not any(self.trials_dir.glob("part-*.parquet")):
-            raise InvalidInputError(f"{self.out}: no finished trials yet (trials/ is empty)")
-        table = pq.read_table(self.trials_dir)
-        return table.sort_by([("cell", "ascending"), ("trial", "ascending")])
+        """Every trial row on disk, sorted by cell and trial (:func:`._folder.read_parts`: an
+        InvalidInputError if there is none or a part is damaged)."""
+        return read_parts(self.out)
 
 
 def open_store(out: str | Path, spec: CampaignSpec, *, resume: bool) -> tuple[CampaignStore, dict | None]:
@@ -108,12 +96,12 @@ def open_store(out: str | Path, spec: CampaignSpec, *, resume: bool) -> tuple[Ca
     ------
     InvalidInputError
         If ``out`` already holds a campaign and ``resume`` is false, if it holds another spec's
-        campaign, or if it is a file.
+        campaign or a damaged one (its manifest, a part), or if it is a file.
     """
     store = CampaignStore(Path(out), made_out=not Path(out).exists())
     if store.out.exists() and not store.out.is_dir():
         raise InvalidInputError(f"--out {store.out} is a file; give a folder")
-    started = store.manifest_path.exists() or any(store.trials_dir.glob("*.parquet"))
+    started = store.manifest_path.exists() or bool(part_paths(store.trials_dir))
     if not started:
         store.trials_dir.mkdir(parents=True, exist_ok=True)
         return store, None
@@ -121,7 +109,10 @@ def open_store(out: str | Path, spec: CampaignSpec, *, resume: bool) -> tuple[Ca
         raise InvalidInputError(f"{store.out} already holds a campaign; pass --resume to finish it, "
                                 "or choose another --out")
     manifest = store.read_manifest()
-    if manifest.get("spec") != spec.as_dict():
-        raise InvalidInputError(f"{store.out} holds the campaign {manifest.get('name')!r} of another spec; "
+    if manifest["spec"] != spec.as_dict():
+        raise InvalidInputError(f"{store.out} holds the campaign {manifest['name']!r} of another spec; "
                                 "--resume needs the same spec (or choose another --out)")
+    if part_paths(store.trials_dir):
+        store.read_trials()  # refuses a damaged part before any trial runs
+    store.trials_dir.mkdir(exist_ok=True)
     return store, manifest
