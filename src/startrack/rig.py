@@ -29,6 +29,7 @@ import dataclasses
 import json
 import math
 import os
+import sys
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -308,10 +309,8 @@ class CameraRig:
     @classmethod
     def load(cls, path: str | os.PathLike) -> CameraRig:
         """Read a rig JSON file; InvalidInputError naming the file and the problem."""
-        from .io import read_json_file
-
         path = Path(path)
-        data = read_json_file(path, "rig file")
+        data = _read_json(path, "rig file")
         try:
             return cls.from_dict(data, base_dir=path.parent)
         except InvalidInputError as exc:
@@ -354,6 +353,11 @@ def _head_to_dict(head: RigHead) -> dict[str, Any]:
 
 HEAD_KEYS = {"name", "camera", "rot_cam_from_body", "centroid_sigma_px", "detector", "psf", "exclusion"}
 
+MAX_SIDE_PX = 2**31 - 1
+"""Largest image side a rig camera may have, px (PNG's limit, a signed 32-bit integer). Beyond it a
+size can be no image at all; a smaller one is still checked against the pixel limit of the command
+that renders it (``--max-pixels``, :mod:`startrack.io._limits`)."""
+
 
 def _head_from_dict(entry: Any, index: int, base: Path) -> RigHead:
     if not isinstance(entry, Mapping):
@@ -368,16 +372,98 @@ def _head_from_dict(entry: Any, index: int, base: Path) -> RigHead:
     quat = entry["rot_cam_from_body"]
     if not (isinstance(quat, Mapping) and set(quat) == {"qx", "qy", "qz", "qw"}):
         raise InvalidInputError(f"{label}: rot_cam_from_body must be an object with qx, qy, qz, qw (scalar last)")
+    values = [_json_number(quat[k], f"{label}: rot_cam_from_body {k}") for k in ("qx", "qy", "qz", "qw")]
+    psf_fields = None if entry.get("psf") is None else _numbers_object(entry["psf"], "psf", label, PsfShape)
+    exclusion_fields = _numbers_object(entry.get("exclusion", {}), "exclusion", label, Exclusion)
     try:
-        psf = None if entry.get("psf") is None else PsfShape(**entry["psf"])
-        exclusion = Exclusion(**entry.get("exclusion", {}))
-        values = [float(quat[k]) for k in ("qx", "qy", "qz", "qw")]
-    except (TypeError, ValueError) as exc:
+        psf = None if psf_fields is None else PsfShape(**psf_fields)
+        exclusion = Exclusion(**exclusion_fields)
+    except InvalidInputError as exc:
         raise InvalidInputError(f"{label}: {exc}") from None
     return RigHead(name=entry["name"], camera=_camera_from(entry["camera"], label, base),
                    rot_cam_from_body=as_rotation(np.array(values), f"{label}: rot_cam_from_body"),
                    centroid_sigma_px=entry.get("centroid_sigma_px", 0.2), detector=entry.get("detector"),
                    psf=psf, exclusion=exclusion)
+
+
+def _short(value: Any) -> str:
+    """``repr(value)`` cut to 60 characters (a JSON value may be a long list or string)."""
+    try:
+        text = repr(value)
+    except ValueError:  # an integer of more digits than Python prints
+        return "an integer too long to print"
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _json_number(value: Any, what: str) -> float:
+    """``value`` as a float when it is one finite JSON number (not a bool, a string or null); else
+    InvalidInputError naming ``what`` (the JSON key as the file writes it)."""
+    if is_real_number(value):
+        try:
+            number = float(value)
+        except OverflowError:  # an integer beyond float64
+            number = math.inf
+        if math.isfinite(number):
+            return number
+        raise InvalidInputError(f"{what} must be a finite number, got {_short(value)}")
+    raise InvalidInputError(f"{what} must be a number, got {_short(value)}")
+
+
+def _numbers_object(value: Any, key: str, label: str, cls: type) -> dict[str, float]:
+    """The fields of the JSON object ``key`` (a :class:`PsfShape` or an :class:`Exclusion`, ``cls``):
+    an object of numbers with the dataclass's field names, its required ones present.
+
+    Raises
+    ------
+    InvalidInputError
+        Naming the head, the key (and the field) and what is valid.
+    """
+    fields = dataclasses.fields(cls)
+    names = [f.name for f in fields]
+    if not isinstance(value, Mapping):
+        raise InvalidInputError(f"{label}: {key} must be an object with {', '.join(names)}, got {_short(value)}")
+    unknown = sorted(set(value) - set(names))
+    if unknown:
+        raise InvalidInputError(f"{label}: unknown {key} keys {unknown}; valid: {', '.join(names)}")
+    missing = [f.name for f in fields if f.default is dataclasses.MISSING and f.name not in value]
+    if missing:
+        raise InvalidInputError(f"{label}: {key} is missing {', '.join(missing)}; valid: {', '.join(names)}")
+    return {k: _json_number(v, f"{label}: {key} {k}") for k, v in value.items()}
+
+
+def _check_side(value: Any, key: str, label: str) -> None:
+    """Refuse a camera ``width`` or ``height`` that is not a JSON integer of 2 to :data:`MAX_SIDE_PX` px."""
+    if is_real_number(value) and isinstance(value, int | np.integer):
+        if 2 <= value <= MAX_SIDE_PX:
+            return
+        problem = f"is {_short(value)} px, " + ("below 2 px" if value < 2 else "beyond the largest image side")
+    elif isinstance(value, float) and value.is_integer():
+        beyond = " and beyond the largest image side" if abs(value) > MAX_SIDE_PX else ""
+        problem = f"is {value!r}, a decimal number, not a JSON integer{beyond}"
+    elif isinstance(value, float):
+        problem = f"is {value!r}, not a whole number of pixels"
+    else:
+        problem = f"is {_short(value)}, not a number"
+    raise InvalidInputError(f"{label}: camera {key} {problem}; valid: a JSON integer (no decimal point or "
+                            f"exponent) from 2 to {MAX_SIDE_PX:,} px")
+
+
+def _read_json(path: Path, what: str) -> Any:
+    """:func:`startrack.io.read_json_file`, with the two JSON texts Python's decoder fails on outside
+    its own JSONDecodeError (an integer of more than ``sys.get_int_max_str_digits()`` digits, arrays
+    nested thousands deep) refused as bad input too."""
+    from .io import read_json_file
+
+    try:
+        return read_json_file(path, what)
+    except InvalidInputError:
+        raise
+    except ValueError:
+        raise InvalidInputError(f"{what} {path} holds an integer of more than {sys.get_int_max_str_digits()} "
+                                "digits; valid: numbers of ordinary size") from None
+    except RecursionError:
+        raise InvalidInputError(f"{what} {path} nests arrays or objects too deeply to read; a {what} is "
+                                "only a few levels deep") from None
 
 
 def _camera_from(value: Any, label: str, base: Path) -> Camera:
@@ -386,22 +472,27 @@ def _camera_from(value: Any, label: str, base: Path) -> Camera:
         if preset_key(value) in PRESETS:
             return get_preset(value)
         path = Path(value) if Path(value).is_absolute() else base / value
-        from .io import read_json_file
-
         try:
-            value = read_json_file(path, "camera file")
+            value = _read_json(path, "camera file")
         except InvalidInputError as exc:
             raise InvalidInputError(f"{label}: camera {value!r} is neither a preset ({', '.join(sorted(PRESETS))}) "
                                     f"nor a readable camera JSON file ({exc})") from None
     if not isinstance(value, Mapping):
         raise InvalidInputError(f"{label}: camera must be a camera profile object, a preset or a file path")
-    fields = {f.name for f in dataclasses.fields(Camera)}
-    unknown = set(value) - fields
+    fields = dataclasses.fields(Camera)
+    names = sorted(f.name for f in fields)
+    unknown = set(value) - set(names)
     if unknown:
-        raise InvalidInputError(f"{label}: unknown camera keys {sorted(unknown)}; valid: {', '.join(sorted(fields))}")
+        raise InvalidInputError(f"{label}: unknown camera keys {sorted(unknown)}; valid: {', '.join(names)}")
+    missing = [f.name for f in fields if f.default is dataclasses.MISSING and f.name not in value]
+    if missing:
+        raise InvalidInputError(f"{label}: camera is missing {', '.join(missing)}; a camera profile needs width and "
+                                f"height (integers, px) and fx (focal length, px); valid keys: {', '.join(names)}")
+    for key in ("width", "height"):
+        _check_side(value[key], key, label)
     try:
         return Camera(**value)
-    except (TypeError, InvalidInputError) as exc:
+    except InvalidInputError as exc:
         raise InvalidInputError(f"{label}: {exc}") from None
 
 

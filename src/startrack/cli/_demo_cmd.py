@@ -9,14 +9,23 @@ import argparse
 from pathlib import Path
 
 from ..analysis import plot_solution
-from ..errors import InvalidInputError, require
+from ..errors import require
 from ..frames import angle_between, attitude_error, boresight
 from ..io import solution_to_dict, write_frame
 from ..solve import DEFAULT_FOV_RANGE_DEG, solve_image
 from ..units import ARCSEC
 from ._batch_warmup import warm_up
-from ._common import SOLUTION_FORMATS, exit_status_epilog, print_json, solution_table
+from ._common import (
+    SOLUTION_FORMATS,
+    add_max_pixels_option,
+    apply_max_pixels_option,
+    check_output_folder,
+    exit_status_epilog,
+    print_json,
+    solution_table,
+)
 from ._progress import ensure_database
+from ._render_limits import check_render_options
 from ._scene_options import add_scene_options, scene_epoch, simulate_scene
 
 OUTPUT_FORMATS = SOLUTION_FORMATS.split("exit status")[0] + """\
@@ -35,10 +44,12 @@ def main(argv: list[str]) -> int:
     add_scene_options(parser)
     parser.add_argument("--out", default="startrack-demo", help="output folder (default startrack-demo)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    add_max_pixels_option(parser)
     args = parser.parse_args(argv)
+    apply_max_pixels_option(args)  # the limit of the image rendered and of the one solved
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise InvalidInputError(f"--out {out} is a file; give a folder")
+    check_output_folder(out)
+    check_render_options(args)  # --width x --height within --max-pixels, before anything is rendered
     seed, sim = simulate_scene(args)
     out.mkdir(parents=True, exist_ok=True)
     written = write_frame(out / "demo.png", sim.image, sim.truth)

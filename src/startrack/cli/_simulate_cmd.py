@@ -19,15 +19,20 @@ from __future__ import annotations
 
 import argparse
 import csv
+import itertools
 import json
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import InvalidInputError
 from ..frames import radec_roll_from_rotation
 from ..io import (
+    ENV_VAR,
     check_frame_path,
     fits_bytes,
     index_row,
@@ -41,7 +46,14 @@ from ..io import (
     write_with_sidecar,
 )
 from ..simulate import ConstantRate, FrameTiming, SplitFieldFrame, load_profile, simulate_sequence
-from ._common import add_max_pixels_option, check_finite_options, exit_status_epilog, print_json, time_option
+from ._common import (
+    add_max_pixels_option,
+    check_finite_options,
+    exit_status_epilog,
+    max_pixels_option,
+    print_json,
+    time_option,
+)
 from ._progress import ProgressBar
 from ._render_limits import check_render_options
 from ._scene_options import (
@@ -57,6 +69,9 @@ from ._scene_options import (
     simulate_scene,
     sky_background,
 )
+
+if TYPE_CHECKING:  # the rig modules are imported only by --rig
+    from ..rig import CameraRig
 
 OUTPUT_FORMATS = """\
 output (text, the default)
@@ -118,9 +133,51 @@ def main(argv: list[str]) -> int:
     check_render_options(args)
     if args.rig is not None:
         return _rig_frame(args)
+    _check_frame_rate(args, _frame_span_s(args))
     if args.frames == 1 and args.profile is None:
         return _one_frame(args)
     return _sequence(args)
+
+
+def _frame_span_s(args: argparse.Namespace) -> float:
+    """How long one frame takes, s: the exposure plus the rolling-shutter read-out of its rows."""
+    return render_sensor(args).exposure_s + (scene_camera(args).height - 1) * (args.line_time_s or 0.0)
+
+
+def _check_frame_rate(args: argparse.Namespace, frame_span_s: float) -> None:
+    """Refuse a --frame-rate-hz that is not positive or whose period is shorter than a frame, for one
+    frame as for a sequence.
+
+    Raises
+    ------
+    InvalidInputError
+        Naming --frame-rate-hz, the value and what is valid.
+    """
+    rate = args.frame_rate_hz
+    if rate is None:
+        return
+    if not (math.isfinite(rate) and rate > 0 and math.isfinite(1.0 / rate)):
+        raise InvalidInputError(f"--frame-rate-hz must be a positive number of frames per second (with a finite "
+                                f"period, 1 / F s), got {rate:g}")
+    if frame_span_s * rate > 1.0 + 1e-9:
+        raise InvalidInputError(f"--frame-rate-hz {rate:g}: a frame (the exposure plus any rolling-shutter read-out) "
+                                f"takes {frame_span_s:g} s and does not fit in a frame period of {1.0 / rate:g} s; "
+                                f"valid: at most {1.0 / frame_span_s:g} Hz, or a shorter --exposure-s or --line-time-s")
+
+
+@contextmanager
+def _new_folder(folder: Path) -> Iterator[None]:
+    """Create ``folder`` (and its missing parents) for the block; if the block fails, remove the
+    folders it created that are still empty (a failed command leaves no empty output folder)."""
+    created = [p for p in (folder, *folder.parents) if not p.exists()]
+    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        yield
+    except BaseException:
+        for path in created:  # innermost first
+            if path.is_dir() and not any(path.iterdir()):
+                path.rmdir()
+        raise
 
 
 def _inputs(args: argparse.Namespace) -> list[str]:
@@ -151,24 +208,23 @@ def _sequence(args: argparse.Namespace) -> int:
     camera, sensor = scene_camera(args), render_sensor(args)
     rng = np.random.default_rng(seed)
     line_time = args.line_time_s or 0.0
-    if args.frame_rate_hz is not None and not (math.isfinite(args.frame_rate_hz) and args.frame_rate_hz > 0):
-        raise InvalidInputError(f"--frame-rate-hz must be positive, got {args.frame_rate_hz:g}")
-    rate_hz = args.frame_rate_hz if args.frame_rate_hz is not None else \
-        1.0 / (sensor.exposure_s + (camera.height - 1) * line_time)
-    profile, rot = _profile(args, rng, sensor.exposure_s + (camera.height - 1) * line_time)
+    span_s = sensor.exposure_s + (camera.height - 1) * line_time
+    rate_hz = args.frame_rate_hz if args.frame_rate_hz is not None else 1.0 / span_s
+    profile, rot = _profile(args, rng, span_s)
     FrameTiming(line_time_s=line_time)  # checks --line-time-s before any file is written
-    folder.mkdir(parents=True, exist_ok=True)
     frames = simulate_sequence(camera, profile, args.frames, frame_rate_hz=rate_hz, sensor=sensor,
                                max_mag=args.max_mag, catalog_epoch_jyear=scene_epoch(args), seed=seed,
                                noise=noise_model(args), sky_background=sky_background(args, rot),
                                line_time_s=line_time,
                                progress=None if args.json else ProgressBar("  frames"))
+    first = next(frames)  # the sequence's own checks run here, before the folder is made
     rows = []
-    for sim in frames:
-        path = folder / f"frame_{sim.truth.frame_index:05d}{SEQUENCE_FORMATS[args.format]}"
-        write_frame(path, sim.image, sim.truth, inputs=_inputs(args))
-        rows.append(index_row(sim.truth, path))
-    index = write_index(folder / "frames.csv", rows)
+    with _new_folder(folder):
+        for sim in itertools.chain([first], frames):
+            path = folder / f"frame_{sim.truth.frame_index:05d}{SEQUENCE_FORMATS[args.format]}"
+            write_frame(path, sim.image, sim.truth, inputs=_inputs(args))
+            rows.append(index_row(sim.truth, path))
+        index = write_index(folder / "frames.csv", rows)
     if args.json:
         print_json({"seed": seed, "folder": str(folder), "frames": len(rows), "index": str(index)})
     else:
@@ -203,6 +259,8 @@ def _rig_frame(args: argparse.Namespace) -> int:
         leave_out = ", ".join(given) or "--frames"
         raise InvalidInputError(f"--rig has its cameras and renders one frame; leave out {leave_out}")
     rig = CameraRig.load(args.rig)
+    _check_rig_sizes(args, rig)
+    _check_frame_rate(args, render_sensor(args).exposure_s)  # one frame: no rolling shutter
     folder = Path(args.out or "startrack-rig-sim")
     if folder.suffix.lower() in SEQUENCE_FORMATS.values() or folder.is_file():
         raise InvalidInputError(f"--out {folder}: --rig writes a folder, not a file")
@@ -213,8 +271,8 @@ def _rig_frame(args: argparse.Namespace) -> int:
     time = None if args.time is None else Time(args.time, scale="utc")
     frame = simulate_rig(rig, rot, rate_body_rad_s=rate, sensor=render_sensor(args), max_mag=args.max_mag,
                          epoch_jyear=scene_epoch(args), rng=rng, noise=noise_model(args), time=time, bodies=bodies)
-    folder.mkdir(parents=True, exist_ok=True)
-    report = _write_rig(folder, rig, frame, args.format, seed, rate, scene_epoch(args), time)
+    with _new_folder(folder):
+        report = _write_rig(folder, rig, frame, args.format, seed, rate, scene_epoch(args), time)
     if args.json:
         print_json(report)
     else:
@@ -223,6 +281,23 @@ def _rig_frame(args: argparse.Namespace) -> int:
               f"Dec {report['dec_deg']:+.5f} deg, roll {report['roll_deg']:.4f} deg"
               + (f"; blinded: {', '.join(blinded)}" if blinded else ""))
     return 0
+
+
+def _check_rig_sizes(args: argparse.Namespace, rig: CameraRig) -> None:
+    """Refuse a rig camera whose image is over the --max-pixels limit, before anything is rendered.
+
+    Raises
+    ------
+    InvalidInputError
+        Naming the rig file, the head, its camera width and height, the limit and how to raise it.
+    """
+    limit = max_pixels_option(args)
+    for head in rig:
+        width, height = head.camera.width, head.camera.height
+        if width * height > limit:
+            raise InvalidInputError(f"rig file {args.rig}: head {head.name!r}: camera width {width} x height {height} "
+                                    f"is {width * height:,} px, over the limit of {limit:,} px; raise it with "
+                                    f"--max-pixels (or {ENV_VAR}) if you mean it")
 
 
 def _quat(rot) -> dict[str, float]:
