@@ -29,7 +29,6 @@ import dataclasses
 import json
 import math
 import os
-import sys
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -449,21 +448,10 @@ def _check_side(value: Any, key: str, label: str) -> None:
 
 
 def _read_json(path: Path, what: str) -> Any:
-    """:func:`startrack.io.read_json_file`, with the two JSON texts Python's decoder fails on outside
-    its own JSONDecodeError (an integer of more than ``sys.get_int_max_str_digits()`` digits, arrays
-    nested thousands deep) refused as bad input too."""
+    """:func:`startrack.io.read_json_file` (imported when a file is read)."""
     from .io import read_json_file
 
-    try:
-        return read_json_file(path, what)
-    except InvalidInputError:
-        raise
-    except ValueError:
-        raise InvalidInputError(f"{what} {path} holds an integer of more than {sys.get_int_max_str_digits()} "
-                                "digits; valid: numbers of ordinary size") from None
-    except RecursionError:
-        raise InvalidInputError(f"{what} {path} nests arrays or objects too deeply to read; a {what} is "
-                                "only a few levels deep") from None
+    return read_json_file(path, what)
 
 
 def _camera_from(value: Any, label: str, base: Path) -> Camera:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +35,9 @@ def read_json_file(path: str | os.PathLike, what: str) -> Any:
     Raises
     ------
     InvalidInputError
-        The file cannot be read, is not UTF-8 text or is not valid JSON.
+        The file cannot be read, is not UTF-8 text or is not valid JSON, or holds what Python's
+        decoder refuses outside its own errors (an integer of more than
+        ``sys.get_int_max_str_digits()`` digits, arrays nested thousands deep).
     """
     path = Path(path)
     try:
@@ -48,3 +51,9 @@ def read_json_file(path: str | os.PathLike, what: str) -> Any:
         return json.loads(text)
     except json.JSONDecodeError as exc:
         raise InvalidInputError(f"{what} {path} is not valid JSON: {exc}") from None
+    except ValueError:  # the decoder's limit on an integer's digits (not a JSONDecodeError)
+        raise InvalidInputError(f"{what} {path} holds an integer of more than {sys.get_int_max_str_digits()} "
+                                "digits; valid: numbers of ordinary size") from None
+    except RecursionError:
+        raise InvalidInputError(f"{what} {path} nests arrays or objects too deeply to read; a {what} is "
+                                "only a few levels deep") from None
