@@ -158,3 +158,16 @@ def test_a_single_frame_longer_than_its_frame_period_is_refused(tmp_path):
                  "--seed", 1, "--out", out)
     assert_misuse(result, "simulate", "--frame-rate-hz 10", "frame period", "at most 2 Hz")
     assert not out.exists()
+
+
+def test_a_small_rig_renders_under_a_small_pixel_limit(tmp_path):
+    """The limit of --width and --height (1024 x 1024 by default) was checked for a rig too, whose
+    heads have sizes of their own: a 60 x 40 px head under --max-pixels 5000 was refused."""
+    rig = tmp_path / "small.json"
+    rig.write_text('{"heads": [{"name": "a", "camera": {"width": 60, "height": 40, "fx": 300.0}, '
+                   '"rot_cam_from_body": {"qx": 0, "qy": 0, "qz": 0, "qw": 1}}]}')
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(["simulate", "--rig", str(rig), "--max-pixels", "5000", "--out", str(tmp_path / "sim")])
+    assert code == 0, err.getvalue()
+    assert (tmp_path / "sim").is_dir()

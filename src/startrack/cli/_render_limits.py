@@ -37,7 +37,7 @@ MAX_STRAY_E_PER_FRAME = 1e9
 
 
 def _check_size(args: argparse.Namespace) -> None:
-    if getattr(args, "camera", None):
+    if getattr(args, "camera", None) or getattr(args, "rig", None) is not None:  # a rig's heads: checked by --rig
         return
     width = args.width if args.width is not None else DEFAULT_SIZE_PX[0]
     height = args.height if args.height is not None else DEFAULT_SIZE_PX[1]
