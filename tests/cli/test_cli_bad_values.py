@@ -102,7 +102,19 @@ def test_an_empty_name_is_refused_not_taken_as_no_option(files, option):
     (["adcs-demo", "--feedback", "tracker", "--duration-s", 2, "--latency-s", 1e9], "--latency-s must be 0 to 30 s"),
     # --square-mm without --checkerboard was ignored
     (["calibrate", "{d}/frames/f0.fits", "--square-mm", 30], "give it with --checkerboard"),
+    # argparse took a negative number in exponent notation for an option: "expected one argument"
+    (["solve", "{d}/frames/f0.fits", "--epoch", "-1e9"], "--epoch must be a Julian year such as 2025.5"),
+    (["warm-up", "--fov-range-deg", "-1e3", 5], "--fov-range-deg must be a field of view between 0.5 and 150"),
 ])
 def test_options_checked_before_the_work(files, argv, words):
     code, out, err = run(*[str(a).format(d=files) for a in argv])
     assert code == 2 and out == "" and err.count("\n") == 1 and words in err, err
+
+
+def test_a_negative_number_in_exponent_notation_is_the_same_number():
+    from startrack.cli._main import _plain_negative
+
+    for text in ("-1e9", "-2.5E-3", "-1e-300", "-1e300", "-.5e2"):
+        assert float(_plain_negative(text)) == float(text) and "e" not in _plain_negative(text).lower()
+    for text in ("-5", "-0.25", "--epoch", "x-1e9", "-1e9x", "-1e400"):
+        assert _plain_negative(text) == text
