@@ -91,10 +91,16 @@ def test_fuzzed_inputs_are_one_line_naming_the_file_or_option(odd_frames, argv, 
     assert err.count("\n") == 1 and words.format(d=odd_frames) in err, err
 
 
-@pytest.mark.parametrize("option", ["--wcs", "--new-fits", "--plot", "--camera"])
-def test_an_empty_name_is_refused_not_taken_as_no_option(files, option):
-    code, out, err = run("solve", files / "frames" / "f0.fits", option, "")
-    assert code == 2 and out == "" and f"argument {option}: expected a name, got ''" in err
+@pytest.mark.parametrize("argv", [
+    ["solve", "{d}/frames/f0.fits", "--wcs"], ["solve", "{d}/frames/f0.fits", "--new-fits"],
+    ["solve", "{d}/frames/f0.fits", "--plot"], ["solve", "{d}/frames/f0.fits", "--camera"],
+    ["simulate", "--out"], ["demo", "--out"], ["track", "{d}/frames", "--out"], ["adcs-demo", "--out"],
+    ["analyse", "histograms", "{d}/frames", "--out"], ["calibrate", "{d}/frames/f0.fits", "--out"],
+])
+def test_an_empty_name_is_refused_not_taken_as_no_option(files, argv):
+    """'' was taken as the option left out (no WCS written, the default output used)."""
+    code, out, err = run(*[str(a).format(d=files) for a in argv], "")
+    assert code == 2 and out == "" and f"argument {argv[-1]}: expected a name, got ''" in err
 
 
 @pytest.mark.parametrize("argv, words", [

@@ -35,7 +35,7 @@ from ..adcs import (
 )
 from ..errors import InvalidInputError
 from ..io import read_json_file
-from ._common import check_output_folder, exit_status_epilog, print_json
+from ._common import check_output_folder, exit_status_epilog, non_empty, print_json
 from ._progress import ProgressBar, ensure_database_for
 
 EPILOG = """\
@@ -59,7 +59,7 @@ def _parser() -> argparse.ArgumentParser:
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--feedback", choices=FEEDBACKS, default="tracker", help="feedback source (default tracker)")
     p.add_argument("--duration-s", type=float, default=700.0, help="simulated time, s (default 700)")
-    p.add_argument("--out", default="startrack-adcs", help="output folder (default startrack-adcs)")
+    p.add_argument("--out", default="startrack-adcs", type=non_empty, help="output folder (default startrack-adcs)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.add_argument("--law", choices=("lqr", "pd"), default="lqr", help="tracking law (default lqr; pd: baseline)")
     p.add_argument("--horizon", choices=HORIZONS, default="shrinking", help="replanning horizon (default shrinking)")

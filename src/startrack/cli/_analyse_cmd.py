@@ -33,6 +33,7 @@ from ._common import (
     check_output_folder,
     exit_status_epilog,
     fov_kwargs,
+    non_empty,
     utc_offset_hours,
 )
 from ._progress import ProgressBar, ensure_database_for
@@ -48,7 +49,8 @@ def _parser() -> argparse.ArgumentParser:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("name", metavar="NAME", help="an analysis ('list' shows them with their parameters)")
     parser.add_argument("paths", metavar="PATH", nargs="*", help="image file or folder of images (one result set each)")
-    parser.add_argument("--out", metavar="DIR", help="output folder (default ./startrack-analysis/NAME)")
+    parser.add_argument("--out", metavar="DIR", type=non_empty,
+                        help="output folder (default ./startrack-analysis/NAME)")
     parser.add_argument("--param", metavar="KEY=VALUE", action="append", default=[],
                         help="a parameter of the analysis (repeatable); lists as 3,4,5")
     add_fov_options(parser)

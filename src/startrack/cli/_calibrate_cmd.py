@@ -30,6 +30,7 @@ from ._common import (
     epoch_option,
     exit_status_epilog,
     fov_kwargs,
+    non_empty,
     print_json,
 )
 
@@ -65,7 +66,7 @@ def _parser() -> argparse.ArgumentParser:
                              " (default %(default)s); insignificant ones are fixed at zero")
     parser.add_argument("--checkerboard", metavar="COLSxROWS", help="inner corners of a checkerboard, e.g. 9x6")
     parser.add_argument("--square-mm", type=float, help="checkerboard square size (default 25; with --checkerboard)")
-    parser.add_argument("--out", metavar="CAMERA.json", help="write the calibrated camera as JSON")
+    parser.add_argument("--out", metavar="CAMERA.json", type=non_empty, help="write the calibrated camera as JSON")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     add_max_pixels_option(parser)
     return parser

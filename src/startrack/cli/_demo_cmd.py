@@ -21,6 +21,7 @@ from ._common import (
     apply_max_pixels_option,
     check_output_folder,
     exit_status_epilog,
+    non_empty,
     print_json,
     solution_table,
 )
@@ -42,7 +43,8 @@ def main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(prog="startrack demo", description=__doc__, epilog=OUTPUT_FORMATS,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_options(parser)
-    parser.add_argument("--out", default="startrack-demo", help="output folder (default startrack-demo)")
+    parser.add_argument("--out", default="startrack-demo", type=non_empty,
+                        help="output folder (default startrack-demo)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     add_max_pixels_option(parser)
     args = parser.parse_args(argv)

@@ -51,6 +51,7 @@ from ._common import (
     check_finite_options,
     exit_status_epilog,
     max_pixels_option,
+    non_empty,
     print_json,
     time_option,
 )
@@ -115,8 +116,9 @@ def main(argv: list[str]) -> int:
     seq.add_argument("--profile", metavar="CSV", help="recorded attitude profile (t_s, qx, qy, qz, qw)")
     seq.add_argument("--format", choices=sorted(SEQUENCE_FORMATS), default="fits",
                      help="image format of a sequence's frames (default fits)")
-    parser.add_argument("--out", help="output .fits, .png or .tif path for one frame (default startrack-sim.fits), "
-                                      "a folder for several (default startrack-sim)")
+    parser.add_argument("--out", type=non_empty,
+                        help="output .fits, .png or .tif path for one frame (default startrack-sim.fits), "
+                             "a folder for several (default startrack-sim)")
     parser.add_argument("--json", action="store_true", help="print the truth as JSON")
     rig = parser.add_argument_group("camera rig")
     rig.add_argument("--rig", metavar="RIG.json", help="render every head of this rig (files in the --out folder)")

@@ -40,6 +40,7 @@ from ._common import (
     exit_status_epilog,
     fov_kwargs,
     max_pixels_option,
+    non_empty,
 )
 from ._progress import ProgressBar, ensure_database_for
 
@@ -76,8 +77,8 @@ def _parser() -> argparse.ArgumentParser:
                         help="exposure of every frame (s; default: the header's EXPTIME, EXPOSURE or ExposureTime); "
                              "with one, the tracker switches between point and streak mode by the smear and prints "
                              "the smear limits and where it switched")
-    parser.add_argument("--out", default="track.csv", help="CSV file to write (default track.csv; - for "
-                                                           "standard output)")
+    parser.add_argument("--out", default="track.csv", type=non_empty,
+                        help="CSV file to write (default track.csv; - for standard output)")
     add_epoch_option(parser)
     add_max_pixels_option(parser)
     return parser
