@@ -91,6 +91,17 @@ def test_a_missing_name_is_refused():
         parse_spec(_with(GOOD, 'name = "fov-noise"\n', ""))
 
 
+def test_a_sweep_of_too_many_cells_is_refused_before_they_are_made():
+    """A sweep of 10^6 cells took minutes before the first trial (found by fuzzing the command)."""
+    fovs = ", ".join(f"{5 + 0.01 * i:.2f}" for i in range(400))
+    sigmas = ", ".join(f"{0.05 + 0.001 * i:.3f}" for i in range(300))
+    big = _with(_with(GOOD, "fov_deg = [10.0, 20.0]", f"fov_deg = [{fovs}]"),
+                "centroid_sigma_px = [0.1, 0.5]", f"centroid_sigma_px = [{sigmas}]")
+    with pytest.raises(SpecError, match=r"makes 120,000 cells \(400 fov_deg x 300 centroid_sigma_px\), more than"):
+        parse_spec(big)
+    assert len(parse_spec(_with(GOOD, "fov_deg = [10.0, 20.0]", f"fov_deg = [{fovs}]")).cells()) == 800
+
+
 def test_image_level_refuses_a_detector_setting_the_detector_refuses():
     text = '[campaign]\nname = "x"\nlevel = "image"\ntrials = 1\n[base]\ndetect_kernel_px = 2\n'
     with pytest.raises(SpecError, match="detector settings.*kernel_px"):

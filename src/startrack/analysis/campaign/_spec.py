@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 import re
 import tomllib
 from collections.abc import Mapping
@@ -235,9 +236,20 @@ def parse_spec(text: str, source: str = "<spec>") -> CampaignSpec:
     return spec
 
 
+MAX_CELLS = 100_000
+"""The most cells a sweep may have: the product of its lists is checked before the cells are made
+(a sweep of 10^6 cells took minutes to start and a manifest of hundreds of MB; a campaign of this
+size is a sweep to split, or a finer grid than any figure shows)."""
+
+
 def _check_cells(spec: CampaignSpec) -> None:
     if spec.mode == "sweep" and spec.budget:
         raise SpecError("[budget] is only read with [campaign] mode = \"budget\"")
+    sizes = [len(values) for values in spec.sweep.values()]
+    if math.prod(sizes) > MAX_CELLS:
+        shape = " x ".join(f"{len(v)} {k}" for k, v in spec.sweep.items())
+        raise SpecError(f"[sweep] makes {math.prod(sizes):,} cells ({shape}), more than {MAX_CELLS:,}; sweep fewer "
+                        "values, or split the campaign")
     cells = spec.cells()
     from ._reference import check_references  # reference reads the spec's cells: imported late
 
