@@ -105,6 +105,23 @@ def dask_client(workers: int | None = None, scheduler: str | None = None) -> Ite
           LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
                        silence_logs=logging.ERROR) as cluster, Client(cluster) as client):
         yield client
+        _settled(client, n)
+
+
+SETTLE_S = 15.0
+"""How long a local cluster may take, at the end of a run, to have all its workers up again before
+it is closed (:func:`_settled`)."""
+
+
+def _settled(client: Any, n: int) -> None:
+    """Wait, at most :data:`SETTLE_S`, for the local cluster's ``n`` workers to be up: a worker that
+    died in the run (a trial that killed its process) is being started again by its nanny, and a
+    cluster closed in the middle of that start fails inside Dask ("can only join a started
+    process", once in CI) after every result was stored. Past the wait the cluster is closed as it is."""
+    try:
+        client.wait_for_workers(n, timeout=SETTLE_S)
+    except TimeoutError:
+        pass
 
 
 CONNECT_S = 20.0
