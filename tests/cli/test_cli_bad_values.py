@@ -124,3 +124,18 @@ def test_a_negative_number_in_exponent_notation_is_the_same_number():
         assert float(_plain_negative(text)) == float(text) and "e" not in _plain_negative(text).lower()
     for text in ("-5", "-0.25", "--epoch", "x-1e9", "-1e9x", "-1e400"):
         assert _plain_negative(text) == text
+
+
+@pytest.mark.parametrize("argv, words", [
+    # ignored without --rig, or for one frame
+    (["simulate", "--time", "2025-03-20T12:00:00", "--out", "{d}/x.fits"], "give --rig, or leave them out"),
+    (["simulate", "--altitude-km", 700, "--out", "{d}/x.fits"], "give --rig, or leave them out"),
+    (["simulate", "--format", "png", "--out", "{d}/x.fits"], "--format sets the files of a sequence"),
+    # empty figures and exit 0 when no image could be read
+    (["analyse", "histograms", "{d}/frames/f0.fits", "--max-pixels", 1, "--out", "{d}/an"],
+     "no image could be read (1 tried; the first: {d}/frames/f0.fits: image is 64 x 64"),
+])
+def test_options_that_did_nothing_are_refused(files, argv, words):
+    code, out, err = run(*[str(a).format(d=files) for a in argv])
+    assert code == 2 and out == "" and words.format(d=files) in err.splitlines()[-1], err
+    assert not (files / "x.fits").exists() and not (files / "an").exists()

@@ -214,7 +214,8 @@ def test_a_cache_folder_that_cannot_be_written_is_one_warning_line(tmp_path):
 @pytest.mark.parametrize("command", ["detect", "calibrate", "rate", "analyse"])
 def test_max_pixels_refuses_a_larger_image_in_every_command_that_reads_images(tmp_path, command):
     """--max-pixels existed only on track and simulate before (the limit message named it anyway).
-    analyse goes on past an image it cannot read (exit 0) and says why on stderr."""
+    analyse goes on past an image it cannot read and says why on stderr; with no image it could read
+    (this one) it stops with exit 2 (it wrote empty figures and exited 0 before)."""
     path = tmp_path / "frame.png"
     write_png(path, np.zeros((64, 80), dtype=np.uint16))
     argv = {"detect": ["detect", path], "calibrate": ["calibrate", path],
@@ -223,7 +224,7 @@ def test_max_pixels_refuses_a_larger_image_in_every_command_that_reads_images(tm
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = main([str(a) for a in argv] + ["--max-pixels", "1000"])
-    assert code == (0 if command == "analyse" else 2), err.getvalue()
+    assert code == 2, err.getvalue()
     assert "over the limit of 1,000 px" in err.getvalue(), err.getvalue()
 
 

@@ -40,8 +40,9 @@ from ._progress import ProgressBar, ensure_database_for
 
 EPILOG = exit_status_epilog(
     "0 the analysis ran (its files are written); 2 misuse (unknown analysis, bad --param, missing path, wrong "
-    "number of PATHs), with one line 'startrack analyse: error: ...' on standard error;",
-    "Images that cannot be read or solved do not stop the run: they count as unsolved.")
+    "number of PATHs, no image that could be read), with one line 'startrack analyse: error: ...' on standard "
+    "error;",
+    "Images that cannot be read or solved do not stop the run: they count as unsolved (unless none could be read).")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -109,6 +110,7 @@ def main(argv: list[str]) -> int:
     options = {**fov_kwargs(args), "channel": args.channel, "utc_offset_hours": args.utc_offset_hours}
     ensure_database_for(options["fov_deg"], options["fov_range_deg"], options["camera"])
     sets = [_solve(path, name, options) for path, name in zip(args.paths, _set_names(args.paths), strict=True)]
+    _check_something_read(sets)
     result = run_analysis(info.name, sets, params)
     written = result.write(out)
     print(_summary_text(result, sets, written))
@@ -125,6 +127,14 @@ def _solve(path: str, name: str, options: dict):
         elif not solution.solved:
             print(f"{record.name}: {solution.status.name.lower()}: {solution.reason}", file=sys.stderr)
     return result
+
+
+def _check_something_read(sets) -> None:
+    """Refuse a run in which no image of any set could be read (it wrote empty figures, exit 0)."""
+    records = [record for result_set in sets for record in result_set.records]
+    if records and all(record.solution.reason.startswith(UNREADABLE) for record in records):
+        first = records[0].solution.reason.removeprefix(UNREADABLE)
+        raise InvalidInputError(f"no image could be read ({len(records)} tried; the first: {first})")
 
 
 def _summary_text(result, sets, written) -> str:

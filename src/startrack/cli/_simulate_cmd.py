@@ -74,6 +74,9 @@ from ._scene_options import (
 if TYPE_CHECKING:  # the rig modules are imported only by --rig
     from ..rig import CameraRig
 
+RIG_ALTITUDE_KM = 500.0
+"""--altitude-km when not given: a dawn-dusk orbit at 500 km (only with --rig --time)."""
+
 OUTPUT_FORMATS = """\
 output (text, the default)
   wrote FILES (one frame) or wrote N frames to FOLDER (a sequence)
@@ -114,7 +117,7 @@ def main(argv: list[str]) -> int:
     seq.add_argument("--frame-rate-hz", type=float, metavar="F",
                      help="frames per second (default: back to back, 1 / exposure)")
     seq.add_argument("--profile", metavar="CSV", help="recorded attitude profile (t_s, qx, qy, qz, qw)")
-    seq.add_argument("--format", choices=sorted(SEQUENCE_FORMATS), default="fits",
+    seq.add_argument("--format", choices=sorted(SEQUENCE_FORMATS),
                      help="image format of a sequence's frames (default fits)")
     parser.add_argument("--out", type=non_empty,
                         help="output .fits, .png or .tif path for one frame (default startrack-sim.fits), "
@@ -124,7 +127,7 @@ def main(argv: list[str]) -> int:
     rig.add_argument("--rig", metavar="RIG.json", help="render every head of this rig (files in the --out folder)")
     rig.add_argument("--time", metavar="UTC", help="with --rig: time of the frame (ISO), for Sun / Moon / Earth "
                                                    "exclusion")
-    rig.add_argument("--altitude-km", type=float, default=500.0, help="with --time: dawn-dusk orbit altitude "
+    rig.add_argument("--altitude-km", type=float, default=RIG_ALTITUDE_KM, help="with --time: dawn-dusk orbit altitude "
                                                                      "(default 500)")
     add_max_pixels_option(parser)
     args = parser.parse_args(argv)
@@ -135,10 +138,23 @@ def main(argv: list[str]) -> int:
     check_render_options(args)
     if args.rig is not None:
         return _rig_frame(args)
+    _check_single_camera_options(args)
     _check_frame_rate(args, _frame_span_s(args))
     if args.frames == 1 and args.profile is None:
         return _one_frame(args)
     return _sequence(args)
+
+
+def _check_single_camera_options(args: argparse.Namespace) -> None:
+    """Refuse the options that only --rig or a sequence reads, given without them (they were
+    ignored): --time and --altitude-km (a rig's exclusion), --format (a sequence's frames; one
+    frame's format is its --out file's)."""
+    if args.time is not None or args.altitude_km != RIG_ALTITUDE_KM:
+        raise InvalidInputError("--time and --altitude-km place a --rig's frame for its Sun, Moon and Earth exclusion; "
+                                "give --rig, or leave them out")
+    if args.frames == 1 and args.profile is None and args.format is not None:
+        raise InvalidInputError("--format sets the files of a sequence (--frames N); one frame is written in the "
+                                "format of its --out name (.fits, .png or .tif)")
 
 
 def _frame_span_s(args: argparse.Namespace) -> float:
@@ -223,7 +239,7 @@ def _sequence(args: argparse.Namespace) -> int:
     rows = []
     with _new_folder(folder):
         for sim in itertools.chain([first], frames):
-            path = folder / f"frame_{sim.truth.frame_index:05d}{SEQUENCE_FORMATS[args.format]}"
+            path = folder / f"frame_{sim.truth.frame_index:05d}{SEQUENCE_FORMATS[args.format or 'fits']}"
             write_frame(path, sim.image, sim.truth, inputs=_inputs(args))
             rows.append(index_row(sim.truth, path))
         index = write_index(folder / "frames.csv", rows)
@@ -274,7 +290,7 @@ def _rig_frame(args: argparse.Namespace) -> int:
     frame = simulate_rig(rig, rot, rate_body_rad_s=rate, sensor=render_sensor(args), max_mag=args.max_mag,
                          epoch_jyear=scene_epoch(args), rng=rng, noise=noise_model(args), time=time, bodies=bodies)
     with _new_folder(folder):
-        report = _write_rig(folder, rig, frame, args.format, seed, rate, scene_epoch(args), time)
+        report = _write_rig(folder, rig, frame, args.format or "fits", seed, rate, scene_epoch(args), time)
     if args.json:
         print_json(report)
     else:
