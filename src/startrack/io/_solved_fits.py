@@ -31,9 +31,11 @@ WCS_CARD = re.compile(r"^(WCSAXES|WCSNAME|CTYPE\d|CRVAL\d|CRPIX\d|CDELT\d|CUNIT\
                       r"[AB]P?_ORDER|[AB]P?_\d+_\d+|[AB]_DMAX|SIPFITPX|IMAGEW|IMAGEH)[A-Z]?$")
 """FITS cards of a WCS, primary or alternate (a letter after the name), which the new WCS replaces."""
 
-STALE_CARDS = frozenset({"CHECKSUM", "DATASUM", "BAYERPAT", "XBAYROFF", "YBAYROFF"})
-"""Cards the written data would contradict: the old checksums, and a mosaic's pattern once it has
-been read into one plane (dropped only then)."""
+CHECKSUM_CARDS = frozenset({"CHECKSUM", "DATASUM"})
+"""The old checksums, which the written data would contradict."""
+
+MOSAIC_CARDS = frozenset({"BAYERPAT", "XBAYROFF", "YBAYROFF"})
+"""A mosaic's pattern, dropped once the mosaic has been read into one plane."""
 
 
 def carried_cards(image: Image) -> dict[str, Any]:
@@ -42,7 +44,7 @@ def carried_cards(image: Image) -> dict[str, Any]:
     header = image.header
     if "SIMPLE" not in header and "XTENSION" not in header:
         return {}
-    stale = STALE_CARDS if image.mosaic is not None else STALE_CARDS - {"BAYERPAT", "XBAYROFF", "YBAYROFF"}
+    stale = CHECKSUM_CARDS | (MOSAIC_CARDS if image.mosaic is not None else frozenset())
     return {key: value for key, value in header.items() if key not in stale and not WCS_CARD.match(key)}
 
 
