@@ -214,3 +214,11 @@ def test_the_plane_strip_by_strip_is_the_whole_frames(shape, monkeypatch):
     for channel in range(3):
         np.testing.assert_array_equal(mosaic_plane(data, "GRBG", channel),
                                       mosaic_channel(without_hot_sites(data), "GRBG", channel))
+
+
+def test_the_words_for_a_mosaic_name_its_kind_and_pattern():
+    from startrack.io import describe_mosaic
+
+    assert describe_mosaic("RGGB") == "a colour-filter (Bayer) mosaic (pattern RGGB)"
+    assert describe_mosaic("GGRGGB/GGBGGR") == "a colour-filter mosaic (pattern GGRGGB/GGBGGR)"
+    assert "no BAYERPAT card" in describe_mosaic("unknown") and "(Bayer)" in describe_mosaic("unknown")

@@ -339,12 +339,10 @@ def announce_mosaic(image: Image) -> None:
     (:mod:`startrack.io._mosaic`); nothing for any other image."""
     if image.mosaic is None:
         return
-    if image.mosaic == "unknown":
-        named = "a colour-filter (Bayer) mosaic (no BAYERPAT card; its sites' levels form a checkerboard)"
-    else:
-        kind = "colour-filter (Bayer) mosaic" if len(image.mosaic) == 4 else "colour-filter mosaic"
-        named = f"a {kind} (pattern {image.mosaic})"
-    sys.stderr.write(f"{image.path}: {named}: read at full resolution, its colour sites evened out (docs/io.md)\n")
+    from ..io import describe_mosaic
+
+    sys.stderr.write(f"{image.path}: {describe_mosaic(image.mosaic)}: read at full resolution, its colour sites "
+                     "evened out (docs/io.md)\n")
 
 
 def print_json(data: dict[str, Any]) -> None:

@@ -42,6 +42,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
         resolve_max_pixels,
         set_max_pixels,
     )
+    from ._mosaic import describe_mosaic
     from ._png16 import warm_up_png16
     from ._raw import bayer_cells, cell_origin, full_resolution_xy, read_raw
     from ._solution_json import solution_to_dict, streak_fields

@@ -95,6 +95,16 @@ def _offset(value: object) -> int:
     return int(value) % 2 if float(value).is_integer() else 0
 
 
+def describe_mosaic(pattern: str) -> str:
+    """How the commands and the web tool name a mosaic read at full resolution (``Image.mosaic``):
+    "a colour-filter (Bayer) mosaic (pattern RGGB)", one found by its pixels alone, or a longer
+    pattern ("a colour-filter mosaic (pattern GGRGGB/...)")."""
+    if pattern == "unknown":
+        return "a colour-filter (Bayer) mosaic (no BAYERPAT card; its sites' levels form a checkerboard)"
+    kind = "colour-filter (Bayer) mosaic" if pattern in BAYER_PATTERNS else "colour-filter mosaic"
+    return f"a {kind} (pattern {pattern})"
+
+
 def site_pattern(data: NDArray) -> bool:
     """Whether the levels (medians, :func:`site_levels`) of the four sites of the 2 x 2 cells of
     ``data`` (H, W) form a checkerboard: half the difference of the sums of the two diagonals of the

@@ -30,6 +30,7 @@ from starlette.routing import Route
 from starlette.templating import Jinja2Templates
 
 from .. import __version__
+from ..io import describe_mosaic
 from ._api import service_of
 from ._jobs import ANALYSIS_STAGES, SOLVE_STAGES
 from ._json_text import MAX_INT_DIGITS
@@ -42,6 +43,7 @@ from ._views import analyses_view, options_view
 
 TEMPLATES = Jinja2Templates(directory=str(Path(__file__).parent / "templates"))
 TEMPLATES.env.globals["version"] = __version__
+TEMPLATES.env.filters["mosaic_words"] = describe_mosaic
 
 
 def _significant(value: Any, digits: int = 6) -> str:
