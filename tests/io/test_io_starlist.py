@@ -38,6 +38,7 @@ def test_header_only_gives_empty_arrays(tmp_path):
         ("x,y\n1,nan\n", r"line 2, column 'y'.*finite"),
         ("x,y\n1,2\n3,inf\n", r"line 3, column 'y'.*finite"),
         ("x,y\n1,two\n", r"line 2, column 'y'.*'two' is not a number"),
+        ("x,y\n1,1_000\n", r"line 2, column 'y'.*'1_000' is not a number"),
         ("x,y\n1,\n", r"line 2, column 'y'.*is not a number"),
         ("x,y\n1,2,3\n", r"line 2: 3 fields, expected 2"),
         ("x,x,y\n1,2,3\n", r"duplicate column"),

@@ -139,7 +139,10 @@ def _columns(path: Path, names: list[str]) -> dict[str, int]:
 
 
 def _number(text: str, path: Path, line: int, column: str) -> float:
+    """The number a cell holds; Python's digit separators ("1_000") are not a number in a table."""
     try:
+        if "_" in text:
+            raise ValueError(text)
         value = float(text)
     except ValueError:
         raise InvalidInputError(
