@@ -218,3 +218,35 @@ def test_the_distortion_term_bounds_what_a_radial_lens_does_to_the_ratios(fov_de
     used = change / (_ratios_of(ab) * bound[:, None])
     assert used.max() <= 1.0
     assert used.max() > 0.4
+
+
+def test_an_edge_angle_has_its_least_value_over_a_scale_range_at_an_end():
+    """What the skip of patterns too wide for every level rests on (:func:`._quad_kernel._wider_than`): the angle
+    between two image stars, as the scale f_nominal / f grows, never dips inside a range of scales, so it exceeds a
+    limit over the whole range when it does at both ends (random stars out to 70 deg off the axis)."""
+    rng = np.random.default_rng(3)
+    scales = np.geomspace(0.05, 3.0, 300)
+    for _ in range(2000):
+        a, b = rng.uniform(-3.0, 3.0, 2), rng.uniform(-3.0, 3.0, 2)
+        va = np.column_stack([np.outer(scales, a), np.ones(scales.size)])
+        vb = np.column_stack([np.outer(scales, b), np.ones(scales.size)])
+        cos = np.sum(va * vb, axis=1) / np.linalg.norm(va, axis=1) / np.linalg.norm(vb, axis=1)
+        i, j = np.sort(rng.integers(0, scales.size, 2))
+        assert cos[i:j + 1].max() <= max(cos[i], cos[j]) + 1e-12
+
+
+def test_a_pattern_too_wide_for_every_level_is_skipped_with_no_candidate(db):
+    """A pattern whose largest edge exceeds the region diameter of every level the grid reaches yields nothing, as
+    the level test of each trial would decide, and the search goes on to the next pattern."""
+    from startrack.identify._quad_kernel import LARGEST_EDGE_SLACK, _wider_than
+
+    row = _row_in_level0(db, 0)
+    u, w, _ = _seen(db, row)
+    wide_u, wide_w = np.append(u, 0.6), np.append(w, 0.6)  # a fifth star 43 deg off the axis
+    grid = focal_grid((0.9, 1.1), 0.0015)
+    limit = 2.0 * SMALL.region_fraction * db.level_fov_rad.max() / LARGEST_EDGE_SLACK
+    vec = np.empty((4, 3))
+    assert _wider_than(wide_u, wide_w, np.array([4, 1, 2, 3]), grid[0], grid[-1], math.cos(limit), vec, vec.copy())
+    assert not _wider_than(u, w, np.array([0, 1, 2, 3]), grid[0], grid[-1], math.cos(limit), vec, vec.copy())
+    fits = search_batch(db, wide_u, wide_w, np.array([[4, 1, 2, 3], [0, 1, 2, 3]]), _setup(grid, FOCAL_PX, True))
+    assert fits.next_pattern == 2 and row in fits.row

@@ -181,11 +181,46 @@ def _lower_bound(keys, lo, hi, value) -> int:
     return lo
 
 
+LARGEST_EDGE_SLACK = 0.95
+"""A level holds patterns whose largest edge is up to its region's diameter over this (a region
+is a circle of radius ``region_fraction`` times the level's field of view)."""
+
+
 @njit(cache=True)
 def _level_fits(level_fov, level_ratio, region_fraction, fov_lo, fov_hi, largest) -> bool:
     """Whether a level serves a trial's range of fields of view and holds patterns this large."""
     return (level_fov >= fov_lo / level_ratio and level_fov <= fov_hi * level_ratio
-            and 2.0 * region_fraction * level_fov >= 0.95 * largest)
+            and 2.0 * region_fraction * level_fov >= LARGEST_EDGE_SLACK * largest)
+
+
+@njit(cache=True)
+def widest_level_fov(level_fovs, level_ratio, fov_lo, fov_hi) -> float:
+    """The widest level field of view (radians) within the window of :func:`_level_fits` for
+    fields of view from ``fov_lo`` to ``fov_hi``; 0 when no level lies in it."""
+    widest = 0.0
+    for fov in level_fovs:
+        if fov_lo / level_ratio <= fov <= fov_hi * level_ratio:
+            widest = max(widest, fov)
+    return widest
+
+
+@njit(cache=True)
+def _wider_than(u, w, quad, scale_lo, scale_hi, cos_limit, vec_lo, vec_hi) -> bool:
+    """Whether some edge of the pattern spans more than the angle whose cosine is ``cos_limit``
+    at every scale from ``scale_lo`` to ``scale_hi``: then no level can hold the pattern at any
+    of its trials, and the search skips it before choosing them. An edge's angle has no
+    interior minimum over a range of scales (it grows, or grows then shrinks, with the scale:
+    the angle a segment subtends from a point moving along a line), so it is enough that it
+    exceeds the limit at both ends; compared by cosines (no arctangent)."""
+    _image_vectors(u, w, quad, scale_lo, vec_lo)
+    _image_vectors(u, w, quad, scale_hi, vec_hi)
+    for e in range(6):
+        i, j = _EDGE_I[e], _EDGE_J[e]
+        cos_lo = vec_lo[i, 0] * vec_lo[j, 0] + vec_lo[i, 1] * vec_lo[j, 1] + vec_lo[i, 2] * vec_lo[j, 2]
+        cos_hi = vec_hi[i, 0] * vec_hi[j, 0] + vec_hi[i, 1] * vec_hi[j, 1] + vec_hi[i, 2] * vec_hi[j, 2]
+        if max(cos_lo, cos_hi) < cos_limit:
+            return True
+    return False
 
 
 @njit(cache=True)
@@ -281,6 +316,17 @@ def _fit_order(u, w, quad, order, scale, cat_vec, stars, obs):
 
 
 @njit(cache=True)
+def _largest_edge_cos(grid, focal_nominal, short_px, square_px, level_fovs, level_ratio, region_fraction) -> float:
+    """Cosine of the largest edge (a bit beyond it) that :func:`_level_fits` lets any trial of
+    the grid look up: the region diameter of the widest level the grid's window reaches over
+    :data:`LARGEST_EDGE_SLACK`; -2 (no edge exceeds it) when that reaches half a turn."""
+    fov_lo = 2.0 * math.atan(short_px * grid[0] / (2.0 * focal_nominal))
+    fov_hi = 2.0 * math.atan(square_px * grid[grid.size - 1] / (2.0 * focal_nominal))
+    limit = 2.0 * region_fraction * widest_level_fov(level_fovs, level_ratio, fov_lo, fov_hi) / LARGEST_EDGE_SLACK
+    return math.cos(limit * (1.0 + 1e-9)) if limit * (1.0 + 1e-9) < math.pi else -2.0
+
+
+@njit(cache=True)
 def search(u, w, quads, grid, focal_nominal, short_px, square_px, sigma_px, step, max_tolerance, fit_focal,
            distortion, shape_floor, level_fovs, level_ratio, region_fraction, keys, cell_starts, pattern_ratios,
            pattern_largest, pattern_stars, vectors, first):
@@ -299,8 +345,11 @@ def search(u, w, quads, grid, focal_nominal, short_px, square_px, sigma_px, step
     count, n_tried = 0, 0
     noise = 3.0 * sigma_px * math.sqrt(2.0)
     step_share = FITTED_FOCAL_STEP_SHARE if fit_focal else 1.0
+    cos_limit = _largest_edge_cos(grid, focal_nominal, short_px, square_px, level_fovs, level_ratio, region_fraction)
     for p in range(first, quads.shape[0]):
         quad[:] = quads[p]
+        if _wider_than(u, w, quad, grid[0], grid[grid.size - 1], cos_limit, vec, obs):
+            continue  # no level holds it at any trial (_level_fits)
         starts = _trial_starts(u, w, quad, grid, step, vec, angles, ordered, ratios, starts_buffer)
         for t in range(starts.size):
             scale = grid[starts[t]]

@@ -244,9 +244,10 @@ class _Search:
             fits = search_batch(self.db, self.u, self.w, patterns, self.setup, next_pattern)
             self.trials[0] += fits.n_tried
             next_pattern = fits.next_pattern
-            yield self._confirmed(fits, int(patterns.max()) + 1, deadline)
+            yield self._confirmed(fits, patterns, deadline) if fits.row.size else None
 
-    def _confirmed(self, fits: Fits, pool_end: int, deadline: float) -> Candidate | None:
+    def _confirmed(self, fits: Fits, patterns: NDArray[np.int64], deadline: float) -> Candidate | None:
+        pool_end = int(patterns.max()) + 1
         levels = np.searchsorted(self.db.level_offsets, fits.row, side="right") - 1
         for i in range(fits.row.size):
             found = self.confirmer.confirm(self._level_stars(int(levels[i])), fits.quat[i],

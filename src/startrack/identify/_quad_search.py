@@ -35,6 +35,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -126,9 +127,9 @@ class SearchSetup:
     level_slack: float = 1.0
 
 
-@dataclass(frozen=True)
-class Fits:
-    """Candidates whose four stars fit a rotation, in search order.
+class Fits(NamedTuple):
+    """Candidates whose four stars fit a rotation, in search order (a named tuple: made once
+    per look-up call, of which a solve makes up to a few dozen).
 
     Attributes
     ----------
@@ -175,10 +176,8 @@ def search_batch(db: PatternDatabase, u: NDArray, w: NDArray, quads: NDArray, se
     -------
     Fits
     """
-    from ._quad_kernel import search  # numba is imported on first use
-
     s = db.settings
-    quat, focal, stars, row, n_tried, next_pattern = search(
+    quat, focal, stars, row, n_tried, next_pattern = _kernel()(
         np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(w, dtype=np.float64),
         np.ascontiguousarray(quads, dtype=np.int64), setup.grid, float(setup.focal_nominal),
         float(setup.short_px), float(setup.square_px), float(setup.sigma_px), float(setup.focal_step),
@@ -186,6 +185,14 @@ def search_batch(db: PatternDatabase, u: NDArray, w: NDArray, quads: NDArray, se
         db.level_fov_rad, float(s.level_ratio * setup.level_slack), float(s.region_fraction), db.keys, db.cell_starts,
         db.pattern_ratios, db.pattern_largest, db.pattern_stars, db.vectors, int(first))
     return Fits(quat, focal, stars, row, int(n_tried), int(next_pattern))
+
+
+@functools.cache
+def _kernel():
+    """The compiled search (:func:`.quad_kernel.search`): numba is imported on first use."""
+    from ._quad_kernel import search
+
+    return search
 
 
 _WARM: set[tuple[np.dtype, ...]] = set()
