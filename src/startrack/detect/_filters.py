@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ._compiled import region_kernels
 from ._label import Regions
 
 NEIGHBOURS_3X3 = np.stack(np.divmod(np.arange(9), 3), axis=1) - 1
@@ -210,10 +211,8 @@ def peak_away_from_edge(regions: Regions, values: NDArray, shape: tuple[int, int
     ``shape`` (:func:`away_from_edge`) and either its highest pixel (of ``values``, shape (M,))
     lies within ``margin`` pixels of it or the core has more than ``max_core_px`` pixels. A
     star whose centre is a few pixels inside keeps its measurable centroid; a glow, a limb or
-    a bright star cut by the border does not."""
-    h, w = shape
-    top = regions.argmax(values)
-    y, x = regions.y[top], regions.x[top]
-    inside = (y >= margin) & (x >= margin) & (y < h - margin) & (x < w - margin)
-    small = regions.sum(core.astype(np.int64)) <= max_core_px
-    return away_from_edge(regions, shape, core) | (inside & small)
+    a bright star cut by the border does not. One compiled loop (:func:`.region_kernels.edge_keep`)."""
+    if len(regions) == 0:
+        return np.zeros(0, dtype=bool)
+    return region_kernels().edge_keep(regions.starts, regions.y, regions.x, values, np.asarray(core, dtype=np.bool_),
+                                      shape[0], shape[1], margin, max_core_px)

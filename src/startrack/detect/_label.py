@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ._compiled import kernels
+from ._compiled import kernels, region_kernels
 from ._threshold import threshold_mask
 
 
@@ -63,6 +63,14 @@ class Regions:
             return np.zeros(0, dtype=values.dtype)
         return np.minimum.reduceat(values, self.starts)
 
+    def max_of(self, image: NDArray) -> NDArray:
+        """Maximum of ``image`` (shape (H, W), the grid of the pixels) over each region, shape (N,):
+        ``self.max(image[self.y, self.x])`` in one compiled loop
+        (:func:`.region_kernels.image_max`)."""
+        if len(self) == 0:
+            return np.zeros(0, dtype=image.dtype)
+        return region_kernels().image_max(self.starts, self.y, self.x, image)
+
     def argmax(self, values: NDArray) -> NDArray[np.int64]:
         """Position (into the pixel arrays) of each region's largest value, shape (N,): the last
         of equal largest values (of its NaN values, if it has any)."""
@@ -78,22 +86,15 @@ class Regions:
         keeps them all: a Regions is not changed after it is made)."""
         if keep.all():
             return self
-        pixel_keep = keep[self.index]
-        new_number = np.cumsum(keep) - 1
-        index = new_number[self.index[pixel_keep]]
-        counts = self.counts[keep]
-        starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
-        return Regions(index, self.y[pixel_keep], self.x[pixel_keep], starts[: counts.size])
+        return Regions(*region_kernels().select_pixels(self.index, self.y, self.x, self.starts,
+                                                        np.asarray(keep, dtype=np.bool_)))
 
     def upsample(self, factor: int) -> Regions:
         """The same regions at ``factor`` times the resolution: pixel (y, x) becomes the
         ``factor`` x ``factor`` block of full-resolution pixels it was binned from."""
         if factor == 1:
             return self
-        dy, dx = np.divmod(np.arange(factor * factor), factor)
-        y = (self.y[:, None] * factor + dy).ravel()
-        x = (self.x[:, None] * factor + dx).ravel()
-        index = np.repeat(self.index, factor * factor)
+        index, y, x = region_kernels().upsample_pixels(self.index, self.y, self.x, factor)
         return Regions(index, y, x, self.starts * factor * factor)
 
 

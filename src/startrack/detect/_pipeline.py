@@ -252,7 +252,7 @@ def find_regions(cfg: DetectionSettings, frame: Frame, det: NDArray) -> tuple[Re
     binning = frame.binning
     snr = significance(det, frame.model, binning) if frame.det_snr is None else frame.det_snr
     regions = group(cfg, snr > min(cfg.grow_sigma, cfg.sigma), max(1, cfg.jump_px // binning))
-    peak = regions.max(snr[regions.y, regions.x]) if len(regions) else np.zeros(0)
+    peak = regions.max_of(snr) if len(regions) else np.zeros(0)
     k_sigma = dynamic_sigma(peak, cfg) if cfg.threshold == "dynamic" else cfg.sigma
     regions = regions.select(peak > k_sigma) if len(regions) else regions
     if cfg.deblend and len(regions):

@@ -72,17 +72,110 @@ def signal_sums(starts, signal):
     for r in range(n):
         lo, hi = starts[r], starts[r + 1] if r + 1 < n else signal.size
         total = squares = 0.0
-        best, where, has_nan = -np.inf, lo, False
         for p in range(lo, hi):
             v = signal[p]
             total += v
             squares += v * v
-            if np.isnan(v):
-                where, has_nan = p, True
-            elif not has_nan and v >= best:
-                best, where = v, p
-        sums[r, 0], sums[r, 1], top[r] = total, squares, where
+        sums[r, 0], sums[r, 1], top[r] = total, squares, _last_largest(signal, lo, hi)
     return sums, top
+
+
+@njit(cache=True, error_model="numpy")
+def _last_largest(values, lo, hi):
+    """Position of the largest of ``values[lo:hi]``: the last of equal largest values, or the last
+    NaN when there is one (:meth:`.label.Regions.argmax`); ``lo`` when the range is empty."""
+    best, where, has_nan = -np.inf, lo, False
+    for p in range(lo, hi):
+        v = values[p]
+        if np.isnan(v):
+            where, has_nan = p, True
+        elif not has_nan and v >= best:
+            best, where = v, p
+    return where
+
+
+@njit(cache=True, error_model="numpy")
+def image_max(starts, y, x, image):
+    """Largest value of ``image`` (h, w) over the pixels (``y``, ``x``) (M,) of each of N regions
+    (``starts`` as in :func:`weighted_moments`; every region has a pixel), in the image's type
+    (N,): ``np.maximum.reduceat(image[y, x], starts)`` (NaN when a pixel is NaN)."""
+    n = starts.size
+    out = np.empty(n, image.dtype)
+    for r in range(n):
+        lo, hi = starts[r], starts[r + 1] if r + 1 < n else y.size
+        best = image[y[lo], x[lo]]
+        for p in range(lo + 1, hi):
+            v = image[y[p], x[p]]
+            if not (np.isnan(best) or v <= best):  # np.maximum: NaN wins, a tie keeps the first
+                best = v
+        out[r] = best
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def select_pixels(index, y, x, starts, keep):
+    """The arrays of :meth:`.label.Regions.select`: the pixels ``index``, ``y``, ``x`` (M,) of the
+    N regions (``starts`` (N,)) where ``keep`` (N,) is True, the regions renumbered 0 .. K-1 in
+    their order; returns (index, y, x) (M',) and starts (K,), int64 (``y`` and ``x`` in their
+    own types)."""
+    n = starts.size
+    new_number = np.empty(n, np.int64)
+    kept, total = 0, 0
+    for r in range(n):
+        new_number[r] = kept
+        kept += keep[r]
+    for p in range(index.size):
+        total += keep[index[p]]
+    out_index, out_y, out_x = np.empty(total, np.int64), np.empty(total, y.dtype), np.empty(total, x.dtype)
+    q = 0
+    for p in range(index.size):
+        if keep[index[p]]:
+            out_index[q], out_y[q], out_x[q] = new_number[index[p]], y[p], x[p]
+            q += 1
+    out_starts = np.empty(kept, np.int64)
+    q = 0
+    for r in range(n):
+        if keep[r]:
+            out_starts[new_number[r]] = q
+            q += (starts[r + 1] if r + 1 < n else index.size) - starts[r]
+    return out_index, out_y, out_x, out_starts
+
+
+@njit(cache=True, error_model="numpy")
+def upsample_pixels(index, y, x, factor):
+    """The pixels of :meth:`.label.Regions.upsample`: each pixel (``y``, ``x``) (M,) of region
+    ``index`` becomes the ``factor`` x ``factor`` block of full-resolution pixels it was binned
+    from, row by row; returns (index, y, x) (M factor^2,) int64."""
+    n = factor * factor
+    out = np.empty((3, y.size * n), np.int64)
+    out_index, out_y, out_x = out[0], out[1], out[2]
+    for p in range(y.size):
+        for d in range(n):
+            q = p * n + d
+            out_index[q], out_y[q], out_x[q] = index[p], y[p] * factor + d // factor, x[p] * factor + d % factor
+    return out_index, out_y, out_x
+
+
+@njit(cache=True, error_model="numpy")
+def edge_keep(starts, y, x, values, core, h, w, margin, max_core):
+    """:func:`.filters.peak_away_from_edge` of N regions (``starts`` as in
+    :func:`weighted_moments``; pixels ``y``, ``x``, ``values`` and bool ``core`` (M,)) on an image
+    ``h`` x ``w``: (N,) bool, True where no core pixel lies on the border, or the region's highest
+    value (:func:`_last_largest`) lies ``margin`` pixels or more inside and it has at most
+    ``max_core`` core pixels."""
+    n = starts.size
+    out = np.empty(n, np.bool_)
+    for r in range(n):
+        lo, hi = starts[r], starts[r + 1] if r + 1 < n else y.size
+        top = _last_largest(values, lo, hi)
+        inside = margin <= y[top] < h - margin and margin <= x[top] < w - margin
+        n_core, touches = 0, False
+        for p in range(lo, hi):
+            if core[p]:
+                n_core += 1
+                touches = touches or y[p] == 0 or y[p] == h - 1 or x[p] == 0 or x[p] == w - 1
+        out[r] = not touches or (inside and n_core <= max_core)
+    return out
 
 
 @njit(cache=True, error_model="numpy")
