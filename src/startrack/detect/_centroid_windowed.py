@@ -83,7 +83,7 @@ def windowed_centroid(windows: Windows, level: NDArray, noise: NDArray, x_start:
         window.
     """
     n = len(windows)
-    sw = np.broadcast_to(np.asarray(window_sigma_px, dtype=float), (n,))
+    sw = np.full(n, window_sigma_px, dtype=np.float64)  # a fresh array: the result's psf_sigma_px
     signal = windows.values - np.asarray(level, dtype=float)[:, None, None]
     valid = np.isfinite(signal)
     signal[~valid] = 0.0
@@ -93,7 +93,7 @@ def windowed_centroid(windows: Windows, level: NDArray, noise: NDArray, x_start:
     half = windows.half
     inside = (np.abs(cx - (windows.x0 + half)) <= half) & (np.abs(cy - (windows.y0 + half)) <= half)
     ok = inside & (total > 0) & np.isfinite(sigma)
-    return Centroids(x=cx, y=cy, flux=np.full(n, np.nan), sigma_px=sigma, psf_sigma_px=sw.copy(), ok=ok)
+    return Centroids(x=cx, y=cy, flux=np.full(n, np.nan), sigma_px=sigma, psf_sigma_px=sw, ok=ok)
 
 
 @dataclass(frozen=True)
@@ -138,8 +138,8 @@ def _sigma(axes: _Axes, signal: NDArray, valid: NDArray, cx: NDArray, cy: NDArra
     if axes.sw2.size == 0:
         return np.zeros(0)
     sp2 = np.zeros(0) if psf_sigma_px is None else \
-        np.ascontiguousarray(np.broadcast_to(np.asarray(psf_sigma_px, float) ** 2, axes.sw2.shape))
-    noise = np.ascontiguousarray(np.broadcast_to(np.asarray(noise, dtype=np.float64), axes.sw2.shape))
+        np.full(axes.sw2.shape, np.asarray(psf_sigma_px, float) ** 2, dtype=np.float64)
+    noise = np.full(axes.sw2.shape, noise, dtype=np.float64)
     return window_kernels().windowed_sigma(np.ascontiguousarray(signal, dtype=np.float64), np.ascontiguousarray(valid),
                                            axes.x0, axes.y0, axes.inv, cx, cy, axes.sw2, sp2, noise,
                                            float(gain_e_per_adu or 0.0))

@@ -26,7 +26,7 @@ from typing import Literal, get_args
 import numpy as np
 from numpy.typing import NDArray
 
-from ._centroid import SpotMeasurements, take_spots
+from ._centroid import SpotMeasurements
 from ._centroid_mle import mle_centroid
 from ._centroid_moments import area_centroid, peak_centroid, weighted_centroid, weighted_raw_centroid
 from ._centroid_windowed import windowed_centroid
@@ -98,10 +98,9 @@ def estimate_psf_sigma(spots: SpotMeasurements, saturated: NDArray[np.bool_] | N
     for left_out in (saturated, extended):
         if left_out is not None and np.count_nonzero(keep & ~left_out) >= MIN_PSF_SPOTS:
             keep &= ~left_out
-    if not keep.all():
-        spots = take_spots(spots, keep)
-    flux = spots.flux  # np.median's values, from one partition where there is no NaN (fast_median)
-    bright = spots.size_px[flux >= (np.median(flux) if np.isnan(flux).any() else fast_median(flux))]
+    flux, size = (spots.flux, spots.size_px) if keep.all() else (spots.flux[keep], spots.size_px[keep])
+    # np.median's values, from one partition where there is no NaN (fast_median)
+    bright = size[flux >= (np.median(flux) if np.isnan(flux).any() else fast_median(flux))]
     bright = bright[np.isfinite(bright)]
     value = SIZE_TO_SIGMA * float(fast_median(bright)) if bright.size else 1.0
     return max(MIN_PSF_SIGMA_PX, value)

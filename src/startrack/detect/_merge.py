@@ -27,6 +27,13 @@ MERGE_RADIUS_PX = 1.0
 """Detections closer than this (px) are one star: two real stars this close are one spot to any
 centroider (their windows converge to the same light centroid)."""
 
+MAX_PAIRWISE = 128
+"""Up to this many detections, :func:`apart` compares every pair first (cheaper than a k-d tree)."""
+
+APART_MARGIN = 1.0 + 1e-6
+"""Detections farther apart than this times the radius are apart for certain: the k-d tree's
+distances (:func:`coincident_groups`) are exact to far better than 1e-6."""
+
 
 def coincident_groups(x: NDArray, y: NDArray, flux: NDArray,
                       radius_px: float = MERGE_RADIUS_PX) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
@@ -50,6 +57,8 @@ def coincident_groups(x: NDArray, y: NDArray, flux: NDArray,
         Group number of every detection, 0..K-1 in the order of ``keep``.
     """
     n = len(x)
+    if n <= MAX_PAIRWISE and apart(x, y, radius_px * APART_MARGIN):
+        return np.arange(n), np.arange(n)
     pairs = cKDTree(np.column_stack([x, y])).query_pairs(radius_px, output_type="ndarray") if n > 1 else \
         np.zeros((0, 2), dtype=np.int64)
     if len(pairs) == 0:
@@ -62,6 +71,14 @@ def coincident_groups(x: NDArray, y: NDArray, flux: NDArray,
     rank = np.empty(label.max() + 1, dtype=np.int64)
     rank[label[keep]] = np.arange(keep.size)
     return keep, rank[label]
+
+
+def apart(x: NDArray, y: NDArray, distance_px: float) -> bool:
+    """Whether every two of the points (x, y) (shape (N,) each, px) lie farther than
+    ``distance_px`` from each other (False when a coordinate is NaN); compares all N (N - 1) / 2
+    pairs at once."""
+    d2 = (x[:, None] - x) ** 2 + (y[:, None] - y) ** 2
+    return bool(np.count_nonzero(d2 > distance_px**2) == len(x) * (len(x) - 1))  # all but the diagonal
 
 
 def merge_coincident(details: DetectionDetails, radius_px: float = MERGE_RADIUS_PX) -> DetectionDetails:

@@ -387,12 +387,14 @@ def filter_spots(cfg: DetectionSettings, frame: Frame, found: MeasuredRegions) -
 def measure(cfg: DetectionSettings, frame: Frame, kept: MeasuredRegions, k_sigma: float,
             full_width: int) -> DetectionDetails:
     """Centroid the (filtered) spots and pack the result."""
-    inputs = CentroidInputs(frame.prepared.data, frame.prepared.invalid, kept.regions, kept.spots, kept.raw,
-                            kept.peak_level, kept.local_noise, saturated_spots(kept.regions, kept.raw, frame.top))
+    saturated = saturated_spots(kept.regions, kept.raw, frame.top)
     with np.errstate(invalid="ignore", divide="ignore"):
-        quality = point_quality_of(inputs, kept.spots.peak / kept.local_noise)
-    inputs = replace(inputs, extended=quality < Detections.POINT_SOURCE_MIN_QUALITY)
-    return pack(cfg, frame, inputs, k_sigma, full_width, quality)
+        peak_snr = kept.spots.peak / kept.local_noise
+        quality = point_quality_of(kept, saturated, peak_snr)
+    inputs = CentroidInputs(frame.prepared.data, frame.prepared.invalid, kept.regions, kept.spots, kept.raw,
+                            kept.peak_level, kept.local_noise, saturated,
+                            quality < Detections.POINT_SOURCE_MIN_QUALITY)
+    return pack(cfg, frame, inputs, k_sigma, full_width, quality, peak_snr)
 
 
 def spot_filters(cfg: DetectionSettings, frame: Frame, found: MeasuredRegions) -> NDArray[np.bool_]:
@@ -420,25 +422,26 @@ def spot_filters(cfg: DetectionSettings, frame: Frame, found: MeasuredRegions) -
 
 
 def pack(cfg: DetectionSettings, frame: Frame, inputs: CentroidInputs, k_sigma: float,
-         full_width: int, point_quality: NDArray[np.float64]) -> DetectionDetails:
+         full_width: int, point_quality: NDArray[np.float64], peak_snr: NDArray[np.float64]) -> DetectionDetails:
     """Centroid with the chosen method (falling back to the weighted sum where it fails), merge
     coincident detections (:mod:`._merge`), sort brightest first, cut to ``max_stars``, and pack
-    with the extra measurements (the spots' ``point_quality`` (N,) among them)."""
+    with the extra measurements (the spots' ``point_quality`` and ``peak_snr``, peak over local
+    pixel noise, (N,) each, among them)."""
     spots, noise = inputs.spots, inputs.noise
     result = run_centroider(cfg.centroid, inputs, psf_sigma_px=cfg.psf_sigma_px,
                             half=cfg.window_half_px, gain_e_per_adu=cfg.gain_e_per_adu)
     ok = result.ok & on_frame(frame, result.x, result.y)
+    failed = not ok.all()  # else the fallbacks below are not needed
     x, y = np.where(ok, result.x, spots.x), np.where(ok, result.y, spots.y)
     flux = np.where(ok & np.isfinite(result.flux), result.flux, spots.flux)
     # the centroided, and the rest whose weighted sum is a flux on the frame: not a piece of mostly
     # negative signal of a blend the fine pass split
-    kept = np.flatnonzero(ok | ((flux > 0) & on_frame(frame, x, y)))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        peak_snr = spots.peak / noise
+    kept = np.flatnonzero(ok | ((flux > 0) & on_frame(frame, x, y))) if failed else np.arange(len(x))
     if cfg.uncertainty == "eq4.2":
         sigma = sigma_eq42(peak_snr)
-    else:
-        sigma = np.where(ok, result.sigma_px, centroid_sigma(spots, noise, "propagated"))
+    else:  # the centroiders' sigma_px is float64
+        sigma = np.where(ok, result.sigma_px, centroid_sigma(spots, noise, "propagated")) if failed else \
+            result.sigma_px
     shape = spot_shape(inputs.regions)
     psf = np.where(np.isfinite(result.psf_sigma_px), result.psf_sigma_px, spots.size_px)
     detections = Detections(
@@ -461,12 +464,12 @@ def on_frame(frame: Frame, x: NDArray, y: NDArray) -> NDArray[np.bool_]:
         return (np.abs(x - (w - 1) / 2) <= w / 2) & (np.abs(y - (h - 1) / 2) <= h / 2)
 
 
-def point_quality_of(inputs: CentroidInputs, peak_snr: NDArray) -> NDArray[np.float64]:
-    """Point-source quality of the spots (:mod:`._point_source`), the saturated ones as
-    ``inputs.saturated`` says."""
-    regions, raw = inputs.regions, inputs.raw
-    shape = core_shape(regions, raw - inputs.level[regions.index], inputs.spots.peak)
-    return point_quality(shape, peak_snr, require(inputs.saturated, "the spots' saturation"))
+def point_quality_of(kept: MeasuredRegions, saturated: NDArray[np.bool_], peak_snr: NDArray) -> NDArray[np.float64]:
+    """Point-source quality (:mod:`._point_source`) of the N ``kept`` spots, of which the
+    ``saturated`` ones (shape (N,)) are clipped, with their ``peak_snr`` (shape (N,))."""
+    regions = kept.regions
+    shape = core_shape(regions, kept.raw - kept.peak_level[regions.index], kept.spots.peak)
+    return point_quality(shape, peak_snr, saturated)
 
 
 def empty_details(frame: Frame, full_width: int, cfg: DetectionSettings,

@@ -95,7 +95,7 @@ def core_shape(regions: Regions, signal: NDArray, peak: NDArray) -> CoreShape:
         Each spot's largest signal.
     """
     with np.errstate(invalid="ignore", divide="ignore"):
-        core = (signal >= 0.5 * peak[regions.index]).astype(np.float64)
+        core = (signal >= (0.5 * peak)[regions.index]).astype(np.float64)
         m = region_kernels().weighted_moments(regions.starts, regions.x.astype(np.float64),
                                               regions.y.astype(np.float64), core)
         area, xx, yy, xy = m[:, 0], m[:, 3] + 1.0 / 12.0, m[:, 4] + 1.0 / 12.0, m[:, 5]
@@ -132,7 +132,9 @@ def point_quality(shape: CoreShape, peak_snr: NDArray, saturated: NDArray[np.boo
     the ``saturated`` ones (shape (N,)), fills instead of sizes (module docstring); a spot
     without a finite measurement counts as a point source (1)."""
     ref_size, ref_elongation = _references(shape.size, shape.elongation, peak_snr, saturated)
-    q_size = np.where(saturated, _ramp(shape.fill, *FILL_RAMP), _ramp(shape.size / ref_size, *SIZE_RAMP))
+    q_size = _ramp(shape.size / ref_size, *SIZE_RAMP)
+    if saturated.any():
+        q_size = np.where(saturated, _ramp(shape.fill, *FILL_RAMP), q_size)
     quality = q_size * _ramp(shape.elongation / ref_elongation, *ELONGATION_RAMP)
     return np.where(np.isfinite(quality), quality, 1.0)
 
@@ -144,7 +146,8 @@ def _references(size: NDArray, elongation: NDArray, peak_snr: NDArray, saturated
     saturated caption can outnumber the stars)."""
     ok = np.isfinite(size) & np.isfinite(elongation) & (size > 0)
     strong = ok & (peak_snr >= MIN_REFERENCE_SNR)  # NaN is not
-    use = next((s for s in (strong & ~saturated, strong) if s.sum() >= MIN_REFERENCE_SPOTS), ok)
+    unsaturated = strong & ~saturated if saturated.any() else strong
+    use = next((s for s in (unsaturated, strong) if np.count_nonzero(s) >= MIN_REFERENCE_SPOTS), ok)
     if not use.any():
         return 1.0, 1.0
     ref_size = fast_quantile(size[use], REFERENCE_QUANTILE)  # np.quantile's and np.median's values
