@@ -143,7 +143,30 @@ def _no_match_hints(problem: SolveRequest, method: MethodName) -> str:
                      "less sure, give a range or none")
     if problem.parity == "normal" and method == "quads":
         hints.append("a mirror image (flipped, or y up) needs parity 'either'")
+    if (narrow := _narrow_field_hint(problem.camera, hi)) is not None:
+        hints.append(narrow)
     return "".join(f"; {hint}" for hint in hints)
+
+
+FEW_CATALOG_STARS = 20.0
+"""A field that holds fewer Hipparcos stars than this on average gets a hint with its failure
+(:func:`_narrow_field_hint`): a telescope's narrow field, whose stars are mostly fainter than
+the catalog."""
+
+SKY_DEG2 = 4.0 * math.pi * math.degrees(1.0) ** 2
+"""The whole sky in square degrees (41,253)."""
+
+
+def _narrow_field_hint(camera: Camera, fov_deg: float) -> str | None:
+    """How many Hipparcos stars a field of ``fov_deg`` (horizontal, deg) on ``camera``'s image
+    (its aspect ratio) holds on average, when fewer than :data:`FEW_CATALOG_STARS`: why a narrow
+    field did not solve. None for a wider field."""
+    height_deg = fov_deg * (camera.height / camera.width) * camera.pixel_aspect
+    expected = len(load_catalog().hip) / SKY_DEG2 * fov_deg * height_deg
+    if expected >= FEW_CATALOG_STARS:
+        return None
+    return (f"a field of {fov_deg:.3g} x {height_deg:.3g} deg holds {expected:.0f} Hipparcos stars on average "
+            "(the catalog is complete to about V 7.3; fainter stars, most of a telescope's image, are not in it)")
 
 
 def _check_parity_method(request: SolveRequest, method: MethodName) -> None:
