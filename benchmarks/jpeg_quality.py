@@ -1,4 +1,4 @@
-"""Solving JPEGs of every quality: the detector's compression noise floor on and off.
+"""Solving JPEGs (or lossy WebP, AVIF) of every quality: the detector's compression noise floor on and off.
 
 A JPEG's quantization turns sky noise into smooth 8 x 8-block patterns the size of a star and
 flattens its quietest blocks (:mod:`startrack.detect._compression`). ``solve_image`` on a JPEG
@@ -15,8 +15,12 @@ within 5 pixel angles of the truth. Printed per quality: how many were solved ri
 floor and without it, the median count of detections and the median solve time (the search
 stops at its 5 s limit).
 
+With ``--format webp`` or ``avif`` the files are lossy WebP or AVIF of the same qualities
+(Pillow's encoders, libwebp and libavif); those give detection no quantization step, so both
+columns are the detector as it is, from the file and from its array.
+
     .venv/bin/python benchmarks/jpeg_quality.py [--qualities 40 50 60 75 90 95] [--frames 10]
-        [--noise-dn 2] [--no-real] [--no-sim]
+        [--noise-dn 2] [--no-real] [--no-sim] [--format jpeg|webp|avif]
 """
 
 from __future__ import annotations
@@ -45,8 +49,13 @@ RIGHT_DEG = 0.1
 """A real image's solve is right when its boresight is this close to astrometry.net's (deg)."""
 
 
-def save_jpeg(pixels: PILImage.Image, path: Path, quality: int) -> Path:
-    """``pixels`` saved at JPEG ``quality`` (Pillow's default 4:2:0 chroma for colour)."""
+FORMATS = {"jpeg": ".jpg", "webp": ".webp", "avif": ".avif"}
+"""The lossy formats compared, by their file suffix (Pillow picks the encoder from it)."""
+
+
+def save_lossy(pixels: PILImage.Image, path: Path, quality: int) -> Path:
+    """``pixels`` saved at ``quality`` in the format of ``path``'s suffix (:data:`FORMATS`;
+    Pillow's default 4:2:0 chroma for a colour JPEG)."""
     pixels.save(path, quality=quality)
     return path
 
@@ -70,7 +79,7 @@ def solve_both(path: Path, right, **solve_options) -> list[tuple[bool, int, floa
     return out
 
 
-def real_cases(folder: Path, qualities: list[int]) -> dict[int, list]:
+def real_cases(folder: Path, qualities: list[int], suffix: str = ".jpg") -> dict[int, list]:
     """Part 1's solves by quality."""
     with open(REALDATA / "truth.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
@@ -83,13 +92,14 @@ def real_cases(folder: Path, qualities: list[int]) -> dict[int, list]:
 
         pixels = as_pil(REALDATA / row["set"] / row["file"])
         for q in qualities:
-            path = save_jpeg(pixels, folder / f"{Path(row['file']).stem}_q{q}.jpg", q)
+            path = save_lossy(pixels, folder / f"{Path(row['file']).stem}_q{q}{suffix}", q)
             results[q].append(solve_both(path, right))
         print(f"  {row['file']} done", file=sys.stderr, flush=True)
     return results
 
 
-def sim_cases(folder: Path, qualities: list[int], frames: int, noise_dn: float, seed: int) -> dict[int, list]:
+def sim_cases(folder: Path, qualities: list[int], frames: int, noise_dn: float, seed: int,
+              suffix: str = ".jpg") -> dict[int, list]:
     """Part 2's solves by quality."""
     from startrack.simulate import simulate_frame
 
@@ -108,7 +118,7 @@ def sim_cases(folder: Path, qualities: list[int], frames: int, noise_dn: float, 
             return bool(attitude_errors_rad([rot], [solution.rot_cam_from_icrs], weight)[0] <= tolerance)
 
         for q in qualities:
-            path = save_jpeg(PILImage.fromarray(grey), folder / f"sim{i:03d}_q{q}.jpg", q)
+            path = save_lossy(PILImage.fromarray(grey), folder / f"sim{i:03d}_q{q}{suffix}", q)
             results[q].append(solve_both(path, right, fov_deg=15.0, epoch=EPOCH_JYEAR))
     return results
 
@@ -134,13 +144,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--no-real", action="store_true")
     parser.add_argument("--no-sim", action="store_true")
+    parser.add_argument("--format", choices=sorted(FORMATS), default="jpeg")
     args = parser.parse_args(argv)
+    suffix = FORMATS[args.format]
     with tempfile.TemporaryDirectory(prefix="startrack-jpeg-") as tmp:
         if not args.no_real and (REALDATA / "truth.csv").is_file():
-            print_table("real images (../shared/realdata), no hint", real_cases(Path(tmp), args.qualities))
+            print_table(f"real images (../shared/realdata) as {args.format}, no hint",
+                        real_cases(Path(tmp), args.qualities, suffix))
         if not args.no_sim:
-            print_table(f"simulated 8-bit frames, sky noise {args.noise_dn:g} DN, FOV given",
-                        sim_cases(Path(tmp), args.qualities, args.frames, args.noise_dn, args.seed))
+            print_table(f"simulated 8-bit frames as {args.format}, sky noise {args.noise_dn:g} DN, FOV given",
+                        sim_cases(Path(tmp), args.qualities, args.frames, args.noise_dn, args.seed, suffix))
     return 0
 
 

@@ -58,7 +58,7 @@ def test_text_file(tmp_path):
     _expect(path, "not an image file")
 
 
-@pytest.mark.parametrize(("fmt", "name"), [("BMP", "image.bmp"), ("GIF", "image.gif")])
+@pytest.mark.parametrize(("fmt", "name"), [("GIF", "image.gif"), ("ICO", "image.ico")])
 def test_unsupported_formats(tmp_path, fmt, name):
     _expect(_save(tmp_path, name, fmt), f"unsupported image format {fmt}")
 

@@ -64,9 +64,12 @@ def test_413_while_a_chunked_body_streams_before_its_end(server):
     still_serving(server)
 
 
+NOT_AN_IMAGE = "is not FITS, PNG, JPEG, TIFF, HEIC, WebP, AVIF, BMP or camera RAW"
+
+
 @pytest.mark.parametrize(("content", "name", "said"), [
-    (b"just some text, not an image\n" * 10, "notes.png", "is not FITS, PNG, JPEG, TIFF, HEIC or camera RAW"),
-    (b"GIF89a" + b"\x00" * 200, "anim.jpg", "is not FITS, PNG, JPEG, TIFF, HEIC or camera RAW"),
+    (b"just some text, not an image\n" * 10, "notes.png", NOT_AN_IMAGE),
+    (b"GIF89a" + b"\x00" * 200, "anim.jpg", NOT_AN_IMAGE),
     (b"\x89PNG\r\n\x1a\n" + b"garbage" * 30, "broken.png", "its header cannot be read"),
     (b"SIMPLE  =                    T" + b" " * 50 + b"NAXIS   = nonsense", "broken.fits", "header cannot be read"),
 ])
@@ -80,7 +83,7 @@ def test_415_from_the_content_not_the_name(server, content, name, said):
 def test_a_page_form_refusal_is_an_error_page_with_the_same_status(server):
     response = server.client.post("/upload", files={"file": ("notes.png", b"just some text")})
     assert response.status_code == 415 and "text/html" in response.headers["content-type"]
-    assert "is not FITS, PNG, JPEG, TIFF, HEIC or camera RAW" in response.text
+    assert NOT_AN_IMAGE in response.text
     response = server.client.post("/upload", files={"file": ("roof.jpg", b"\xff\xd8\xff")},
                                   data={"fov_mode": "fov", "fov_deg": "ten"})
     assert response.status_code == 422 and "options.fov_deg" in response.text

@@ -34,7 +34,8 @@ def _parser() -> argparse.ArgumentParser:
                                      epilog=EXIT_STATUS + "\n" + batch_epilog(),
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("image", nargs="+", metavar="IMAGE",
-                        help="FITS, PNG, JPEG, TIFF, HEIC or camera RAW file; several files or folders for a batch")
+                        help="FITS, PNG, JPEG, TIFF, HEIC, WebP, AVIF, BMP or camera RAW file; several files or "
+                             "folders for a batch")
     parser.add_argument("--method", choices=CENTROIDERS, default=StarDetector.centroid,
                         help="centroider (default: %(default)s)")
     parser.add_argument("--threshold", choices=THRESHOLDS, default=StarDetector.threshold,

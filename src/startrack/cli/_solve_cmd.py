@@ -49,7 +49,8 @@ def _parser() -> argparse.ArgumentParser:
                                      epilog=SOLUTION_FORMATS + "\n" + batch_epilog(),
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("image", nargs="+", metavar="IMAGE",
-                        help="FITS, PNG, JPEG, TIFF, HEIC or camera RAW file; several files or folders for a batch")
+                        help="FITS, PNG, JPEG, TIFF, HEIC, WebP, AVIF, BMP or camera RAW file; several files or "
+                             "folders for a batch")
     add_fov_options(parser)
     add_method_option(parser)
     add_timeout_option(parser)

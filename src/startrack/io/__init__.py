@@ -32,7 +32,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._fits_cards import BITPIX_VALUES
     from ._fitsfile import fits_bytes, write_fits
     from ._heif import HEIF_BRANDS, is_heif
-    from ._image import IMAGE_SUFFIXES, RAW_SUFFIXES, SUPPORTED_FORMATS, Image, read_image
+    from ._image import IMAGE_SUFFIXES, RAW_SUFFIXES, SUPPORTED_FORMATS, Image, pillow_raster_format, read_image
     from ._json_file import read_json_file
     from ._limits import (
         DEFAULT_MAX_PIXELS,

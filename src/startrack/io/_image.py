@@ -25,7 +25,7 @@ from ._limits import check_image_size, resolve_max_pixels
 from ._raster import identify_format, read_raster
 from ._targets import note_input
 
-SUPPORTED_FORMATS = ("FITS", "PNG", "JPEG", "TIFF", "HEIF")
+SUPPORTED_FORMATS = ("FITS", "PNG", "JPEG", "TIFF", "HEIF", "WEBP", "AVIF", "BMP")
 GZIP_MAGIC = b"\x1f\x8b"
 _SIGNATURES = {
     b"SIMPLE  =": "FITS",
@@ -165,6 +165,8 @@ def _sniff(path: Path) -> str:
             return name
     if is_heif(head):
         return "HEIF"
+    if (container := pillow_raster_format(head)) is not None:
+        return container
     other = identify_format(path)
     if other is not None:
         raise ImageReadError(
@@ -174,6 +176,20 @@ def _sniff(path: Path) -> str:
         f"{path}: not an image file (no {', '.join(SUPPORTED_FORMATS)} signature; it starts "
         f"with {head[:12]!r})"
     )
+
+
+AVIF_BRANDS = frozenset({b"avif", b"avis"})
+"""``ftyp`` major brands of AVIF files (AV1-coded still images and sequences)."""
+
+
+def pillow_raster_format(head: bytes) -> str | None:
+    """"WEBP", "AVIF" or "BMP" when a file's first 12 bytes are that format's signature: a RIFF
+    container of WebP, an ISO ``ftyp`` box of an AVIF brand, a bitmap's "BM"; else None."""
+    if head[:4] == b"RIFF" and head[8:12] == b"WEBP":
+        return "WEBP"
+    if head[4:8] == b"ftyp" and head[8:12] in AVIF_BRANDS:
+        return "AVIF"
+    return "BMP" if head[:2] == b"BM" else None
 
 
 def _check_gzip_holds_fits(path: Path) -> None:
@@ -195,7 +211,7 @@ RAW_SUFFIXES = frozenset({".dng", ".cr2", ".cr3", ".nef", ".arw", ".raf", ".orf"
 """Camera RAW file names, decoded through rawpy by :func:`startrack.io._raw.read_raw_plane` (the
 mosaic at full resolution, as :mod:`startrack.io._mosaic` reads a FITS one)."""
 IMAGE_SUFFIXES = frozenset({".fits", ".fit", ".fts", ".png", ".jpg", ".jpeg", ".tif", ".tiff", ".heic", ".heif",
-                            *RAW_SUFFIXES})
+                            ".webp", ".avif", ".bmp", *RAW_SUFFIXES})
 """File names that folders of images are searched for (the reader then checks the content)."""
 
 

@@ -1,4 +1,4 @@
-"""PNG, JPEG and TIFF images through Pillow, keeping native bit depths.
+"""PNG, JPEG, TIFF, WebP, AVIF and BMP images through Pillow, keeping native bit depths.
 
 What each Pillow mode becomes (before the colour rule of :mod:`startrack.io._channels`):
 
@@ -22,7 +22,9 @@ decoded by :mod:`startrack.io._tiff` and 16-bit colour PNGs by :mod:`startrack.i
 :class:`~startrack.errors.ImageReadError` even if ``PIL.ImageFile.LOAD_TRUNCATED_IMAGES`` was
 set elsewhere, and so does a PNG or JPEG whose structure is whole but whose pixel data stop early
 (:mod:`startrack.io._pixel_data`). EXIF orientation is recorded in the header but never applied: the array keeps
-the sensor's own row and column order.
+the sensor's own row and column order. Pillow decodes WebP and AVIF (lossy or lossless) to 8-bit
+RGB(A), an AVIF of 10 or 12 bits too; lossy ones have no JPEG quantization step to give detection
+(``compression_step`` 0).
 """
 
 from __future__ import annotations
@@ -47,8 +49,12 @@ from ._pixel_data import JpegLayout, jpeg_layout, png_missing_data, probe_stream
 from ._png16 import is_png16_colour, read_png16_colour
 from ._tiff import is_tiff16_colour, read_tiff16_colour
 
-SUPPORTED_PILLOW_FORMATS = ("PNG", "JPEG", "MPO", "TIFF")
+SUPPORTED_PILLOW_FORMATS = ("PNG", "JPEG", "MPO", "TIFF", "WEBP", "AVIF", "BMP")
 """Pillow format names read here (MPO is the multi-picture JPEG some cameras write)."""
+
+LENIENT_METADATA_FORMATS = ("JPEG", "PNG", "WEBP", "AVIF", "BMP")
+"""Formats whose broken metadata (EXIF, ICC) is ignored: their pixels do not depend on it (a
+TIFF's directory is its structure: there a metadata warning is an error)."""
 
 _JPEG_FORMATS = ("JPEG", "MPO")
 JPEG_LOWEST_FREQUENCIES = (1, 8)
@@ -254,7 +260,7 @@ def _open(fh: BinaryIO, path: Path, strict_metadata: bool) -> PILImage.Image:
 
 def read_raster(path: Path, max_pixels: int | None = None, *, kind: str | None = None
                 ) -> tuple[NDArray, dict[str, Any], int, float]:
-    """Decode a PNG, JPEG or TIFF file, refusing one over the size limit from its header.
+    """Decode a PNG, JPEG, TIFF, WebP, AVIF or BMP file, refusing one over the size limit from its header.
 
     Parameters
     ----------
@@ -262,9 +268,9 @@ def read_raster(path: Path, max_pixels: int | None = None, *, kind: str | None =
         The file; it is read as Pillow needs it, never whole up front.
     max_pixels : int, optional
         Largest width x height (:mod:`startrack.io._limits`; None: the limit in force).
-    kind : {"PNG", "JPEG", "TIFF"}, optional
-        The format its signature named; metadata warnings of a JPEG or PNG (broken EXIF) are
-        ignored, those of a TIFF (whose directory is the image's structure) are errors.
+    kind : {"PNG", "JPEG", "TIFF", "WEBP", "AVIF", "BMP"}, optional
+        The format its signature named; metadata warnings (broken EXIF) are ignored but for a TIFF
+        (whose directory is the image's structure: :data:`LENIENT_METADATA_FORMATS`).
 
     Returns
     -------
@@ -286,7 +292,7 @@ def read_raster(path: Path, max_pixels: int | None = None, *, kind: str | None =
     with open(path, "rb") as fh:
         head = fh.read(32)
         fh.seek(0)
-        with _open(fh, path, strict_metadata=kind not in ("JPEG", "PNG")) as image:
+        with _open(fh, path, strict_metadata=kind not in LENIENT_METADATA_FORMATS) as image:
             if image.format not in SUPPORTED_PILLOW_FORMATS:
                 raise ImageReadError(f"{path}: unsupported image format {image.format}")
             check_image_size(image.width, image.height, max_pixels, path)

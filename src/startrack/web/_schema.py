@@ -16,7 +16,8 @@ _BATCH = {**_ID, "name": "batch_id"}
 _NAME = {"name": "name", "in": "path", "required": True,
          "schema": {"type": "string", "examples": ["annotated.png", "solution.wcs", "matches.csv"]}}
 _MULTIPART_JOB = {"multipart/form-data": {"schema": {"type": "object", "properties": {
-    "file": {"type": "string", "format": "binary", "description": "FITS, PNG, JPEG, TIFF, HEIC or camera RAW"},
+    "file": {"type": "string", "format": "binary",
+             "description": "FITS, PNG, JPEG, TIFF, HEIC, WebP, AVIF, BMP or camera RAW"},
     "options": {"type": "string", "description": "JSON object of solve options (docs/web.md)"},
     "simulate": {"type": "string", "description": "JSON object of scene parameters, instead of a file"}}}}}
 _MULTIPART_BATCH = {"multipart/form-data": {"schema": {"type": "object", "properties": {

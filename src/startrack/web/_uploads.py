@@ -33,7 +33,7 @@ from starlette.datastructures import UploadFile
 from starlette.formparsers import MultiPartException, MultiPartParser
 from starlette.requests import Request
 
-from ..io import BITPIX_VALUES, RAW_SUFFIXES, is_heif
+from ..io import BITPIX_VALUES, RAW_SUFFIXES, is_heif, pillow_raster_format
 from ._config import MAX_SIDE_PX, MIN_SIDE_PX
 from ._refusals import Refusal, bad_request
 
@@ -44,7 +44,8 @@ SIGNATURES: tuple[tuple[bytes, str], ...] = (
 )
 """Leading bytes of each accepted format (RAW: Olympus ORF, Panasonic RW2, Fuji RAF; CR3 is an
 ISO media file, ``ftypcrx`` at offset 4; DNG, NEF, CR2, ARW, PEF and SRW are TIFF containers)."""
-EXTENSIONS = {"fits": ".fits", "png": ".png", "jpeg": ".jpg", "tiff": ".tif", "heif": ".heic"}
+EXTENSIONS = {"fits": ".fits", "png": ".png", "jpeg": ".jpg", "tiff": ".tif", "heif": ".heic", "webp": ".webp",
+              "avif": ".avif", "bmp": ".bmp"}
 RAW_SIGNATURE_SUFFIXES = ((b"IIRO", ".orf"), (b"IIRS", ".orf"), (b"MMOR", ".orf"), (b"IIU\x00", ".rw2"),
                           (b"FUJIFILMCCD-RAW", ".raf"))
 FITS_BLOCK = 2880
@@ -117,19 +118,22 @@ def display_label(filename: str | None) -> str:
 
 
 def sniff(head: bytes, label: str) -> str:
-    """"fits", "png", "jpeg", "tiff", "heif" or "raw" from the first bytes; 415 otherwise."""
+    """"fits", "png", "jpeg", "tiff", "heif", "webp", "avif", "bmp" or "raw" from the first bytes;
+    415 otherwise."""
     if head[4:12] == b"ftypcrx ":
         return "raw"
     if is_heif(head):
         return "heif"
+    if (other := pillow_raster_format(head)) is not None:
+        return other.lower()
     for signature, kind in SIGNATURES:
         if head.startswith(signature):
             if kind == "tiff" and Path(label).suffix.lower() in RAW_SUFFIXES:
                 return "raw"
             return kind
     shown = head[:12]
-    raise Refusal(415, f"unsupported file type: {label!r} is not FITS, PNG, JPEG, TIFF, HEIC or camera RAW "
-                       f"(it starts with {shown!r})", "file")
+    raise Refusal(415, f"unsupported file type: {label!r} is not FITS, PNG, JPEG, TIFF, HEIC, WebP, AVIF, BMP or "
+                       f"camera RAW (it starts with {shown!r})", "file")
 
 
 def raw_suffix(head: bytes, label: str) -> str:
