@@ -71,29 +71,31 @@ which the final fit matched them: a fit that bends its lens to lay any line of s
 catalog (focal length, aspect and k1 free) leaves the rigid attitude tens of pixels off them."""
 
 
-def _solution(problem: SolveRequest, stars: FieldStars, cand: Candidate, t0: float) -> AttitudeSolution:
+def _solution(problem: SolveRequest, stars: FieldStars, cand: Candidate, t0: float,
+              fov_source: str = "") -> AttitudeSolution:
     """The solution from a verified candidate: refined fit, then the Wahba attitude of all matched
     stars (Davenport's q-method: the same optimum as QUEST) with the QUEST measurement-model
     covariance (Huffman 2006 §6.1.3), residuals and RA / Dec / roll, in one compiled call
     (:func:`.identify.refine.solution_terms`; the solvers and the covariance are in
     :mod:`startrack.attitude`). The attitude is a rotation matrix inside; the one Rotation is the
     solution's. A mirror image's candidate has a ``mirrored`` camera (:mod:`.identify._parity`),
-    which the fit and the solution keep."""
+    which the fit and the solution keep. ``fov_source``: the solution's
+    :attr:`~startrack.results.AttitudeSolution.fov_source`."""
     fit = settle_matches(problem.x, problem.y, stars, cand, problem.focal_range, fit_aspect=problem.fit_aspect)
     camera, img, rows, ref, res_px = fit.camera, fit.image_index, fit.catalog_rows, fit.ref_icrs, fit.residual_px
     observed = pixel_vectors(camera, problem.x[img], problem.y[img])
-    usable = np.isfinite(observed).all(axis=1)  # a star where a fitted wide lens cannot be inverted: left out
-    if not usable.all():
+    if not math.isfinite(float(observed.sum())):  # a star where a fitted wide lens cannot be inverted: left out
+        usable = np.isfinite(observed).all(axis=1)
         img, rows, ref, res_px, observed = img[usable], rows[usable], ref[usable], res_px[usable], observed[usable]
     if len(img) < MIN_SOLUTION_STARS:
         return _not_held(problem, t0, f"the final fit kept {len(img)} of its stars (at least {MIN_SOLUTION_STARS} "
-                                      "needed)")
+                                      "needed)", fov_source)
     sigma_rad = max(math.sqrt(float(res_px @ res_px) / len(img)), 0.05) / math.sqrt(camera.fx * camera.fy)
     quat, _, residual_rad, covariance, (ra, dec, roll) = solution_terms(observed, ref, sigma_rad)  # >= 3 stars
-    rms_px = math.sqrt(float(np.mean(residual_rad**2)) * camera.fx * camera.fy)
+    rms_px = math.sqrt(float(residual_rad @ residual_rad) / len(img) * camera.fx * camera.fy)
     if not rms_px <= MAX_SOLUTION_RESIDUAL_PX:
         return _not_held(problem, t0, f"its {len(img)} stars lie {rms_px:.3g} px rms from where its attitude puts "
-                                      f"them (at most {MAX_SOLUTION_RESIDUAL_PX:g} px)")
+                                      f"them (at most {MAX_SOLUTION_RESIDUAL_PX:g} px)", fov_source)
     matches = StarMatches(status=Status.OK, det_index=problem.rows[img].astype(np.int64),
                           hip=_hip()[rows].astype(np.int64), cat_vectors=ref,
                           false_match_prob=cand.false_match_prob)
@@ -102,14 +104,14 @@ def _solution(problem: SolveRequest, stars: FieldStars, cand: Candidate, t0: flo
         ra_deg=math.degrees(ra), dec_deg=math.degrees(dec), roll_deg=math.degrees(roll),
         fov_deg=camera.fov_deg, camera=camera, matches=matches, residuals_arcsec=residual_rad / ARCSEC,
         false_match_prob=cand.false_match_prob, solve_time_s=time.perf_counter() - t0,
-        epoch_jyear=problem.epoch.jyear, epoch_source=problem.epoch.source)
+        epoch_jyear=problem.epoch.jyear, epoch_source=problem.epoch.source, fov_source=fov_source)
 
 
-def _not_held(problem: SolveRequest, t0: float, why: str) -> AttitudeSolution:
+def _not_held(problem: SolveRequest, t0: float, why: str, fov_source: str) -> AttitudeSolution:
     """No match: the matcher's verified candidate did not survive the final fit, ``why``."""
     return AttitudeSolution(status=Status.NO_MATCH, reason=f"a verified match did not hold: {why}",
                             solve_time_s=time.perf_counter() - t0, epoch_jyear=problem.epoch.jyear,
-                            epoch_source=problem.epoch.source)
+                            epoch_source=problem.epoch.source, fov_source=fov_source)
 
 
 def _hip() -> np.ndarray:
@@ -117,16 +119,19 @@ def _hip() -> np.ndarray:
     return load_catalog().hip
 
 
-def _run(problem: SolveRequest, method: MethodName, options: MatcherOptionsBase | None) -> AttitudeSolution:
-    """Run the named matcher on a validated request and build the solution (or the failure)."""
+def _run(problem: SolveRequest, method: MethodName, options: MatcherOptionsBase | None,
+         fov_source: str) -> AttitudeSolution:
+    """Run the named matcher on a validated request and build the solution (or the failure), its
+    :attr:`~startrack.results.AttitudeSolution.fov_source` ``fov_source``."""
     matcher, stars = prepare_matcher(method, problem)  # loads (or builds) the database first
     t0 = time.perf_counter()
     outcome = matcher(options)
     if outcome.candidate is None:
         reason = outcome.reason + (_no_match_hints(problem, method) if outcome.status is Status.NO_MATCH else "")
         return AttitudeSolution(status=outcome.status, reason=reason, solve_time_s=time.perf_counter() - t0,
-                                epoch_jyear=problem.epoch.jyear, epoch_source=problem.epoch.source)
-    return _solution(problem, stars, outcome.candidate, t0)
+                                epoch_jyear=problem.epoch.jyear, epoch_source=problem.epoch.source,
+                                fov_source=fov_source)
+    return _solution(problem, stars, outcome.candidate, t0, fov_source)
 
 
 def _no_match_hints(problem: SolveRequest, method: MethodName) -> str:
@@ -268,7 +273,7 @@ def solve_stars(x: ArrayLike, y: ArrayLike, *, width: int | None = None, height:
     _check_parity_method(request, method)
     if prior_rot_cam_from_icrs is not None or sigma != request.prior_sigma_deg:  # else the defaults hold
         request = replace(request, prior_rot=prior_rot_cam_from_icrs, prior_sigma_deg=sigma)
-    return replace(_run(request, method, options), fov_source=_given_fov_source(fov_deg, fov_range_deg, camera))
+    return _run(request, method, options, _given_fov_source(fov_deg, fov_range_deg, camera))
 
 
 SEARCH_CELLS, SPOTS_PER_TURN = 6, 2
@@ -456,7 +461,7 @@ def _point_solve(found: Detections, searches: list[tuple[tuple[float, float] | N
     for fov_range_deg, source in searches:
         request = build_request(found.x[order], found.y[order], fov_range_deg=fov_range_deg, **request_args)
         _check_parity_method(request, method)
-        solution = replace(_run(replace(request, rows=order[request.rows]), method, options), fov_source=source)
+        solution = _run(replace(request, rows=order[request.rows]), method, options, source)
         spent, tried = spent + solution.solve_time_s, [*tried, (request.fov_range_deg, solution.status)]
         if solution.status not in (Status.NO_MATCH, Status.TIMEOUT):
             break

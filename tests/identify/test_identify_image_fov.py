@@ -207,7 +207,7 @@ def test_a_default_search_that_runs_out_of_time_is_followed_by_the_wide_one(monk
     a failure after it is a timeout (that range was not searched through) saying which ran out."""
     searched = []
 
-    def run(request, method, options):
+    def run(request, method, options, fov_source):
         searched.append(request.fov_range_deg)
         status = Status.TIMEOUT if len(searched) == 1 else wide_status
         return AttitudeSolution(status=status, reason="nothing", solve_time_s=0.5)

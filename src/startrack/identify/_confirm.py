@@ -146,10 +146,9 @@ class Confirmer:
         pattern_img = np.asarray(pattern_img, dtype=np.int64)
         counted[pattern_img[pattern_img < n_stars]] = False
         counted[fitted] = False
-        counts = []
-        for f in TEST_RADIUS_FRACTIONS:  # the matches at f r are those of the tight ones within f r
-            img_i = tight if f == 1.0 else tight[d2 <= (f * self.radius_px) * (f * self.radius_px)]
-            counts.append(int(np.count_nonzero(counted[img_i])))
+        counted_d2 = d2[counted[tight]]  # all within the tight radius: the matches at f r are those within f r
+        counts = [int(np.count_nonzero(counted_d2 <= (f * self.radius_px) * (f * self.radius_px)))
+                  for f in TEST_RADIUS_FRACTIONS]
         n_tested = n_stars - len(pattern_img) - len(fitted)
         if max(counts) == 0 or n_tested <= 0:
             return 1.0, tight

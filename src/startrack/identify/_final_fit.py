@@ -267,8 +267,8 @@ def _image_reach_rad(camera: Camera) -> float:
         corners = pixel_vectors(camera, np.array([-0.5, w, -0.5, w]), np.array([-0.5, -0.5, h, h]))
         corner_rad = float(np.max(np.arctan2(np.hypot(corners[:, 0], corners[:, 1]), corners[:, 2])))
     else:
-        corner_rad = max(math.atan(math.hypot((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy))
-                         for u in (-0.5, w) for v in (-0.5, h))
+        corner_rad = math.atan(max(math.hypot((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy)
+                                   for u in (-0.5, w) for v in (-0.5, h)))  # atan grows: the farthest corner's
     reach_px = REMATCH_RADIUS_PX + SELECT_MARGIN_PX
     return corner_rad + ANGLE_PER_PIXEL_SAFETY * reach_px / min(camera.fx, camera.fy)
 
@@ -328,7 +328,7 @@ def _settle(field: _Field, matrix: NDArray, camera: Camera, img: NDArray, rows: 
         if catalog is None or not catalog.serves(matrix, camera):
             catalog = _Catalog.chosen(field, matrix, camera)
         new_img, new_rows, new_ref = rematch(field, catalog, matrix, camera)
-        unchanged = np.array_equal(new_img, img) and np.array_equal(new_rows, rows)
+        unchanged = new_img.size == img.size and bool((new_img == img).all() and (new_rows == rows).all())
         if unchanged or new_img.size < img.size:
             break
         img, rows, ref = new_img, new_rows, new_ref

@@ -160,8 +160,12 @@ def _nominal_camera(width: int, height: int, fx: float, fy: float) -> Camera:
 
 
 def check_distinct(x: NDArray, y: NDArray) -> None:
-    """Two stars at exactly the same position make degenerate patterns: refuse them. (One sort of
-    the positions as complex numbers, ordered by x then y; the pair is looked up only when there is one.)"""
+    """Two stars at exactly the same position make degenerate patterns: refuse them. (One sort of x;
+    only when two stars share an x, one of the positions as complex numbers, ordered by x then y;
+    the pair is looked up only when there is one.)"""
+    by_x = np.sort(x)
+    if not (by_x[1:] == by_x[:-1]).any():  # no two share an x (the usual case): no pair to look for
+        return
     z = np.sort(x + 1j * y)
     if not np.any(z[1:] == z[:-1]):
         return
@@ -178,13 +182,8 @@ def star_arrays(x, y, flux, width, height) -> tuple[NDArray, NDArray, NDArray]:
     x, y = _coordinates(x, "x"), _coordinates(y, "y")
     if x.shape != y.shape:
         raise InvalidInputError(f"x and y must have the same length, got {x.size} and {y.size}")
-    if not (np.isfinite(x).all() and np.isfinite(y).all()):
-        raise InvalidInputError("star coordinates must be finite numbers (got NaN or inf)")
-    if x.size and (x.min() < -0.5 or y.min() < -0.5 or x.max() > width - 0.5 or y.max() > height - 0.5):
-        outside = (x < -0.5) | (y < -0.5) | (x > width - 0.5) | (y > height - 0.5)
-        i = int(np.flatnonzero(outside)[0])
-        raise InvalidInputError(f"star {i} at ({x[i]:g}, {y[i]:g}) lies outside the {width} x {height} image "
-                                f"(valid: -0.5 <= x <= {width - 0.5}, -0.5 <= y <= {height - 0.5})")
+    if x.size and not _inside(x, y, width, height):  # NaN or inf fail it: say which check they fail
+        _check_inside(x, y, width, height)
     check_distinct(x, y)
     if flux is not None:
         flux = _coordinates(flux, "flux")
@@ -193,6 +192,22 @@ def star_arrays(x, y, flux, width, height) -> tuple[NDArray, NDArray, NDArray]:
         order = np.argsort(-flux, kind="stable")
         return x[order], y[order], order
     return x, y, np.arange(x.size)
+
+
+def _inside(x: NDArray, y: NDArray, width, height) -> bool:
+    """Whether the stars ``x``, ``y`` (N >= 1,) are finite numbers inside the image (four reductions:
+    a NaN makes its extreme NaN, and an inf lies outside)."""
+    return bool(x.min() >= -0.5 and y.min() >= -0.5 and x.max() <= width - 0.5 and y.max() <= height - 0.5)
+
+
+def _check_inside(x: NDArray, y: NDArray, width, height) -> None:
+    """Refuse stars that are not finite numbers, or one outside the image (naming the first)."""
+    if not (np.isfinite(x).all() and np.isfinite(y).all()):
+        raise InvalidInputError("star coordinates must be finite numbers (got NaN or inf)")
+    outside = (x < -0.5) | (y < -0.5) | (x > width - 0.5) | (y > height - 0.5)
+    i = int(np.flatnonzero(outside)[0])
+    raise InvalidInputError(f"star {i} at ({x[i]:g}, {y[i]:g}) lies outside the {width} x {height} image "
+                            f"(valid: -0.5 <= x <= {width - 0.5}, -0.5 <= y <= {height - 0.5})")
 
 
 def _coordinates(values, name: str) -> NDArray[np.float64]:
