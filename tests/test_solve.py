@@ -401,15 +401,3 @@ def test_cli_pixel_aspect_and_time(tmp_path):
         code, out, err = _cli("solve-stars", stars, *size, *argv)
         assert (code, out) == (2, "")
         assert err.startswith("startrack solve-stars: error: ") and words in err and len(err.splitlines()) == 1
-
-
-def test_a_narrow_field_that_fails_says_how_few_catalog_stars_it_holds():
-    from startrack.solve import _narrow_field_hint
-
-    # 117,955 stars over 41,253 deg2: 2.86 per deg2, so 1.0 x 0.8 deg holds 2 and 10 x 8 deg 229
-    hint = _narrow_field_hint(Camera.from_fov(1000, 800, 1.0), 1.0)
-    assert hint is not None and "1 x 0.8 deg holds 2 Hipparcos stars on average" in hint
-    assert _narrow_field_hint(Camera.from_fov(1000, 800, 10.0), 10.0) is None
-    # a pixel twice as high on the sky doubles the field's height
-    tall = _narrow_field_hint(Camera.from_fov(1000, 800, 1.0, pixel_aspect=2.0), 1.0)
-    assert tall is not None and "1 x 1.6 deg holds 5" in tall

@@ -54,7 +54,21 @@ def test_parity_is_offered_only_by_the_matcher_that_can_search_mirror_images(met
     """Found in review: the other matchers refuse parity 'either', which the hint proposed."""
     from types import SimpleNamespace
 
+    from startrack import Camera
     from startrack.solve import _no_match_hints
 
-    request = SimpleNamespace(fov_range_deg=(11.0, 12.0), focal_range=(1.0, 2.0), parity="normal")
+    request = SimpleNamespace(fov_range_deg=(11.0, 12.0), focal_range=(1.0, 2.0), parity="normal",
+                              camera=Camera.from_fov(1024, 1024, 11.5))
     assert (PARITY_HINT in _no_match_hints(request, method)) is offered
+
+
+def test_a_narrow_field_that_fails_says_how_few_catalog_stars_it_holds():
+    from startrack.solve import _narrow_field_hint
+
+    # 117,955 stars over 41,253 deg2: 2.86 per deg2, so 1.0 x 0.8 deg holds 2 and 10 x 8 deg 229
+    hint = _narrow_field_hint(Camera.from_fov(1000, 800, 1.0), 1.0)
+    assert hint is not None and "1 x 0.8 deg holds 2 Hipparcos stars on average" in hint
+    assert _narrow_field_hint(Camera.from_fov(1000, 800, 10.0), 10.0) is None
+    # a pixel twice as high on the sky doubles the field's height
+    tall = _narrow_field_hint(Camera.from_fov(1000, 800, 1.0, pixel_aspect=2.0), 1.0)
+    assert tall is not None and "1 x 1.6 deg holds 5" in tall
