@@ -177,9 +177,12 @@ def global_background(image: NDArray) -> BackgroundModel:
 
 
 def _finite(values: NDArray) -> NDArray:
-    """The finite values, flattened."""
+    """The finite values, flattened (``values`` itself, raveled, when all are: read, not written)."""
     values = values.ravel()
-    return values if np.issubdtype(values.dtype, np.integer) else values[np.isfinite(values)]
+    if np.issubdtype(values.dtype, np.integer):
+        return values
+    finite = np.isfinite(values)
+    return values if finite.all() else values[finite]
 
 
 def tiled_background(image: NDArray, tile: int, scale: float = 1.0, offset: float = 0.0,
@@ -281,8 +284,8 @@ def _grid_quantile(grid: NDArray, q: float) -> float:
 def low_side_clipped(image: NDArray) -> bool:
     """Whether at least :data:`CLIPPED_FRACTION` of a subsample of ``image`` sits at its lowest
     value: a sensor or a file that clips the dark side of its noise at zero."""
-    sample = _finite(strided_sample(image)[0])
-    return bool(sample.size) and float(np.mean(sample == sample.min())) >= CLIPPED_FRACTION
+    sample = _finite(strided_sample(image)[0])  # the count over the size is np.mean's value (both exact)
+    return bool(sample.size) and int(np.count_nonzero(sample == sample.min())) / sample.size >= CLIPPED_FRACTION
 
 
 def upper_tail_factor(q_lo: NDArray, q_mid: NDArray, q_hi: NDArray) -> float:
@@ -465,9 +468,10 @@ def pixel_noise(image: NDArray, model: BackgroundModel) -> float:
     finite = np.ravel if np.issubdtype(sample.dtype, np.integer) else _finite  # integers are finite (so is the level)
     sample = sample.astype(np.float64)
     q = quantization_step(finite(sample))
-    if q > 0:  # np.rint is np.round's value at 0 decimals; a step of 1 needs no scaling
-        level = np.asarray(level, dtype=np.float64)
-        level = np.rint(level) if q == 1 else q * np.rint(level / q)
+    if q == 1:  # np.rint is np.round's value at 0 decimals; rounded in float32, a map's integers are float64's
+        level = np.rint(level)
+    elif q > 0:
+        level = q * np.rint(np.asarray(level, dtype=np.float64) / q)
     residual = finite(sample - level)
     return clipped_level_noise(residual, q, upper_half=True)[1] if residual.size else 0.0
 

@@ -40,7 +40,6 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from ._centroid import axis_ratio
 from ._compiled import region_kernels
 from ._label import Regions
 from ._windows import fast_median, fast_quantile
@@ -83,7 +82,8 @@ class CoreShape(NamedTuple):
 
 
 def core_shape(regions: Regions, signal: NDArray, peak: NDArray) -> CoreShape:
-    """Half-maximum size (px), elongation (>= 1) and fill of N spots (module docstring).
+    """Half-maximum size (px), elongation (>= 1) and fill of N spots (module docstring), one
+    compiled loop over the pixels (:func:`.region_kernels.core_shapes`).
 
     Parameters
     ----------
@@ -94,15 +94,10 @@ def core_shape(regions: Regions, signal: NDArray, peak: NDArray) -> CoreShape:
     peak : ndarray, shape (N,)
         Each spot's largest signal.
     """
-    with np.errstate(invalid="ignore", divide="ignore"):
-        core = (signal >= (0.5 * peak)[regions.index]).astype(np.float64)
-        m = region_kernels().weighted_moments(regions.starts, regions.x.astype(np.float64),
-                                              regions.y.astype(np.float64), core)
-        area, xx, yy, xy = m[:, 0], m[:, 3] + 1.0 / 12.0, m[:, 4] + 1.0 / 12.0, m[:, 5]
-        elongation = axis_ratio(xx, yy, xy)
-        fill = area / (4.0 * np.pi * np.sqrt(np.maximum(xx * yy - xy * xy, 0.0)))
-    measured = area >= MIN_SHAPE_PIXELS
-    return CoreShape(np.sqrt(area / HALF_MAX_AREA), np.where(measured, elongation, 1.0), np.where(measured, fill, 1.0))
+    shape = region_kernels().core_shapes(regions.starts, np.asarray(regions.x, np.int64),
+                                         np.asarray(regions.y, np.int64), np.ascontiguousarray(signal, np.float64),
+                                         np.ascontiguousarray(peak, np.float64), MIN_SHAPE_PIXELS, HALF_MAX_AREA)
+    return CoreShape(shape[0], shape[1], shape[2])
 
 
 def saturated_spots(regions: Regions, raw: NDArray, top: float) -> NDArray[np.bool_]:

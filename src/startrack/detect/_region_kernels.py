@@ -1,6 +1,6 @@
 """The compiled loops over the pixel lists of :class:`.label.Regions` (numba): per-region
-weighted moments and signal sums (each region's pixels in two short passes), and the local peaks
-of the deblender.
+weighted moments, the shapes of the half-maximum cores and signal sums (each region's pixels in
+two short passes), and the local peaks of the deblender.
 
 They give the values of the numpy expressions of :func:`.centroid.measure_spots`,
 :func:`.point_source.core_shape` and :func:`.deblend.local_peaks` that they replace, sums taken
@@ -58,6 +58,64 @@ def _region_moments(x, y, w, lo, hi, out):
             spread += dx * dx + dy * dy
     out[0], out[1], out[2] = total, mx, my
     out[3], out[4], out[5], out[6] = cxx / total, cyy / total, cxy / total, spread
+
+
+@njit(cache=True, error_model="numpy")
+def core_shapes(starts, x, y, signal, peak, min_pixels, half_max_area):
+    """Half-maximum size, elongation and fill of the cores of N regions, the numbers of the numpy
+    expressions of :func:`.point_source.core_shape` operation for operation.
+
+    ``starts`` (N,) as in :func:`weighted_moments`; ``x``, ``y`` (M,) int64 pixel columns and rows,
+    ``signal`` (M,) float64, ``peak`` (N,) float64 each region's largest signal; a region's core
+    is its pixels with ``signal >= 0.5 peak`` (none where ``peak`` is NaN). ``min_pixels``: the
+    elongation and fill of smaller cores are 1; ``half_max_area`` the core area of a Gaussian of
+    unit standard deviation, px^2. Returns (3, N) float64: ``sqrt(area / half_max_area)`` (px),
+    the ratio of the principal axes of the core's second moments (each plus 1/12 px^2 on the
+    diagonal) and ``area / (4 pi sqrt(det))``.
+    """
+    n = starts.size
+    out = np.empty((3, n))
+    for r in range(n):
+        hi = starts[r + 1] if r + 1 < n else x.size
+        area, cxx, cyy, cxy = _core_moments(x, y, signal, 0.5 * peak[r], starts[r], hi)
+        out[0, r], out[1, r], out[2, r] = np.sqrt(area / half_max_area), 1.0, 1.0
+        if area >= min_pixels:
+            xx, yy = cxx + 1.0 / 12.0, cyy + 1.0 / 12.0
+            det = xx * yy - cxy * cxy
+            out[1, r] = _axis_ratio(xx, yy, cxy)
+            out[2, r] = area / (4.0 * np.pi * np.sqrt(det if det > 0.0 else 0.0))
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def _core_moments(x, y, signal, half, lo, hi):
+    """Pixel count and central moments xx, yy, xy over the count of the pixels ``lo`` .. ``hi`` - 1
+    with ``signal >= half``: :func:`_region_moments`' with the weights 1 on them and 0 elsewhere,
+    bit for bit (a zero weight adds a zero to a sum that is never -0); NaN moments when none."""
+    count = sx = sy = 0.0
+    for p in range(lo, hi):
+        if signal[p] >= half:  # False against NaN
+            count += 1.0
+            sx += np.float64(x[p])
+            sy += np.float64(y[p])
+    mx, my = sx / count, sy / count
+    cxx = cyy = cxy = 0.0
+    for p in range(lo, hi):
+        if signal[p] >= half:
+            dx, dy = x[p] - mx, y[p] - my
+            cxx += dx * dx
+            cyy += dy * dy
+            cxy += dx * dy
+    return count, cxx / count, cyy / count, cxy / count
+
+
+@njit(cache=True, error_model="numpy")
+def _axis_ratio(cxx, cyy, cxy):
+    """:func:`.centroid.axis_ratio` of one finite moment matrix [[cxx, cxy], [cxy, cyy]]."""
+    mean = 0.5 * (cxx + cyy)
+    half_diff = np.sqrt(0.25 * ((cxx - cyy) * (cxx - cyy)) + cxy * cxy)
+    low = mean - half_diff
+    return np.sqrt((mean + half_diff) / (low if low > 1e-12 else 1e-12))
 
 
 @njit(cache=True, error_model="numpy")

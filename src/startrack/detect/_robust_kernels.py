@@ -13,6 +13,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+GCD_PROBE = 256
+"""Values whose distances :func:`quantization_step` tries first (:func:`_coprime_start`)."""
+
 
 @njit(cache=True, error_model="numpy")
 def quantization_step(values, max_range):
@@ -24,7 +27,7 @@ def quantization_step(values, max_range):
         if np.floor(v) != v:  # NaN too
             return 0.0
         lo, hi = min(lo, v), max(hi, v)
-    if hi - lo > max_range:
+    if hi - lo > max_range or _coprime_start(values, lo):
         return 1.0
     present = np.zeros(int(hi - lo) + 1, dtype=np.bool_)
     for v in values:
@@ -36,6 +39,21 @@ def quantization_step(values, max_range):
                 divisor = _gcd(divisor, k - last)
             last = k
     return 1.0 if last < 0 or divisor == 0 else float(max(1, divisor))
+
+
+@njit(cache=True, error_model="numpy")
+def _coprime_start(values, lo):
+    """Whether the distances from ``lo`` (the smallest) of the first :data:`GCD_PROBE` of the
+    integer ``values`` (their span at most :data:`.robust.MAX_QUANTIZED_RANGE`) have no common
+    divisor but 1: then neither have the gaps between all the values present (the gaps' greatest
+    common divisor is the distances'), so that the step of noisy data is found without a pass
+    over its histogram."""
+    divisor = 0
+    for p in range(min(values.size, GCD_PROBE)):
+        divisor = _gcd(divisor, int(values[p] - lo))
+        if divisor == 1:
+            return True
+    return False
 
 
 @njit(cache=True, error_model="numpy")
@@ -77,14 +95,16 @@ def clipped_quantized(values, step, upper_half, probabilities, clip_sigma, itera
 def _grid_counts(values, lo, hi, step):
     """How many of ``values`` fall on each grid value ``lo + step k``, k = 0 .. (hi - lo) / step,
     when every value is an integer below 2^52 that lies exactly on the grid (so that the
-    arithmetic of the clipping loop is exact whether it runs on values or on bins); else empty."""
+    arithmetic of the clipping loop is exact whether it runs on values or on bins); else empty.
+    ``lo`` and ``hi`` are the smallest and largest value (:func:`_span`)."""
     empty = np.zeros(0, dtype=np.int64)
-    if np.floor(step) != step or max(abs(lo), abs(hi)) >= 2.0**52:
+    if np.floor(step) != step or max(abs(lo), abs(hi)) >= 2.0**52 or np.floor(lo) != lo:
         return empty
     counts = np.zeros(int(np.rint((hi - lo) / step)) + 1, dtype=np.int64)
+    unit = step == 1.0  # no division: v - lo is the bin of an integer v
     for v in values:
-        k = int(np.rint((v - lo) / step))
-        if np.floor(v) != v or lo + step * k != v:
+        k = int(v - lo) if unit else int(np.rint((v - lo) / step))
+        if lo + step * k != v:  # an integer (exact below 2^53), so also where v is not one (or NaN)
             return empty
         counts[k] += 1
     return counts
