@@ -100,12 +100,17 @@ def reference(name: str) -> Reference:
     corr = fits.getdata(truth / (Path(name).stem + ".corr"))
     genuine = np.hypot(corr["field_x"] - corr["index_x"], corr["field_y"] - corr["index_y"]) < CORR_TOLERANCE_PX
     x, y = from_fits_pixels(np.asarray(corr["field_x"][genuine], float), np.asarray(corr["field_y"][genuine], float))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", FITSFixedWarning)
-        header = fits.Header.fromfile(truth / (Path(name).stem + ".wcs"))
-        wcs = WCS(header)
+    wcs, header = truth_wcs(name)
     hx, hy = _hipparcos_pixels(wcs, int(header["IMAGEW"]), int(header["IMAGEH"]))
     return Reference(x, y, hx, hy)
+
+
+def truth_wcs(name: str) -> tuple[WCS, fits.Header]:
+    """astrometry.net's TAN-SIP solution of image ``name`` (``truth/<image>.wcs``) and its header."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FITSFixedWarning)  # a header without an image
+        header = fits.Header.fromfile(REALDATA / IMAGES[name] / "truth" / (Path(name).stem + ".wcs"))
+        return WCS(header), header
 
 
 def _hipparcos_pixels(wcs: WCS, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
