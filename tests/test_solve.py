@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from cli_runner import run as run_cli
 from startrack import Camera, Status
 from startrack.errors import InvalidInputError
 from startrack.frames import attitude_error, random_rotations, rotation_from_radec_roll
@@ -373,17 +374,6 @@ def test_the_search_order_lets_a_bright_crowd_in_two_at_a_time():
     assert (first < 12).sum() == 8  # two per round while the spread spots last (6 rounds), then the rest
 
 
-def _cli(*argv) -> tuple[int, str, str]:
-    import contextlib
-    import io
-
-    from startrack.cli import main
-
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
-
 
 def test_cli_pixel_aspect_and_time(tmp_path):
     """solve-stars --pixel-aspect solves the 1.9 sensor; --time garbage is refused without a site
@@ -392,12 +382,12 @@ def test_cli_pixel_aspect_and_time(tmp_path):
     stars = tmp_path / "stars.csv"
     stars.write_text("x,y\n" + "".join(f"{a:.3f},{b:.3f}\n" for a, b in zip(x, y, strict=True)))
     size = ("--width", 1024, "--height", 1024)
-    code, out, err = _cli("solve-stars", stars, *size, "--pixel-aspect", 1.9, "--time", "2025-01-01T00:00:00")
+    code, out, err = run_cli("solve-stars", stars, *size, "--pixel-aspect", 1.9, "--time", "2025-01-01T00:00:00")
     assert code == 0, err
     assert "solved" in out
     for argv, words in ((("--time", "garbage"), "--time must be an ISO 8601 UTC time"),
                         (("--pixel-aspect", 0), "--pixel-aspect must be"),
                         (("--pixel-aspect", 1, 2, 3), "--pixel-aspect must be")):
-        code, out, err = _cli("solve-stars", stars, *size, *argv)
+        code, out, err = run_cli("solve-stars", stars, *size, *argv)
         assert (code, out) == (2, "")
         assert err.startswith("startrack solve-stars: error: ") and words in err and len(err.splitlines()) == 1

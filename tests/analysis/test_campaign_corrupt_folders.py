@@ -7,8 +7,6 @@ a copy of it.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import shutil
 from collections.abc import Callable
@@ -18,7 +16,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from startrack.cli import main
+from cli_runner import run
 
 SPEC = """
 [campaign]
@@ -33,13 +31,6 @@ fov_deg = [12.0, 18.0]
 """
 PART = "part-00000-000000.parquet"
 AGAIN = "run the spec again into a new --out folder"
-
-
-def run(*argv: object) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
 
 
 @pytest.fixture(scope="module")

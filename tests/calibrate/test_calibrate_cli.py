@@ -1,24 +1,15 @@
 """startrack calibrate: star images (joint calibration + one re-solve round) and checkerboards."""
 
-import contextlib
-import io
 import json
 
 import numpy as np
 import pytest
 
+from cli_runner import run
 from startrack.camera import Camera
-from startrack.cli import main
 from startrack.io import write_png
 
 CEDAR_SAME_SIZE = ("crappy.jpg", "orion_trees.jpg", "roof.jpg")  # 507 x 507
-
-
-def run(*argv):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
 
 
 def test_calibrate_from_three_real_images(tmp_path, realdata_dir):

@@ -3,16 +3,14 @@ files it writes against the library's result), a real image, and every misuse (e
 
 from __future__ import annotations
 
-import contextlib
 import csv
-import io
 
 import numpy as np
 import pytest
 
+from cli_runner import run as run_cli
 from startrack import Camera
 from startrack.analysis.postprocess import ANALYSES, records_from_images, run_analysis
-from startrack.cli import main
 from startrack.frames import random_rotations
 from startrack.io._truth_files import write_frame
 from startrack.simulate import get_sensor_preset, simulate_frame
@@ -22,10 +20,7 @@ CAMERA = Camera.from_fov(384, 320, 12.0)
 
 def run(*argv) -> tuple[int, str, str]:
     """``startrack analyse ARGV`` in-process: (exit code, stdout, stderr)."""
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(["analyse", *[str(a) for a in argv]])
-    return code, out.getvalue(), err.getvalue()
+    return run_cli("analyse", *argv)
 
 
 @pytest.fixture(scope="module")

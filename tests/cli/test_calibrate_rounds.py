@@ -6,14 +6,12 @@ the camera without a sigma (and the other terms' sigmas were too small, those th
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 
 import pytest
 
+from cli_runner import run
 from startrack.camera import Camera
-from startrack.cli import main
 from startrack.cli._calibrate_cmd import PARAMETERS
 from startrack.io._truth_files import write_frame
 from startrack.simulate import get_sensor_preset, random_attitude, simulate_frame
@@ -21,13 +19,6 @@ from startrack.simulate import get_sensor_preset, random_attitude, simulate_fram
 DEFAULT_FIT = ("f", "aspect", "cx", "cy", "k1", "k2", "p1", "p2")
 TRUTH = Camera(width=1024, height=768, fx=1911.0, fy=1925.0, cx=530.0, cy=370.0, k1=-0.1)
 """Principal point 18.5 px and 13.5 px off centre, pixels 0.7 % taller than wide, barrel distortion."""
-
-
-def run(*argv) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
 
 
 def null_value(name: str, camera: dict) -> float:

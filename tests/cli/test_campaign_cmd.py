@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import io
 import json
 import sys
@@ -11,8 +10,8 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 
+from cli_runner import run
 from startrack.analysis.campaign import list_specs
-from startrack.cli import main
 
 SPEC = """
 [campaign]
@@ -25,13 +24,6 @@ max_mag = 6.0
 [sweep]
 fov_deg = [12.0, 18.0]
 """
-
-
-def run(*argv) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
 
 
 @pytest.fixture(scope="module")

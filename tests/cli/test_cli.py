@@ -23,8 +23,9 @@ import pytest
 from PIL import Image as PILImage
 from scipy.spatial.transform import Rotation
 
+from cli_runner import run
 from startrack.camera import Camera
-from startrack.cli import SUBCOMMANDS, main
+from startrack.cli import SUBCOMMANDS
 from startrack.cli._progress import ensure_database
 from startrack.frames import angle_between, attitude_error, boresight, rotation_from_radec_roll
 from startrack.io import read_image, write_fits, write_png
@@ -37,14 +38,6 @@ SIZE = ("--width", SIM_SIZE_PX, "--height", SIM_SIZE_PX)
 SOLUTION_KEYS = {"status", "ra_deg", "dec_deg", "roll_deg", "fov_deg", "qx", "qy", "qz", "qw", "matches",
                  "false_match_prob", "solve_time_s"}
 PLEIADES = Path(__file__).resolve().parents[3] / "shared" / "realdata" / "smroid-cedar-solve" / "pleiades.jpg"
-
-
-def run(*argv) -> tuple[int, str, str]:
-    """Run ``startrack ARGV`` in-process; returns (exit code, stdout, stderr)."""
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
 
 
 def strict_json(text: str) -> dict:

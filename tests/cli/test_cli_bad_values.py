@@ -4,21 +4,11 @@ valid, exit status 2. Before, they ended as "unexpected" errors (exit 3), or as 
 
 from __future__ import annotations
 
-import contextlib
-import io
-
 import numpy as np
 import pytest
 
-from startrack.cli import main
+from cli_runner import run
 from startrack.io import write_fits
-
-
-def run(*argv) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
 
 
 @pytest.fixture

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cli_runner import run
 from startrack.camera import Camera
 from startrack.cli import main
 from startrack.cli._progress import ensure_database
@@ -31,13 +32,6 @@ from startrack.units import DEG
 
 STARTRACK = [sys.executable, "-m", "startrack"]
 SENSOR = get_sensor_preset("generic-cmos")
-
-
-def run(*argv) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
 
 
 def assert_misuse(result: tuple[int, str, str], command: str, *words: str) -> str:
@@ -208,7 +202,6 @@ def test_a_cache_folder_that_cannot_be_written_is_one_warning_line(tmp_path):
     warning = [line for line in proc.stderr.splitlines() if "warning" in line]
     assert len(warning) == 1 and warning[0].startswith("startrack availability: warning: cannot write the cache")
     assert "P(< 3 stars)" in proc.stdout
-
 
 
 @pytest.mark.parametrize("command", ["detect", "calibrate", "rate", "analyse"])

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 
+from cli_runner import run
 from startrack.cli import main
 from startrack.errors import OutputError
 
@@ -21,14 +22,6 @@ GOOD_CAMERA = {"width": 32, "height": 32, "fx": 150.0}
 IDENTITY = {"qx": 0, "qy": 0, "qz": 0, "qw": 1}
 LEAKS = ("Traceback", "__init__", "argument after **", "could not convert", "positional argument",
          "unexpected keyword", "sys.set_int_max_str_digits", "a fault of startrack's")
-
-
-def run(*argv) -> tuple[int, str, str]:
-    """Run ``startrack ARGV`` in-process; returns (exit code, stdout, stderr)."""
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
 
 
 def assert_misuse(result: tuple[int, str, str], command: str, *words: str) -> str:

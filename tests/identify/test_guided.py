@@ -7,8 +7,6 @@ run at 30 sigma so that the blind pass leaves the fainter stars for the guided o
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import math
 import sys
@@ -20,7 +18,7 @@ import pytest
 from scipy.ndimage import maximum_filter
 
 import startrack
-from startrack.cli import main
+from cli_runner import run as run_cli
 from startrack.detect import StarDetector
 from startrack.errors import InvalidInputError
 from startrack.identify import GuidedStars, guided_stars, with_guided_stars
@@ -187,12 +185,6 @@ def test_real_photos_gain_the_stars_astrometry_net_matched(realdata_dir):
                                       det.y[:len(det) - solution.guided_stars], reference(name)).unconfirmed
 
 
-def _cli(*argv) -> tuple[int, str]:
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
-        code = main([str(a) for a in argv])
-    return code, out.getvalue()
-
 
 def test_cli_guided(tmp_path):
     """startrack solve --guided: the table's stars row and the JSON's guided_stars say how many
@@ -202,11 +194,11 @@ def test_cli_guided(tmp_path):
                          rng=101)
     path = tmp_path / "deep.fits"
     write_fits(path, sim.image)
-    code, table = _cli("solve", path, "--fov-deg", 15, "--guided")
+    code, table, _ = run_cli("solve", path, "--fov-deg", 15, "--guided")
     assert code == 0 and "of them measured where the solution predicts them" in table
-    code, text = _cli("solve", path, "--fov-deg", 15, "--guided", "--json")
+    code, text, _ = run_cli("solve", path, "--fov-deg", 15, "--guided", "--json")
     guided = json.loads(text)["guided_stars"]
-    code_plain, plain = _cli("solve", path, "--fov-deg", 15, "--json")
+    code_plain, plain, _ = run_cli("solve", path, "--fov-deg", 15, "--json")
     assert code == code_plain == 0 and guided > 0 and json.loads(plain)["guided_stars"] == 0
     assert len(json.loads(text)["matches"]) == len(json.loads(plain)["matches"]) + guided
 

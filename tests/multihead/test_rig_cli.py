@@ -2,25 +2,16 @@
 
 from __future__ import annotations
 
-import contextlib
 import csv
-import io
 import json
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from startrack.cli import main
+from cli_runner import run
 
 from .rigs import split_rig, two_heads
-
-
-def run(*argv) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
 
 
 def assert_misuse(result, command: str, *words: str) -> None:

@@ -3,9 +3,7 @@
 
 from __future__ import annotations
 
-import contextlib
 import csv
-import io
 import json
 
 import numpy as np
@@ -14,19 +12,12 @@ from astropy.io import fits
 from astropy.time import Time
 from astropy.wcs import WCS
 
+from cli_runner import run
 from startrack.camera import Camera
-from startrack.cli import main
 from startrack.frames import angle_between, radec_to_vector
 from startrack.io._truth_files import index_row, write_frame, write_index
 from startrack.simulate import FrameTiming, get_sensor_preset, random_attitude, save_profile, simulate_frame, tumble
 from startrack.units import DEG, PIXEL
-
-
-def run(*argv) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
 
 
 @pytest.fixture(scope="module")
