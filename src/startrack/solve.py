@@ -123,6 +123,10 @@ def _run(problem: SolveRequest, method: MethodName, options: MatcherOptionsBase 
          fov_source: str) -> AttitudeSolution:
     """Run the named matcher on a validated request and build the solution (or the failure), its
     :attr:`~startrack.results.AttitudeSolution.fov_source` ``fov_source``."""
+    if (known := _failure_before_search(problem, method)) is not None:
+        status, reason = known
+        return AttitudeSolution(status=status, reason=reason, solve_time_s=0.0, epoch_jyear=problem.epoch.jyear,
+                                epoch_source=problem.epoch.source, fov_source=fov_source)
     matcher, stars = prepare_matcher(method, problem)  # loads (or builds) the database first
     t0 = time.perf_counter()
     outcome = matcher(options)
@@ -153,24 +157,70 @@ def _no_match_hints(problem: SolveRequest, method: MethodName) -> str:
     return "".join(f"; {hint}" for hint in hints)
 
 
+def _failure_before_search(problem: SolveRequest, method: MethodName) -> tuple[Status, str] | None:
+    """The status and reason of a lost-in-space solve that cannot succeed, known before its
+    database is loaded, or built (about 30 s for a new narrow field): fewer than 4 stars, or a
+    field too sparse in catalog stars (:func:`too_sparse_to_solve`). None otherwise, and for the
+    overlay matcher (its prior attitude needs no database)."""
+    if method == "overlay":
+        return None
+    if problem.x.size < 4:
+        return Status.TOO_FEW_STARS, f"lost-in-space identification needs at least 4 stars, got {problem.x.size}"
+    width_deg, height_deg = _field_deg(problem.camera, problem.fov_range_deg[1])
+    if too_sparse_to_solve(width_deg, height_deg / width_deg):
+        return Status.NO_MATCH, f"not searched: {_sparse_field_words(width_deg, height_deg)}"
+    return None
+
+
 FEW_CATALOG_STARS = 20.0
 """A field that holds fewer Hipparcos stars than this on average gets a hint with its failure
 (:func:`_narrow_field_hint`): a telescope's narrow field, whose stars are mostly fainter than
 the catalog."""
 
+MIN_CATALOG_STARS = 1.5
+"""A lost-in-space solve of a field that holds fewer Hipparcos stars than this on average, at the
+widest field searched, fails at once (:func:`too_sparse_to_solve`). A solution confirms a
+pattern of 4 stars with at least 2 more (``identify._confirm.MIN_EXTRA_MATCHES``); of 200,000
+random fields of 0.5 deg2, which hold 1.43 stars on average, 99 % held at most 4 and 99.9 % at
+most 6 (a 0.72 deg square field holds 1.5)."""
+
 SKY_DEG2 = 4.0 * math.pi * math.degrees(1.0) ** 2
 """The whole sky in square degrees (41,253)."""
+
+
+def expected_catalog_stars(width_deg: float, height_deg: float) -> float:
+    """How many Hipparcos stars a field of ``width_deg`` x ``height_deg`` holds on average over
+    the sky (2.86 per deg2; small fields, taken as flat)."""
+    return len(load_catalog().hip) / SKY_DEG2 * width_deg * height_deg
+
+
+def too_sparse_to_solve(fov_deg: float, height_ratio: float = 1.0) -> bool:
+    """Whether a field ``fov_deg`` wide (horizontal, deg) and ``height_ratio`` times as high holds
+    fewer than :data:`MIN_CATALOG_STARS` Hipparcos stars on average: too few for a lost-in-space
+    solve almost anywhere on the sky, so that no pattern database is built for it."""
+    return expected_catalog_stars(fov_deg, fov_deg * height_ratio) < MIN_CATALOG_STARS
+
+
+def _field_deg(camera: Camera, fov_deg: float) -> tuple[float, float]:
+    """Width and height (deg) of a field ``fov_deg`` wide on ``camera``'s image (its aspect ratio
+    and pixel aspect)."""
+    return fov_deg, fov_deg * (camera.height / camera.width) * camera.pixel_aspect
 
 
 def _narrow_field_hint(camera: Camera, fov_deg: float) -> str | None:
     """How many Hipparcos stars a field of ``fov_deg`` (horizontal, deg) on ``camera``'s image
     (its aspect ratio) holds on average, when fewer than :data:`FEW_CATALOG_STARS`: why a narrow
     field did not solve. None for a wider field."""
-    height_deg = fov_deg * (camera.height / camera.width) * camera.pixel_aspect
-    expected = len(load_catalog().hip) / SKY_DEG2 * fov_deg * height_deg
-    if expected >= FEW_CATALOG_STARS:
+    width_deg, height_deg = _field_deg(camera, fov_deg)
+    if expected_catalog_stars(width_deg, height_deg) >= FEW_CATALOG_STARS:
         return None
-    return (f"a field of {fov_deg:.3g} x {height_deg:.3g} deg holds {expected:.0f} Hipparcos stars on average "
+    return _sparse_field_words(width_deg, height_deg)
+
+
+def _sparse_field_words(width_deg: float, height_deg: float) -> str:
+    """The hint of :func:`_narrow_field_hint` for a field of ``width_deg`` x ``height_deg``."""
+    expected = expected_catalog_stars(width_deg, height_deg)
+    return (f"a field of {width_deg:.3g} x {height_deg:.3g} deg holds {expected:.0f} Hipparcos stars on average "
             "(the catalog is complete to about V 7.3; fainter stars, most of a telescope's image, are not in it)")
 
 

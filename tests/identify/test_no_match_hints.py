@@ -72,3 +72,48 @@ def test_a_narrow_field_that_fails_says_how_few_catalog_stars_it_holds():
     # a pixel twice as high on the sky doubles the field's height
     tall = _narrow_field_hint(Camera.from_fov(1000, 800, 1.0, pixel_aspect=2.0), 1.0)
     assert tall is not None and "1 x 1.6 deg holds 5" in tall
+
+
+def _no_database(*args, **kwargs):
+    raise AssertionError("a pattern database was loaded for a solve that could not succeed")
+
+
+def test_a_field_too_sparse_for_the_catalog_fails_before_any_database(monkeypatch):
+    """Found by a probe: a 0.7 deg field given spent 34 s building a pattern database first."""
+    import startrack.solve as solve
+
+    monkeypatch.setattr(solve, "prepare_matcher", _no_database)
+    x, y = np.array([100.0, 400.0, 700.0, 250.0, 820.0, 530.0]), np.array([90.0, 600.0, 300.0, 700.0, 120.0, 420.0])
+    solution = solve_stars(x, y, width=1000, height=800, fov_deg=0.7)
+    assert solution.status is Status.NO_MATCH, solution.reason
+    assert solution.reason.startswith("not searched: a field of 0.721 x 0.577 deg holds 1 Hipparcos stars")
+    assert not solution.solved and solution.solve_time_s == 0.0
+
+
+def test_a_list_of_three_stars_fails_before_any_database(monkeypatch):
+    import startrack.solve as solve
+
+    monkeypatch.setattr(solve, "prepare_matcher", _no_database)
+    solution = solve_stars([10.0, 500.0, 900.0], [20.0, 400.0, 700.0], width=1000, height=800, fov_deg=12.0)
+    assert solution.status is Status.TOO_FEW_STARS
+    assert solution.reason == "lost-in-space identification needs at least 4 stars, got 3"
+
+
+@pytest.mark.parametrize(("fov_deg", "sparse"), [(0.5, True), (0.72, True), (0.73, False), (3.0, False)])
+def test_the_sparse_field_limit_is_where_a_field_holds_1_5_catalog_stars(fov_deg, sparse):
+    from startrack.solve import MIN_CATALOG_STARS, expected_catalog_stars, too_sparse_to_solve
+
+    assert too_sparse_to_solve(fov_deg) is sparse
+    assert (expected_catalog_stars(fov_deg, fov_deg) < MIN_CATALOG_STARS) is sparse
+    # a field twice as high holds twice as many
+    assert too_sparse_to_solve(0.6, 2.0) is False and too_sparse_to_solve(0.6, 1.0) is True
+
+
+def test_the_command_builds_no_database_for_a_field_too_sparse(monkeypatch):
+    import startrack.identify as identify
+    from startrack.cli._progress import ensure_database
+
+    monkeypatch.setattr(identify, "load_database", _no_database)
+    ensure_database((0.5, 0.6))  # nothing loaded, nothing built
+    with pytest.raises(AssertionError, match="pattern database was loaded"):
+        ensure_database((9.0, 11.0))

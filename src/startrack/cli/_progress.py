@@ -41,10 +41,15 @@ class ProgressBar:
 
 
 def ensure_database(fov_range_deg: tuple[float, float] | None = None) -> None:
-    """Load (building on first use, with a progress bar) the pattern database for a FOV range (deg)."""
+    """Load (building on first use, with a progress bar) the pattern database for a FOV range (deg);
+    nothing for a range too narrow for the catalog (:func:`startrack.solve.too_sparse_to_solve`:
+    the solve fails at once, saying why)."""
     from ..identify import DEFAULT_FOV_RANGE_DEG, database_settings_for, is_cached, load_database
+    from ..solve import too_sparse_to_solve
 
     low, high = fov_range_deg if fov_range_deg else DEFAULT_FOV_RANGE_DEG
+    if too_sparse_to_solve(high):
+        return
     settings = database_settings_for((low, high))
     if not is_cached(settings):
         sys.stderr.write("building the star-pattern database (first run only; it is cached)\n")
