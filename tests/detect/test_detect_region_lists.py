@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from startrack.detect._filters import away_from_edge, peak_away_from_edge
+from startrack.detect._filters import EDGE_PEAK_FRACTION, away_from_edge, peak_away_from_edge
 from startrack.detect._label import Regions, label_regions
 
 
@@ -33,7 +33,8 @@ def _numpy_edge(regions: Regions, values: np.ndarray, shape: tuple[int, int], ma
     y, x = regions.y[top], regions.x[top]
     inside = (y >= margin) & (x >= margin) & (y < h - margin) & (x < w - margin)
     small = regions.sum(core.astype(np.int64)) <= max_core_px
-    return away_from_edge(regions, shape, core) | (inside & small)
+    bright = ~(values < EDGE_PEAK_FRACTION * values[top][regions.index])  # NaN: every pixel
+    return away_from_edge(regions, shape, core & bright) | (inside & small)
 
 
 def _snr(seed: int, dtype=np.float32) -> np.ndarray:

@@ -105,6 +105,23 @@ def test_edge_spots_are_rejected():
     assert len(detect(image, reject_edge=False)) == 4
 
 
+def test_a_bright_star_a_few_pixels_inside_is_kept_and_a_glow_there_is_not():
+    """Found by a crop of a real frame: its brightest star, 4 px inside, was dropped because its
+    threshold core (hundreds of px) reached the border; its half-maximum core does not. A glow of
+    the same flux and place, 6 px wide, is cut by the border at its half maximum and goes. (The
+    full-resolution pass, which a frame of fewer than three stars runs, is off: it has an edge
+    filter of its own and found the star itself.)"""
+    x, y = np.array([128.0, 60.0]), np.array([4.0, 128.0])
+    star = render_stars(SHAPE, x[:1], y[:1], [2e6], sigma_px=1.3, background=100.0, read_noise=2.0, rng=9)
+    det = detect(star, fine_sigma=None)
+    assert len(det) == 1 and det.area_px[0] > 64
+    assert np.hypot(det.x[0] - x[0], det.y[0] - y[0]) < 0.05 * PIXEL
+    glow = render_stars(SHAPE, x[:1], y[:1], [2e6], sigma_px=6.0, background=100.0, read_noise=2.0, rng=9)
+    glow += render_stars(SHAPE, x[1:], y[1:], [2e4], sigma_px=1.3, background=0.0, read_noise=0.0, rng=9)
+    det = detect(glow, fine_sigma=None)
+    assert len(det) == 1 and np.hypot(det.x[0] - x[1], det.y[0] - y[1]) < 0.05 * PIXEL
+
+
 def test_close_pair_is_deblended():
     x, y = np.array([100.0, 107.3]), np.array([120.0, 121.5])
     image = render_stars(SHAPE, x, y, [3e4, 1.5e4], sigma_px=1.3, background=100.0,

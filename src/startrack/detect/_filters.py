@@ -186,6 +186,14 @@ def clutter_ok(clutter: NDArray, max_clutter: float | None, candidates: NDArray[
     return clutter <= max_clutter
 
 
+EDGE_PEAK_FRACTION = 0.5
+"""The edge filter (:func:`peak_away_from_edge`) looks at the core pixels of at least this fraction
+of a region's highest value (its half-maximum core in the significance image): those of a bright
+star a few pixels inside stay off the border while its threshold core reaches it (the brightest
+star of a 6 deg frame cropped 4 px below it was dropped), those of a star, a glow or a limb that
+the border cuts do not."""
+
+
 def away_from_edge(regions: Regions, shape: tuple[int, int], core: NDArray[np.bool_] | None = None
                    ) -> NDArray[np.bool_]:
     """True for regions whose core does not touch the border of ``shape``.
@@ -207,12 +215,13 @@ def away_from_edge(regions: Regions, shape: tuple[int, int], core: NDArray[np.bo
 
 def peak_away_from_edge(regions: Regions, values: NDArray, shape: tuple[int, int], margin: int,
                         core: NDArray[np.bool_], max_core_px: int) -> NDArray[np.bool_]:
-    """The edge filter of the detector: a region is rejected when its core touches the border of
-    ``shape`` (:func:`away_from_edge`) and either its highest pixel (of ``values``, shape (M,))
-    lies within ``margin`` pixels of it or the core has more than ``max_core_px`` pixels. A
-    star whose centre is a few pixels inside keeps its measurable centroid; a glow, a limb or
-    a bright star cut by the border does not. One compiled loop (:func:`.region_kernels.edge_keep`)."""
+    """The edge filter of the detector: a region is rejected when its core's bright part (pixels of
+    at least :data:`EDGE_PEAK_FRACTION` of its highest value in ``values``, shape (M,)) touches the
+    border of ``shape`` and either that highest pixel lies within ``margin`` pixels of it or the
+    core has more than ``max_core_px`` pixels. A star whose centre is a few pixels inside keeps
+    its measurable centroid, however bright (its faint wings may be cut); a glow, a limb or a
+    bright star cut by the border does not. One compiled loop (:func:`.region_kernels.edge_keep`)."""
     if len(regions) == 0:
         return np.zeros(0, dtype=bool)
     return region_kernels().edge_keep(regions.starts, regions.y, regions.x, values, np.asarray(core, dtype=np.bool_),
-                                      shape[0], shape[1], margin, max_core_px)
+                                      shape[0], shape[1], margin, max_core_px, EDGE_PEAK_FRACTION)

@@ -215,23 +215,25 @@ def upsample_pixels(index, y, x, factor):
 
 
 @njit(cache=True, error_model="numpy")
-def edge_keep(starts, y, x, values, core, h, w, margin, max_core):
+def edge_keep(starts, y, x, values, core, h, w, margin, max_core, peak_fraction):
     """:func:`.filters.peak_away_from_edge` of N regions (``starts`` as in
     :func:`weighted_moments``; pixels ``y``, ``x``, ``values`` and bool ``core`` (M,)) on an image
-    ``h`` x ``w``: (N,) bool, True where no core pixel lies on the border, or the region's highest
-    value (:func:`_last_largest`) lies ``margin`` pixels or more inside and it has at most
-    ``max_core`` core pixels."""
+    ``h`` x ``w``: (N,) bool, True where no core pixel of at least ``peak_fraction`` times the
+    region's highest value (:func:`_last_largest`) lies on the border, or that value lies
+    ``margin`` pixels or more inside and the region has at most ``max_core`` core pixels."""
     n = starts.size
     out = np.empty(n, np.bool_)
     for r in range(n):
         lo, hi = starts[r], starts[r + 1] if r + 1 < n else y.size
         top = _last_largest(values, lo, hi)
         inside = margin <= y[top] < h - margin and margin <= x[top] < w - margin
+        level = peak_fraction * values[top]
         n_core, touches = 0, False
         for p in range(lo, hi):
             if core[p]:
                 n_core += 1
-                touches = touches or y[p] == 0 or y[p] == h - 1 or x[p] == 0 or x[p] == w - 1
+                on_border = y[p] == 0 or y[p] == h - 1 or x[p] == 0 or x[p] == w - 1
+                touches = touches or (on_border and not values[p] < level)  # a NaN peak: every pixel
         out[r] = not touches or (inside and n_core <= max_core)
     return out
 
