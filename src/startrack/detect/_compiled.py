@@ -79,7 +79,9 @@ def warm_up_detect(dtypes: Sequence[DTypeLike] = (np.uint8, np.uint16, np.float3
     noise = np.random.default_rng(0).normal(20.0, 2.0, (96, 96))
     frame = np.clip(noise + star, 0, 255)
     for dtype in dtypes:
-        image = frame.astype(dtype)
-        if np.issubdtype(image.dtype, np.floating):
-            image[3, 5] = np.nan
-        detect_frame(settings, np.stack([image] * channels, axis=-1) if channels > 1 else image, None)
+        images = [frame.astype(dtype)]
+        if np.issubdtype(images[0].dtype, np.floating):  # a float frame with a NaN pixel, and one without
+            images.append(images[0].copy())  # (the fine pass's one compiled loop reads the latter's plane)
+            images[0][3, 5] = np.nan
+        for image in images:
+            detect_frame(settings, np.stack([image] * channels, axis=-1) if channels > 1 else image, None)

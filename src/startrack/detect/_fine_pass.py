@@ -38,10 +38,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._background import last_axis_quantiles, tiled_background
+from ._compiled import kernels
 from ._deblend import split_regions
 from ._filters import peak_away_from_edge
 from ._label import Regions, label_regions, regions_from_index
-from ._smooth import detection_image, smooth
+from ._smooth import detection_image, empty_apart, kernel_weights, smooth
 from ._threshold import significance
 from ._windows import extract_windows
 
@@ -123,7 +124,10 @@ def fine_significance(data: NDArray, invalid: NDArray[np.bool_] | None, kernel: 
     """The full-resolution pass's significance image, shape (H, W): the ``kernel``-smoothed
     plane's local contrast (:func:`local_contrast`) over its tiled noise, in noise units; None
     when the image has no noise (a constant plane). Arguments as :func:`fine_regions`'s."""
-    det = local_contrast(detection_image(data, 1, kernel, kernel_px, invalid), may_hold_nan=invalid is not None)
+    if invalid is None:
+        det = smoothed_contrast(data, kernel, kernel_px)
+    else:
+        det = local_contrast(detection_image(data, 1, kernel, kernel_px, invalid))
     model = tiled_background(det, tile_px, skewed=skewed)
     if model.noise <= 0:
         return None
@@ -150,6 +154,37 @@ def local_contrast(image: NDArray[np.float32], may_hold_nan: bool = True) -> NDA
     weight = smooth(valid.astype(np.float32), "box", LOCAL_BOX_PX)
     with np.errstate(invalid="ignore", divide="ignore"):
         return image - total / weight
+
+
+COMPILED_DTYPES = (np.float32,)
+"""Types :func:`smoothed_contrast` reads as they are (those :func:`.compiled.warm_up_detect`
+prepares the compiled loop for); other planes are converted to float32 first (each type compiled
+costs about 5 s once; an integer plane's float32 copy, about 0.3 ms on a 1 MP frame)."""
+
+
+def smoothed_contrast(data: NDArray, kernel: str, kernel_px: int) -> NDArray[np.float32]:
+    """``local_contrast(detection_image(data, 1, kernel, kernel_px), may_hold_nan=False)`` in one
+    compiled pass (:func:`.frame_kernels.contrast`): the same float32 values, without the
+    float32 copy of an integer plane and the two frame-sized intermediate images.
+
+    Parameters
+    ----------
+    data : ndarray, shape (H, W)
+        The prepared plane, any real type (NaN pixels give NaN about them, as the two steps do).
+    kernel, kernel_px
+        The smoothing (:func:`.smooth.kernel_weights`).
+
+    Returns
+    -------
+    ndarray of float32, shape (H, W)
+    """
+    if data.dtype not in COMPILED_DTYPES or not data.flags.c_contiguous:
+        data = np.ascontiguousarray(data, dtype=np.float32)
+    inner, box = kernel_weights(kernel, kernel_px), kernel_weights("box", LOCAL_BOX_PX)
+    out = empty_apart(data.shape, data)
+    ring = empty_apart((2 * box.size, data.shape[1]), data, out).reshape(2, box.size, -1)
+    pads = empty_apart((2, data.shape[1] + 2 * (max(inner.size, box.size) // 2)), data, out, ring)
+    return kernels().contrast(data, inner, box[0], out, ring, pads[:, None, :])
 
 
 def _less_box_mean(image: NDArray[np.float32]) -> NDArray[np.float32]:
@@ -285,15 +320,20 @@ def grow(regions: Regions, shape: tuple[int, int], which: NDArray[np.bool_], ste
     dy, dx = (v.ravel() for v in np.meshgrid(k, k, indexing="ij"))
     ring = np.maximum(np.abs(dy), np.abs(dx))
     grown = which[regions.index]
-    offsets = np.where(grown[:, None], 1, ring[None, :] == 0)  # (M, S): others keep their pixels
-    y = (regions.y[:, None] + dy).ravel()
-    x = (regions.x[:, None] + dx).ravel()
-    index = np.repeat(regions.index, dy.size)
-    distance = np.tile(ring, regions.y.size)
-    ok = offsets.ravel().astype(bool) & (y >= 0) & (y < h) & (x >= 0) & (x < w)
-    key, index, distance = y[ok] * w + x[ok], index[ok], distance[ok]
-    order = np.lexsort((index, distance, key))
-    key, index = key[order], index[order]
+    stay = ~grown  # the others keep their pixels, at distance 0
+    y = np.concatenate([regions.y[stay], (regions.y[grown][:, None] + dy).ravel()])
+    x = np.concatenate([regions.x[stay], (regions.x[grown][:, None] + dx).ravel()])
+    index = np.concatenate([regions.index[stay], np.repeat(regions.index[grown], dy.size)])
+    distance = np.concatenate([np.zeros(int(stay.sum()), np.int64), np.tile(ring, int(grown.sum()))])
+    ok = (y >= 0) & (y < h) & (x >= 0) & (x < w)
+    key, index, distance = y[ok] * w + x[ok], index[ok].astype(np.int64), distance[ok]
+    n, near = len(regions), steps + 1
+    if h * w * near * n < 2**62:  # each pixel's nearest, then lowest-numbered region: one sort of one code
+        code = np.sort((key * near + distance) * n + index)
+        key, index = code // (near * n), code % n
+    else:
+        order = np.lexsort((index, distance, key))
+        key, index = key[order], index[order]
     first = np.r_[True, np.diff(key) != 0]
     return regions_from_index(index[first], key[first] // w, key[first] % w, len(regions))
 
