@@ -5,24 +5,22 @@ infinite pixels, frames narrower or lower than the kernels."""
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 
-from startrack.detect._background import tiled_background
 from startrack.detect._compiled import kernels, warm_up_detect
 from startrack.detect._fine_pass import (
     COMPILED_DTYPES,
     LOCAL_BOX_PX,
+    contrast_significance,
     fine_significance,
     grow,
     local_contrast,
     smoothed_contrast,
+    square_offsets,
 )
 from startrack.detect._label import Regions, label_regions, regions_from_index
 from startrack.detect._smooth import detection_image, smooth
-from startrack.detect._threshold import significance
 
 SHAPES = [(37, 53), (1, 200), (200, 1), (2, 2), (3, 9), (7, 7), (64, 96)]
 KERNELS = [("binomial", 3), ("binomial", 1), ("binomial", 5), ("box", 3), ("box", 5)]
@@ -62,13 +60,7 @@ def _reference_significance(data: np.ndarray, invalid: np.ndarray | None, kernel
     """:func:`fine_significance` as it was written before the compiled local contrast."""
     with np.errstate(invalid="ignore"):  # inf - inf of a plane with NaN and inf given as valid
         det = local_contrast(detection_image(data, 1, kernel, kernel_px, invalid), may_hold_nan=invalid is not None)
-    model = tiled_background(det, tile_px, skewed=skewed)
-    if model.noise <= 0:
-        return None
-    tiles = model.tiles
-    if tiles is not None:
-        tiles = replace(tiles, level=np.full_like(tiles.level, np.float32(model.level)))
-    return significance(det, replace(model, tiles=tiles, level_map=None))
+    return contrast_significance(det, tile_px, skewed)
 
 
 @pytest.mark.parametrize("shape", SHAPES)
@@ -126,9 +118,7 @@ def _lexsort_grow(regions: Regions, shape: tuple[int, int], which: np.ndarray, s
     if len(regions) == 0 or steps <= 0 or not which.any():
         return regions
     h, w = shape
-    k = np.arange(-steps, steps + 1)
-    dy, dx = (v.ravel() for v in np.meshgrid(k, k, indexing="ij"))
-    ring = np.maximum(np.abs(dy), np.abs(dx))
+    dy, dx, ring = square_offsets(steps)
     offsets = np.where(which[regions.index][:, None], 1, ring[None, :] == 0)
     y, x = (regions.y[:, None] + dy).ravel(), (regions.x[:, None] + dx).ravel()
     index, distance = np.repeat(regions.index, dy.size), np.tile(ring, regions.y.size)

@@ -128,6 +128,12 @@ def fine_significance(data: NDArray, invalid: NDArray[np.bool_] | None, kernel: 
         det = smoothed_contrast(data, kernel, kernel_px)
     else:
         det = local_contrast(detection_image(data, 1, kernel, kernel_px, invalid))
+    return contrast_significance(det, tile_px, skewed)
+
+
+def contrast_significance(det: NDArray[np.float32], tile_px: int, skewed: bool = False) -> NDArray[np.float32] | None:
+    """The local contrast ``det`` (H, W) over its tiled noise (``tile_px`` tiles), in noise units;
+    None when it has no noise (:func:`fine_significance`)."""
     model = tiled_background(det, tile_px, skewed=skewed)
     if model.noise <= 0:
         return None
@@ -304,6 +310,14 @@ def stands_above_ring(snr: NDArray, x: NDArray, y: NDArray, peak_snr: NDArray, f
         return np.asarray(peak_snr, dtype=np.float64) / local >= BUSY_RING_SIGMA_FACTOR * fine_sigma
 
 
+def square_offsets(steps: int) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+    """Row and column offsets of the (2 steps + 1)^2 pixels about a pixel, row by row, and the
+    ring (Chebyshev distance, 0 .. ``steps``) of each: three arrays of shape ((2 steps + 1)^2,)."""
+    k = np.arange(-steps, steps + 1)
+    dy, dx = (v.ravel() for v in np.meshgrid(k, k, indexing="ij"))
+    return dy, dx, np.maximum(np.abs(dy), np.abs(dx))
+
+
 def grow(regions: Regions, shape: tuple[int, int], which: NDArray[np.bool_], steps: int = GROW_STEPS) -> Regions:
     """The regions ``which`` (shape (N,)) grown by ``steps`` rings of 8-connected pixels into
     pixels of no region (a pixel two could take goes to the nearer, then the lower-numbered).
@@ -316,9 +330,7 @@ def grow(regions: Regions, shape: tuple[int, int], which: NDArray[np.bool_], ste
     if len(regions) == 0 or steps <= 0 or not which.any():
         return regions
     h, w = shape
-    k = np.arange(-steps, steps + 1)
-    dy, dx = (v.ravel() for v in np.meshgrid(k, k, indexing="ij"))
-    ring = np.maximum(np.abs(dy), np.abs(dx))
+    dy, dx, ring = square_offsets(steps)
     grown = which[regions.index]
     stay = ~grown  # the others keep their pixels, at distance 0
     y = np.concatenate([regions.y[stay], (regions.y[grown][:, None] + dy).ravel()])
