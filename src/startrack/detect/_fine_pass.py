@@ -170,8 +170,9 @@ costs about 5 s once; an integer plane's float32 copy, about 0.3 ms on a 1 MP fr
 
 def smoothed_contrast(data: NDArray, kernel: str, kernel_px: int) -> NDArray[np.float32]:
     """``local_contrast(detection_image(data, 1, kernel, kernel_px), may_hold_nan=False)`` in one
-    compiled pass (:func:`.frame_kernels.contrast`): the same float32 values, without the
-    float32 copy of an integer plane and the two frame-sized intermediate images.
+    compiled pass (:func:`.frame_kernels.contrast`): the same float32 values, without the two
+    frame-sized intermediate images (a plane of another type than :data:`COMPILED_DTYPES` is still
+    copied to float32 first).
 
     Parameters
     ----------
