@@ -109,8 +109,15 @@ def _solution(problem: SolveRequest, stars: FieldStars, cand: Candidate, t0: flo
 
 def _not_held(problem: SolveRequest, t0: float, why: str, fov_source: str) -> AttitudeSolution:
     """No match: the matcher's verified candidate did not survive the final fit, ``why``."""
-    return AttitudeSolution(status=Status.NO_MATCH, reason=f"a verified match did not hold: {why}",
-                            solve_time_s=time.perf_counter() - t0, epoch_jyear=problem.epoch.jyear,
+    return _failed(problem, Status.NO_MATCH, f"a verified match did not hold: {why}", time.perf_counter() - t0,
+                   fov_source)
+
+
+def _failed(problem: SolveRequest, status: Status, reason: str, solve_time_s: float,
+            fov_source: str) -> AttitudeSolution:
+    """A solve of ``problem`` that found no attitude: ``status`` and ``reason``, after ``solve_time_s``
+    (s), with the request's epoch and the given ``fov_source``."""
+    return AttitudeSolution(status=status, reason=reason, solve_time_s=solve_time_s, epoch_jyear=problem.epoch.jyear,
                             epoch_source=problem.epoch.source, fov_source=fov_source)
 
 
@@ -124,17 +131,13 @@ def _run(problem: SolveRequest, method: MethodName, options: MatcherOptionsBase 
     """Run the named matcher on a validated request and build the solution (or the failure), its
     :attr:`~startrack.results.AttitudeSolution.fov_source` ``fov_source``."""
     if (known := _failure_before_search(problem, method)) is not None:
-        status, reason = known
-        return AttitudeSolution(status=status, reason=reason, solve_time_s=0.0, epoch_jyear=problem.epoch.jyear,
-                                epoch_source=problem.epoch.source, fov_source=fov_source)
+        return _failed(problem, *known, 0.0, fov_source)
     matcher, stars = prepare_matcher(method, problem)  # loads (or builds) the database first
     t0 = time.perf_counter()
     outcome = matcher(options)
     if outcome.candidate is None:
         reason = outcome.reason + (_no_match_hints(problem, method) if outcome.status is Status.NO_MATCH else "")
-        return AttitudeSolution(status=outcome.status, reason=reason, solve_time_s=time.perf_counter() - t0,
-                                epoch_jyear=problem.epoch.jyear, epoch_source=problem.epoch.source,
-                                fov_source=fov_source)
+        return _failed(problem, outcome.status, reason, time.perf_counter() - t0, fov_source)
     return _solution(problem, stars, outcome.candidate, t0, fov_source)
 
 
