@@ -117,3 +117,19 @@ def test_the_command_builds_no_database_for_a_field_too_sparse(monkeypatch):
     ensure_database((0.5, 0.6))  # nothing loaded, nothing built
     with pytest.raises(AssertionError, match="pattern database was loaded"):
         ensure_database((9.0, 11.0))
+
+
+def test_the_command_judges_a_tall_field_as_the_solve_does(monkeypatch):
+    """A portrait field 0.62 deg wide and 1.3 high holds 2.3 stars on average: the solve searches
+    it, so the command builds its database (found in review: the command took every field square)."""
+    import startrack.identify as identify
+    from startrack.cli._progress import ensure_database_for
+    from startrack.solve import too_sparse_to_solve
+
+    assert too_sparse_to_solve(0.62) and not too_sparse_to_solve(0.62, 1.3 / 0.62)
+    monkeypatch.setattr(identify, "load_database", _no_database)
+    ensure_database_for(fov_deg=0.6)  # a square field: nothing built
+    with pytest.raises(AssertionError, match="pattern database was loaded"):
+        ensure_database_for(fov_deg=0.6, height_ratio=2.1)
+    with pytest.raises(AssertionError, match="pattern database was loaded"):
+        ensure_database_for(camera=Camera.from_fov(600, 1260, 0.6))

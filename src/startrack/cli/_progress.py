@@ -40,15 +40,16 @@ class ProgressBar:
         sys.stderr.flush()
 
 
-def ensure_database(fov_range_deg: tuple[float, float] | None = None) -> None:
+def ensure_database(fov_range_deg: tuple[float, float] | None = None, height_ratio: float = 1.0) -> None:
     """Load (building on first use, with a progress bar) the pattern database for a FOV range (deg);
-    nothing for a range too narrow for the catalog (:func:`startrack.solve.too_sparse_to_solve`:
-    the solve fails at once, saying why)."""
+    nothing for a range too narrow for the catalog (:func:`startrack.solve.too_sparse_to_solve`
+    of its widest field, ``height_ratio`` times as high as wide: the solve fails at once, saying
+    why)."""
     from ..identify import DEFAULT_FOV_RANGE_DEG, database_settings_for, is_cached, load_database
     from ..solve import too_sparse_to_solve
 
     low, high = fov_range_deg if fov_range_deg else DEFAULT_FOV_RANGE_DEG
-    if too_sparse_to_solve(high):
+    if too_sparse_to_solve(high, height_ratio):
         return
     settings = database_settings_for((low, high))
     if not is_cached(settings):
@@ -59,12 +60,14 @@ def ensure_database(fov_range_deg: tuple[float, float] | None = None) -> None:
 
 
 def ensure_database_for(fov_deg: float | None = None, fov_range_deg: tuple[float, float] | None = None,
-                        camera: Camera | None = None) -> None:
-    """:func:`ensure_database` for the FOV range a solve with these (checked) options searches."""
+                        camera: Camera | None = None, height_ratio: float = 1.0) -> None:
+    """:func:`ensure_database` for the FOV range a solve with these (checked) options searches, on
+    an image ``height_ratio`` times as high as wide on the sky (the camera's, when one is given)."""
     from ..solve import FOV_DEG_TOLERANCE
 
     if camera is not None:
         fov_range_deg = (camera.fov_deg, camera.fov_deg)
+        height_ratio = camera.fov_height_deg / camera.fov_deg
     elif fov_deg is not None:
         fov_range_deg = (fov_deg * (1 - FOV_DEG_TOLERANCE), fov_deg * (1 + FOV_DEG_TOLERANCE))
-    ensure_database(fov_range_deg)
+    ensure_database(fov_range_deg, height_ratio)

@@ -114,7 +114,7 @@ def main(argv: list[str]) -> int:
     args.image = args.image[0]
     image = read_image(args.image, channel=args.channel)
     announce_mosaic(image)
-    ensure_database_for(**fov_options)
+    ensure_database_for(**fov_options, height_ratio=image.data.shape[0] / image.data.shape[1])
     _announce_stated_field(image, fov_options)
     site = _site(args)
     # the compiled kernels loaded (or compiled, with a message) outside the solve time, and the catalog stars

@@ -102,7 +102,7 @@ def main(argv: list[str]) -> int:
     if flux is None and "mag" in stars:
         flux = -stars["mag"]
     fov_options = {key: solver_options[key] for key in ("fov_deg", "fov_range_deg", "camera")}
-    ensure_database_for(**fov_options)
+    ensure_database_for(**fov_options, height_ratio=args.height / args.width if args.width and args.height else 1.0)
     warm_up(**fov_options)  # the compiled kernels loaded (or compiled, with a message) outside the solve time
     try:
         solution = solve_stars(stars["x"], stars["y"], width=args.width, height=args.height, flux=flux,
