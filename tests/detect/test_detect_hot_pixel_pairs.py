@@ -11,6 +11,7 @@ triples none (now 8 and 8)."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from startrack.detect import detect
 from startrack.detect._filters import peak_fraction
@@ -82,21 +83,56 @@ def test_hot_pairs_and_triples_are_refused_when_they_abound():
         assert star.sum() >= 27, offsets
 
 
+def _stars_at_random_phases(sd_px: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Noise-free stars of PSF sd ``sd_px`` at 400 random sub-pixel positions: the image and each
+    star's brightest pixel (x, y), as the detector's peak."""
+    rng = np.random.default_rng(8)
+    x, y = 20.0 + 40.0 * (np.arange(400) % 12) + rng.uniform(-0.5, 0.5, 400), \
+        20.0 + 30.0 * (np.arange(400) // 12) + rng.uniform(-0.5, 0.5, 400)
+    image = render_gaussian_psf((1100, 520), x, y, np.full(400, 1e4), sd_px)
+    py, px = np.rint(y).astype(int), np.rint(x).astype(int)
+    for k in range(400):
+        window = image[py[k] - 1: py[k] + 2, px[k] - 1: px[k] + 2]
+        dy, dx = np.unravel_index(window.argmax(), window.shape)
+        py[k], px[k] = py[k] + dy - 1, px[k] + dx - 1
+    return image, px, py
+
+
 def test_the_cluster_measure_keeps_stars_of_sd_035_px_wherever_they_fall():
     """Rendered stars of PSF sd 0.35 px at 400 random sub-pixel positions: the measure with
     pairs and triples stays under the 0.75 limit (0.71 at worst), as the single-pixel one does;
     two and three hot pixels side by side give about 1."""
-    rng = np.random.default_rng(8)
-    x, y = 20.0 + 40.0 * (np.arange(400) % 12) + rng.uniform(-0.5, 0.5, 400), \
-        20.0 + 30.0 * (np.arange(400) // 12) + rng.uniform(-0.5, 0.5, 400)
-    image = render_gaussian_psf((1100, 520), x, y, np.full(400, 1e4), 0.35)
-    py, px = np.rint(y).astype(int), np.rint(x).astype(int)
-    for k in range(400):  # the brightest pixel of each star, as the detector's peak
-        window = image[py[k] - 1: py[k] + 2, px[k] - 1: px[k] + 2]
-        dy, dx = np.unravel_index(window.argmax(), window.shape)
-        py[k], px[k] = py[k] + dy - 1, px[k] + dx - 1
+    image, px, py = _stars_at_random_phases(0.35)
     measure = peak_fraction(image, np.zeros(400), px, py, pairs=True)
     assert measure.max() < 0.75, measure.max()
     hot = np.zeros((9, 9))
     hot[4, 4], hot[4, 5], hot[5, 4] = 900.0, 700.0, 800.0
     assert peak_fraction(hot, np.zeros(1), np.array([4]), np.array([4]), pairs=True)[0] > 0.99
+
+
+def test_the_block_measure_keeps_stars_of_sd_05_px_and_refuses_touching_pairs():
+    """With ``blocks``, the four brightest pixels' share to the eighth power: under the 0.75
+    limit for every star of sd 0.5 px (0.68 at worst over 3,000 positions), over it for some of
+    sd 0.35 px (centred near a pixel corner: the reason the detector does not count blocks when
+    it decides whether hot pixels abound), and over it for two pairs of hot pixels that touch."""
+    image, px, py = _stars_at_random_phases(0.5)
+    assert peak_fraction(image, np.zeros(400), px, py, blocks=True).max() < 0.75
+    image, px, py = _stars_at_random_phases(0.35)
+    sharp = peak_fraction(image, np.zeros(400), px, py, blocks=True)
+    assert 0.2 < np.mean(sharp > 0.75) < 0.6  # 42 % of 3,000 positions
+    hot = np.zeros((9, 9))
+    hot[4, 4:6], hot[5, 3:5] = 900.0, 600.0  # two pairs, offset by a pixel
+    measures = [peak_fraction(hot, np.zeros(1), np.array([4]), np.array([4]), **flag)[0]
+                for flag in ({"pairs": True}, {"blocks": True})]
+    assert measures[0] < 0.75 < 0.99 < measures[1]
+
+
+def test_a_block_is_judged_only_where_bright_enough_to_tell_from_a_star():
+    """Under 150 times the noise, a faint star's few pixels above the noise hold most of its
+    3 x 3 sum: the block measure falls back on the pairs' there."""
+    hot = np.zeros((9, 9))
+    hot[4, 4:6], hot[5, 3:5] = 900.0, 600.0  # a 3 x 3 sum of 3,000 DN
+    at_noise = [peak_fraction(hot, np.zeros(1), np.array([4]), np.array([4]), blocks=True, noise=noise)[0]
+                for noise in (10.0, 30.0)]  # DN: the sum is 300 and 100 times the noise
+    assert at_noise[0] > 0.99
+    assert at_noise[1] == pytest.approx(0.8**4)  # the three brightest pixels' share, to the fourth power

@@ -14,8 +14,8 @@ So when the hot spots are at least half of the first pass's spots, and at least
 (:func:`without_hot_pixels`) and the frame is detected again: around every local maximum of the
 full-resolution plane that stands :data:`HOT_SIGMA` times the pixel noise over the background
 level and whose 3 x 3 neighbourhood the hot-pixel tests refuse (the peak's share of the 3 x 3 sum,
-or the measure of pairs and triples, over ``max_peak_fraction``), the pixels of the neighbourhood
-over that threshold take the neighbourhood's median. This is the cosmetic correction of
+or the measure of pairs, triples and blocks of four, over ``max_peak_fraction``), the pixels of
+the neighbourhood over that threshold take the neighbourhood's median. This is the cosmetic correction of
 astronomical image processing (a median replaces pixels that stand alone; van Dokkum 2001,
 L.A.Cosmic, finds cosmic rays by their sharp edges in the same spirit), run only where the spots
 say it is needed, so that every other frame is detected exactly as before.
@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ._filters import hot_pixel_ok, hot_pixels_abound, neighbourhoods_3x3, peak_fractions
+from ._filters import HotMeasures, hot_pixel_ok, hot_pixels_abound, neighbourhoods_3x3, peak_fractions
 
 HOT_SIGMA = 5.0
 """A local maximum is replaced when it stands this many times the pixel noise over the level
@@ -44,14 +44,15 @@ def refused(single: NDArray, cluster: NDArray, max_peak_fraction: float) -> NDAr
     return ~(hot_pixel_ok(single, max_peak_fraction) & hot_pixel_ok(cluster, max_peak_fraction))
 
 
-def hot_pixels_dominate(single: NDArray, cluster: NDArray, max_peak_fraction: float | None) -> bool:
-    """Whether hot pixels, alone or in clusters, are at least half of a frame's N spots (peak
-    fractions ``single`` and cluster measures ``cluster``, shape (N,) each) and at least
-    :data:`._filters.HOT_PIXELS_ABOUND` of them: :func:`._filters.hot_pixels_abound` against the
-    other spots (never when the test is off, ``max_peak_fraction`` None)."""
+def hot_pixels_dominate(measures: HotMeasures, max_peak_fraction: float | None) -> bool:
+    """Whether hot pixels, alone or in pairs and triples, are at least half of a frame's N spots
+    (their ``measures``, shape (N,) each; blocks of four do not count,
+    :func:`._filters.peak_fraction`) and at least :data:`._filters.HOT_PIXELS_ABOUND` of them:
+    :func:`._filters.hot_pixels_abound` against the other spots (never when the test is off,
+    ``max_peak_fraction`` None)."""
     if max_peak_fraction is None:
         return False
-    hot = refused(single, cluster, max_peak_fraction)
+    hot = refused(measures.single, measures.cluster, max_peak_fraction)
     return hot_pixels_abound(hot, ~hot)
 
 
@@ -64,8 +65,8 @@ def without_hot_pixels(data: NDArray, level: NDArray, noise_px: float,
     threshold = HOT_SIGMA * noise_px
     for _ in range(CLEAN_PASSES):
         y, x = _bright_maxima(values, level, threshold)
-        single, cluster = peak_fractions(values, level[y, x], x, y)
-        hot = refused(single, cluster, max_peak_fraction)
+        measures = peak_fractions(values, level[y, x], x, y, noise=noise_px)
+        hot = refused(measures.single, measures.block, max_peak_fraction)
         if not hot.any():
             break
         _replace(values, level, y[hot], x[hot], threshold)

@@ -32,6 +32,7 @@ from ._dark import subtract_dark, subtract_row_reference
 from ._deblend import split_regions
 from ._denoise import anisotropic_diffusion, gaussian_smooth
 from ._details import DetectionDetails
+from ._filters import HotMeasures
 from ._fine_pass import (
     BLEND_RING_PX,
     MAX_BLEND_RING_NOISE,
@@ -88,9 +89,9 @@ class MeasuredRegions:
         The weighted-sum measurements, shape (N,) each.
     peak_level, local_noise : ndarray, shape (N,)
         Background level and pixel noise at each spot's peak.
-    hot_tests : (ndarray, ndarray) of shape (N,) each, or None
-        The spots' peak fractions and cluster measures (:func:`._filters.peak_fractions`) when
-        measured already (:func:`with_hot_tests`); the filters measure them otherwise.
+    hot_tests : HotMeasures or None
+        The spots' hot-pixel measures (:func:`._filters.peak_fractions`) when measured already
+        (:func:`with_hot_tests`); the filters measure them otherwise.
     """
 
     regions: Regions
@@ -99,7 +100,7 @@ class MeasuredRegions:
     spots: SpotMeasurements
     peak_level: NDArray[np.float64]
     local_noise: NDArray[np.float64]
-    hot_tests: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+    hot_tests: HotMeasures | None = None
 
     def __len__(self) -> int:
         return len(self.regions)
@@ -110,7 +111,7 @@ class MeasuredRegions:
         if keep.all():
             return self
         pixels = keep[self.regions.index]
-        tests = None if self.hot_tests is None else (self.hot_tests[0][keep], self.hot_tests[1][keep])
+        tests = None if self.hot_tests is None else HotMeasures(*(m[keep] for m in self.hot_tests))
         return MeasuredRegions(self.regions.select(keep), self.raw[pixels], self.signal[pixels],
                                take_spots(self.spots, keep), self.peak_level[keep], self.local_noise[keep], tests)
 
@@ -146,7 +147,7 @@ def detect_frame(cfg: DetectionSettings, image: NDArray, dark: NDArray | None) -
         return empty_details(frame, image.shape[1], cfg)
     regions, k_sigma = find_regions(cfg, frame, det)
     found = with_hot_tests(frame, measure_regions(frame, regions))
-    if hot_pixels_dominate(*require(found.hot_tests, "the hot-pixel tests"), cfg.max_peak_fraction):
+    if hot_pixels_dominate(require(found.hot_tests, "the hot-pixel tests"), cfg.max_peak_fraction):
         frame, det = frame_of(cfg, with_hot_pixels_replaced(cfg, frame), skewed, x_offset)
         regions, k_sigma = find_regions(cfg, frame, det)
         found = measure_regions(frame, regions)
@@ -363,13 +364,14 @@ def measure_regions(frame: Frame, regions: Regions) -> MeasuredRegions:
     return MeasuredRegions(regions, raw, signal, spots, peak_level, frame.noise_px * peak_noise / model.noise)
 
 
-def hot_measures(frame: Frame, found: MeasuredRegions) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The spots' peak fractions and cluster measures (:func:`._filters.peak_fractions`): those
-    ``found`` carries, else measured."""
+def hot_measures(frame: Frame, found: MeasuredRegions) -> HotMeasures:
+    """The spots' hot-pixel measures (:func:`._filters.peak_fractions`): those ``found``
+    carries, else measured."""
     if found.hot_tests is not None:
         return found.hot_tests
     spots = found.spots
-    return filters.peak_fractions(frame.prepared.data, found.peak_level, spots.peak_x, spots.peak_y)
+    return filters.peak_fractions(frame.prepared.data, found.peak_level, spots.peak_x, spots.peak_y,
+                                  noise=found.local_noise)
 
 
 def with_hot_tests(frame: Frame, found: MeasuredRegions) -> MeasuredRegions:
@@ -401,7 +403,7 @@ def spot_filters(cfg: DetectionSettings, frame: Frame, found: MeasuredRegions) -
     """The AND of all spot filters on the measured regions (see :mod:`._filters`,
     :mod:`._prefilters`, :mod:`._shape`; the hot-pixel measures by :func:`hot_measures`)."""
     regions, spots, local_noise = found.regions, found.spots, found.local_noise
-    fraction, clusters = hot_measures(frame, found)
+    fraction, clusters, blocks = hot_measures(frame, found)
     keep = np.isfinite(spots.x) & (spots.flux > 0)
     keep &= filters.area_ok(spots.area_px, cfg.min_area_px, cfg.max_area_px)
     keep &= filters.peak_ok(spots.peak / local_noise, cfg.min_peak_snr)
@@ -410,8 +412,8 @@ def spot_filters(cfg: DetectionSettings, frame: Frame, found: MeasuredRegions) -
     hot = ~filters.hot_pixel_ok(fraction, cfg.max_peak_fraction)
     keep &= ~hot
     clustered = keep & ~filters.hot_pixel_ok(clusters, cfg.max_peak_fraction)  # pairs, triples
-    if filters.hot_pixels_abound(hot | clustered, keep & ~clustered):
-        keep &= ~clustered
+    if filters.hot_pixels_abound(hot | clustered, keep & ~clustered):  # blocks refused, not counted
+        keep &= filters.hot_pixel_ok(blocks, cfg.max_peak_fraction)
     keep &= filters.clutter_ok(frame.model.clutter_at(spots.peak_x, spots.peak_y), cfg.max_clutter, keep)
     if cfg.min_packing > 0:
         keep &= packing(regions) >= cfg.min_packing
