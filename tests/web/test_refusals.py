@@ -64,7 +64,7 @@ def test_413_while_a_chunked_body_streams_before_its_end(server):
     still_serving(server)
 
 
-NOT_AN_IMAGE = "is not FITS, PNG, JPEG, TIFF, HEIC, WebP, AVIF, BMP or camera RAW"
+NOT_AN_IMAGE = "is not FITS, XISF, PNG, JPEG, TIFF, HEIC, WebP, AVIF, BMP or camera RAW"
 
 
 @pytest.mark.parametrize(("content", "name", "said"), [

@@ -19,6 +19,7 @@ from startrack.web._uploads import check_size, display_label, image_size, raw_su
     (b"II*\x00\x08\x00", "x.tif", "tiff"), (b"MM\x00*\x00", "x", "tiff"), (b"II*\x00\x08\x00", "x.NEF", "raw"),
     (b"IIRO\x08\x00", "x.jpg", "raw"), (b"\x00\x00\x00\x18ftypcrx \x00", "x", "raw"),
     (b"\x00\x00\x00\x1cftypheic\x00\x00\x00\x00", "x.jpg", "heif"), (b"\x00\x00\x00\x18ftypmif1\x00", "x", "heif"),
+    (b"XISF0100\x10\x00\x00\x00", "x.fits", "xisf"),
 ])
 def test_the_type_comes_from_the_bytes(head, label, kind):
     assert sniff(head, label) == kind
@@ -87,3 +88,14 @@ def test_heif_size_comes_from_its_boxes(tmp_path):
     rgb = np.zeros((48, 72, 3), np.uint8)
     pillow_heif.from_bytes(mode="RGB", size=(72, 48), data=rgb.tobytes()).save(path, quality=50)
     assert image_size(path, sniff(path.read_bytes()[:32], "phone.heic"), "phone.heic") == (72, 48)
+
+
+def test_xisf_size_comes_from_its_header(tmp_path):
+    path = tmp_path / "stack.xisf"
+    path.write_bytes(b"XISF0100" + (56).to_bytes(4, "little") + bytes(4)
+                     + b'<xisf version="1.0"><Image geometry="72:48:1"/></xisf>'.ljust(56))
+    assert image_size(path, sniff(path.read_bytes()[:32], "stack.xisf"), "stack.xisf") == (72, 48)
+    path.write_bytes(path.read_bytes().replace(b"72:48:1", b"72:48:0"))
+    with pytest.raises(Refusal, match="has the signature of XISF but its header cannot be read") as refused:
+        image_size(path, "xisf", "stack.xisf")
+    assert refused.value.status == 415

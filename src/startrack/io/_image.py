@@ -25,7 +25,7 @@ from ._limits import check_image_size, resolve_max_pixels
 from ._raster import identify_format, read_raster
 from ._targets import note_input
 
-SUPPORTED_FORMATS = ("FITS", "PNG", "JPEG", "TIFF", "HEIF", "WEBP", "AVIF", "BMP")
+SUPPORTED_FORMATS = ("FITS", "XISF", "PNG", "JPEG", "TIFF", "HEIF", "WEBP", "AVIF", "BMP")
 GZIP_MAGIC = b"\x1f\x8b"
 _SIGNATURES = {
     b"SIMPLE  =": "FITS",
@@ -34,6 +34,7 @@ _SIGNATURES = {
     b"\xff\xd8\xff": "JPEG",
     b"II*\x00": "TIFF",
     b"MM\x00*": "TIFF",
+    b"XISF0100": "XISF",
 }
 
 
@@ -210,8 +211,8 @@ def _check_gzip_holds_fits(path: Path) -> None:
 RAW_SUFFIXES = frozenset({".dng", ".cr2", ".cr3", ".nef", ".arw", ".raf", ".orf", ".rw2", ".pef", ".srw"})
 """Camera RAW file names, decoded through rawpy by :func:`startrack.io._raw.read_raw_plane` (the
 mosaic at full resolution, as :mod:`startrack.io._mosaic` reads a FITS one)."""
-IMAGE_SUFFIXES = frozenset({".fits", ".fit", ".fts", ".png", ".jpg", ".jpeg", ".tif", ".tiff", ".heic", ".heif",
-                            ".webp", ".avif", ".bmp", *RAW_SUFFIXES})
+IMAGE_SUFFIXES = frozenset({".fits", ".fit", ".fts", ".xisf", ".png", ".jpg", ".jpeg", ".tif", ".tiff", ".heic",
+                            ".heif", ".webp", ".avif", ".bmp", *RAW_SUFFIXES})
 """File names that folders of images are searched for (the reader then checks the content)."""
 
 
@@ -229,10 +230,11 @@ def read_image(
     Parameters
     ----------
     source : str, Path or ndarray
-        A FITS, PNG, JPEG or TIFF file (8 or 16 bit, grey or colour; float FITS / TIFF), a HEIC /
-        HEIF photo (through pillow-heif, :mod:`startrack.io._heif`), a camera RAW file
-        (:data:`RAW_SUFFIXES`, through rawpy, at full resolution), or an array of shape (H, W)
-        or (H, W, C) with C = 1 (grey), 2 (grey + alpha), 3 (RGB) or 4 (RGBA).
+        A FITS, XISF (:mod:`startrack.io._xisf`), PNG, JPEG or TIFF file (8 or 16 bit, grey or
+        colour; float FITS / XISF / TIFF), a HEIC / HEIF photo (through pillow-heif,
+        :mod:`startrack.io._heif`), a camera RAW file (:data:`RAW_SUFFIXES`, through rawpy, at
+        full resolution), or an array of shape (H, W) or (H, W, C) with C = 1 (grey), 2 (grey +
+        alpha), 3 (RGB) or 4 (RGBA).
     channel : {None, "r", "g", "b", 0, 1, 2}
         Colour rule: None sums R + G + B in a wider type (uint8 -> uint16, uint16 -> uint32,
         floats in their own precision); otherwise that plane is kept in its native dtype.
@@ -280,6 +282,12 @@ def read_image(
         from ._mosaic import from_mosaic
 
         data, header, bit_depth = read_fits(path, max_pixels)
+        data, mosaic = from_mosaic(data, header, channel_index(channel))
+    elif kind == "XISF":
+        from ._mosaic import from_mosaic
+        from ._xisf import read_xisf  # PixInsight's format, read from its specification
+
+        data, header, bit_depth = read_xisf(path, max_pixels)
         data, mosaic = from_mosaic(data, header, channel_index(channel))
     elif kind == "HEIF":
         from ._heif import read_heif  # pillow-heif (the "heif" extra): loaded only for HEIF files

@@ -8,7 +8,7 @@ Every refusal is a JSON body ``{"error": "<what is wrong and what would be valid
 404  no such job, batch, file or folder (also every malformed id or file name)
 409  the job is not in a state that allows it (e.g. the files of an analysis not yet done)
 413  the body is larger than ``--max-upload-mb`` (refused while it streams, before it is read)
-415  the file's content is not FITS, PNG, JPEG, TIFF, HEIC, WebP, AVIF, BMP or camera RAW (sniffed from its bytes)
+415  the file's content is not FITS, XISF, PNG, JPEG, TIFF, HEIC, WebP, AVIF, BMP or camera RAW (sniffed from its bytes)
 416  no byte of a result file's ``Range`` header lies in the file (``Content-Range`` gives its size)
 422  an option or parameter is invalid, or the image's dimensions are absurd (from its header,
      before decoding); ``field`` names it

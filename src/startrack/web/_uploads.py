@@ -33,19 +33,19 @@ from starlette.datastructures import UploadFile
 from starlette.formparsers import MultiPartException, MultiPartParser
 from starlette.requests import Request
 
-from ..io import BITPIX_VALUES, RAW_SUFFIXES, is_heif, pillow_raster_format
+from ..io import BITPIX_VALUES, RAW_SUFFIXES, is_heif, pillow_raster_format, xisf_size
 from ._config import MAX_SIDE_PX, MIN_SIDE_PX
 from ._refusals import Refusal, bad_request
 
 SIGNATURES: tuple[tuple[bytes, str], ...] = (
     (b"SIMPLE  =", "fits"), (b"\x1f\x8b", "fits"), (b"\x89PNG\r\n\x1a\n", "png"), (b"\xff\xd8\xff", "jpeg"),
-    (b"II*\x00", "tiff"), (b"MM\x00*", "tiff"), (b"IIRO", "raw"), (b"IIRS", "raw"), (b"MMOR", "raw"),
-    (b"IIU\x00", "raw"), (b"FUJIFILMCCD-RAW", "raw"),
+    (b"II*\x00", "tiff"), (b"MM\x00*", "tiff"), (b"XISF0100", "xisf"), (b"IIRO", "raw"), (b"IIRS", "raw"),
+    (b"MMOR", "raw"), (b"IIU\x00", "raw"), (b"FUJIFILMCCD-RAW", "raw"),
 )
 """Leading bytes of each accepted format (RAW: Olympus ORF, Panasonic RW2, Fuji RAF; CR3 is an
 ISO media file, ``ftypcrx`` at offset 4; DNG, NEF, CR2, ARW, PEF and SRW are TIFF containers)."""
 EXTENSIONS = {"fits": ".fits", "png": ".png", "jpeg": ".jpg", "tiff": ".tif", "heif": ".heic", "webp": ".webp",
-              "avif": ".avif", "bmp": ".bmp"}
+              "avif": ".avif", "bmp": ".bmp", "xisf": ".xisf"}
 RAW_SIGNATURE_SUFFIXES = ((b"IIRO", ".orf"), (b"IIRS", ".orf"), (b"MMOR", ".orf"), (b"IIU\x00", ".rw2"),
                           (b"FUJIFILMCCD-RAW", ".raf"))
 FITS_BLOCK = 2880
@@ -118,8 +118,8 @@ def display_label(filename: str | None) -> str:
 
 
 def sniff(head: bytes, label: str) -> str:
-    """"fits", "png", "jpeg", "tiff", "heif", "webp", "avif", "bmp" or "raw" from the first bytes;
-    415 otherwise."""
+    """"fits", "xisf", "png", "jpeg", "tiff", "heif", "webp", "avif", "bmp" or "raw" from the first
+    bytes; 415 otherwise."""
     if head[4:12] == b"ftypcrx ":
         return "raw"
     if is_heif(head):
@@ -132,8 +132,8 @@ def sniff(head: bytes, label: str) -> str:
                 return "raw"
             return kind
     shown = head[:12]
-    raise Refusal(415, f"unsupported file type: {label!r} is not FITS, PNG, JPEG, TIFF, HEIC, WebP, AVIF, BMP or "
-                       f"camera RAW (it starts with {shown!r})", "file")
+    raise Refusal(415, f"unsupported file type: {label!r} is not FITS, XISF, PNG, JPEG, TIFF, HEIC, WebP, AVIF, BMP "
+                       f"or camera RAW (it starts with {shown!r})", "file")
 
 
 def raw_suffix(head: bytes, label: str) -> str:
@@ -190,6 +190,8 @@ def image_size(path: Path, kind: str, label: str) -> tuple[int, int]:
             return _raw_size(path)
         if kind == "heif":
             return _heif_size(path)
+        if kind == "xisf":
+            return xisf_size(path)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", PILImage.DecompressionBombWarning)
             with PILImage.open(path) as image:  # lazy: reads the header, decodes nothing
