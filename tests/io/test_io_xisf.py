@@ -135,12 +135,15 @@ def test_keyword_values_are_read_as_fits_cards_write_them(text, value):
 
 EDITS = {"codec": (b'compression="zlib:', b'compression="lzma:'),
          "geometry": (b'geometry="40:24:3"', b'geometry="40:24:2:3"'),
-         "complex": (b'sampleFormat="UInt16"', b'sampleFormat="Complex32"'), "xml": (b"</xisf>", b"</xisg>")}
+         "complex": (b'sampleFormat="UInt16"', b'sampleFormat="Complex32"'), "xml": (b"</xisf>", b"</xisg>"),
+         "declared": (b'compression="zlib:5760"', b'compression="zlib:9999999"'),
+         "channels": (b'geometry="40:24:3"', b'geometry="40:24:5"')}
 """Header edits of :func:`_damaged`: the text replaced and its replacement."""
 
 
 def _damaged(path: Path, rgb16: np.ndarray, how: str) -> None:
-    write_xisf(path, rgb16, codec="zlib" if how in ("codec", "checksum") else None, checksum=how == "checksum")
+    codec = "zlib" if how in ("codec", "checksum", "declared") else None
+    write_xisf(path, rgb16, codec=codec, checksum=how == "checksum")
     raw = path.read_bytes()
     if how == "truncated":
         path.write_bytes(raw[:-100])
@@ -155,7 +158,9 @@ def _damaged(path: Path, rgb16: np.ndarray, how: str) -> None:
 @pytest.mark.parametrize(("how", "words"), [("truncated", "truncated XISF file"), ("checksum", "checksum"),
                                             ("codec", "codec 'lzma' is not read"),
                                             ("geometry", "more than two dimensions"),
-                                            ("complex", "sample format 'Complex32'"), ("xml", "not well-formed")])
+                                            ("complex", "sample format 'Complex32'"), ("xml", "not well-formed"),
+                                            ("declared", "declares 9,999,999 bytes; the image's geometry needs 5,760"),
+                                            ("channels", "5 channels; 1 \\(grey\\) to 4")])
 def test_damaged_or_unsupported_files_are_refused_by_name(tmp_path, rgb16, how, words):
     path = tmp_path / f"{how}.xisf"
     _damaged(path, rgb16, how)

@@ -47,6 +47,7 @@ PREAMBLE_BYTES = 16
 MAX_HEADER_BYTES = 1 << 28
 """The longest XML header read (256 MiB: inline thumbnails and properties can make it long)."""
 NAMESPACE = "{http://www.pixinsight.com/xisf}"
+MAX_CHANNELS = 4
 
 SAMPLE_TYPES = {"UInt8": "u1", "UInt16": "u2", "UInt32": "u4", "UInt64": "u8", "Float32": "f4", "Float64": "f8"}
 """XISF sample formats read, and their numpy types (without byte order)."""
@@ -85,8 +86,8 @@ def read_xisf(path: Path, max_pixels: int | None = None) -> tuple[NDArray, dict[
         check_image_size(width, height, max_pixels, path)
         dtype = _sample_type(image, path)
         stored = _stored_block(fh, image, path)
-    raw = _decoded(stored, image, path)
     expected = width * height * channels * dtype.itemsize
+    raw = _decoded(stored, image, expected, path)
     if len(raw) != expected:
         raise ImageReadError(f"{path}: the image's pixel block holds {len(raw)} bytes; its geometry "
                              f"{width}:{height}:{channels} of {image.get('sampleFormat')} needs {expected}")
@@ -137,6 +138,9 @@ def _geometry(image: ET.Element, path: Path) -> tuple[int, int, int]:
     if len(sizes) != 3 or min(sizes) < 1:
         raise ImageReadError(f"{path}: XISF image geometry {text!r} is not width:height:channels of positive "
                              "integers (images of more than two dimensions are not read)")
+    if sizes[2] > MAX_CHANNELS:
+        raise ImageReadError(f"{path}: XISF image of {sizes[2]} channels; 1 (grey) to {MAX_CHANNELS} (RGB and "
+                             "alpha) are read")
     return sizes[0], sizes[1], sizes[2]
 
 
@@ -205,8 +209,10 @@ def _check_sum(stored: bytes, checksum: str | None, path: Path) -> None:
                              "damaged)")
 
 
-def _decoded(stored: bytes, image: ET.Element, path: Path) -> bytes:
-    """The block decompressed and unshuffled (``stored`` itself when it is not compressed)."""
+def _decoded(stored: bytes, image: ET.Element, expected: int, path: Path) -> bytes:
+    """The block decompressed and unshuffled (``stored`` itself when it is not compressed). The
+    size it declares must be the ``expected`` bytes of the image's geometry, and no codec is let
+    write more: a small block cannot unpack to more memory than the image's size allows."""
     spec = image.get("compression")
     if not spec:
         return stored
@@ -217,15 +223,19 @@ def _decoded(stored: bytes, image: ET.Element, path: Path) -> bytes:
         item = int(parts[2]) if shuffled else 1
     except (IndexError, ValueError):
         raise ImageReadError(f"{path}: XISF compression {spec!r} is not CODEC:SIZE or CODEC+sh:SIZE:ITEM") from None
-    pieces = _subblocks(image.get("subblocks"), stored, path)
+    if size != expected:
+        raise ImageReadError(f"{path}: XISF compression {spec!r} declares {size:,} bytes; the image's geometry "
+                             f"needs {expected:,}")
+    pieces = _subblocks(image.get("subblocks"), stored, size, path)
     raw = b"".join(_decompress(codec, piece, out_size, path) for piece, out_size in pieces or [(stored, size)])
     if len(raw) != size:
         raise ImageReadError(f"{path}: the XISF image's block decompressed to {len(raw):,} bytes, not {size:,}")
     return _unshuffled(raw, item) if item > 1 else raw
 
 
-def _subblocks(spec: str | None, stored: bytes, path: Path) -> list[tuple[bytes, int]]:
-    """The separately compressed pieces of a block: (compressed bytes, decompressed size)."""
+def _subblocks(spec: str | None, stored: bytes, size: int, path: Path) -> list[tuple[bytes, int]]:
+    """The separately compressed pieces of a block: (compressed bytes, decompressed size); their
+    sizes must add up to the block's and to its declared ``size``."""
     if not spec:
         return []
     pieces, start = [], 0
@@ -236,15 +246,16 @@ def _subblocks(spec: str | None, stored: bytes, path: Path) -> list[tuple[bytes,
             start += packed
     except ValueError:
         raise ImageReadError(f"{path}: XISF subblocks {spec!r} are not C,U:C,U:... byte counts") from None
-    if start != len(stored):
-        raise ImageReadError(f"{path}: XISF subblocks add up to {start:,} bytes; the block holds {len(stored):,}")
+    if start != len(stored) or sum(unpacked for _, unpacked in pieces) != size:
+        raise ImageReadError(f"{path}: XISF subblocks {spec!r} do not add up to the block's {len(stored):,} bytes "
+                             f"and its {size:,} decompressed")
     return pieces
 
 
 def _decompress(codec: str, data: bytes, size: int, path: Path) -> bytes:
     try:
         if codec == "zlib":
-            return zlib.decompress(data)
+            return zlib.decompressobj().decompress(data, size)
         if codec in ("lz4", "lz4hc"):
             from lz4 import block  # the "xisf" extra
 
@@ -252,7 +263,7 @@ def _decompress(codec: str, data: bytes, size: int, path: Path) -> bytes:
         if codec == "zstd":
             import zstandard  # the "xisf" extra
 
-            return zstandard.ZstdDecompressor().decompress(data, max_output_size=size)
+            return zstandard.ZstdDecompressor().stream_reader(data).read(size)
     except ImportError as exc:
         raise ImageReadError(f"{path}: its pixels are compressed with {codec}, which needs the {exc.name} package: "
                              "pip install 'startrack[xisf]'") from exc
