@@ -73,6 +73,16 @@ def test_blocks_do_not_decide_that_hot_pixels_abound():
     assert hot_pixels_dominate(measures._replace(cluster=np.full(60, 0.9)), 0.75)
 
 
+def test_a_block_of_six_is_replaced_by_the_sky_around_it():
+    """Two L-shaped triples that touch, the brightest pixel in the middle: its 3 x 3 holds all six,
+    and its median is one of them (the block stayed, flattened, when that was the replacement);
+    the ring of 16 pixels around it is sky."""
+    pixels = np.full((15, 15), SKY, np.float32)
+    pixels[6:8, 6:9] = [[1400.0, 1500.0, 1300.0], [1200.0, 1100.0, 1000.0]]  # DN, the brightest in the middle
+    cleaned = without_hot_pixels(pixels, np.full(pixels.shape, SKY, np.float32), READ_NOISE, 0.75)
+    np.testing.assert_allclose(cleaned, SKY, atol=1e-3)  # DN
+
+
 def test_a_frame_without_hot_pixels_is_left_alone():
     image, x, y = _stars(np.random.default_rng(2))
     pixels = np.clip(image, 0, 65535).astype(np.uint16)

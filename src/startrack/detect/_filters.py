@@ -14,8 +14,8 @@ From Fowler 2013 §II.B ("Noise-removal techniques" 5-7) and Huffman 2006 §4.1:
   sum of the 3 x 3 pixels around it (a focused star with a 0.5 px sigma puts under half of
   that sum in its peak; a hot pixel puts nearly all); or, where hot pixels abound, two side by
   side (or diagonal) whose share of that sum, squared, is more, or three whose share to the
-  fourth power is, or four whose share to the eighth power is (:func:`peak_fraction`,
-  :func:`hot_pixels_abound`);
+  fourth power is, or a block of four to six k whose share to the power 2^(k - 1) is
+  (:func:`peak_fraction`, :func:`hot_pixels_abound`);
 * **clutter** -- the background's lower-half noise there is more than ``max_clutter`` times
   that of the clean sky (lit leaves, roof texture: structure, not stars; stars do not raise
   the lower half); the clean sky is checked against a dark foreground (:func:`clutter_ok`);
@@ -41,12 +41,13 @@ NEIGHBOURS_3X3 = np.stack(np.divmod(np.arange(9), 3), axis=1) - 1
 """Offsets (dy, dx) of a pixel's 3 x 3 neighbourhood, shape (9, 2)."""
 
 
-def neighbourhoods_3x3(shape: tuple[int, ...], y: NDArray, x: NDArray) -> tuple[NDArray, NDArray]:
-    """Rows and columns (K, 9) of the 3 x 3 neighbourhoods of the pixels (y, x) (K,) of an image
-    of ``shape`` (H, W), clipped to the image (a border pixel repeats its edge neighbours)."""
+def neighbourhoods_3x3(shape: tuple[int, ...], y: NDArray, x: NDArray,
+                       offsets: NDArray = NEIGHBOURS_3X3) -> tuple[NDArray, NDArray]:
+    """Rows and columns (K, M) of the 3 x 3 neighbourhoods of the pixels (y, x) (K,) of an image
+    of ``shape`` (H, W), or of other ``offsets`` (M, 2) (dy, dx), clipped to the image (a border
+    pixel repeats its edge neighbours)."""
     h, w = shape[:2]
-    return (np.clip(y[:, None] + NEIGHBOURS_3X3[:, 0], 0, h - 1),
-            np.clip(x[:, None] + NEIGHBOURS_3X3[:, 1], 0, w - 1))
+    return np.clip(y[:, None] + offsets[:, 0], 0, h - 1), np.clip(x[:, None] + offsets[:, 1], 0, w - 1)
 
 
 def area_ok(area_px: NDArray, min_area_px: int, max_area_px: int | None) -> NDArray[np.bool_]:
@@ -80,8 +81,8 @@ def peak_fraction(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y
     background-subtracted; with ``pairs``, where they are larger, the square of the two brightest
     pixels' share of that sum (two hot pixels side by side, or one diagonal from the other) and
     the fourth power of the three brightest pixels' share (three together, as a demosaiced
-    colour photo turns one hot pixel into); with ``blocks`` as well, the eighth power of the
-    four brightest pixels' share (a block of four: two pairs that touch).
+    colour photo turns one hot pixel into); with ``blocks`` as well, the k brightest pixels' share
+    to the power 2^(k - 1) for k = 4, 5, 6 (a block: pairs or triples that touch).
 
     The square makes one limit serve both: a star centred on the border of two pixels puts in
     them the square root of what it puts in its peak pixel when centred on one (the share of its
@@ -96,14 +97,12 @@ def peak_fraction(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y
 
     Blocks break that rule: a star centred near a pixel corner puts nearly all its light in the
     four pixels about it, as two touching pairs of hot pixels do. Over the same 3,000 positions,
-    the measure with ``blocks`` is over 0.75 for 42 % of the stars of sd 0.35 px, 15 % at 0.4 px
-    and 1.7 % at 0.45 px, and none from 0.5 px (largest 0.68; 0.2 at 1 px). So the detector
+    the measure with ``blocks`` is over 0.75 for 64 % of the stars of sd 0.35 px, 27 % at 0.4 px
+    and 1.7 % at 0.45 px (four pixels alone: 42 %, 15 % and 1.7 %), and none from 0.5 px
+    (largest 0.68; 0.2 at 1 px); seven pixels would refuse 6.8 % at 0.45 px. So the detector
     refuses blocks where hot pixels abound but does not count them when it decides whether they
     do (:func:`._pipeline.spot_filters`); and only where the 3 x 3 sum is bright enough for the
-    measure to tell a star of sd 0.5 px from a block (:data:`BLOCK_MIN_SNR`). Five or six pixels
-    (share to the 16th and 32nd power) would refuse no more of these sharp stars, and more faint
-    ones (2-7 more of the 30-43 stars of three openstartracker frames with 1 % of their pixels
-    hot, measured without the noise condition).
+    measure to tell a star of sd 0.5 px from a block (:data:`BLOCK_MIN_SNR`).
 
     Parameters
     ----------
@@ -116,8 +115,8 @@ def peak_fraction(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y
     pairs : bool
         Take two or three hot pixels side by side as one (above).
     blocks : bool
-        Take four as one too (implies ``pairs``), where the 3 x 3 sum is at least
-        :data:`BLOCK_MIN_SNR` times ``noise``.
+        Take four to six as one too (implies ``pairs``), k of them where the 3 x 3 sum is at
+        least ``BLOCK_MIN_SNR[k - 4]`` times ``noise``.
     noise : ndarray, shape (N,), or float
         Pixel noise at each peak, in the image's units (0: blocks judged everywhere).
 
@@ -140,22 +139,22 @@ class HotMeasures(NamedTuple):
     cluster: NDArray[np.float64]
     """The largest of the k brightest pixels' shares to the power 2^(k - 1), k = 1, 2, 3."""
     block: NDArray[np.float64]
-    """The same for k = 1 to 4 (for k = 1 to 3 where the sum is under :data:`BLOCK_MIN_SNR` times
-    the noise)."""
+    """The same for k = 1 to 6 (each k from 4 on only where the sum reaches its
+    :data:`BLOCK_MIN_SNR` times the noise)."""
 
 
 CLUSTER_PIXELS = 3
 """The most pixels of :attr:`HotMeasures.cluster`."""
-BLOCK_PIXELS = 4
+BLOCK_PIXELS = 6
 """The most pixels of :attr:`HotMeasures.block`."""
-BLOCK_MIN_SNR = 150.0
-"""A block is judged only where its 3 x 3 sum is at least this many times the pixel noise. A star
-of sd 0.5 px leaves at least 4.6 % of that sum outside its four brightest pixels (centred on a
-pixel corner); from 150 times the noise on, that is 3 times the noise of the other five pixels'
-sum (sqrt(5) times the pixel noise), and the measure tells the two apart. Below it, a faint
-star's few pixels above the noise hold most of a sum whose other pixels are noise about 0: judged
-everywhere, blocks cost 1-5 of the 30-43 stars of three openstartracker frames with hot pixels at
-1 %; judged from here on, none or one."""
+BLOCK_MIN_SNR = (150.0, 175.0, 225.0)
+"""A block of k = 4, 5, 6 pixels is judged only where its 3 x 3 sum is at least this many times
+the pixel noise. A star of sd 0.5 px leaves at least 4.7, 3.5 and 2.3 % of that sum outside its
+k brightest pixels (3,000 random sub-pixel positions); from these sums on, that is 3 times the
+noise of the other 9 - k pixels' sum (sqrt(9 - k) times the pixel noise), and the measure tells
+the two apart. Below them, a faint star's few pixels above the noise hold most of a sum whose
+other pixels are noise about 0: judged everywhere, blocks of four cost 1-5 of the 30-43 stars of
+each of three openstartracker frames with hot pixels at 1 %, and of four to six 2-7 more."""
 
 
 def peak_fractions(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y: NDArray, clusters: bool = True,
@@ -173,10 +172,10 @@ def peak_fractions(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_
             return HotMeasures(single, single, single)
         brightest = -np.sort(-np.nan_to_num(window, nan=-np.inf), axis=1)[:, 1:BLOCK_PIXELS]  # after the peak
         shares = (peak[:, None] + np.cumsum(np.maximum(brightest, 0.0), axis=1)) / total[:, None]
-        powered = np.c_[single, shares ** (2.0 ** np.arange(1, BLOCK_PIXELS))]  # k = 1 .. 4
+        powered = np.c_[single, shares ** (2.0 ** np.arange(1, BLOCK_PIXELS))]  # k = 1 .. 6
         cluster = powered[:, :CLUSTER_PIXELS].max(axis=1)
-        judged = total >= BLOCK_MIN_SNR * np.asarray(noise)
-        block = np.maximum(cluster, np.where(judged, powered[:, CLUSTER_PIXELS:].max(axis=1), 0.0))
+        judged = total[:, None] >= np.multiply.outer(np.broadcast_to(noise, total.shape), BLOCK_MIN_SNR)
+        block = np.maximum(cluster, np.where(judged, powered[:, CLUSTER_PIXELS:], 0.0).max(axis=1))
         positive = total > 0
         return HotMeasures(single, np.where(positive, cluster, single), np.where(positive, block, single))
 

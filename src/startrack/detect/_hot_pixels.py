@@ -14,11 +14,13 @@ So when the hot spots are at least half of the first pass's spots, and at least
 (:func:`without_hot_pixels`) and the frame is detected again: around every local maximum of the
 full-resolution plane that stands :data:`HOT_SIGMA` times the pixel noise over the background
 level and whose 3 x 3 neighbourhood the hot-pixel tests refuse (the peak's share of the 3 x 3 sum,
-or the measure of pairs, triples and blocks of four, over ``max_peak_fraction``), the pixels of
-the neighbourhood over that threshold take the neighbourhood's median. This is the cosmetic correction of
-astronomical image processing (a median replaces pixels that stand alone; van Dokkum 2001,
-L.A.Cosmic, finds cosmic rays by their sharp edges in the same spirit), run only where the spots
-say it is needed, so that every other frame is detected exactly as before.
+or the measure of pairs, triples and blocks, over ``max_peak_fraction``), the pixels of the
+neighbourhood over that threshold take the median of the 16 pixels around it (:data:`RING_5X5`;
+a block of five or six is most of its own 3 x 3, whose median would be one of its pixels). This
+is the cosmetic correction of astronomical image processing (a median replaces pixels that stand
+alone; van Dokkum 2001, L.A.Cosmic, finds cosmic rays by their sharp edges in the same spirit),
+run only where the spots say it is needed, so that every other frame is detected exactly as
+before.
 """
 
 from __future__ import annotations
@@ -27,6 +29,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._filters import HotMeasures, hot_pixel_ok, hot_pixels_abound, neighbourhoods_3x3, peak_fractions
+
+RING_5X5 = np.array([(dy, dx) for dy in range(-2, 3) for dx in range(-2, 3) if max(abs(dy), abs(dx)) == 2])
+"""Offsets (dy, dx) of the 16 pixels around a 3 x 3 neighbourhood, shape (16, 2)."""
 
 HOT_SIGMA = 5.0
 """A local maximum is replaced when it stands this many times the pixel noise over the level
@@ -86,10 +91,10 @@ def _bright_maxima(values: NDArray, level: NDArray, threshold: float) -> tuple[N
 
 def _replace(values: NDArray, level: NDArray, y: NDArray, x: NDArray, threshold: float) -> None:
     """Set, in place, the pixels of the 3 x 3 neighbourhoods about (y, x) (K,) that stand more
-    than ``threshold`` over the level to their neighbourhood's median."""
+    than ``threshold`` over the level to the median of the ring around them (:data:`RING_5X5`)."""
     ys, xs = neighbourhoods_3x3(values.shape, y, x)
     window = values[ys, xs]  # (K, 9)
-    median = np.nanmedian(window, axis=1)
+    median = np.nanmedian(values[neighbourhoods_3x3(values.shape, y, x, RING_5X5)], axis=1)
     with np.errstate(invalid="ignore"):
         high = window - level[ys, xs] > threshold
     values[ys[high], xs[high]] = np.broadcast_to(median[:, None], window.shape)[high]

@@ -7,8 +7,8 @@ is not one of the kept detections (no kept centroid within :data:`SAME_SPOT_PX`)
 filter, and the first filter it fails, in the detector's order, is given as its reason, from the
 spot's own measurements and the filters of :mod:`startrack.detect._filters`: area, elongation,
 edge, hot pixel (peak fraction of the 3 x 3 sum; where single hot pixels outnumber the other
-spots, as the detector judges it, also two to four together: their share of the sum, squared,
-to the fourth or to the eighth power), peak SNR. The clutter test needs the local
+spots, as the detector judges it, also two to six together: k pixels' share of the sum to the
+power 2^(k - 1)), peak SNR. The clutter test needs the local
 background model that only the detector sees, so the spots left are detected once more with only
 that filter on: those it drops are "clutter". A spot that passes all of those was refused by
 packing or the smear-shape test: "another filter (packing or shape)".
@@ -96,7 +96,7 @@ def _not_kept(spots: Detections, kept: Detections) -> NDArray[np.int64]:
 
 def _peak_fraction(image: NDArray, spots: Detections, limit: float | None) -> NDArray[np.float64]:
     """The hot-pixel test's measure at the pixel nearest each centroid: the peak over the 3 x 3
-    sum, or with clusters of two to four where the spots over ``limit`` outnumber the rest (at least
+    sum, or with clusters of two to six where the spots over ``limit`` outnumber the rest (at least
     ``HOT_PIXELS_ABOUND``), as the detector decides (:func:`startrack.detect.peak_fraction`)."""
     if len(spots) == 0:
         return np.zeros(0)
@@ -125,7 +125,7 @@ def _reason(cfg: StarDetector, spots: Detections, i: int, fraction: float, shape
     if cfg.reject_edge and (x < EDGE_PX or y < EDGE_PX or x > w - 1 - EDGE_PX or y > h - 1 - EDGE_PX):
         return "edge", "touches the image edge"
     if cfg.max_peak_fraction is not None and not (0 <= fraction <= cfg.max_peak_fraction):
-        return "hot pixel", (f"hot pixel (or two to four together): {fraction:.2f} of its 3 x 3 sum "
+        return "hot pixel", (f"hot pixel (or two to six together): {fraction:.2f} of its 3 x 3 sum "
                              f"(> {cfg.max_peak_fraction:g})")
     snr = float(spots.peak[i]) / spots.noise if spots.noise > 0 else np.inf
     if snr < cfg.min_peak_snr:
