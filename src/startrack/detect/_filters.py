@@ -14,7 +14,7 @@ From Fowler 2013 §II.B ("Noise-removal techniques" 5-7) and Huffman 2006 §4.1:
   sum of the 3 x 3 pixels around it (a focused star with a 0.5 px sigma puts under half of
   that sum in its peak; a hot pixel puts nearly all); or, where hot pixels abound, two side by
   side (or diagonal) whose share of that sum, squared, is more, or three whose share to the
-  fourth power is, or a block of four to six k whose share to the power 2^(k - 1) is
+  fourth power is, or a block of k = 4 to 6 whose share to the power 2^(k - 1) is
   (:func:`peak_fraction`, :func:`hot_pixels_abound`);
 * **clutter** -- the background's lower-half noise there is more than ``max_clutter`` times
   that of the clean sky (lit leaves, roof texture: structure, not stars; stars do not raise
