@@ -51,7 +51,7 @@ def refused(single: NDArray, cluster: NDArray, max_peak_fraction: float) -> NDAr
 
 def hot_pixels_dominate(measures: HotMeasures, max_peak_fraction: float | None) -> bool:
     """Whether hot pixels, alone or in pairs and triples, are at least half of a frame's N spots
-    (their ``measures``, shape (N,) each; blocks of four do not count,
+    (their ``measures``, shape (N,) each; blocks of four to six do not count,
     :func:`._filters.peak_fraction`) and at least :data:`._filters.HOT_PIXELS_ABOUND` of them:
     :func:`._filters.hot_pixels_abound` against the other spots (never when the test is off,
     ``max_peak_fraction`` None)."""

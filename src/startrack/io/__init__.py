@@ -54,7 +54,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._truth_files import check_frame_path, index_row, truth_to_dict, write_frame, write_index, write_with_sidecar
     from ._wcs import read_wcs, solution_wcs, wcs_header, write_wcs
     from ._writers import png_bytes, write_png, write_tiff
-    from ._xisf import is_xisf, xisf_size
+    from ._xisf import xisf_size
 
 _EXPORTS = _exports_of(__file__)
 
