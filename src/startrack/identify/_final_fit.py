@@ -44,7 +44,8 @@ within :data:`REMATCH_RADIUS_PX` of where the last fit puts them, and the fit re
 corners a band of stars at a time. With 4 rounds, simulated images of 80-89 deg fields with k1
 of -0.15 to -0.2 (lenses whose polynomial folds back inside the image) stopped at a lens that left
 their corners out (k1 off by 0.02-0.03, median residual 0.45-0.65 px against 0.14-0.19 px through
-the true lens); lenses that do not fold settled in 4 rounds before as now."""
+the true lens). Lenses that do not fold settled on the same lens before as now (star lists of
+70-89 deg lenses with k1 of -0.10 to -0.2)."""
 
 REMATCH_RADIUS_PX = 3.0
 """After verification, every image star within this distance of a predicted star is matched."""
