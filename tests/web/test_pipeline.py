@@ -221,3 +221,26 @@ def test_pairs_of_hot_pixels_are_named_as_hot_where_hot_pixels_abound():
     named = [c for (x, y), c in found.items()
              if any(abs(y - py) <= near_px and abs(x - px - 0.5) <= near_px for py, px in pairs)]
     assert named and all(c == "hot pixel" for c in named), found
+
+
+def test_pairs_alone_are_named_as_hot_where_they_abound():
+    """Pairs of hot pixels with no single ones among them: the detector counts the pairs when it
+    decides that hot pixels abound, and so does the list of refused spots (before: it counted
+    single hot pixels only and named the pairs "another filter")."""
+    rng = np.random.default_rng(2)
+    yy, xx = np.mgrid[0:300, 0:300]
+    image = rng.normal(100.0, 3.0, (300, 300))
+    cells = rng.permutation(np.stack(np.mgrid[1:14, 1:14], -1).reshape(-1, 2))[:45] * 20 + 10  # px, apart
+    for y, x in cells[:40]:
+        image[y, x] += 3000.0
+        image[y, x + 1] += 2900.0  # a pair
+    for y, x in cells[40:]:  # five stars
+        image += 2000.0 * np.exp(-((xx - x - 5.3) ** 2 + (yy - y - 5.6) ** 2) / (2 * 1.3**2))
+    detector = StarDetector()
+    kept = detector.detect(image)
+    refused = rejected_spots(image, detector, kept)
+    found = {(round(x), round(y)): c for x, y, c in zip(refused["x"], refused["y"], refused["category"], strict=True)}
+    near_px = 1  # a refused spot within 1 px of a pair's middle is that pair
+    named = [c for (x, y), c in found.items()
+             if any(abs(y - py) <= near_px and abs(x - px - 0.5) <= near_px for py, px in cells[:40])]
+    assert len(kept) == 5 and len(named) == 40 and set(named) == {"hot pixel"}, (len(kept), found)

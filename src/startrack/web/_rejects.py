@@ -6,9 +6,9 @@ with the same settings but every spot filter off (:data:`RELAXED`); each spot of
 is not one of the kept detections (no kept centroid within :data:`SAME_SPOT_PX`) was refused by a
 filter, and the first filter it fails, in the detector's order, is given as its reason, from the
 spot's own measurements and the filters of :mod:`startrack.detect._filters`: area, elongation,
-edge, hot pixel (peak fraction of the 3 x 3 sum; where single hot pixels outnumber the other
-spots, as the detector judges it, also two to six together: k pixels' share of the sum to the
-power 2^(k - 1)), peak SNR. The clutter test needs the local
+edge, hot pixel (peak fraction of the 3 x 3 sum; where hot pixels, alone or in pairs and
+triples, outnumber the other spots, as the detector judges it, also two to six together: k
+pixels' share of the sum to the power 2^(k - 1)), peak SNR. The clutter test needs the local
 background model that only the detector sees, so the spots left are detected once more with only
 that filter on: those it drops are "clutter". A spot that passes all of those was refused by
 packing or the smear-shape test: "another filter (packing or shape)".
@@ -53,9 +53,11 @@ def rejected_spots(image: NDArray, detector: StarDetector, kept: Detections) -> 
         Equal-length lists, brightest spot first; ``category`` is one of :data:`CATEGORIES`.
     """
     spots = replace(detector, **RELAXED).detect(image)
-    refused = _not_kept(spots, kept)[:MAX_REJECTS]
-    spots = spots.take(refused)
-    fraction = _peak_fraction(image, spots, detector.max_peak_fraction)
+    refused = _not_kept(spots, kept)
+    fraction = _peak_fraction(image, spots, _judged(detector, spots, refused, image.shape),
+                              detector.max_peak_fraction)
+    refused = refused[:MAX_REJECTS]
+    spots, fraction = spots.take(refused), fraction[refused]
     reasons = [_reason(detector, spots, i, fraction[i], image.shape) for i in range(len(spots))]
     reasons = _clutter(image, detector, spots, reasons)
     out: dict[str, list] = {k: [] for k in ("x", "y", "area_px", "peak", "elongation", "category", "reason")}
@@ -94,10 +96,23 @@ def _not_kept(spots: Detections, kept: Detections) -> NDArray[np.int64]:
     return np.flatnonzero(nearest > SAME_SPOT_PX**2)
 
 
-def _peak_fraction(image: NDArray, spots: Detections, limit: float | None) -> NDArray[np.float64]:
-    """The hot-pixel test's measure at the pixel nearest each centroid: the peak over the 3 x 3
-    sum, or with clusters of two to six where the spots over ``limit`` outnumber the rest (at least
-    ``HOT_PIXELS_ABOUND``), as the detector decides (:func:`startrack.detect.peak_fraction`)."""
+def _judged(cfg: StarDetector, spots: Detections, refused: NDArray[np.int64],
+            shape: tuple[int, int]) -> NDArray[np.bool_]:
+    """The spots (N,) the detector's hot-pixel tests judge: the kept ones (all but ``refused``)
+    and the refused ones that no filter before the hot-pixel tests, nor the peak SNR, refuses."""
+    judged = np.ones(len(spots), dtype=bool)
+    for i in refused:
+        judged[i] = _reason(cfg, spots, int(i), 0.0, shape)[0] == "other"
+    return judged
+
+
+def _peak_fraction(image: NDArray, spots: Detections, judged: NDArray[np.bool_],
+                   limit: float | None) -> NDArray[np.float64]:
+    """The hot-pixel test's measure of every spot (N,) at the pixel nearest its centroid: the
+    peak over the 3 x 3 sum, or with clusters of two to six where hot pixels abound, as the
+    detector decides (:func:`startrack.detect._pipeline.spot_filters`): the single hot pixels,
+    and the pairs and triples among the spots it ``judged`` (:func:`_judged`), number at least
+    ``HOT_PIXELS_ABOUND`` and at least as many as the other spots it judged."""
     if len(spots) == 0:
         return np.zeros(0)
     h, w = image.shape
@@ -107,7 +122,8 @@ def _peak_fraction(image: NDArray, spots: Detections, limit: float | None) -> ND
     pixels = np.asarray(image, dtype=np.float64)
     single = peak_fraction(pixels, level, px, py)
     hot = ~hot_pixel_ok(single, limit)
-    if not hot_pixels_abound(hot, ~hot):
+    clustered = judged & ~hot & ~hot_pixel_ok(peak_fraction(pixels, level, px, py, pairs=True), limit)
+    if not hot_pixels_abound(hot | clustered, judged & ~hot & ~clustered):
         return single
     return peak_fraction(pixels, level, px, py, blocks=True, noise=spots.noise)
 
