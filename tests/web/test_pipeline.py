@@ -20,13 +20,13 @@ from startrack.calibrate._sites import get_site
 from startrack.detect import StarDetector
 from startrack.frames import angle_between, radec_to_vector
 from startrack.io import write_png
-from startrack.results import AttitudeSolution, Status
+from startrack.results import AttitudeSolution, Detections, Status
 from startrack.units import ARCSEC, DEG
 from startrack.web._annotate import grid_step_deg, residual_gain
 from startrack.web._jobs import read_json
 from startrack.web._outputs import failure_words
 from startrack.web._records import job_record, load_solution
-from startrack.web._rejects import rejected_spots
+from startrack.web._rejects import rejected_spots, without_solved
 
 
 def run_job(server, source, options: dict | None = None):
@@ -244,3 +244,12 @@ def test_pairs_alone_are_named_as_hot_where_they_abound():
     named = [c for (x, y), c in found.items()
              if any(abs(y - py) <= near_px and abs(x - px - 0.5) <= near_px for py, px in cells[:40])]
     assert len(kept) == 5 and len(named) == 40 and set(named) == {"hot pixel"}, (len(kept), found)
+
+
+def test_a_refused_spot_the_solve_used_is_not_listed_as_refused():
+    """Where the detector's spots matched nothing, solve_image solves again on the spots found
+    with the clutter test off; those it then holds are detections, not refused spots."""
+    rejects = {"x": [10.0, 50.0, 90.0], "y": [10.0, 50.0, 90.0], "category": ["clutter", "clutter", "edge"]}
+    solved = Detections(x=np.array([50.4, 200.0]), y=np.array([49.5, 200.0]))
+    assert without_solved(rejects, solved) == {"x": [10.0, 90.0], "y": [10.0, 90.0], "category": ["clutter", "edge"]}
+    assert without_solved(rejects, None) is rejects

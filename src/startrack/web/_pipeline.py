@@ -52,7 +52,7 @@ from ._jobs import SOLVE_STAGES, now_iso, read_json, update_state, write_json
 from ._outputs import num, rerun_dict, result_dict, write_solution_files
 from ._presets import auto_settings, preset_detector
 from ._records import save_solution
-from ._rejects import rejected_spots
+from ._rejects import rejected_spots, without_solved
 
 STAGES = SOLVE_STAGES
 WEIGHTS = {"read": 0.10, "detect": 0.15, "identify": 0.35, "attitude": 0.10, "refine": 0.15, "annotate": 0.15}
@@ -237,6 +237,7 @@ def _write_files(job: _Job, image: Image, solution, details, rejects, detector, 
     folder = job.folder
     truth_xy = _truth_xy(folder / job.meta["input"])
     shown = details.detections if solution.detections is None else solution.detections  # + guided stars
+    rejects = without_solved(rejects, solution.detections)
     write_annotated(folder / "annotated.png", image.data, solution, shown, rejects, truth_xy)
     result = result_dict(solution, job.times, {**extra, "n_rejected": len(rejects["x"]), "auto": auto,
                                                 "mosaic": image.mosaic,
