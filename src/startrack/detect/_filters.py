@@ -160,24 +160,25 @@ each of three openstartracker frames with hot pixels at 1 %, and of four to six 
 def peak_fractions(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y: NDArray, clusters: bool = True,
                    noise: NDArray | float = 0.0) -> HotMeasures:
     """The measures of :func:`peak_fraction` from one reading of the 3 x 3 neighbourhoods
-    (arguments as there); with ``clusters`` False all three are ``single``."""
-    ys, xs = neighbourhoods_3x3(signal_image.shape, peak_y, peak_x)
-    window = signal_image[ys, xs].astype(np.float64) - level[:, None]
-    peak = signal_image[peak_y, peak_x] - level
-    # NaN (missing) neighbours count as 0; an integer frame has none (np.nansum's copy skipped)
-    total = window.sum(axis=1) if signal_image.dtype.kind in "biu" else np.nansum(window, axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        single = peak / total
-        if not clusters or len(window) == 0:
-            return HotMeasures(single, single, single)
-        brightest = -np.sort(-np.nan_to_num(window, nan=-np.inf), axis=1)[:, 1:BLOCK_PIXELS]  # after the peak
-        shares = (peak[:, None] + np.cumsum(np.maximum(brightest, 0.0), axis=1)) / total[:, None]
-        powered = np.c_[single, shares ** (2.0 ** np.arange(1, BLOCK_PIXELS))]  # k = 1 .. 6
-        cluster = powered[:, :CLUSTER_PIXELS].max(axis=1)
-        judged = total[:, None] >= np.multiply.outer(np.broadcast_to(noise, total.shape), BLOCK_MIN_SNR)
-        block = np.maximum(cluster, np.where(judged, powered[:, CLUSTER_PIXELS:], 0.0).max(axis=1))
-        positive = total > 0
-        return HotMeasures(single, np.where(positive, cluster, single), np.where(positive, block, single))
+    (arguments as there; ``level`` and ``noise`` a number or one per spot); with ``clusters``
+    False all three are ``single``. One compiled loop (:func:`.region_kernels.hot_measures`,
+    12 us for the 30 spots of a ``benchmarks/detect_speed.py`` frame, 75 us with numpy); its
+    powered shares are numpy's to 1 ulp (``tests/detect/test_detect_region_kernels.py``)."""
+    n = len(peak_x)
+    out = np.empty((3, n))
+    if n:
+        region_kernels().hot_measures(signal_image, _per_spot(level, n), np.asarray(peak_x, dtype=np.int64),
+                                      np.asarray(peak_y, dtype=np.int64), _per_spot(noise, n), _BLOCK_MIN_SNR, out)
+    return HotMeasures(*out) if clusters else HotMeasures(out[0], out[0], out[0])
+
+
+_BLOCK_MIN_SNR = np.array(BLOCK_MIN_SNR)
+
+
+def _per_spot(values: NDArray | float, n: int) -> NDArray[np.float64]:
+    """``values`` as float64 of shape (n,) (a number repeated)."""
+    array = np.asarray(values, dtype=np.float64)
+    return array if array.shape == (n,) else np.full(n, array)
 
 
 HOT_PIXELS_ABOUND = 30

@@ -1,6 +1,7 @@
 """The compiled loops over the pixel lists of :class:`.label.Regions` (numba): per-region
 weighted moments, the shapes of the half-maximum cores and signal sums (each region's pixels in
-two short passes), and the local peaks of the deblender.
+two short passes), the local peaks of the deblender, and the hot-pixel measures of the spots'
+3 x 3 neighbourhoods (:func:`hot_measures`, for :func:`.filters.peak_fractions`).
 
 They give the values of the numpy expressions of :func:`.centroid.measure_spots`,
 :func:`.point_source.core_shape` and :func:`.deblend.local_peaks` that they replace, sums taken
@@ -286,3 +287,52 @@ def spot_axes(starts, x, y):
                 b_hi = across
         out[r, 0], out[r, 1], out[r, 2] = a_hi - a_lo + 1.0, b_hi - b_lo + 1.0, angle
     return out
+
+
+@njit(cache=True, error_model="numpy")
+def hot_measures(image, level, peak_x, peak_y, noise, block_min_snr, out):
+    """The hot-pixel measures of N spots into ``out`` (3, N) float64 (single, cluster, block),
+    as :func:`.filters.peak_fractions` computes them with numpy from the 3 x 3 neighbourhood of
+    each peak (``peak_y``, ``peak_x``) (N,) of ``image`` (H, W), less ``level`` (N,): the sum in
+    numpy's order for nine values (eight partial sums paired, then the ninth), NaN pixels as 0
+    in it and last in the ranking, the five brightest after the largest summed in turn (then
+    the peak added);
+    ``noise`` (N,) and ``block_min_snr`` (3,) set where blocks of 4-6 are judged."""
+    h, w = image.shape
+    window = np.empty(9)
+    ranked = np.empty(9)
+    for k in range(peak_x.size):
+        y0, x0 = peak_y[k], peak_x[k]
+        for i in range(9):
+            yy = min(max(y0 + i // 3 - 1, 0), h - 1)
+            xx = min(max(x0 + i % 3 - 1, 0), w - 1)
+            window[i] = np.float64(image[yy, xx]) - level[k]
+        total = _sum9(window)
+        peak = image[y0, x0] - level[k]
+        single = peak / total
+        out[0, k] = single
+        for i in range(9):
+            ranked[i] = -np.inf if np.isnan(window[i]) else window[i]
+        ranked.sort()
+        if not total > 0:
+            out[1, k] = out[2, k] = single
+            continue
+        cluster, block, brighter = single, 0.0, 0.0
+        for j in range(1, 6):
+            brighter += max(ranked[8 - j], 0.0)  # numpy's cumsum of the five, then the peak added
+            powered = ((peak + brighter) / total) ** (2.0 ** j)
+            if j < 3:
+                cluster = max(cluster, powered)
+            elif total >= noise[k] * block_min_snr[j - 3]:
+                block = max(block, powered)
+        out[1, k], out[2, k] = cluster, max(cluster, block)
+
+
+@njit(cache=True, error_model="numpy")
+def _sum9(values):
+    """The sum of nine float64 values, NaN as 0, in the order of numpy's pairwise sum of a row of
+    nine (eight accumulators paired, then the ninth), so that the result is numpy's bit for bit."""
+    v = np.empty(9)
+    for i in range(9):
+        v[i] = 0.0 if np.isnan(values[i]) else values[i]
+    return ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7])) + v[8]

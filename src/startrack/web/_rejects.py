@@ -131,7 +131,7 @@ def _peak_fraction(image: NDArray, spots: Detections, judged: NDArray[np.bool_],
     px = np.clip(np.rint(spots.x).astype(np.int64), 0, w - 1)
     py = np.clip(np.rint(spots.y).astype(np.int64), 0, h - 1)
     level = np.full(len(spots), spots.background)
-    pixels = np.asarray(image, dtype=np.float64)
+    pixels = np.ascontiguousarray(image)  # in its own type: the detector's compiled measures take it so
     single = peak_fraction(pixels, level, px, py)
     hot = ~hot_pixel_ok(single, limit)
     clustered = judged & ~hot & ~hot_pixel_ok(peak_fraction(pixels, level, px, py, pairs=True), limit)
