@@ -291,13 +291,13 @@ def spot_axes(starts, x, y):
 
 @njit(cache=True, error_model="numpy")
 def hot_measures(image, level, peak_x, peak_y, noise, block_min_snr, out):
-    """The hot-pixel measures of N spots into ``out`` (3, N) float64 (single, cluster, block),
-    as :func:`.filters.peak_fractions` computes them with numpy from the 3 x 3 neighbourhood of
-    each peak (``peak_y``, ``peak_x``) (N,) of ``image`` (H, W), less ``level`` (N,): the sum in
-    numpy's order for nine values (eight partial sums paired, then the ninth), NaN pixels as 0
-    in it and last in the ranking, the five brightest after the largest summed in turn (then
-    the peak added);
-    ``noise`` (N,) and ``block_min_snr`` (3,) set where blocks of 4-6 are judged."""
+    """The hot-pixel measures of N spots into ``out`` (3, N) float64 (single, cluster, block) of
+    :func:`.filters.peak_fractions`, from the 3 x 3 neighbourhood (clipped to the image) of each
+    peak (``peak_y``, ``peak_x``) (N,) of ``image`` (H, W), less ``level`` (N,); ``noise`` (N,) and
+    ``block_min_snr`` (3,) set where blocks of 4-6 pixels are judged. The numbers are those of the
+    numpy expressions this loop replaced: the sum in numpy's order for nine values (:func:`_sum9`),
+    NaN pixels as 0 in it and last in the ranking, and the five brightest after the largest
+    summed in turn before the peak is added (numpy's cumsum)."""
     h, w = image.shape
     window = np.empty(9)
     ranked = np.empty(9)
