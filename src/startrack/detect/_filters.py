@@ -161,14 +161,18 @@ def peak_fractions(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_
                    noise: NDArray | float = 0.0) -> HotMeasures:
     """The measures of :func:`peak_fraction` from one reading of the 3 x 3 neighbourhoods
     (arguments as there; ``level`` and ``noise`` a number or one per spot); with ``clusters``
-    False all three are ``single``. One compiled loop (:func:`.region_kernels.hot_measures`,
-    12 us for the 30 spots of a ``benchmarks/detect_speed.py`` frame, 75 us with numpy); its
+    False all three are ``single``. The neighbourhoods are read with numpy and measured in one
+    compiled loop (:func:`.region_kernels.hot_measures`, of one type whatever the image's):
+    about 30 us for the 30 spots of a ``benchmarks/detect_speed.py`` frame, 75 us all in numpy; the
     powered shares are numpy's to 1 ulp (``tests/detect/test_detect_region_kernels.py``)."""
     n = len(peak_x)
     out = np.empty((3, n))
     if n:
-        region_kernels().hot_measures(signal_image, _per_spot(level, n), np.asarray(peak_x, dtype=np.int64),
-                                      np.asarray(peak_y, dtype=np.int64), _per_spot(noise, n), _BLOCK_MIN_SNR, out)
+        level = _per_spot(level, n)
+        ys, xs = neighbourhoods_3x3(signal_image.shape, peak_y, peak_x)
+        window = signal_image[ys, xs].astype(np.float64) - level[:, None]
+        peak = np.asarray(signal_image[peak_y, peak_x] - level, dtype=np.float64)
+        region_kernels().hot_measures(window, peak, _per_spot(noise, n), _BLOCK_MIN_SNR, out)
     return HotMeasures(*out) if clusters else HotMeasures(out[0], out[0], out[0])
 
 

@@ -290,37 +290,29 @@ def spot_axes(starts, x, y):
 
 
 @njit(cache=True, error_model="numpy")
-def hot_measures(image, level, peak_x, peak_y, noise, block_min_snr, out):
+def hot_measures(window, peak, noise, block_min_snr, out):
     """The hot-pixel measures of N spots into ``out`` (3, N) float64 (single, cluster, block) of
-    :func:`.filters.peak_fractions`, from the 3 x 3 neighbourhood (clipped to the image) of each
-    peak (``peak_y``, ``peak_x``) (N,) of ``image`` (H, W), less ``level`` (N,); ``noise`` (N,) and
-    ``block_min_snr`` (3,) set where blocks of 4-6 pixels are judged. The numbers are those of the
-    numpy expressions this loop replaced: the sum in numpy's order for nine values (:func:`_sum9`),
-    NaN pixels as 0 in it and last in the ranking, and the five brightest after the largest
-    summed in turn before the peak is added (numpy's cumsum)."""
-    h, w = image.shape
-    window = np.empty(9)
+    :func:`.filters.peak_fractions`, from the background-subtracted 3 x 3 neighbourhood of each
+    spot's peak, ``window`` (N, 9) float64 (row-major, the peak in the middle), and the peak
+    ``peak`` (N,); ``noise`` (N,) and ``block_min_snr`` (3,) set where blocks of 4-6 pixels are
+    judged. The numbers are those of the numpy expressions this loop replaced: the sum in numpy's
+    order for nine values (:func:`_sum9`), NaN pixels as 0 in it and last in the ranking, and the
+    five brightest after the largest summed in turn before the peak is added (numpy's cumsum)."""
     ranked = np.empty(9)
-    for k in range(peak_x.size):
-        y0, x0 = peak_y[k], peak_x[k]
-        for i in range(9):
-            yy = min(max(y0 + i // 3 - 1, 0), h - 1)
-            xx = min(max(x0 + i % 3 - 1, 0), w - 1)
-            window[i] = np.float64(image[yy, xx]) - level[k]
-        total = _sum9(window)
-        peak = image[y0, x0] - level[k]
-        single = peak / total
+    for k in range(peak.size):
+        total = _sum9(window[k])
+        single = peak[k] / total
         out[0, k] = single
-        for i in range(9):
-            ranked[i] = -np.inf if np.isnan(window[i]) else window[i]
-        ranked.sort()
         if not total > 0:
             out[1, k] = out[2, k] = single
             continue
+        for i in range(9):
+            ranked[i] = -np.inf if np.isnan(window[k, i]) else window[k, i]
+        ranked.sort()
         cluster, block, brighter = single, 0.0, 0.0
         for j in range(1, 6):
-            brighter += max(ranked[8 - j], 0.0)  # numpy's cumsum of the five, then the peak added
-            powered = ((peak + brighter) / total) ** (2.0 ** j)
+            brighter += max(ranked[8 - j], 0.0)
+            powered = ((peak[k] + brighter) / total) ** (2.0 ** j)
             if j < 3:
                 cluster = max(cluster, powered)
             elif total >= noise[k] * block_min_snr[j - 3]:
