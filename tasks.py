@@ -86,7 +86,7 @@ def warm_test_cache() -> None:
     """
     print(f"warming the tests' cache in {TEST_CACHE} (once after a checkout or an upgrade)", flush=True)
     env = {**os.environ, "STARTRACK_CACHE_DIR": str(TEST_CACHE)}
-    subprocess.run([str(BIN / "startrack"), "warm-up"], check=True, cwd=ROOT, env=env)
+    subprocess.run([str(PY), "-m", "startrack", "warm-up"], check=True, cwd=ROOT, env=env)
 
 
 def _parallel(rest: list[str]) -> list[str]:
