@@ -1,12 +1,14 @@
 """Real photos after what a photographer's workflow does to them, solved with no hint.
 
 The eight real images of ``../shared/realdata`` are turned (90, 180, 270 deg), cropped (the
-central 60 % of each side; the top-left 71 %, half the area), resized (x 0.5 and x 2, Lanczos),
+central 60 % of each side; the top-left 71 %, half the area), resized (x 0.5 and x 2, and to
+thumbnails 256 and 200 px wide; Lanczos),
 stretched (gamma 0.5, asinh, 1-99 % levels), re-saved as a quality-60 JPEG, reduced to grey or
 to the green plane, given a colour cast, smoothed (Gaussian sd 1 px, 3 x 3 median), sharpened
 (unsharp mask), saved as 16-bit grey PNG and TIFF, padded (a black canvas 1.5 times the size, a
 white 20 px frame), vignetted (corners 60 % darker) and given a sky gradient (0 to 120 grey
-levels down the frame). Each variant is saved in its photo's format (JPEG quality 95, or PNG)
+levels down the frame), and trailed (stars drawn out 12 and 24 px, as from a fixed tripod:
+:func:`trailed`). Each variant is saved in its photo's format (JPEG quality 95, or PNG)
 unless its transformation names another, and solved from the file by ``solve_image`` with no hint.
 
 A solve is right when the direction it gives the variant's centre lies within :data:`RIGHT_PX`
@@ -71,7 +73,8 @@ def geometric(rgb: np.ndarray) -> dict[str, Variant]:
     x0, y0 = (w - cw) // 2, (h - ch) // 2
     out["crop centre 60 %"] = Variant(rgb[y0:y0 + ch, x0:x0 + cw], "photo", lambda x, y: (x + x0, y + y0))
     out["crop top-left 71 %"] = Variant(rgb[: round(0.71 * h), : round(0.71 * w)], "photo", _same)
-    for label, factor in (("resized x 0.5", 0.5), ("resized x 2", 2.0)):
+    for label, factor in (("resized x 0.5", 0.5), ("resized x 2", 2.0), ("256 px wide", 256 / w),
+                          ("200 px wide", 200 / w)):
         size = (round(w * factor), round(h * factor))
         pixels = np.asarray(Image.fromarray(_clip8(rgb)).resize(size, Image.LANCZOS), dtype=np.float64)
         out[label] = Variant(pixels, "photo", lambda x, y, s=size: ((x + 0.5) * w / s[0] - 0.5,
@@ -113,6 +116,44 @@ def tonal(rgb: np.ndarray) -> dict[str, Variant]:
     return {label: Variant(p, how, _same) for label, (p, how) in pixels.items()}
 
 
+TRAIL_ANGLE_DEG = 20.0
+"""Direction of the star trails of :func:`trailed`, from +x towards +y."""
+
+
+def trailed(rgb: np.ndarray) -> dict[str, Variant]:
+    """The photo as an exposure from a fixed tripod: every star drawn out into a straight trail of
+    12 or 24 px (the photo convolved with a line), and the noise that the convolution smoothed
+    away added back (a pixel's noise estimated from its difference with the 5 x 5 median), so
+    that the sky is as noisy as the photo's own. A trail's light centroid is the star's position
+    at mid-exposure, the original position."""
+    grey = rgb.mean(axis=2)
+    sigma = 1.4826 * float(np.median(np.abs(grey - ndimage.median_filter(grey, 5))))
+    rng = np.random.default_rng(0)
+    out = {}
+    for length in (12.0, 24.0):
+        kernel = line_kernel(length, TRAIL_ANGLE_DEG)
+        lost = sigma * np.sqrt(max(1.0 - float((kernel**2).sum()), 0.0))
+        pixels = np.stack([ndimage.convolve(rgb[..., c], kernel, mode="nearest") for c in range(3)], axis=-1)
+        out[f"trailed {length:.0f} px"] = Variant(pixels + rng.normal(0.0, lost, grey.shape)[..., None], "photo", _same)
+    return out
+
+
+def line_kernel(length_px: float, angle_deg: float) -> np.ndarray:
+    """A normalised kernel (odd square) of a straight segment of ``length_px`` through its centre
+    at ``angle_deg``, sampled every 1/8 px and spread bilinearly over the pixels."""
+    size = int(np.ceil(length_px)) + 3
+    size += 1 - size % 2
+    kernel = np.zeros((size, size))
+    along = np.linspace(-length_px / 2, length_px / 2, int(length_px * 8) + 1)
+    x = size // 2 + along * np.cos(np.radians(angle_deg))
+    y = size // 2 + along * np.sin(np.radians(angle_deg))
+    x0, y0 = np.floor(x).astype(int), np.floor(y).astype(int)
+    fx, fy = x - x0, y - y0
+    for dx, dy, weight in ((0, 0, (1 - fx) * (1 - fy)), (1, 0, fx * (1 - fy)), (0, 1, (1 - fx) * fy), (1, 1, fx * fy)):
+        np.add.at(kernel, (y0 + dy, x0 + dx), weight)
+    return kernel / kernel.sum()
+
+
 def _grey8(rgb: np.ndarray) -> np.ndarray:
     """Pillow's grey ("L") of an RGB array of grey levels."""
     return np.asarray(Image.fromarray(_clip8(rgb)).convert("L"))
@@ -152,7 +193,7 @@ def run_image(name: str, folder: Path) -> list[dict]:
     scale = float(np.sqrt(abs(np.linalg.det(truth.pixel_scale_matrix)))) * 3600.0
     rgb = np.asarray(Image.open(REALDATA / IMAGES[name] / name).convert("RGB"), dtype=np.float64)
     rows = []
-    for label, variant in {**geometric(rgb), **tonal(rgb)}.items():
+    for label, variant in {**geometric(rgb), **tonal(rgb), **trailed(rgb)}.items():
         path = save(variant, folder / f"{Path(name).stem} {label}", Path(name).suffix)
         t0 = time.perf_counter()
         solution = solve_image(path)

@@ -429,7 +429,8 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
         the point sources first (spots the detector marks extended or elongated come last).
         A point solve that matches nothing, or finds too few stars, is tried once more on the
         spots found with the detector's clutter test off, when there are more of them (lit
-        clouds: :func:`_without_clutter_test`). ``solve_time_s`` covers detection and identification,
+        clouds), and on a smeared frame also with the elongation test off and weighted centroids
+        (star trails; :func:`_second_detection`). ``solve_time_s`` covers detection and identification,
         not reading the file nor what a process does once (loading the pattern database and the
         compiled search).
     """
@@ -468,35 +469,45 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
             and (streaked := smeared()).solved:
         return smeared_image.image_solution(streaked, found, detect_s, when.source)
     solution = replace(solution, solve_time_s=detect_s + solution.solve_time_s, detections=found)
-    if solution.status in CLUTTER_RETRY_STATUSES and detector.max_clutter is not None:
-        solution = _without_clutter_test(img.data, solution, detector, point_solve)
+    if solution.status in SECOND_DETECTION_STATUSES and detector.max_clutter is not None:
+        trails = elongation >= smeared_image.SOME_ELONGATION
+        solution = _second_detection(img.data, solution, detector, point_solve, trails)
     return _with_guided(img.data, solution, detector) if guided and solution.solved else solution
 
 
-CLUTTER_RETRY_STATUSES = (Status.NO_MATCH, Status.TOO_FEW_STARS)
-"""A point solve that ends so is tried once more without the detector's clutter test
-(:func:`_without_clutter_test`); one out of time is not (it would take as long again)."""
-CLUTTER_RETRY_MIN_SPOTS = 3
-"""Spots the clutter test must have refused for that second solve to be tried."""
+SECOND_DETECTION_STATUSES = (Status.NO_MATCH, Status.TOO_FEW_STARS)
+"""A point solve that ends so is tried once more on a second detection (:func:`_second_detection`);
+one out of time is not (it would take as long again)."""
+SECOND_DETECTION_MIN_SPOTS = 3
+"""Spots the clutter test must have refused for the second solve of a frame of round spots."""
 
 
-def _without_clutter_test(data: NDArray, failed: AttitudeSolution, detector,
-                          point_solve: Callable[[Detections], AttitudeSolution]) -> AttitudeSolution:
+def _second_detection(data: NDArray, failed: AttitudeSolution, detector,
+                      point_solve: Callable[[Detections], AttitudeSolution], trails: bool = False) -> AttitudeSolution:
     """The image detected again with the clutter test off and solved (``point_solve``), when that
-    finds at least :data:`CLUTTER_RETRY_MIN_SPOTS` more spots; the ``failed`` solution otherwise or
-    if this fails too. ``solve_time_s`` counts both.
+    finds at least :data:`SECOND_DETECTION_MIN_SPOTS` more spots; with ``trails`` (the brightest
+    spots elongated: :data:`startrack._smeared_image.SOME_ELONGATION`), with the elongation test
+    off too and the weighted centroid, and solved whatever the count. The ``failed`` solution
+    when there is no second solve or it fails too. ``solve_time_s`` counts both.
 
     The clutter test refuses the spots of tiles whose background is busy (lit cloud, foliage, a
     roof; :mod:`startrack.detect._background`), and with them the stars of clear sky in a tile
     that a cloud's edge crosses. Under partial clouds (``benchmarks/photo_hazards.py``), that
     left 9-29 spots to four photos that did not solve, which solved right from the 12-34 spots
-    found without the test. A wrong match is no likelier than in any solve: the false-match
+    found without the test. On a frame of star trails, the elongation test refuses the longest,
+    and the windowed centroider, whose window is a star's size, settles on a piece of a trail
+    rather than its middle: crappy.jpg with trails of 28 px solves so (``photo_transforms.py``'s
+    trailed photos: 2 of 8 at 24 px, none before). A wrong match is no likelier than in any solve: the false-match
     probability limit is the same.
     """
     t0 = time.perf_counter()
-    found = replace(detector, max_clutter=None).detect(data)
+    relaxed = replace(detector, max_clutter=None)
+    if trails:
+        relaxed = replace(relaxed, max_elongation=None, centroid="weighted")
+    found = relaxed.detect(data)
     detect_s = time.perf_counter() - t0
-    if len(found) < len(require(failed.detections, "the failed solve's detections")) + CLUTTER_RETRY_MIN_SPOTS:
+    if not trails and len(found) < len(require(failed.detections, "the failed solve's detections")) \
+            + SECOND_DETECTION_MIN_SPOTS:
         return replace(failed, solve_time_s=failed.solve_time_s + detect_s)
     second = point_solve(found)
     spent = failed.solve_time_s + detect_s + second.solve_time_s

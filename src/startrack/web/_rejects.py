@@ -72,8 +72,9 @@ def rejected_spots(image: NDArray, detector: StarDetector, kept: Detections) -> 
 def without_solved(rejects: dict[str, list], solved: Detections | None) -> dict[str, list]:
     """``rejects`` (:func:`rejected_spots`) without the spots the solve used after all: where the
     detector's spots matched nothing, :func:`startrack.solve_image` solves again on those found
-    with the clutter test off (:func:`startrack.solve._without_clutter_test`), and a refused
-    spot of that list (``solved``) is then a detection, not a refused one."""
+    with the clutter test off (and the elongation test, on a frame of trails:
+    :func:`startrack.solve._second_detection`), and a refused spot of that list (``solved``) is
+    then a detection, not a refused one."""
     if solved is None or not rejects["x"]:
         return rejects
     spots = Detections(x=np.asarray(rejects["x"], dtype=float), y=np.asarray(rejects["y"], dtype=float))

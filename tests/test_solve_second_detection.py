@@ -1,9 +1,13 @@
-"""A real photo under partial clouds solves with no hint, its clear sky's stars kept.
+"""Real photos that the first detection leaves unsolved, solved from a second one with no hint.
 
-Lit clouds make their tiles' background busy, and the detector's clutter test refuses the spots
-of busy tiles, the stars in clear sky beside a cloud's edge with them. When the point solve then
-finds no match, :func:`startrack.solve.solve_image` detects the image again without that test and
-solves once more (:func:`startrack.solve._without_clutter_test`).
+:func:`startrack.solve.solve_image` detects an image again when its point solve matches nothing
+(:func:`startrack.solve._second_detection`):
+
+* under partial clouds, with the clutter test off: lit clouds make their tiles' background busy,
+  and the test refuses the spots of busy tiles, the stars in clear sky beside a cloud's edge
+  with them;
+* on a frame of star trails, also with the elongation test off and the weighted centroid: the
+  windowed centroider's window, a star's size, settles on a piece of a trail.
 
 Truth: astrometry.net (../shared/realdata/truth.csv), as in test_realdata_solve.py.
 """
@@ -59,11 +63,40 @@ def test_a_clouded_photo_solves_from_the_spots_found_without_the_clutter_test(cl
     solution = solve_image(image)
     assert solution.solved, solution.reason
     assert _centre_error_px(solution, row) < 2.0  # px
-    assert len(solution.detections) >= len(with_test) + startrack.solve.CLUTTER_RETRY_MIN_SPOTS
+    assert len(solution.detections) >= len(with_test) + startrack.solve.SECOND_DETECTION_MIN_SPOTS
 
 
 def test_without_the_second_solve_the_clouded_photo_is_not_solved(clouded, monkeypatch):
     """The premise of the test above: with the clutter test on, these clouds leave no match."""
-    monkeypatch.setattr(startrack.solve, "CLUTTER_RETRY_STATUSES", ())
+    monkeypatch.setattr(startrack.solve, "SECOND_DETECTION_STATUSES", ())
     assert solve_image(clouded[0]).status is Status.NO_MATCH
 
+
+
+TRAIL_PX = 28
+"""Length of the star trails of :func:`trailed`, px."""
+
+
+@pytest.fixture()
+def trailed(truth_table, realdata_dir):
+    """crappy.jpg (grey) with every star drawn out into a horizontal trail of :data:`TRAIL_PX`
+    (a box of that length), and the sky's noise that the box smoothed away added back (seeded);
+    and its truth row."""
+    row = next(r for r in truth_table if r["file"] == "crappy.jpg")
+    grey = np.asarray(Image.open(realdata_dir / row["set"] / row["file"]).convert("L"), dtype=np.float64)
+    noise = 1.4826 * float(np.median(np.abs(grey - ndimage.median_filter(grey, 5))))
+    trails = ndimage.convolve(grey, np.ones((1, TRAIL_PX)) / TRAIL_PX, mode="nearest")
+    lost = np.random.default_rng(0).normal(0.0, noise * np.sqrt(1 - 1 / TRAIL_PX), grey.shape)
+    return np.clip(np.rint(trails + lost), 0, 255).astype(np.uint8), row
+
+
+def test_a_photo_of_star_trails_solves_from_their_weighted_centroids(trailed):
+    image, row = trailed
+    solution = solve_image(image)
+    assert solution.solved, solution.reason
+    assert _centre_error_px(solution, row) < 2.0  # px
+
+
+def test_without_the_second_solve_the_trails_are_not_solved(trailed, monkeypatch):
+    monkeypatch.setattr(startrack.solve, "SECOND_DETECTION_STATUSES", ())
+    assert solve_image(trailed[0]).status is Status.NO_MATCH
