@@ -253,3 +253,18 @@ def test_a_refused_spot_the_solve_used_is_not_listed_as_refused():
     solved = Detections(x=np.array([50.4, 200.0]), y=np.array([49.5, 200.0]))
     assert without_solved(rejects, solved) == {"x": [10.0, 90.0], "y": [10.0, 90.0], "category": ["clutter", "edge"]}
     assert without_solved(rejects, None) is rejects
+
+
+def test_detections_csv_keeps_the_detect_stage_measurements_only_for_its_own_spots():
+    """The detect stage's magnitudes go with the solution's detections when those are its spots;
+    a second detection (star trails: weighted centroids of as many spots) gets none."""
+    from startrack.detect._details import DetectionDetails
+    from startrack.web._outputs import detections_table
+
+    spots = Detections(x=np.array([10.0, 50.0]), y=np.array([20.0, 60.0]))
+    details = DetectionDetails(detections=spots, mag=np.array([3.0, 4.0]), peak_snr=np.array([50.0, 20.0]),
+                               psf_sigma_px=np.array([1.2, 1.3]))
+    same = detections_table(details, AttitudeSolution(status=Status.NO_MATCH, detections=spots))
+    moved = Detections(x=np.array([10.4, 50.0]), y=np.array([20.0, 60.0]))
+    other = detections_table(details, AttitudeSolution(status=Status.NO_MATCH, detections=moved))
+    assert same["mag"] == [3.0, 4.0] and other["mag"] == [None, None] and other["x"] == [10.4, 50.0]

@@ -123,7 +123,10 @@ def detections_table(details: DetectionDetails, solution: AttitudeSolution) -> d
         cols[key] = getattr(det, key).tolist()
     guided = solution.guided_stars  # the last rows: measured where the solution predicts them
     blind = len(det) - guided
-    same = len(details) == blind  # the solve's detections are the detect stage's (deterministic)
+    # the solve's detections are the detect stage's (deterministic), unless it solved a second
+    # detection (startrack.solve._second_detection): then the stage's measurements are not theirs
+    same = len(details) == blind and bool(np.array_equal(det.x[:blind], details.detections.x)
+                                          and np.array_equal(det.y[:blind], details.detections.y))
     for key in ("mag", "peak_snr", "psf_sigma_px"):
         cols[key] = (getattr(details, key).tolist() if same else [None] * blind) + [None] * guided
     cols["hip"] = [int(h) if h >= 0 else None for h in hip]
