@@ -469,9 +469,9 @@ def solve_image(image: str | os.PathLike | NDArray | Image, *, fov_deg: float | 
             and (streaked := smeared()).solved:
         return smeared_image.image_solution(streaked, found, detect_s, when.source)
     solution = replace(solution, solve_time_s=detect_s + solution.solve_time_s, detections=found)
-    if solution.status in SECOND_DETECTION_STATUSES and detector.max_clutter is not None:
-        trails = elongation >= smeared_image.SOME_ELONGATION
-        solution = _second_detection(img.data, solution, detector, point_solve, trails)
+    if solution.status in SECOND_DETECTION_STATUSES:
+        solution = _second_detection(img.data, solution, detector, point_solve,
+                                     trails=elongation >= smeared_image.SOME_ELONGATION)
     return _with_guided(img.data, solution, detector) if guided and solution.solved else solution
 
 
@@ -497,14 +497,14 @@ def _second_detection(data: NDArray, failed: AttitudeSolution, detector,
     found without the test. On a frame of star trails, the elongation test refuses the longest,
     and the windowed centroider, whose window is a star's size, settles on a piece of a trail
     rather than its middle: crappy.jpg with trails of 28 px solves so (``photo_transforms.py``'s
-    trailed photos: 2 of 8 at 24 px, none before). A wrong match is no likelier than in any solve: the false-match
-    probability limit is the same.
+    trailed photos: 2 of 8 at 24 px, none before). A wrong match is no likelier than in any
+    solve: the false-match probability limit is the same.
     """
+    relaxed = {"max_clutter": None, **({"max_elongation": None, "centroid": "weighted"} if trails else {})}
+    if all(getattr(detector, key) == value for key, value in relaxed.items()):  # nothing to relax
+        return failed
     t0 = time.perf_counter()
-    relaxed = replace(detector, max_clutter=None)
-    if trails:
-        relaxed = replace(relaxed, max_elongation=None, centroid="weighted")
-    found = relaxed.detect(data)
+    found = replace(detector, **relaxed).detect(data)
     detect_s = time.perf_counter() - t0
     if not trails and len(found) < len(require(failed.detections, "the failed solve's detections")) \
             + SECOND_DETECTION_MIN_SPOTS:
