@@ -4,6 +4,8 @@ valid, exit status 2. Before, they ended as "unexpected" errors (exit 3), or as 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -101,19 +103,29 @@ def test_an_empty_name_is_refused_not_taken_as_no_option(files, argv):
     # argparse took a negative number in exponent notation for an option: "expected one argument"
     (["solve", "{d}/frames/f0.fits", "--epoch", "-1e9"], "--epoch must be a Julian year such as 2025.5"),
     (["warm-up", "--fov-range-deg", "-1e3", 5], "--fov-range-deg must be a field of view between 0.5 and 150"),
+    # beyond float64, or -inf: "expected one argument" too, where +1e400 was named
+    (["simulate", "--epoch", "-1e400", "--out", "{d}/x.fits"], "--epoch must be a finite number, got -inf"),
+    (["simulate", "--epoch", "-inf", "--out", "{d}/x.fits"], "--epoch must be a finite number, got -inf"),
 ])
 def test_options_checked_before_the_work(files, argv, words):
     code, out, err = run(*[str(a).format(d=files) for a in argv])
     assert code == 2 and out == "" and err.count("\n") == 1 and words in err, err
 
 
-def test_a_negative_number_in_exponent_notation_is_the_same_number():
-    from startrack.cli._main import _plain_negative
+def test_every_negative_number_is_a_value_of_its_option():
+    """argparse took "-1e9", "-1e400" and "-inf" for unknown options ("expected one argument");
+    startrack's parsers read them as values, as typed, and leave options alone."""
+    from startrack.cli._parser import CommandParser
 
-    for text in ("-1e9", "-2.5E-3", "-1e-300", "-1e300", "-.5e2"):
-        assert float(_plain_negative(text)) == float(text) and "e" not in _plain_negative(text).lower()
-    for text in ("-5", "-0.25", "--epoch", "x-1e9", "-1e9x", "-1e400"):
-        assert _plain_negative(text) == text
+    parser = CommandParser(prog="probe")
+    parser.add_argument("--x", type=float)
+    parser.add_argument("--name")
+    for text in ("-1e9", "-2.5E-3", "-1e-300", "-.5e2", "-5", "-0.25", "-inf", "-Infinity", "-1e400"):
+        assert parser.parse_args(["--x", text]).x == float(text)
+    assert parser.parse_args(["--name", "-inf"]).name == "-inf"
+    assert math.isnan(parser.parse_args(["--x", "-nan"]).x)
+    with pytest.raises(SystemExit):  # an unknown option is still one
+        parser.parse_args(["--x", "1", "-e9"])
 
 
 @pytest.mark.parametrize("argv, words", [

@@ -36,6 +36,7 @@ from ..adcs import (
 from ..errors import InvalidInputError
 from ..io import read_json_file
 from ._common import check_output_folder, exit_status_epilog, non_empty, print_json
+from ._parser import CommandParser
 from ._progress import ProgressBar, ensure_database_for
 
 EPILOG = """\
@@ -55,8 +56,8 @@ output
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="startrack adcs-demo", description=__doc__, epilog=EPILOG,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = CommandParser(prog="startrack adcs-demo", description=__doc__, epilog=EPILOG,
+                      formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--feedback", choices=FEEDBACKS, default="tracker", help="feedback source (default tracker)")
     p.add_argument("--duration-s", type=float, default=700.0, help="simulated time, s (default 700)")
     p.add_argument("--out", default="startrack-adcs", type=non_empty, help="output folder (default startrack-adcs)")

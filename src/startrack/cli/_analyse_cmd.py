@@ -36,6 +36,7 @@ from ._common import (
     non_empty,
     utc_offset_hours,
 )
+from ._parser import CommandParser
 from ._progress import ProgressBar, ensure_database_for
 
 EPILOG = exit_status_epilog(
@@ -46,8 +47,8 @@ EPILOG = exit_status_epilog(
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="startrack analyse", description=__doc__, epilog=EPILOG,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(prog="startrack analyse", description=__doc__, epilog=EPILOG,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("name", metavar="NAME", help="an analysis ('list' shows them with their parameters)")
     parser.add_argument("paths", metavar="PATH", nargs="*", help="image file or folder of images (one result set each)")
     parser.add_argument("--out", metavar="DIR", type=non_empty,

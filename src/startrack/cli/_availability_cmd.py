@@ -18,6 +18,7 @@ from ..catalog import load_catalog, thin_uniform
 from ..errors import InvalidInputError
 from ..io import open_output, output_target
 from ._common import check_finite_options, exit_status_epilog, positive_count, print_json, time_option
+from ._parser import CommandParser
 from ._progress import ProgressBar
 
 
@@ -66,8 +67,8 @@ def _check(args) -> None:
 
 
 def main(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser(prog="startrack availability", description=__doc__, epilog=EPILOG,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(prog="startrack availability", description=__doc__, epilog=EPILOG,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--camera", help="camera preset")
     parser.add_argument("--fov-deg", type=float, help="pinhole camera: horizontal FOV")
     parser.add_argument("--width", type=positive_count, default=1024)

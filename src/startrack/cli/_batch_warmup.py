@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from ..camera import Camera
 from ..warm_up import solve_catalog_stars
 from ._common import exit_status_epilog
+from ._parser import CommandParser
 from ._process_gc import collection_paused, no_collection_at_exit
 
 COMPILE_ESTIMATE_S = 60
@@ -118,8 +119,8 @@ def _detection(image: NDArray | None, every_detection: bool) -> None:
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="startrack warm-up", description=__doc__, epilog=EXIT_STATUS,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(prog="startrack warm-up", description=__doc__, epilog=EXIT_STATUS,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--fov-range-deg", type=float, nargs=2, metavar=("LO", "HI"),
                         help="also build the database for this range of fields of view, deg "
                              "(default: the ranges a solve with no field of view searches, 3-100 deg and, "

@@ -18,6 +18,7 @@ from ..camera import Camera
 from ..errors import InvalidInputError, require
 from ..io import atomic_path, read_image
 from ..solve import solve_image
+from ._parser import CommandParser
 
 if TYPE_CHECKING:
     from ..io import Image
@@ -55,8 +56,8 @@ output (--json)
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="startrack calibrate", description=__doc__, epilog=OUTPUT,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(prog="startrack calibrate", description=__doc__, epilog=OUTPUT,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("images", nargs="+", help="star images (or checkerboard images with --checkerboard)")
     add_fov_options(parser)
     add_epoch_option(parser)

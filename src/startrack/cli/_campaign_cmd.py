@@ -22,6 +22,7 @@ from typing import Any
 
 from ..errors import InvalidInputError
 from ._common import exit_status_epilog
+from ._parser import CommandParser
 
 DEFAULT_OUT = Path("startrack-campaigns")
 EXIT_STATUS = exit_status_epilog(
@@ -47,8 +48,8 @@ def _needs_extra() -> None:
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="startrack campaign", description=__doc__.split("\n\n")[0],
-                                     epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(prog="startrack campaign", description=__doc__.split("\n\n")[0],
+                           epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="action", required=True, metavar="{run,report,rerun,list}")
 
     def action(name: str, text: str) -> argparse.ArgumentParser:

@@ -25,6 +25,7 @@ from ._common import (
     print_json,
     solution_table,
 )
+from ._parser import CommandParser
 from ._progress import ensure_database
 from ._render_limits import check_render_options
 from ._scene_options import add_scene_options, scene_epoch, simulate_scene
@@ -40,8 +41,8 @@ demo adds
 
 
 def main(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser(prog="startrack demo", description=__doc__, epilog=OUTPUT_FORMATS,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(prog="startrack demo", description=__doc__, epilog=OUTPUT_FORMATS,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_options(parser)
     parser.add_argument("--out", default="startrack-demo", type=non_empty,
                         help="output folder (default startrack-demo)")

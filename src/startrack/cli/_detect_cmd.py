@@ -24,15 +24,16 @@ from ._common import (
     positive_count,
     print_json,
 )
+from ._parser import CommandParser
 
 EXIT_STATUS = exit_status_epilog("0 done (also when no star is found); 2 misuse (bad option, unreadable file or "
                                  "invalid image), with one line 'startrack detect: error: ...' on standard error;")
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="startrack detect", description=__doc__,
-                                     epilog=EXIT_STATUS + "\n" + batch_epilog(),
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(prog="startrack detect", description=__doc__,
+                           epilog=EXIT_STATUS + "\n" + batch_epilog(),
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("image", nargs="+", metavar="IMAGE",
                         help="FITS, PNG, JPEG, TIFF, HEIC, WebP, AVIF, BMP or camera RAW file; several files or "
                              "folders for a batch")

@@ -9,11 +9,8 @@ naming the exception's type (:data:`DEBUG_ENV` set to 1 shows its traceback).
 
 from __future__ import annotations
 
-import decimal
 import importlib
-import math
 import os
-import re
 import sys
 
 from .. import __version__
@@ -66,21 +63,7 @@ def main(argv: list[str] | None = None) -> int:
         problem = f"unknown command {argv[0]!r}" if argv else "a command is required"
         print(f"{USAGE}\nstartrack: error: {problem}", file=sys.stderr)
         return 2
-    return _run(argv[0], [_plain_negative(arg) for arg in argv[1:]])
-
-
-NEGATIVE_EXPONENT_NUMBER = re.compile(r"-(\d+\.?\d*|\.\d+)[eE][-+]?\d+")
-"""A negative number in exponent notation (-1e9, -2.5E-3), which argparse takes for an option."""
-
-
-def _plain_negative(arg: str) -> str:
-    """``arg`` itself, or a negative number in exponent notation written without the exponent
-    (-1e9 as -1000000000, the same float), which argparse reads as a value: it took "-1e9" for an
-    option and said "expected one argument" (``--epoch -1e9``, ``--height-m -1e3``)."""
-    if not NEGATIVE_EXPONENT_NUMBER.fullmatch(arg):
-        return arg
-    value = float(arg)
-    return arg if not math.isfinite(value) else format(decimal.Decimal(repr(value)), "f")  # repr: round trip
+    return _run(argv[0], argv[1:])
 
 
 def _run(name: str, argv: list[str]) -> int:

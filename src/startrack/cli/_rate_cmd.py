@@ -39,6 +39,7 @@ from ._common import (
     exit_status_epilog,
     print_json,
 )
+from ._parser import CommandParser
 
 EPILOG = """\
 output: status, reason, rate (deg/s), axis (camera frame, unit), omega_deg_s (x, y, z),
@@ -59,8 +60,8 @@ CENTROID_SIGMA_PX = 0.5
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="startrack rate", description=__doc__.splitlines()[0], epilog=EPILOG,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(prog="startrack rate", description=__doc__.splitlines()[0], epilog=EPILOG,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("images", nargs="+", metavar="IMAGE", help="one streaked image, or two images")
     camera = parser.add_mutually_exclusive_group(required=True)
     camera.add_argument("--camera", metavar="PRESET", help="a calibrated camera preset")

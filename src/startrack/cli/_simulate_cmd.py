@@ -55,6 +55,7 @@ from ._common import (
     print_json,
     time_option,
 )
+from ._parser import CommandParser
 from ._progress import ProgressBar
 from ._render_limits import check_render_options
 from ._scene_options import (
@@ -108,8 +109,8 @@ SEQUENCE_FORMATS = {"fits": ".fits", "png": ".png", "tif": ".tif"}
 
 
 def main(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser(prog="startrack simulate", description=__doc__, epilog=OUTPUT_FORMATS,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(prog="startrack simulate", description=__doc__, epilog=OUTPUT_FORMATS,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_options(parser)
     add_render_options(parser)
     seq = parser.add_argument_group("sequence")

@@ -40,14 +40,15 @@ from ._common import (
     report,
     utc_offset_hours,
 )
+from ._parser import CommandParser
 from ._progress import ensure_database_for
 from ._solve_stars_cmd import add_aspect_option, add_parity_option, aspect_option, solver_epoch, time_option
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="startrack solve", description=__doc__,
-                                     epilog=SOLUTION_FORMATS + "\n" + batch_epilog(),
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(prog="startrack solve", description=__doc__,
+                           epilog=SOLUTION_FORMATS + "\n" + batch_epilog(),
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("image", nargs="+", metavar="IMAGE",
                         help="FITS, PNG, JPEG, TIFF, HEIC, WebP, AVIF, BMP or camera RAW file; several files or "
                              "folders for a batch")

@@ -36,6 +36,7 @@ from ._common import (
     exit_status_epilog,
     print_json,
 )
+from ._parser import CommandParser
 from ._progress import ensure_database_for
 
 OUTPUT_FORMATS = """\
@@ -64,8 +65,8 @@ output (--json)
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="startrack solve-rig", description=__doc__, epilog=OUTPUT_FORMATS,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(prog="startrack solve-rig", description=__doc__, epilog=OUTPUT_FORMATS,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("rig", metavar="RIG.json", help="the rig: heads, camera profiles, mountings")
     parser.add_argument("inputs", nargs="+", metavar="HEAD=FILE",
                         help="a head's star list (.csv) or image, or a split detector's image")

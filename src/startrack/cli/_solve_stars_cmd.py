@@ -31,12 +31,13 @@ from ._common import (
     positive_int,
     report,
 )
+from ._parser import CommandParser
 from ._progress import ensure_database_for
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="startrack solve-stars", description=__doc__, epilog=SOLUTION_FORMATS,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(prog="startrack solve-stars", description=__doc__, epilog=SOLUTION_FORMATS,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("starlist", help="CSV file with columns x, y [, flux | mag]")
     parser.add_argument("--width", type=positive_int, metavar="W", help="image width in pixels")
     parser.add_argument("--height", type=positive_int, metavar="H", help="image height in pixels")

@@ -42,6 +42,7 @@ from ._common import (
     max_pixels_option,
     non_empty,
 )
+from ._parser import CommandParser
 from ._progress import ProgressBar, ensure_database_for
 
 EPILOG = "CSV columns: " + ", ".join(COLUMNS) + (
@@ -67,8 +68,8 @@ def _frames(source: Path) -> list[Path]:
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="startrack track", description=__doc__, epilog=EPILOG,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(prog="startrack track", description=__doc__, epilog=EPILOG,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("source", help="a folder of images (name order = time order, numbers in names compared as "
                                        "numbers: frame_2 before frame_10) or one image")
     add_fov_options(parser)

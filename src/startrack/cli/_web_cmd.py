@@ -20,6 +20,7 @@ from ..web import (
     default_data_dir,
 )
 from ._common import exit_status_epilog
+from ._parser import CommandParser
 
 EPILOG = exit_status_epilog(
     "0 the server stopped normally (Ctrl-C); 2 misuse (a bad option, a --root that is not a folder, a port in use), "
@@ -27,8 +28,8 @@ EPILOG = exit_status_epilog(
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="startrack web", description=__doc__, epilog=EPILOG,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = CommandParser(prog="startrack web", description=__doc__, epilog=EPILOG,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1: this computer only)")
     parser.add_argument("--port", type=int, default=DEFAULT_PORT,
                         help=f"port (default {DEFAULT_PORT}; 0: any free one)")
