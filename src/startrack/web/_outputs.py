@@ -157,5 +157,6 @@ def rerun_dict(meta: dict[str, Any], detector_settings: dict[str, Any], auto: di
     return {"startrack_version": __version__, "kind": meta["kind"], "created": meta["created"],
             "input": {k: meta.get(k) for k in ("label", "sha256", "bytes", "format", "width", "height")},
             "simulate": meta.get("simulate"), "options": meta["options"], "detector": settings, "auto": auto,
-            "repeat": "POST /api/jobs with this file and 'options' gives the same result; so does "
-                      "startrack.solve_stars on the detections of startrack.detect.StarDetector(**detector)"}
+            "repeat": "POST /api/jobs with this file and 'options' gives the same result; "
+                      "startrack.solve_image on the file with detector=startrack.detect.StarDetector(**detector) "
+                      "and the job's solver options gives its identify stage's solution (before fit_camera)"}
