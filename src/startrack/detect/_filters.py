@@ -126,7 +126,7 @@ def peak_fraction(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y
         About 1 for an isolated hot pixel, a pair or a triple (or a block, with ``blocks``),
         0.1-0.5 for a star image of sd 0.5 px or more.
     """
-    measures = peak_fractions(signal_image, level, peak_x, peak_y, clusters=pairs or blocks, noise=noise)
+    measures = peak_fractions(signal_image, level, peak_x, peak_y, noise=noise)
     return measures.block if blocks else measures.cluster if pairs else measures.single
 
 
@@ -157,14 +157,14 @@ other pixels are noise about 0: judged everywhere, blocks of four cost 1-5 of th
 each of three openstartracker frames with hot pixels at 1 %, and of four to six 2-7 more."""
 
 
-def peak_fractions(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y: NDArray, clusters: bool = True,
+def peak_fractions(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y: NDArray,
                    noise: NDArray | float = 0.0) -> HotMeasures:
-    """The measures of :func:`peak_fraction` from one reading of the 3 x 3 neighbourhoods
-    (arguments as there; ``level`` and ``noise`` a number or one per spot); with ``clusters``
-    False all three are ``single``. The neighbourhoods are read with numpy and measured in one
-    compiled loop (:func:`.region_kernels.hot_measures`, of one type whatever the image's):
-    about 30 us for the 30 spots of a ``benchmarks/detect_speed.py`` frame, 75 us all in numpy; the
-    powered shares are numpy's to 1 ulp (``tests/detect/test_detect_region_kernels.py``)."""
+    """The three measures of :func:`peak_fraction` from one reading of the 3 x 3 neighbourhoods
+    (arguments as there; ``level`` and ``noise`` a number or one per spot). The neighbourhoods are
+    read with numpy and measured in one compiled loop (:func:`.region_kernels.hot_measures`, of
+    one type whatever the image's): about 30 us for the 30 spots of a
+    ``benchmarks/detect_speed.py`` frame, 75 us all in numpy; the powered shares are numpy's to
+    1 ulp (``tests/detect/test_detect_region_kernels.py``)."""
     n = len(peak_x)
     out = np.empty((3, n))
     if n:
@@ -172,11 +172,13 @@ def peak_fractions(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_
         ys, xs = neighbourhoods_3x3(signal_image.shape, peak_y, peak_x)
         window = signal_image[ys, xs].astype(np.float64) - level[:, None]
         peak = np.asarray(signal_image[peak_y, peak_x] - level, dtype=np.float64)
-        region_kernels().hot_measures(window, peak, _per_spot(noise, n), _BLOCK_MIN_SNR, out)
-    return HotMeasures(*out) if clusters else HotMeasures(out[0], out[0], out[0])
+        region_kernels().hot_measures(window, peak, _per_spot(noise, n), CLUSTER_PIXELS, _BLOCK_MIN_SNR, out)
+    return HotMeasures(*out)
 
 
 _BLOCK_MIN_SNR = np.array(BLOCK_MIN_SNR)
+"""The block limits as the compiled loop takes them, one per block size from ``CLUSTER_PIXELS + 1``
+to :data:`BLOCK_PIXELS`."""
 
 
 def _per_spot(values: NDArray | float, n: int) -> NDArray[np.float64]:
@@ -189,6 +191,16 @@ HOT_PIXELS_ABOUND = 30
 """Fewest hot spots (single hot pixels, pairs or triples) among a frame's spots for
 :func:`hot_pixels_abound` (the frames of the tests and benchmarks have 0-6; a camera with hot
 pixels over 0.1 % of its pixels, hundreds)."""
+
+
+def clusters_abound(hot: NDArray[np.bool_], cluster: NDArray, keep: NDArray[np.bool_],
+                    max_peak_fraction: float | None) -> bool:
+    """Whether hot pixels abound (:func:`hot_pixels_abound`) among N spots: the single ones
+    (``hot``) and the pairs and triples (their ``cluster`` measure over ``max_peak_fraction``)
+    among the spots ``keep`` (those the other filters pass, single hot pixels left out), against
+    the rest of ``keep``; all shape (N,). Then the detector refuses pairs, triples and blocks."""
+    clustered = keep & ~hot_pixel_ok(cluster, max_peak_fraction)
+    return hot_pixels_abound(hot | clustered, keep & ~clustered)
 
 
 def hot_pixels_abound(hot: NDArray[np.bool_], passing: NDArray[np.bool_]) -> bool:

@@ -411,8 +411,7 @@ def spot_filters(cfg: DetectionSettings, frame: Frame, found: MeasuredRegions) -
     keep &= filters.flatness_ok(spots.flatness, cfg.min_flatness)
     hot = ~filters.hot_pixel_ok(fraction, cfg.max_peak_fraction)
     keep &= ~hot
-    clustered = keep & ~filters.hot_pixel_ok(clusters, cfg.max_peak_fraction)  # pairs, triples
-    if filters.hot_pixels_abound(hot | clustered, keep & ~clustered):  # blocks refused, not counted
+    if filters.clusters_abound(hot, clusters, keep, cfg.max_peak_fraction):  # blocks refused, not counted
         keep &= filters.hot_pixel_ok(blocks, cfg.max_peak_fraction)
     keep &= filters.clutter_ok(frame.model.clutter_at(spots.peak_x, spots.peak_y), cfg.max_clutter, keep)
     if cfg.min_packing > 0:

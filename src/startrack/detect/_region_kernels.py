@@ -290,14 +290,15 @@ def spot_axes(starts, x, y):
 
 
 @njit(cache=True, error_model="numpy")
-def hot_measures(window, peak, noise, block_min_snr, out):
+def hot_measures(window, peak, noise, cluster_pixels, block_min_snr, out):
     """The hot-pixel measures of N spots into ``out`` (3, N) float64 (single, cluster, block) of
     :func:`.filters.peak_fractions`, from the background-subtracted 3 x 3 neighbourhood of each
     spot's peak, ``window`` (N, 9) float64 (row-major, the peak in the middle), and the peak
-    ``peak`` (N,); ``noise`` (N,) and ``block_min_snr`` (3,) set where blocks of 4-6 pixels are
-    judged. The numbers are those of the numpy expressions this loop replaced: the sum in numpy's
-    order for nine values (:func:`_sum9`), NaN pixels as 0 in it and last in the ranking, and the
-    five brightest after the largest summed in turn before the peak is added (numpy's cumsum)."""
+    ``peak`` (N,): clusters of up to ``cluster_pixels`` pixels, then blocks of one more pixel for
+    each of ``block_min_snr`` (B,), judged where the sum reaches that many times ``noise`` (N,).
+    The numbers are those of the numpy expressions this loop replaced: the sum in numpy's order
+    for nine values (:func:`_sum9`), NaN pixels as 0 in it and last in the ranking, and the
+    brightest after the largest summed in turn before the peak is added (numpy's cumsum)."""
     ranked = np.empty(9)
     for k in range(peak.size):
         total = _sum9(window[k])
@@ -310,12 +311,12 @@ def hot_measures(window, peak, noise, block_min_snr, out):
             ranked[i] = -np.inf if np.isnan(window[k, i]) else window[k, i]
         ranked.sort()
         cluster, block, brighter = single, 0.0, 0.0
-        for j in range(1, 6):
+        for j in range(1, cluster_pixels + block_min_snr.size):  # j + 1 pixels
             brighter += max(ranked[8 - j], 0.0)
             powered = ((peak[k] + brighter) / total) ** (2.0 ** j)
-            if j < 3:
+            if j < cluster_pixels:
                 cluster = max(cluster, powered)
-            elif total >= noise[k] * block_min_snr[j - 3]:
+            elif total >= noise[k] * block_min_snr[j - cluster_pixels]:
                 block = max(block, powered)
         out[1, k], out[2, k] = cluster, max(cluster, block)
 

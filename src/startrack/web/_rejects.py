@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..detect import StarDetector, hot_pixel_ok, hot_pixels_abound, peak_fraction
+from ..detect import StarDetector, clusters_abound, hot_pixel_ok, peak_fraction
 from ..results import Detections
 
 RELAXED: dict[str, Any] = {"min_area_px": 1, "max_area_px": None, "max_elongation": None, "max_peak_fraction": None,
@@ -135,8 +135,7 @@ def _peak_fraction(image: NDArray, spots: Detections, judged: NDArray[np.bool_],
     pixels = np.ascontiguousarray(image)  # in its own type: the detector's compiled measures take it so
     single = peak_fraction(pixels, level, px, py)
     hot = ~hot_pixel_ok(single, limit)
-    clustered = judged & ~hot & ~hot_pixel_ok(peak_fraction(pixels, level, px, py, pairs=True), limit)
-    if not hot_pixels_abound(hot | clustered, judged & ~hot & ~clustered):
+    if not clusters_abound(hot, peak_fraction(pixels, level, px, py, pairs=True), judged & ~hot, limit):
         return single
     return peak_fraction(pixels, level, px, py, blocks=True, noise=spots.noise)
 
