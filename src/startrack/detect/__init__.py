@@ -46,7 +46,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._denoise import stack_frames
     from ._details import DetectionDetails
     from ._detector import StarDetector, detect
-    from ._filters import clusters_abound, hot_pixel_ok, hot_pixels_abound, peak_fraction
+    from ._filters import clusters_abound, hot_pixel_ok, hot_pixels_abound, peak_fraction, peak_fractions
     from ._fine_pass import MAX_RING_NOISE, fine_significance, quiet_surroundings, ring_noise_ratio, stands_above_ring
     from ._magnitude import calibrate_zero_point, instrument_magnitude
     from ._pipeline import background_model, noise_floor, preprocess
@@ -85,6 +85,7 @@ __all__ = [
     "median_frame",
     "noise_floor",
     "peak_fraction",
+    "peak_fractions",
     "pixel_noise",
     "preprocess",
     "quiet_surroundings",

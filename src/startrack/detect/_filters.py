@@ -157,7 +157,7 @@ other pixels are noise about 0: judged everywhere, blocks of four cost 1-5 of th
 each of three openstartracker frames with hot pixels at 1 %, and of four to six 2-7 more."""
 
 
-def peak_fractions(signal_image: NDArray, level: NDArray, peak_x: NDArray, peak_y: NDArray,
+def peak_fractions(signal_image: NDArray, level: NDArray | float, peak_x: NDArray, peak_y: NDArray,
                    noise: NDArray | float = 0.0) -> HotMeasures:
     """The three measures of :func:`peak_fraction` from one reading of the 3 x 3 neighbourhoods
     (arguments as there; ``level`` and ``noise`` a number or one per spot). The neighbourhoods are

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..detect import StarDetector, clusters_abound, hot_pixel_ok, peak_fraction
+from ..detect import StarDetector, clusters_abound, hot_pixel_ok, peak_fractions
 from ..results import Detections
 
 RELAXED: dict[str, Any] = {"min_area_px": 1, "max_area_px": None, "max_elongation": None, "max_peak_fraction": None,
@@ -123,21 +123,14 @@ def _peak_fraction(image: NDArray, spots: Detections, judged: NDArray[np.bool_],
                    limit: float | None) -> NDArray[np.float64]:
     """The hot-pixel test's measure of every spot (N,) at the pixel nearest its centroid: the
     peak over the 3 x 3 sum, or with clusters of two to six where hot pixels abound, as the
-    detector decides (:func:`startrack.detect._pipeline.spot_filters`): the single hot pixels,
-    and the pairs and triples among the spots it ``judged`` (:func:`_judged`), number at least
-    ``HOT_PIXELS_ABOUND`` and at least as many as the other spots it judged."""
-    if len(spots) == 0:
-        return np.zeros(0)
+    detector decides (:func:`startrack.detect.clusters_abound`, the pairs and triples counted
+    among the spots it ``judged``, :func:`_judged`)."""
     h, w = image.shape
     px = np.clip(np.rint(spots.x).astype(np.int64), 0, w - 1)
     py = np.clip(np.rint(spots.y).astype(np.int64), 0, h - 1)
-    level = np.full(len(spots), spots.background)
-    pixels = np.ascontiguousarray(image)  # in its own type: the detector's compiled measures take it so
-    single = peak_fraction(pixels, level, px, py)
-    hot = ~hot_pixel_ok(single, limit)
-    if not clusters_abound(hot, peak_fraction(pixels, level, px, py, pairs=True), judged & ~hot, limit):
-        return single
-    return peak_fraction(pixels, level, px, py, blocks=True, noise=spots.noise)
+    measures = peak_fractions(image, spots.background, px, py, noise=spots.noise)
+    hot = ~hot_pixel_ok(measures.single, limit)
+    return measures.block if clusters_abound(hot, measures.cluster, judged & ~hot, limit) else measures.single
 
 
 def _reason(cfg: StarDetector, spots: Detections, i: int, fraction: float, shape: tuple[int, int]) -> tuple[str, str]:
