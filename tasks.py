@@ -78,7 +78,7 @@ TEST_CACHE = ROOT / ".test-cache"
 
 def warm_test_cache() -> None:
     """Build the default pattern database and compile the kernels in the tests' cache, once,
-    before the tests start (``startrack warm-up``; about 90 s on a fresh checkout of the 2-core
+    before the tests start (``startrack warm-up``; 71-88 s on a fresh checkout of the 2-core
     reference machine, about 1 s afterwards).
 
     Without it the test processes all do this work at once on a fresh checkout: the web tests'
