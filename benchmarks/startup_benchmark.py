@@ -22,8 +22,9 @@ Measured, each in fresh processes (the median of ``--repeat`` runs where it says
 * cedar-solve (its own virtual environment, ``benchmarks/peers/cedar_env.py``): a new process
   that imports tetra3, loads its database and solves the same photo (``solve_from_image``), and
   20 photos in one such process;
-* astrometry.net's ``solve-field`` on the same photo, when it and its index files are installed
-  (otherwise a printed note says why it was left out);
+* astrometry.net's ``solve-field`` on the same photo (Debian's, with its Tycho-2 index files:
+  ``benchmarks/peers/astrometry_env.py`` installs them where it may, otherwise a printed note
+  says why the peer was left out);
 * with ``--cold``, first: the one-time compile, ``startrack warm-up`` with an empty numba cache
   (``NUMBA_CACHE_DIR`` set to a new temporary folder, so the catalog and databases stay cached);
   the rest then runs on that fresh numba cache, as after an install (a development cache holds
@@ -41,7 +42,6 @@ import argparse
 import json
 import os
 import resource
-import shutil
 import statistics
 import subprocess
 import sys
@@ -299,30 +299,31 @@ def measure_cedar(paths: list[Path], repeat: int) -> None:
           f"({inner['solved']}/{BATCH_SIZE} solved; median solve {1e3 * statistics.median(inner['solve_s']):.0f} ms)")
 
 
-def _astrometry_indexes() -> list[Path]:
-    """Index files on the paths astrometry.net's configuration names."""
-    folders = [Path("/usr/share/astrometry"), Path("/usr/local/astrometry/data")]
-    for cfg in (Path("/etc/astrometry.cfg"), Path("/usr/local/astrometry/etc/astrometry.cfg")):
-        if cfg.is_file():
-            folders += [Path(line.split(None, 1)[1].strip()) for line in cfg.read_text().splitlines()
-                        if line.startswith("add_path")]
-    return sorted({p for f in folders if f.is_dir() for p in f.glob("index-*.fits")})
+def measure_astrometry(work: Path, paths: list[Path], repeat: int) -> None:
+    """Debian's ``solve-field`` on the same photo (median of ``repeat`` new processes) and on the
+    batch's ``paths`` in one command (it takes several files), FOV within 10 % of :data:`FOV_DEG`;
+    solved = the ``.solved`` file it writes for each."""
+    from astrometry_env import ensure_solve_field, index_files
 
-
-def measure_astrometry(work: Path) -> None:
-    exe = shutil.which("solve-field")
+    exe, why = ensure_solve_field()
     if exe is None:
-        print("\nastrometry.net: left out, solve-field is not installed")
-        return
-    if not _astrometry_indexes():
-        print(f"\nastrometry.net: left out, {exe} is installed but no index files (index-*.fits) are on its "
-              "paths (/etc/astrometry.cfg add_path), so it cannot solve")
+        print(f"\nastrometry.net: left out, {why}")
         return
     cmd = [exe, "--overwrite", "--no-plots", "--no-verify", "--dir", str(work), "--scale-units", "degwidth",
-           "--scale-low", str(FOV_DEG * 0.9), "--scale-high", str(FOV_DEG * 1.1), "--cpulimit", "60", str(PHOTO)]
-    elapsed, done = _wall(cmd)
+           "--scale-low", str(FOV_DEG * 0.9), "--scale-high", str(FOV_DEG * 1.1), "--cpulimit", "60"]
+    med, low, _ = _median_wall([*cmd, str(PHOTO)], repeat)
     solved = (work / f"{PHOTO.stem}.solved").exists()
-    print(f"\nastrometry.net solve-field, one image: {elapsed:6.2f} s wall (solved {solved})")
+    print(f"\nastrometry.net {_astrometry_version(exe)} solve-field, {len(index_files())} index files "
+          f"({', '.join(sorted({p.parent.as_posix() for p in index_files()}))})")
+    print(f"  one image            median {med:6.3f} s wall, min {low:6.3f} s (solved {solved})")
+    elapsed, _ = _wall([*cmd, *map(str, paths)])
+    solved_n = sum((work / f"{path.stem}.solved").exists() for path in paths)
+    print(f"  {BATCH_SIZE} images, one command {elapsed:6.2f} s total, {elapsed / BATCH_SIZE:6.3f} s per image "
+          f"({solved_n}/{BATCH_SIZE} solved)")
+
+
+def _astrometry_version(exe: str) -> str:
+    return subprocess.run([exe, "--version"], capture_output=True, text=True).stdout.strip()
 
 
 def measure_cold_compile(numba_dir: Path) -> None:
@@ -399,7 +400,7 @@ def measure_warm(args: argparse.Namespace, source_env: dict | None = None) -> No
         paths = measure_batch(folder)
         if not args.no_peers:
             measure_cedar(paths, args.repeat)
-            measure_astrometry(Path(tmp) / "astrometry")
+            measure_astrometry(Path(tmp) / "astrometry", paths, args.repeat)
 
 
 if __name__ == "__main__":
