@@ -241,6 +241,36 @@ def test_solve_stars_csv_from_the_truth(sim):
     assert attitude_error(rotation_from_quaternion(truth), rotation_from_quaternion(solution)) < tenth_px
 
 
+def _other_programs_lists(truth: dict, folder: Path) -> dict[str, Path]:
+    """The truth's stars as astrometry.net's xylist (a FITS table of X, Y, FLUX) and as
+    SExtractor's ASCII_HEAD catalog, both with 1-based positions as those programs write them."""
+    from astropy.io import fits
+
+    x, y, mag = (np.array([s[k] for s in truth["stars"]]) for k in ("x", "y", "mag"))
+    flux = 10 ** (-0.4 * mag)
+    xylist = folder / "field.xyls"
+    fits.HDUList([fits.PrimaryHDU(), fits.BinTableHDU.from_columns(
+        [fits.Column(name=k, format="D", array=v) for k, v in (("X", x + 1), ("Y", y + 1), ("FLUX", flux))])]
+    ).writeto(xylist, overwrite=True)
+    catalog = folder / "field.cat"
+    catalog.write_text("#   1 NUMBER  Running object number\n#   2 X_IMAGE  Object position along x  [pixel]\n"
+                       "#   3 Y_IMAGE  Object position along y  [pixel]\n#   4 MAG_AUTO  Kron-like magnitude  [mag]\n"
+                       + "".join(f"{k + 1} {a + 1:.6f} {b + 1:.6f} {m:.4f}\n" for k, (a, b, m) in enumerate(zip(
+                           x, y, mag, strict=True))))
+    return {"xylist": xylist, "sextractor": catalog}
+
+
+@pytest.mark.parametrize("kind", ["xylist", "sextractor"])
+def test_solve_stars_reads_astrometry_net_and_sextractor_lists_in_our_pixels(sim, tmp_path, kind):
+    """Their 1-based positions made 0-based: the attitude is the truth's to a tenth of a pixel,
+    where a pixel's shift of every star would turn it by a whole pixel."""
+    truth = json.loads(sim["truth"].read_text())
+    code, out, err = run("solve-stars", _other_programs_lists(truth, tmp_path)[kind], *SIZE, "--json")
+    assert code == 0, err
+    tenth_px = 0.1 * PIXEL / truth["camera"]["fx"]
+    assert attitude_error(rotation_from_quaternion(truth), rotation_from_quaternion(strict_json(out))) < tenth_px
+
+
 def test_solve_stars_match_index_is_the_row_of_the_star_list(sim, tmp_path):
     truth = json.loads(sim["truth"].read_text())
     stars = [truth["stars"][i] for i in np.random.default_rng(5).permutation(len(truth["stars"]))]

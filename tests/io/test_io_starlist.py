@@ -85,7 +85,6 @@ def test_the_canonical_name_wins_over_another_name_of_the_same_column(tmp_path):
 
 
 @pytest.mark.parametrize(("text", "match"), [
-    ("X_IMAGE,Y_IMAGE,FLUX_AUTO\n10,20,300\n", r"1-based positions.*subtract 1"),
     ("u,v\n1,2\n", r"lacks required column.*x may also be named x_px.*col"),
     ("# u v\n1 2\n", r"lacks required column"),  # a comment that is not a header is not taken as one
     ("1.5,2.5\n3,4\n", r"first row holds numbers: start it with a header row"),

@@ -1,9 +1,10 @@
 """startrack solve-stars FILE.csv --width W --height H: lost-in-space attitude of a star list.
 
 The CSV has a header row with at least the columns x and y (0-based pixel centres,
-x = column; subtract 1 from FITS / astrometry.net positions); an optional flux (larger is
-brighter) or mag column orders the stars, otherwise they are taken brightest first as listed.
-Lines starting with # are comments. --width and --height give the image size (not needed with
+x = column); an optional flux (larger is brighter) or mag column orders the stars, otherwise
+they are taken brightest first as listed. Lines starting with # are comments. SExtractor's
+catalogs (ASCII_HEAD or FITS_LDAC: X_IMAGE, Y_IMAGE) and astrometry.net's xylists (.xyls, .axy:
+X, Y) are read as they are, their 1-based positions made 0-based. --width and --height give the image size (not needed with
 --camera, whose size is used). The catalog epoch is --epoch, else the year of --time, else
 J2000.0; the solution says which (epoch_jyear, epoch_source).
 """
@@ -38,7 +39,7 @@ from ._progress import ensure_database_for
 def _parser() -> argparse.ArgumentParser:
     parser = CommandParser(prog="startrack solve-stars", description=__doc__, epilog=SOLUTION_FORMATS,
                            formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("starlist", help="CSV file with columns x, y [, flux | mag]")
+    parser.add_argument("starlist", help="CSV file with columns x, y [, flux | mag], a SExtractor catalog or an astrometry.net xylist")
     parser.add_argument("--width", type=positive_int, metavar="W", help="image width in pixels")
     parser.add_argument("--height", type=positive_int, metavar="H", help="image height in pixels")
     add_fov_options(parser)

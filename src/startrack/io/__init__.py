@@ -8,7 +8,8 @@
   :mod:`startrack.io._atomic` (never over an input, a complete write or nothing).
 * :func:`mosaic_to_plane` turns a raw colour-filter mosaic (Bayer, X-Trans) from a camera's own
   software into the plane ``read_image`` would read from its FITS or RAW file.
-* :func:`read_star_list` reads CSV star lists (x, y in our 0-based pixel convention).
+* :func:`read_star_list` reads CSV star lists (x, y in our 0-based pixel convention), SExtractor's
+  catalogs and astrometry.net's xylists (their 1-based positions made ours).
 * :func:`in_name_order` orders a folder's images by name, numbers compared as numbers.
 
 Problems with a file raise :class:`startrack.errors.ImageReadError` (a ValueError) naming the
