@@ -249,7 +249,9 @@ def _other_programs_lists(truth: dict, folder: Path) -> dict[str, Path]:
     x, y, mag = (np.array([s[k] for s in truth["stars"]]) for k in ("x", "y", "mag"))
     flux = 10 ** (-0.4 * mag)
     xylist = folder / "field.xyls"
-    fits.HDUList([fits.PrimaryHDU(), fits.BinTableHDU.from_columns(
+    primary = fits.PrimaryHDU()
+    primary.header["IMAGEW"], primary.header["IMAGEH"] = SIM_SIZE_PX, SIM_SIZE_PX  # as solve-field's .axy says
+    fits.HDUList([primary, fits.BinTableHDU.from_columns(
         [fits.Column(name=k, format="D", array=v) for k, v in (("X", x + 1), ("Y", y + 1), ("FLUX", flux))])]
     ).writeto(xylist, overwrite=True)
     catalog = folder / "field.cat"
@@ -269,6 +271,16 @@ def test_solve_stars_reads_astrometry_net_and_sextractor_lists_in_our_pixels(sim
     assert code == 0, err
     tenth_px = 0.1 * PIXEL / truth["camera"]["fx"]
     assert attitude_error(rotation_from_quaternion(truth), rotation_from_quaternion(strict_json(out))) < tenth_px
+
+
+def test_solve_stars_takes_the_image_size_from_an_axy_header_and_asks_for_it_otherwise(sim, tmp_path):
+    truth = json.loads(sim["truth"].read_text())
+    code, out, err = run("solve-stars", _other_programs_lists(truth, tmp_path)["xylist"], "--json")
+    assert code == 0, err
+    tenth_px = 0.1 * PIXEL / truth["camera"]["fx"]  # the optical axis at the centre of the size it read
+    assert attitude_error(rotation_from_quaternion(truth), rotation_from_quaternion(strict_json(out))) < tenth_px
+    code, out, err = run("solve-stars", sim["csv"])
+    assert code == 2 and "--width and --height are required unless --camera or the star list's FITS header" in err
 
 
 def test_solve_stars_match_index_is_the_row_of_the_star_list(sim, tmp_path):

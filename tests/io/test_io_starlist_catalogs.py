@@ -8,7 +8,7 @@ import pytest
 from astropy.io import fits
 
 from startrack.errors import InvalidInputError
-from startrack.io import read_star_list
+from startrack.io import read_star_list, star_list_image_size
 
 X0 = np.array([10.25, 300.5, 41.0])  # 0-based pixel centres (ours)
 Y0 = np.array([20.5, 7.75, 199.0])
@@ -105,3 +105,25 @@ def test_a_truncated_fits_file_is_refused_with_a_message(tmp_path):
     path.write_bytes(path.read_bytes()[:3000])
     with pytest.raises(InvalidInputError, match=r"star list .*list.fits"):
         read_star_list(path)
+
+
+@pytest.mark.parametrize(("cards", "size"), [
+    ({"IMAGEW": 640, "IMAGEH": 480}, (640, 480)),  # solve-field's .axy
+    ({}, None),
+    ({"IMAGEW": 640}, None),
+    ({"IMAGEW": 0, "IMAGEH": 480}, None),
+    ({"IMAGEW": 640.5, "IMAGEH": 480}, None),
+    ({"IMAGEW": "wide", "IMAGEH": 480}, None),
+])
+def test_the_image_size_of_a_star_list_is_its_fits_headers_imagew_and_imageh(tmp_path, cards, size):
+    primary = fits.PrimaryHDU()
+    primary.header.update(cards)
+    path = tmp_path / "field.axy"
+    fits.HDUList([primary, _table({"X": X0 + 1, "Y": Y0 + 1})]).writeto(path)
+    assert star_list_image_size(path) == size
+
+
+def test_a_csv_or_a_missing_file_has_no_image_size(tmp_path):
+    path = tmp_path / "stars.csv"
+    path.write_text("x,y\n1,2\n")
+    assert star_list_image_size(path) is None and star_list_image_size(tmp_path / "absent.axy") is None

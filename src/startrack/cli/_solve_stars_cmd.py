@@ -4,8 +4,9 @@ The CSV has a header row with at least the columns x and y (0-based pixel centre
 x = column); an optional flux (larger is brighter) or mag column orders the stars, otherwise
 they are taken brightest first as listed. Lines starting with # are comments. SExtractor's
 catalogs (ASCII_HEAD or FITS_LDAC: X_IMAGE, Y_IMAGE) and astrometry.net's xylists (.xyls, .axy:
-X, Y) are read as they are, their 1-based positions made 0-based. --width and --height give the image size (not needed with
---camera, whose size is used). The catalog epoch is --epoch, else the year of --time, else
+X, Y) are read as they are, their 1-based positions made 0-based. --width and --height give the
+image size (not needed with --camera, whose size is used, or with an astrometry.net .axy, whose
+IMAGEW and IMAGEH are). The catalog epoch is --epoch, else the year of --time, else
 J2000.0; the solution says which (epoch_jyear, epoch_source).
 """
 
@@ -15,7 +16,7 @@ import argparse
 
 from ..errors import InvalidInputError
 from ..identify import PARITIES, check_pixel_aspect, parse_utc
-from ..io import read_star_list
+from ..io import read_star_list, star_list_image_size
 from ..solve import solve_stars
 from ._batch_warmup import warm_up
 from ._common import (
@@ -39,7 +40,8 @@ from ._progress import ensure_database_for
 def _parser() -> argparse.ArgumentParser:
     parser = CommandParser(prog="startrack solve-stars", description=__doc__, epilog=SOLUTION_FORMATS,
                            formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("starlist", help="CSV file with columns x, y [, flux | mag], a SExtractor catalog or an astrometry.net xylist")
+    parser.add_argument("starlist",
+                        help="CSV with columns x, y [, flux | mag], a SExtractor catalog or an astrometry.net xylist")
     parser.add_argument("--width", type=positive_int, metavar="W", help="image width in pixels")
     parser.add_argument("--height", type=positive_int, metavar="H", help="image height in pixels")
     add_fov_options(parser)
@@ -94,7 +96,11 @@ def main(argv: list[str]) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
     if args.camera is None and (args.width is None or args.height is None):
-        parser.error("--width and --height are required unless --camera gives them")
+        size = star_list_image_size(args.starlist)
+        if size is None:
+            parser.error("--width and --height are required unless --camera or the star list's "
+                         "FITS header (IMAGEW, IMAGEH) gives them")
+        args.width, args.height = (given or found for given, found in zip((args.width, args.height), size, strict=True))
     apply_max_pixels_option(args)
     solver_options = {**fov_kwargs(args), "epoch": solver_epoch(args), **method_kwargs(args),
                       "pixel_aspect": aspect_option(args), "parity": args.parity}

@@ -48,7 +48,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._raw import bayer_cells, cell_origin, full_resolution_xy, read_raw
     from ._solution_json import solution_to_dict, streak_fields
     from ._solved_fits import write_solved_fits
-    from ._starlist import read_star_list
+    from ._starlist import read_star_list, star_list_image_size
     from ._targets import STDOUT, output_target, protect_inputs
     from ._tiff import tiff_bytes
     from ._track_csv import COLUMNS, error_row, track_csv_writer, track_row

@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidInputError
 from ._starlist_dialect import is_numeric_row, separator_of, sextractor_names, split_rows, without_comment
-from ._starlist_fits import is_fits, read_fits_table
+from ._starlist_fits import image_size, is_fits, read_fits_table
 from ._targets import note_input
 
 REQUIRED_COLUMNS = ("x", "y")
@@ -253,3 +253,9 @@ def _shifted(stars: dict[str, NDArray[np.float64]], shift: float) -> dict[str, N
     if shift:
         stars["x"], stars["y"] = stars["x"] - shift, stars["y"] - shift
     return stars
+
+
+def star_list_image_size(path: str | os.PathLike) -> tuple[int, int] | None:
+    """The (width, height) in pixels of the image a star list was measured on, when the file says
+    so: astrometry.net's ``.axy`` (``IMAGEW``, ``IMAGEH``); None otherwise (a CSV never does)."""
+    return image_size(path)

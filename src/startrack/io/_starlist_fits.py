@@ -11,6 +11,7 @@ are 1-based like SExtractor's ``X_IMAGE``; :mod:`._starlist` subtracts 1.
 
 from __future__ import annotations
 
+import os
 import warnings
 from collections.abc import Callable
 from pathlib import Path
@@ -28,6 +29,25 @@ def is_fits(path: Path) -> bool:
     """Whether ``path`` starts as a FITS file does."""
     with open(path, "rb") as fh:
         return fh.read(len(FITS_SIGNATURE)) == FITS_SIGNATURE
+
+
+def image_size(path: str | os.PathLike) -> tuple[int, int] | None:
+    """The (width, height) in pixels of the image a FITS star list was measured on, as
+    astrometry.net's ``.axy`` files give it (``IMAGEW``, ``IMAGEH`` in the primary header); None
+    for another file, or one without both (positive integers)."""
+    from astropy.io import fits
+
+    try:
+        if not is_fits(Path(path)):
+            return None
+        header = fits.getheader(path, 0)
+    except (OSError, ValueError):
+        return None
+    size = tuple(header.get(key) for key in ("IMAGEW", "IMAGEH"))
+    if not all(isinstance(v, int | float) and not isinstance(v, bool) and v >= 1 and float(v).is_integer()
+               for v in size):
+        return None
+    return int(size[0]), int(size[1])
 
 
 def read_fits_table(path: Path, has_positions: Callable[[list[str]], bool], max_rows: int
