@@ -100,7 +100,7 @@ def main(argv: list[str]) -> int:
         if size is None:
             parser.error("--width and --height are required unless --camera or the star list's "
                          "FITS header (IMAGEW, IMAGEH) gives them")
-        args.width, args.height = (given or found for given, found in zip((args.width, args.height), size, strict=True))
+        args.width, args.height = args.width or size[0], args.height or size[1]
     apply_max_pixels_option(args)
     solver_options = {**fov_kwargs(args), "epoch": solver_epoch(args), **method_kwargs(args),
                       "pixel_aspect": aspect_option(args), "parity": args.parity}

@@ -140,7 +140,7 @@ def _positions(names: list[str], fits_table: bool = False) -> tuple[dict[str, in
     """Where x and y are among ``names`` and what to subtract from them (0, or 1 for 1-based
     positions: :data:`ONE_BASED_NAMES`, and ``x``, ``y`` in a FITS table); a 0-based pair first.
     None when neither pair is complete."""
-    zero = {c: COLUMN_NAMES[c][1:] if fits_table else COLUMN_NAMES[c] for c in REQUIRED_COLUMNS}
+    zero = {c: tuple(n for n in COLUMN_NAMES[c] if not (fits_table and n == c)) for c in REQUIRED_COLUMNS}
     one = {c: ONE_BASED_NAMES[c] + ((c,) if fits_table else ()) for c in REQUIRED_COLUMNS}
     for aliases, shift in ((zero, 0.0), (one, 1.0)):
         found = {c: _first(names, aliases[c]) for c in REQUIRED_COLUMNS}
@@ -219,7 +219,11 @@ def read_star_list(path: str | os.PathLike) -> dict[str, NDArray[np.float64]]:
     path = Path(path)
     if not path.is_file():
         raise InvalidInputError(f"star list {path} does not exist or is not a file")
-    if is_fits(path):
+    try:
+        fits_file = is_fits(path)
+    except OSError as exc:
+        raise InvalidInputError(f"star list {path} cannot be read ({exc.strerror or exc})") from None
+    if fits_file:
         return _from_fits(path)
     names, rows = _rows(path)
     columns, shift = _columns(path, names)
