@@ -215,6 +215,17 @@ def test_solve_fits_json_matches_the_truth_cards(sim):
     assert attitude_error(printed, solved_rot) < 1e-6
 
 
+def test_the_table_and_the_json_name_the_constellation_astropy_names(sim):
+    from astropy.coordinates import SkyCoord
+
+    header = read_image(sim["fits"]).header
+    expected = SkyCoord(header["TRUE_RA"], header["TRUE_DEC"], unit="deg").get_constellation()
+    code, out, err = run("solve", sim["fits"], "--fov-deg", 15)
+    assert code == 0 and parse_table(out)["RA, Dec"].endswith(f"(boresight, ICRS), in {expected}"), err
+    code, out, err = run("solve", sim["fits"], "--fov-deg", 15, "--json")
+    assert code == 0 and strict_json(out)["constellation"] == expected, err
+
+
 @pytest.mark.parametrize("kind", ["png", "tif"])
 def test_solve_png_and_tiff_table(sim, kind):
     code, out, err = run("solve", sim[kind], "--fov-deg", 15)

@@ -89,6 +89,7 @@ def test_a_mirror_image_is_solved_and_said_to_be(server, real_images, tmp_path):
     assert result["status"] == "ok" and result["mirrored"] is True
     unflipped = read_json(run_job(server, real_images["crappy.jpg"]) / "result.json")
     assert unflipped["status"] == "ok" and unflipped["mirrored"] is False
+    assert result["constellation"] == unflipped["constellation"] == "Taurus"  # as astropy's get_constellation says
 
 
 def test_the_guided_option_adds_the_stars_the_solution_predicts(server, real_images):

@@ -10,6 +10,7 @@ from .. import _exports_of, _lazy_exports
 if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
     from ._chord import angle_from_chord, chord_from_angle
     from ._cone import ConeIndex, cone_search, query_cone
+    from ._constellations import constellation_of
     from ._doubles import flag_doubles, merge_doubles
     from ._epoch import EPOCH_RANGE_JYEAR, epoch_jyear, jyear_tdb
     from ._hipparcos import catalog_identity, load_catalog

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..camera import Camera, get_preset
+from ..catalog import constellation_of
 from ..errors import InvalidInputError, require
 from ..identify import MATCHERS
 from ..io import solution_to_dict, streak_fields
@@ -99,7 +100,7 @@ FOV_SOURCE_WORDS = {"given": "the field or range given", "camera": "the camera's
 SOLUTION_FORMATS = """\
 output (table, the default)
   status       solved, or the status of a failure (too_few_stars, no_match, timeout)
-  RA, Dec      boresight in ICRS, deg
+  RA, Dec      boresight in ICRS, deg, and the IAU constellation it lies in
   roll         deg, the startrack.frames definition (equal to tetra3 / cedar-solve roll)
   FOV          horizontal field of view, deg, the focal length, px, and where the search for it
                started: the field given, the camera's, the field the header states (EXIF
@@ -122,8 +123,9 @@ output (table, the default)
 output (--json)
   One object. Always: status ("ok", "too_few_stars", "no_match", "timeout"), reason (empty
   when solved), solve_time_s, and for an image n_detections. When solved also: ra_deg,
-  dec_deg, roll_deg, fov_deg, qx, qy, qz, qw, focal_px, mirrored (true for a mirror image:
-  its camera's pixel x runs against the camera frame's x axis), sigma_cross_boresight_arcsec,
+  dec_deg, constellation (as the table's), roll_deg, fov_deg, qx, qy, qz, qw, focal_px,
+  mirrored (true for a mirror image: its camera's pixel x runs against the camera frame's x
+  axis), sigma_cross_boresight_arcsec,
   sigma_roll_arcsec, residual_rms_arcsec, false_match_prob, guided_stars (how many of the
   matches were measured where the solution predicts them: solve --guided; they are the last
   matches and detections), epoch_jyear and epoch_source (as the table's epoch), fov_source
@@ -364,7 +366,8 @@ def solution_table(solution: AttitudeSolution, detections: Detections | None = N
     camera = require(solution.camera, "a solved frame's camera")
     return _table([
         ("status", "solved"),
-        ("RA, Dec", f"{solution.ra_deg:.5f} deg, {solution.dec_deg:+.5f} deg (boresight, ICRS)"),
+        ("RA, Dec", f"{solution.ra_deg:.5f} deg, {solution.dec_deg:+.5f} deg (boresight, ICRS), "
+                    f"in {constellation_of(solution.ra_deg, solution.dec_deg)}"),
         ("roll", f"{solution.roll_deg:.4f} deg"),
         ("FOV", f"{solution.fov_deg:.4f} deg horizontal (focal length {camera.fx:.1f} px)"
                 + (f"; {FOV_SOURCE_WORDS[solution.fov_source]}" if solution.fov_source in FOV_SOURCE_WORDS else "")),

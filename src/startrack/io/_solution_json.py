@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from ..catalog import constellation_of
 from ..errors import require
 from ..results import AttitudeSolution, Detections
 
@@ -27,6 +28,7 @@ def solution_to_dict(solution: AttitudeSolution, detections: Detections | None =
         qx, qy, qz, qw = (float(q) for q in require(solution.quaternion_xyzw, "the solution's quaternion"))
         out.update({
             "ra_deg": _num(solution.ra_deg), "dec_deg": _num(solution.dec_deg),
+            "constellation": constellation_of(solution.ra_deg, solution.dec_deg),
             "roll_deg": _num(solution.roll_deg), "fov_deg": _num(solution.fov_deg),
             "qx": qx, "qy": qy, "qz": qz, "qw": qw,
             "focal_px": _num(solution.camera.fx) if solution.camera else None,

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from ..analysis import display_stretch
 from ..camera import Camera
-from ..catalog import load_catalog
+from ..catalog import constellation_of, load_catalog
 from ..errors import require
 from ..frames import radec_to_vector
 from ..io import atomic_path
@@ -85,7 +85,8 @@ def _rotation(solution: AttitudeSolution) -> Rotation:
 def _title(solution: AttitudeSolution) -> str:
     if not solution.solved:
         return f"not solved: {solution.reason}"
-    return (f"RA {solution.ra_deg:.4f}  Dec {solution.dec_deg:+.4f}  roll {solution.roll_deg:.3f} deg  "
+    where = constellation_of(solution.ra_deg, solution.dec_deg)
+    return (f"RA {solution.ra_deg:.4f}  Dec {solution.dec_deg:+.4f}  ({where})  roll {solution.roll_deg:.3f} deg  "
             f"FOV {solution.fov_deg:.3f} deg  {len(solution.matches)} stars matched")
 
 

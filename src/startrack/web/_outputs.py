@@ -29,7 +29,7 @@ import numpy as np
 from .. import __version__
 from ..analysis.postprocess import csv_cell
 from ..camera import Camera
-from ..catalog import load_catalog
+from ..catalog import constellation_of, load_catalog
 from ..detect import DetectionDetails
 from ..errors import require
 from ..frames import vector_to_radec
@@ -69,12 +69,13 @@ def result_dict(solution: AttitudeSolution, times_s: dict[str, float], extra: di
                            "epoch_jyear": num(solution.epoch_jyear), "epoch_source": solution.epoch_source,
                            "fov_source": solution.fov_source,
                            "guided_stars": int(solution.guided_stars)}
-    keys = ("ra_deg", "dec_deg", "roll_deg", "fov_deg", "qx", "qy", "qz", "qw", "false_match_prob",
+    keys = ("ra_deg", "dec_deg", "constellation", "roll_deg", "fov_deg", "qx", "qy", "qz", "qw", "false_match_prob",
             "residual_arcsec", "sigma_cross_boresight_arcsec", "sigma_roll_arcsec", "focal_px", "mirrored")
     out.update(dict.fromkeys(keys))
     if solution.solved:
         qx, qy, qz, qw = require(solution.quaternion_xyzw, "a solved frame's quaternion")
-        out.update(ra_deg=num(solution.ra_deg), dec_deg=num(solution.dec_deg), roll_deg=num(solution.roll_deg),
+        out.update(ra_deg=num(solution.ra_deg), dec_deg=num(solution.dec_deg),
+                   constellation=constellation_of(solution.ra_deg, solution.dec_deg), roll_deg=num(solution.roll_deg),
                    fov_deg=num(solution.fov_deg), qx=float(qx), qy=float(qy), qz=float(qz), qw=float(qw),
                    false_match_prob=num(solution.false_match_prob),
                    residual_arcsec=num(np.sqrt(np.mean(solution.residuals_arcsec**2))),
