@@ -82,6 +82,7 @@ def test_csv_has_a_row_per_image_and_exit_zero_when_all_solve(folder, tmp_path):
         rows = list(reader)
     assert tuple(reader.fieldnames) == SOLVE_COLUMNS
     assert [Path(r["image"]).name for r in rows] == list(GOOD)
+    assert [r["constellation"] for r in rows] == ["Taurus", "Camelopardalis"]  # as astropy's get_constellation says
     for row in rows:
         assert row["status"] == "ok" and row["reason"] == ""
         assert int(row["n_matched"]) >= 10

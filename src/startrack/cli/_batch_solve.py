@@ -14,9 +14,10 @@ from ._batch import BatchSpec, Record
 
 HEADER = "{image}  status           RA deg    Dec deg   roll deg  FOV deg  matched   rms\"  time ms  reason"
 
-CSV_COLUMNS = ("image", "status", "reason", "ra_deg", "dec_deg", "roll_deg", "fov_deg", "focal_px", "mirrored",
-               "n_matched", "n_detections", "guided_stars", "residual_rms_arcsec", "sigma_cross_boresight_arcsec",
-               "sigma_roll_arcsec", "false_match_prob", "solve_time_s", "qx", "qy", "qz", "qw")
+CSV_COLUMNS = ("image", "status", "reason", "ra_deg", "dec_deg", "constellation", "roll_deg", "fov_deg", "focal_px",
+               "mirrored", "n_matched", "n_detections", "guided_stars", "residual_rms_arcsec",
+               "sigma_cross_boresight_arcsec", "sigma_roll_arcsec", "false_match_prob", "solve_time_s",
+               "qx", "qy", "qz", "qw")
 """Columns of ``startrack solve --csv`` (one row per image; empty where not solved)."""
 
 
