@@ -224,6 +224,8 @@ def test_the_table_and_the_json_name_the_constellation_astropy_names(sim):
     assert code == 0 and parse_table(out)["RA, Dec"].endswith(f"(boresight, ICRS), in {expected}"), err
     code, out, err = run("solve", sim["fits"], "--fov-deg", 15, "--json")
     assert code == 0 and strict_json(out)["constellation"] == expected, err
+    solution = strict_json(out)
+    assert solution["pixel_scale_arcsec"] == pytest.approx(np.degrees(1 / solution["focal_px"]) * 3600, rel=1e-3)
 
 
 @pytest.mark.parametrize("kind", ["png", "tif"])
@@ -362,6 +364,8 @@ def test_demo_writes_its_files_and_solves(tmp_path):
     total_arcsec = float(lines["error"].split()[0])
     pixel_scale_arcsec = float(lines["FOV"].split()[0]) * 3600 / SIM_SIZE_PX
     assert total_arcsec < 2 * pixel_scale_arcsec
+    printed_scale = float(lines["FOV"].split(" arcsec/px")[0].split()[-1])  # the FOV row's scale at the centre
+    assert printed_scale == pytest.approx(pixel_scale_arcsec, rel=0.01)  # a 15 deg field: 1 % from FOV / width
 
 
 @pytest.mark.skipif(not PLEIADES.is_file(), reason=f"real image {PLEIADES} is absent (../shared/realdata)")

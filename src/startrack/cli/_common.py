@@ -102,10 +102,11 @@ output (table, the default)
   status       solved, or the status of a failure (too_few_stars, no_match, timeout)
   RA, Dec      boresight in ICRS, deg, and the IAU constellation it lies in
   roll         deg, the startrack.frames definition (equal to tetra3 / cedar-solve roll)
-  FOV          horizontal field of view, deg, the focal length, px, and where the search for it
-               started: the field given, the camera's, the field the header states (EXIF
-               focal length, a FITS WCS's scale, FOCALLEN and XPIXSZ), the default search
-               (3-100 deg) or the search of 90-150 deg after the default found nothing
+  FOV          horizontal field of view, deg, the focal length, px, the pixel scale at the
+               image's centre, arcsec/px, and where the search for it started: the field
+               given, the camera's, the field the header states (EXIF focal length, a FITS
+               WCS's scale, FOCALLEN and XPIXSZ), the default search (3-100 deg) or the
+               search of 90-150 deg after the default found nothing
   parity       (only for a mirror image of the sky: a star diagonal, a flipped file) mirrored
   stars        stars matched (of those detected, for an image; with --guided, how many of them
                were measured where the solution predicts them)
@@ -124,13 +125,12 @@ output (--json)
   One object. Always: status ("ok", "too_few_stars", "no_match", "timeout"), reason (empty
   when solved), solve_time_s, and for an image n_detections. When solved also: ra_deg,
   dec_deg, constellation (as the table's), roll_deg, fov_deg, qx, qy, qz, qw, focal_px,
-  mirrored (true for a mirror image: its camera's pixel x runs against the camera frame's x
-  axis), sigma_cross_boresight_arcsec,
+  pixel_scale_arcsec (at the image's centre), mirrored (true for a mirror image: its camera's
+  pixel x runs against the camera frame's x axis), sigma_cross_boresight_arcsec,
   sigma_roll_arcsec, residual_rms_arcsec, false_match_prob, guided_stars (how many of the
   matches were measured where the solution predicts them: solve --guided; they are the last
   matches and detections), epoch_jyear and epoch_source (as the table's epoch), fov_source
-  (given, camera, header, default or wide: as the table's FOV), and
-  matches: a list of
+  (given, camera, header, default or wide: as the table's FOV), and matches: a list of
   {index, hip, residual_arcsec[, x, y]} (index into the detections or star list; x, y in
   0-based pixels). Values that are undefined are null. With a ground site (solve --site or
   --latitude-deg / --longitude-deg) also: time_utc, site, latitude_deg, longitude_deg,
@@ -369,7 +369,8 @@ def solution_table(solution: AttitudeSolution, detections: Detections | None = N
         ("RA, Dec", f"{solution.ra_deg:.5f} deg, {solution.dec_deg:+.5f} deg (boresight, ICRS), "
                     f"in {constellation_of(solution.ra_deg, solution.dec_deg)}"),
         ("roll", f"{solution.roll_deg:.4f} deg"),
-        ("FOV", f"{solution.fov_deg:.4f} deg horizontal (focal length {camera.fx:.1f} px)"
+        ("FOV", f"{solution.fov_deg:.4f} deg horizontal (focal length {camera.fx:.1f} px, "
+                f"{camera.pixel_scale_arcsec:.2f} arcsec/px)"
                 + (f"; {FOV_SOURCE_WORDS[solution.fov_source]}" if solution.fov_source in FOV_SOURCE_WORDS else "")),
         *([("parity", "mirrored: the image is a mirror image of the sky")] if camera.mirrored else []),
         ("stars", f"{len(solution.matches)} matched{n_det}" + _guided_note(solution)),

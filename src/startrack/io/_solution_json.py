@@ -32,6 +32,7 @@ def solution_to_dict(solution: AttitudeSolution, detections: Detections | None =
             "roll_deg": _num(solution.roll_deg), "fov_deg": _num(solution.fov_deg),
             "qx": qx, "qy": qy, "qz": qz, "qw": qw,
             "focal_px": _num(solution.camera.fx) if solution.camera else None,
+            "pixel_scale_arcsec": _num(solution.camera.pixel_scale_arcsec) if solution.camera else None,
             "mirrored": bool(solution.camera.mirrored) if solution.camera else None,
             "sigma_cross_boresight_arcsec": _num(solution.sigma_cross_boresight_arcsec),
             "sigma_roll_arcsec": _num(solution.sigma_roll_arcsec),
