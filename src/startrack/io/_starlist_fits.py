@@ -1,10 +1,10 @@
 """Star lists as FITS tables: astrometry.net's xylists (``image2xy``, ``solve-field``'s ``.axy``)
 and SExtractor's ``FITS_LDAC`` catalogs.
 
-The first table extension that holds a pair of position columns (:func:`has_positions`) is read;
-an ``LDAC_IMHEAD`` extension before it, which holds the image's header as text, is passed over.
-Columns of one number per row are kept, a vector column (``FLUX_APER`` of several apertures)
-gives its first element. FITS tables give positions in FITS pixel coordinates: ``X`` and ``Y``
+The first table extension that holds a pair of position columns (as :mod:`._starlist` names them)
+is read; an ``LDAC_IMHEAD`` extension before it, which holds the image's header as text, is
+passed over. Columns of one number per row are kept, a vector column (``FLUX_APER`` of several
+apertures) gives its first element. FITS tables give positions in FITS pixel coordinates: ``X`` and ``Y``
 (astrometry.net says so in its xylists' header: "1,1 is the center of the leftmost bottom pixel")
 are 1-based like SExtractor's ``X_IMAGE``; :mod:`._starlist` subtracts 1.
 """
@@ -35,11 +35,11 @@ def image_size(path: str | os.PathLike) -> tuple[int, int] | None:
     """The (width, height) in pixels of the image a FITS star list was measured on, as
     astrometry.net's ``.axy`` files give it (``IMAGEW``, ``IMAGEH`` in the primary header); None
     for another file, or one without both (positive integers)."""
-    from astropy.io import fits
-
     try:
         if not is_fits(Path(path)):
             return None
+        from astropy.io import fits  # here: a CSV needs none of it
+
         header = fits.getheader(path, 0)
     except (OSError, ValueError):
         return None
