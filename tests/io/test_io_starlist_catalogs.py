@@ -91,6 +91,10 @@ def test_a_fits_ldac_catalog_reads_from_its_objects_table_past_the_image_header_
      r"no FITS table with x and y positions.*RADEC: \['ra', 'dec'\]"),
     (lambda: [fits.PrimaryHDU(), _table({"X": np.array([1.0, np.nan]), "Y": np.ones(2)})],
      r"table row 2, column 'x'.*finite"),
+    (lambda: [fits.PrimaryHDU(), fits.BinTableHDU.from_columns([
+        fits.Column(name="X", format="5A", array=np.array(["a", "b"])),
+        fits.Column(name="Y", format="E", array=Y0[:2])])],
+     r"column\(s\) \['x'\] hold text, not numbers"),
 ])
 def test_fits_tables_that_cannot_be_read_as_star_lists_say_why(tmp_path, hdus, match):
     path = tmp_path / "list.fits"
@@ -127,3 +131,9 @@ def test_a_csv_or_a_missing_file_has_no_image_size(tmp_path):
     path = tmp_path / "stars.csv"
     path.write_text("x,y\n1,2\n")
     assert star_list_image_size(path) is None and star_list_image_size(tmp_path / "absent.axy") is None
+
+
+def test_an_empty_fits_table_is_an_empty_list(tmp_path):
+    path = tmp_path / "none.xyls"
+    fits.HDUList([fits.PrimaryHDU(), _table({"X": np.zeros(0), "Y": np.zeros(0)})]).writeto(path)
+    assert {k: v.shape for k, v in read_star_list(path).items()} == {"x": (0,), "y": (0,)}

@@ -241,8 +241,12 @@ def read_star_list(path: str | os.PathLike) -> dict[str, NDArray[np.float64]]:
 def _from_fits(path: Path) -> dict[str, NDArray[np.float64]]:
     """:func:`read_star_list` of a FITS table (:mod:`._starlist_fits`)."""
     note_input(path)
-    names, table = read_fits_table(path, lambda found: _positions(found, fits_table=True) is not None, MAX_STARS)
+    names, table, numeric = read_fits_table(path, lambda found: _positions(found, fits_table=True) is not None,
+                                            MAX_STARS)
     columns, shift = _columns(path, names, fits_table=True)
+    text = [names[index] for index in columns.values() if not numeric[index]]
+    if text:
+        raise InvalidInputError(f"star list {path}: column(s) {text} hold text, not numbers")
     out = {c: table[:, index].copy() for c, index in columns.items()}
     for column, index in columns.items():
         bad = np.flatnonzero(~np.isfinite(out[column]))

@@ -51,9 +51,9 @@ def image_size(path: str | os.PathLike) -> tuple[int, int] | None:
 
 
 def read_fits_table(path: Path, has_positions: Callable[[list[str]], bool], max_rows: int
-                    ) -> tuple[list[str], NDArray[np.float64]]:
-    """The column names (lower case) and values (N, K) of the first table in ``path`` whose names
-    ``has_positions`` accepts.
+                    ) -> tuple[list[str], NDArray[np.float64], NDArray[np.bool_]]:
+    """The column names (lower case), values (N, K) and whether each column holds numbers (K,)
+    of the first table in ``path`` whose names ``has_positions`` accepts.
 
     Raises
     ------
@@ -80,15 +80,15 @@ def read_fits_table(path: Path, has_positions: Callable[[list[str]], bool], max_
                             f"xylists, X_IMAGE, Y_IMAGE as SExtractor's, or x, y columns); {held}")
 
 
-def _table_values(path: Path, hdu, names: list[str], max_rows: int) -> tuple[list[str], NDArray[np.float64]]:
-    """Every column of ``hdu`` as float64 (N, K): the first element of a vector column, NaN for a
-    column that is not numeric (so it cannot be read as a position or a brightness)."""
+def _table_values(path: Path, hdu, names: list[str], max_rows: int
+                  ) -> tuple[list[str], NDArray[np.float64], NDArray[np.bool_]]:
+    """Every column of ``hdu`` as float64 (N, K), the first element of a vector column, NaN in a
+    column that is not numeric; and which columns are (K,)."""
     n = hdu.data.shape[0] if hdu.data is not None else 0
     if n > max_rows:
         raise InvalidInputError(f"star list {path} has more than {max_rows:,} rows")
     values = np.full((n, len(names)), np.nan)
-    for k in range(len(names)):
-        column = np.asarray(hdu.data.field(k)) if n else np.empty(0)
-        if n and np.issubdtype(column.dtype, np.number):
-            values[:, k] = column.reshape(n, -1)[:, 0]
-    return names, values
+    numeric = np.array([np.issubdtype(np.dtype(column.dtype).base, np.number) for column in hdu.columns])
+    for k in np.flatnonzero(numeric) if n else []:
+        values[:, k] = np.asarray(hdu.data.field(k)).reshape(n, -1)[:, 0]
+    return names, values, numeric
