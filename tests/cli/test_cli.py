@@ -226,6 +226,10 @@ def test_the_table_and_the_json_name_the_constellation_astropy_names(sim):
     assert code == 0 and strict_json(out)["constellation"] == expected, err
     solution = strict_json(out)
     assert solution["pixel_scale_arcsec"] == pytest.approx(np.degrees(1 / solution["focal_px"]) * 3600, rel=1e-3)
+    from startrack.analysis import solution_title  # the --plot picture's and the web tool's title
+    from startrack.solve import solve_image
+
+    assert f"({expected})" in solution_title(solve_image(sim["fits"], fov_deg=15.0))
 
 
 @pytest.mark.parametrize("kind", ["png", "tif"])

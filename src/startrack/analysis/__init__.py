@@ -26,7 +26,7 @@ from .. import _exports_of, _lazy_exports
 if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use (PEP 562)
     from ._availability import star_counts
     from ._calibration_plots import plot_distortion, plot_repeatability, plot_residuals
-    from ._plots import display_stretch, plot_solution, plot_star_counts
+    from ._plots import display_stretch, plot_solution, plot_star_counts, solution_title
     from ._records import ImageRecord
     from ._rso_passes import elements
     from ._scoring import (

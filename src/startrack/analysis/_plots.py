@@ -10,6 +10,7 @@ from typing import IO
 
 import numpy as np
 
+from ..catalog import constellation_of
 from ..plotting import new_figure
 from ..results import AttitudeSolution, Detections
 
@@ -43,7 +44,7 @@ def plot_solution(image: np.ndarray, detections: Detections, solution: AttitudeS
         for i, hip in zip(idx[:25], solution.matches.hip[:25], strict=False):
             ax.annotate(f"HIP {hip}", (detections.x[i], detections.y[i]), xytext=(6, -6),
                         textcoords="offset points", color="lime", fontsize=7)
-    ax.set_title(title or _title(solution), fontsize=9)
+    ax.set_title(title or solution_title(solution), fontsize=9)
     ax.set_xlim(-0.5, width - 0.5)
     ax.set_ylim(height - 0.5, -0.5)
     ax.set_xlabel("x (px)")
@@ -52,11 +53,14 @@ def plot_solution(image: np.ndarray, detections: Detections, solution: AttitudeS
     fig.savefig(path, format="png")  # whatever the name ends with: a command's temporary file
 
 
-def _title(solution: AttitudeSolution) -> str:
+def solution_title(solution: AttitudeSolution) -> str:
+    """One line for a picture of a solve: the boresight (deg, ICRS) and its constellation, roll,
+    field of view and stars matched; or why it was not solved."""
     if not solution.solved:
         return f"not solved: {solution.reason}"
-    return (f"RA {solution.ra_deg:.4f}  Dec {solution.dec_deg:+.4f}  roll {solution.roll_deg:.3f} deg  "
-            f"FOV {solution.fov_deg:.3f} deg  {len(solution.matches)} stars")
+    where = constellation_of(solution.ra_deg, solution.dec_deg)
+    return (f"RA {solution.ra_deg:.4f}  Dec {solution.dec_deg:+.4f}  ({where})  roll {solution.roll_deg:.3f} deg  "
+            f"FOV {solution.fov_deg:.3f} deg  {len(solution.matches)} stars matched")
 
 
 def plot_star_counts(availability, path: str | os.PathLike | IO, *, title: str = "") -> None:

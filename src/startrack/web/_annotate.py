@@ -23,9 +23,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from ..analysis import display_stretch
+from ..analysis import display_stretch, solution_title
 from ..camera import Camera
-from ..catalog import constellation_of, load_catalog
+from ..catalog import load_catalog
 from ..errors import require
 from ..frames import radec_to_vector
 from ..io import atomic_path
@@ -68,7 +68,7 @@ def write_annotated(path: Path, image: NDArray, solution: AttitudeSolution, dete
     ax.set_ylim(height - 0.5, -0.5)
     ax.set_xlabel("x (px)")
     ax.set_ylabel("y (px)")
-    ax.set_title(_title(solution), fontsize=9)
+    ax.set_title(solution_title(solution), fontsize=9)
     ax.legend(loc="lower left", fontsize=7, framealpha=0.7, ncols=2)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", pil_kwargs={"compress_level": 1})
@@ -80,14 +80,6 @@ def _camera(solution: AttitudeSolution) -> Camera:
 
 def _rotation(solution: AttitudeSolution) -> Rotation:
     return require(solution.rot_cam_from_icrs, "a solved frame's attitude")
-
-
-def _title(solution: AttitudeSolution) -> str:
-    if not solution.solved:
-        return f"not solved: {solution.reason}"
-    where = constellation_of(solution.ra_deg, solution.dec_deg)
-    return (f"RA {solution.ra_deg:.4f}  Dec {solution.dec_deg:+.4f}  ({where})  roll {solution.roll_deg:.3f} deg  "
-            f"FOV {solution.fov_deg:.3f} deg  {len(solution.matches)} stars matched")
 
 
 def _draw_rejects(ax, rejects: dict[str, list]) -> None:
