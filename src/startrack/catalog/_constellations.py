@@ -26,15 +26,18 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
 
 from ..errors import StartrackError
+from ..frames import radec_to_vector, vector_to_radec
+from ..units import ARCSEC, J2000_JD
 
 B1875_JD = 2405889.258550475
 """Julian date of the Besselian epoch B1875.0, the equinox of Roman's boundaries."""
-J2000_JD = 2451545.0
-ARCSEC_RAD = np.pi / (180.0 * 3600.0)
 TABLE_FILE = "constellation_data_roman87.dat"
+"""astropy.coordinates' copy of Roman's table: RA from, RA to (h), lower Dec (deg), abbreviation."""
 NAMES_FILE = "constellation_names.dat"
+"""astropy.coordinates' list of the IAU abbreviations and names."""
 
 
 def _data_file(name: str) -> Path:
@@ -65,28 +68,16 @@ def _names() -> dict[str, str]:
     return dict(line.split(None, 1) for line in lines if line.strip() and not line.startswith("#"))
 
 
-def precession_matrix_iau1976(jd: float) -> NDArray[np.float64]:
-    """The 3 x 3 matrix taking a J2000.0 mean-equator vector to the mean equator and equinox of
-    the Julian date ``jd``: ``R3(-z) R2(theta) R3(-zeta)`` of the angles of Lieske et al. 1977
-    (Meeus 1998 ch. 21); its error grows as the cube of the time from J2000.0, below an arcsecond
-    at B1875.0 (against astropy's FK5, in the tests)."""
+def precession_iau1976(jd: float) -> Rotation:
+    """The rotation taking a J2000.0 mean-equator vector to the mean equator and equinox of the
+    Julian date ``jd``: the axes turned by ``-zeta`` about z, ``theta`` about y and ``-z`` about z,
+    the angles of Lieske et al. 1977 (Meeus 1998 ch. 21). Its error grows as the cube of the time
+    from J2000.0: below an arcsecond at B1875.0 (against astropy's FK5, in the tests)."""
     t = (jd - J2000_JD) / 36525.0
-    zeta = (2306.2181 * t + 0.30188 * t**2 + 0.017998 * t**3) * ARCSEC_RAD
-    z = (2306.2181 * t + 1.09468 * t**2 + 0.018203 * t**3) * ARCSEC_RAD
-    theta = (2004.3109 * t - 0.42665 * t**2 - 0.041833 * t**3) * ARCSEC_RAD
-    return _r3(-z) @ _r2(theta) @ _r3(-zeta)
-
-
-def _r2(angle: float) -> NDArray[np.float64]:
-    """Rotation of the axes about y by ``angle`` (rad)."""
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
-
-
-def _r3(angle: float) -> NDArray[np.float64]:
-    """Rotation of the axes about z by ``angle`` (rad)."""
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+    zeta = (2306.2181 * t + 0.30188 * t**2 + 0.017998 * t**3) * ARCSEC
+    z = (2306.2181 * t + 1.09468 * t**2 + 0.018203 * t**3) * ARCSEC
+    theta = (2004.3109 * t - 0.42665 * t**2 - 0.041833 * t**3) * ARCSEC
+    return Rotation.from_euler("ZYZ", [z, -theta, zeta])  # turning the axes by a angle turns vectors by -a
 
 
 def constellation_of(ra_deg: ArrayLike, dec_deg: ArrayLike, *, abbreviation: bool = False) -> str | NDArray[np.str_]:
@@ -118,7 +109,5 @@ def constellation_of(ra_deg: ArrayLike, dec_deg: ArrayLike, *, abbreviation: boo
 def _to_b1875(ra_rad: NDArray[np.float64], dec_rad: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
     """Right ascension (h, in [0, 24)) and declination (deg) in the mean equator and equinox of
     B1875.0 of J2000.0 directions given in radians."""
-    vectors = np.stack([np.cos(dec_rad) * np.cos(ra_rad), np.cos(dec_rad) * np.sin(ra_rad), np.sin(dec_rad)])
-    x, y, z = precession_matrix_iau1976(B1875_JD) @ vectors
-    ra_h = np.degrees(np.arctan2(y, x)) / 15.0 % 24.0
-    return ra_h, np.degrees(np.arcsin(np.clip(z, -1.0, 1.0)))
+    ra, dec = vector_to_radec(precession_iau1976(B1875_JD).apply(radec_to_vector(ra_rad, dec_rad)))
+    return np.degrees(ra) / 15.0 % 24.0, np.degrees(dec)
