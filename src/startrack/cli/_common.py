@@ -101,7 +101,8 @@ SOLUTION_FORMATS = """\
 output (table, the default)
   status       solved, or the status of a failure (too_few_stars, no_match, timeout)
   RA, Dec      boresight in ICRS, deg, and the IAU constellation it lies in
-  roll         deg, the startrack.frames definition (equal to tetra3 / cedar-solve roll)
+  roll         deg, the startrack.frames definition (equal to tetra3 / cedar-solve roll): the
+               image's top (row 0) points 360 - roll deg east of north
   FOV          horizontal field of view, deg, the focal length, px, the pixel scale at the
                image's centre, arcsec/px, and where the search for it started: the field
                given, the camera's, the field the header states (EXIF focal length, a FITS
