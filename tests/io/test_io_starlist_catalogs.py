@@ -50,6 +50,9 @@ def test_1_based_column_names_in_a_csv_are_made_ours_and_a_0_based_pair_wins(tmp
     path.write_text("x,Y_IMAGE\n1,2\n")  # one of each: neither pair is whole
     with pytest.raises(InvalidInputError, match=r"lacks required column.*'y'.*both 0-based or both 1-based"):
         read_star_list(path)
+    path.write_text("X_IMAGE,FLUX_AUTO\n1,2\n")  # no y at all: nothing is mixed
+    with pytest.raises(InvalidInputError, match=r"lacks required column.*or 1-based ywin_image, y_image, field_y\)$"):
+        read_star_list(path)
 
 
 def test_a_comment_that_starts_with_a_number_before_a_header_row_is_not_a_sextractor_header(tmp_path):

@@ -165,8 +165,9 @@ def _columns(path: Path, names: list[str], fits_table: bool = False) -> tuple[di
                          f"{', '.join(ONE_BASED_NAMES[c])}" for c in missing)
         numbers = "; its first row holds numbers: start it with a header row such as x,y,flux" \
             if is_numeric_row(names) else ""
-        mixed = "; x and y must be both 0-based or both 1-based" \
-            if any(_first(names, ONE_BASED_NAMES[c]) is not None for c in REQUIRED_COLUMNS) else ""
+        bases = [any(_first(names, aliases[c]) is not None for c in REQUIRED_COLUMNS)
+                 for aliases in (COLUMN_NAMES, ONE_BASED_NAMES)]
+        mixed = "; x and y must be both 0-based or both 1-based" if all(bases) else ""
         raise InvalidInputError(f"star list {path} lacks required column(s) {missing}; found columns {names} "
                                 f"({also}){numbers}{mixed}")
     columns, shift = positions
