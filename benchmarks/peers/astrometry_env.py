@@ -25,6 +25,7 @@ PACKAGES = ("astrometry.net", "astrometry-data-tycho2-10-19-littleendian")
 INDEX_FOLDERS = (Path("/usr/share/astrometry"), Path("/usr/local/astrometry/data"))
 """Where Debian's and a source install's index files lie, before their configuration's ``add_path``."""
 CONFIGS = (Path("/etc/astrometry.cfg"), Path("/usr/local/astrometry/etc/astrometry.cfg"))
+"""astrometry.net's configuration files (Debian's, a source install's), whose ``add_path`` lines name more folders."""
 
 
 def index_files() -> list[Path]:
